@@ -1,0 +1,261 @@
+"""Physics accessors for the truck-on-rig model: named indices, static equilibrium, modes.
+
+This is the dm_control-style middle layer: the XML describes the model, this module reads
+and solves it by name, and the scenario layer (``scenarios``) runs tasks on top.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from mjcf.build import CORNERS
+
+__all__ = [
+    "TRUCK_JOINTS",
+    "MODE_NAMES",
+    "RigIndex",
+    "friction_disabled",
+    "static_equilibrium",
+    "tire_forces",
+    "Mode",
+    "modal_analysis",
+]
+
+#: The truck's degrees of freedom (the pans' are ``pan_<corner>_z``).
+TRUCK_JOINTS: tuple[str, ...] = (
+    "chassis_z",
+    "chassis_pitch",
+    "chassis_roll",
+    "front_axle_z",
+    "front_axle_roll",
+    "rear_axle_z",
+    "rear_axle_roll",
+)
+
+#: Name of a vibration mode after the joint that holds most of its kinetic energy.
+MODE_NAMES: dict[str, str] = {
+    "chassis_z": "body bounce",
+    "chassis_pitch": "body pitch",
+    "chassis_roll": "body roll",
+    "front_axle_z": "front axle hop",
+    "front_axle_roll": "front axle roll",
+    "rear_axle_z": "rear axle hop",
+    "rear_axle_roll": "rear axle roll",
+}
+
+
+@dataclass(frozen=True)
+class RigIndex:
+    """Addresses of the named elements of a compiled truck-on-rig model.
+
+    Attributes
+    ----------
+    truck_qpos, truck_dof : numpy.ndarray of int
+        qpos and dof addresses of :data:`TRUCK_JOINTS`, in that order.
+    pan_qpos, pan_dof : numpy.ndarray of int
+        qpos and dof addresses of ``pan_<corner>_z`` in :data:`mjcf.build.CORNERS` order
+        (empty when the pans are fixed).
+    tire_actuator : numpy.ndarray of int
+        Actuator ids of ``tire_<corner>``.
+    """
+
+    truck_qpos: np.ndarray
+    truck_dof: np.ndarray
+    pan_qpos: np.ndarray
+    pan_dof: np.ndarray
+    tire_actuator: np.ndarray
+
+    @classmethod
+    def of(cls, model: mujoco.MjModel) -> "RigIndex":
+        def jid(name: str) -> int:
+            i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+            if i < 0:
+                raise KeyError(f"the model has no joint named {name!r}")
+            return i
+
+        truck = [jid(n) for n in TRUCK_JOINTS]
+        pan_names = [f"pan_{c}_z" for c in CORNERS]
+        has_pans = all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) >= 0 for n in pan_names)
+        pans = [jid(n) for n in pan_names] if has_pans else []
+        tires = []
+        for c in CORNERS:
+            i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"tire_{c}")
+            if i < 0:
+                raise KeyError(f"the model has no actuator named 'tire_{c}'")
+            tires.append(i)
+        as_int = lambda v: np.asarray(v, dtype=np.intp)  # noqa: E731
+        return cls(
+            truck_qpos=as_int(model.jnt_qposadr[truck]),
+            truck_dof=as_int(model.jnt_dofadr[truck]),
+            pan_qpos=as_int(model.jnt_qposadr[pans] if pans else []),
+            pan_dof=as_int(model.jnt_dofadr[pans] if pans else []),
+            tire_actuator=as_int(tires),
+        )
+
+
+@contextlib.contextmanager
+def friction_disabled(model: mujoco.MjModel):
+    """Disable MuJoCo's dry friction (``frictionloss``) on ``model`` inside the block.
+
+    Dry friction makes the static equilibrium non-unique and a linearization about rest
+    meaningless (the springs are stuck); both are computed without it. The flag is
+    restored on exit, also on error.
+    """
+    bit = int(mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS)
+    old = int(model.opt.disableflags)
+    model.opt.disableflags = old | bit
+    try:
+        yield model
+    finally:
+        model.opt.disableflags = old
+
+
+def tire_forces(model: mujoco.MjModel, data: mujoco.MjData, index: RigIndex | None = None) -> np.ndarray:
+    """Tire forces in N per corner (fl, fr, rl, rr), compression positive.
+
+    Exact: the forces MuJoCo applied at the last force evaluation (``mj_forward`` or the
+    start of the last ``mj_step``).
+    """
+    index = index or RigIndex.of(model)
+    return data.actuator_force[index.tire_actuator].copy()
+
+
+def static_equilibrium(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    *,
+    pan_z_m: np.ndarray | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 30,
+) -> np.ndarray:
+    """Solve for the truck's rest position on the pans and leave ``data`` there.
+
+    Newton iteration on the truck joints' accelerations (zero velocity, dry friction off)
+    with a finite-difference Jacobian; the pans are held at ``pan_z_m``.
+
+    Parameters
+    ----------
+    model, data : mujoco.MjModel, mujoco.MjData
+    pan_z_m : array_like of 4 floats, m, optional
+        Pan positions (default: mid-stroke, 0).
+    tol : float, m/s^2
+        Convergence tolerance on the largest truck-joint acceleration.
+    max_iter : int
+        Newton iterations before giving up.
+
+    Returns
+    -------
+    numpy.ndarray
+        The equilibrium ``qpos`` (also left in ``data.qpos``, with ``qvel`` zero and
+        ``mj_forward`` evaluated).
+    """
+    idx = RigIndex.of(model)
+    data.qvel[:] = 0.0
+    if data.act.size:
+        pass  # activation (hydraulics) is the caller's business; left as it is
+    if idx.pan_qpos.size:
+        data.qpos[idx.pan_qpos] = 0.0 if pan_z_m is None else np.asarray(pan_z_m, dtype=float)
+    q_adr, dof = idx.truck_qpos, idx.truck_dof
+
+    def residual(q: np.ndarray) -> np.ndarray:
+        data.qpos[q_adr] = q
+        mujoco.mj_forward(model, data)
+        return data.qacc[dof].copy()
+
+    with friction_disabled(model):
+        q = data.qpos[q_adr].copy()
+        r = residual(q)
+        h = 1e-7
+        for _ in range(max_iter):
+            if np.max(np.abs(r)) < tol:
+                break
+            jac = np.empty((q.size, q.size))
+            for j in range(q.size):
+                dq = np.zeros_like(q)
+                dq[j] = h
+                jac[:, j] = (residual(q + dq) - residual(q - dq)) / (2 * h)
+            q = q - np.linalg.solve(jac, r)
+            r = residual(q)
+        else:
+            raise RuntimeError(
+                f"static equilibrium not found in {max_iter} Newton steps (largest residual "
+                f"acceleration {np.max(np.abs(r)):.3g} m/s^2): check that every tire touches its pan"
+            )
+    # Final evaluation with the model as the caller has it (friction on at rest adds nothing).
+    data.qpos[q_adr] = q
+    mujoco.mj_forward(model, data)
+    return data.qpos.copy()
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One vibration mode of a linearized model.
+
+    Attributes
+    ----------
+    name : str
+        Named after the joint that holds most of the mode's kinetic energy.
+    frequency_hz : float, Hz
+        Undamped natural frequency |lambda| / (2 pi).
+    damping_ratio : float
+        -Re(lambda) / |lambda|.
+    energy_share : dict[str, float]
+        Kinetic-energy share of each truck joint in the mode (sums to 1).
+    """
+
+    name: str
+    frequency_hz: float
+    damping_ratio: float
+    energy_share: dict
+
+
+def modal_analysis(model: mujoco.MjModel, data: mujoco.MjData, eps: float = 1e-6) -> list[Mode]:
+    """Vibration modes of the model about the state in ``data``.
+
+    Linearizes the discrete-time transition with ``mujoco.mjd_transitionFD`` (centred
+    differences, dry friction disabled), maps each eigenvalue mu to continuous time with
+    lambda = log(mu) / dt, and keeps one of each complex-conjugate pair.
+
+    Returns
+    -------
+    list of Mode
+        Oscillatory modes, sorted by frequency.
+    """
+    nv, na = model.nv, model.na
+    n = 2 * nv + na
+    a = np.zeros((n, n))
+    with friction_disabled(model):
+        mujoco.mjd_transitionFD(model, data, eps, True, a, None, None, None)
+        mass = np.zeros((nv, nv))
+        mujoco.mj_fullM(model, data, mass)
+    mu, vec = np.linalg.eig(a)
+    lam = np.log(mu.astype(complex)) / model.opt.timestep
+    names = {}
+    for j in range(model.njnt):
+        names[int(model.jnt_dofadr[j])] = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+    modes = []
+    for k in np.argsort(np.abs(lam)):
+        if lam[k].imag <= 1e-9:
+            continue
+        p = vec[:nv, k]
+        energy = np.real(np.conj(p) * (mass @ p))
+        energy = np.clip(energy, 0.0, None)
+        total = energy.sum()
+        if total <= 0:
+            continue
+        share = {names[i]: float(energy[i] / total) for i in range(nv)}
+        dominant = max(share, key=share.get)
+        wn = float(abs(lam[k]))
+        modes.append(
+            Mode(
+                name=MODE_NAMES.get(dominant, dominant),
+                frequency_hz=wn / (2 * np.pi),
+                damping_ratio=float(-lam[k].real / wn),
+                energy_share=share,
+            )
+        )
+    return sorted(modes, key=lambda m_: m_.frequency_hz)

@@ -1,0 +1,159 @@
+"""The ``rigsim`` command line.
+
+Exit codes: 0 success; 2 bad input or a run that cannot go on (one sentence on stderr,
+nothing written); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import pathlib
+import sys
+
+__all__ = ["main"]
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse's own errors: exit 2 with one sentence, like ours
+        self.print_usage(sys.stderr)
+        self.exit(2, f"rigsim: error: {message}\n")
+
+
+@contextlib.contextmanager
+def _progress_bar(label: str, quiet: bool):
+    """A tqdm bar on stderr (only on a terminal) fed by the runner's progress callback."""
+    if quiet:
+        yield None
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(total=100, desc=label, unit="%", leave=False, disable=None, file=sys.stderr,
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}")
+    try:
+        def update(done_s: float, total_s: float) -> None:
+            bar.n = min(100.0, 100.0 * done_s / total_s)
+            bar.refresh()
+
+        yield update
+    finally:
+        bar.close()
+
+
+def _cmd_run(args) -> int:
+    from scenarios.config import load_scenario
+    from scenarios.results import write_run
+    from scenarios.runner import run
+
+    scenario = load_scenario(args.scenario)
+    with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
+        result = run(scenario, args.mode, progress=progress)
+    paths = write_run(result, args.out)
+    print(result.table())
+    if result.events:
+        print("events: " + json.dumps(result.events))
+    print(f"wrote {paths['result']} and {paths['timeseries']}")
+    return 0
+
+
+def _cmd_paper(args) -> int:
+    from scenarios.config import load_scenario, paper_scenarios
+    from scenarios.results import write_run
+    from scenarios.runner import run
+
+    scenarios = [load_scenario(p) for p in paper_scenarios()]
+    modes = args.modes
+    results = []
+    for scenario in scenarios:
+        for mode in modes:
+            with _progress_bar(f"{scenario.name} [{mode}]", args.quiet) as progress:
+                results.append(run(scenario, mode, progress=progress))
+    out = pathlib.Path(args.out)
+    rows = []
+    for r in results:
+        write_run(r, out / r.scenario_name / r.mode)
+    by_case: dict[str, dict[str, float]] = {}
+    for r in results:
+        by_case.setdefault(r.scenario_name, {})[r.mode] = r.summary()["dlc_mean"]
+    header = f"{'case':32s}" + "".join(f"{'DLC ' + m:>12s}" for m in modes)
+    rows.append(header)
+    for case, d in by_case.items():
+        rows.append(f"{case:32s}" + "".join(f"{d[m]:12.4f}" for m in modes))
+    print("\n".join(rows))
+    from scenarios.results import atomic_write_text
+
+    atomic_write_text(out / "paper.json", json.dumps({"cases": by_case}, indent=2) + "\n")
+    print(f"wrote {out / 'paper.json'} and one folder per case and mode")
+    return 0
+
+
+def _cmd_model(args) -> int:
+    import mujoco
+
+    from mjcf.build import CORNERS, TruckVariant, build_model
+    from mjcf.physics import modal_analysis, static_equilibrium, tire_forces
+
+    variant = TruckVariant(payload_kg=args.payload_kg)
+    model = build_model(variant, pans="fixed")
+    data = mujoco.MjData(model)
+    static_equilibrium(model, data)
+    forces = tire_forces(model, data)
+    print(f"truck on rigid pans, payload {args.payload_kg:g} kg")
+    print("static wheel loads: " + ", ".join(f"{c} {f:.0f} N" for c, f in zip(CORNERS, forces))
+          + f"; total {forces.sum():.0f} N")
+    print("modes (leaf friction off):")
+    for m in modal_analysis(model, data):
+        print(f"  {m.name:16s} {m.frequency_hz:6.2f} Hz  damping ratio {m.damping_ratio:.3f}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="rigsim", description="Four-post road simulator (DYNTRAC) with a heavy truck, in MuJoCo.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    r = sub.add_parser("run", help="run one scenario file in road or rig mode")
+    r.add_argument("scenario", help="scenario TOML file")
+    r.add_argument("--mode", choices=("road", "rig"), default="road",
+                   help="road: pans follow the profile exactly; rig: hydraulic actuators drive the pans")
+    r.add_argument("--out", required=True, help="output folder (result.json, timeseries.csv)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_run)
+
+    pp = sub.add_parser("paper", help="run the paper's three cases and print the DLC table")
+    pp.add_argument("--out", required=True, help="output folder")
+    pp.add_argument("--modes", nargs="+", choices=("road", "rig"), default=["road"],
+                    help="modes to run (default: road)")
+    pp.add_argument("--quiet", action="store_true", help="no progress bar")
+    pp.set_defaults(func=_cmd_paper)
+
+    m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
+    m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg (default 3640)")
+    m.set_defaults(func=_cmd_model)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``rigsim`` console command; returns the exit code."""
+    from scenarios.config import ScenarioError
+    from scenarios.runner import SimulationError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (ScenarioError, SimulationError) as exc:
+        print(f"rigsim: error: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:  # parameter validation of the model layers
+        print(f"rigsim: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"rigsim: error: cannot write output: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("rigsim: interrupted; nothing more was written", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

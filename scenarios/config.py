@@ -1,0 +1,284 @@
+"""Scenario files: strict TOML into frozen, validated dataclasses.
+
+A scenario file names a road, a speed, a payload and a duration, and may override any
+parameter of the truck (``[vehicle]``, the fields of :class:`mjcf.build.TruckVariant`) or
+of the hydraulic actuators (``[actuator]``, the fields of
+:class:`hydraulics.params.ActuatorParams`). Every key is checked: an unknown key is an error
+that names it and the closest valid key; a wrong type or a value out of range names the
+field. Errors are :class:`ScenarioError`, one sentence each.
+
+Example::
+
+    name = "paper-high-72kmh-3640kg"
+    speed_kmh = 72.0
+    duration_s = 60.0
+    seed = 1
+
+    [road]
+    roughness = "high"           # ISO 8608 class letter A-H, or the paper's word
+    cuton_wavelength_m = 40.0    # high-pass of the drive (stroke 15.2 cm)
+
+    [vehicle]
+    payload_kg = 3640.0
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import pathlib
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from mjcf.build import TruckVariant
+
+__all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios"]
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot be run as written; the message is one sentence naming the field."""
+
+
+def _closest(key: str, valid) -> str:
+    match = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.5)
+    if match:
+        return f"; did you mean {match[0]!r}?"
+    return f"; valid keys are {', '.join(sorted(valid))}"
+
+
+def _number(where: str, value: Any, *, lo: float | None = None, hi: float | None = None, lo_open=False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"{where} must be a number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ScenarioError(f"{where} must be finite, got {value!r}")
+    if lo is not None and (v < lo or (lo_open and v == lo)):
+        raise ScenarioError(f"{where} must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
+    if hi is not None and v > hi:
+        raise ScenarioError(f"{where} must be <= {hi:g}, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class RoadConfig:
+    """The road of a scenario.
+
+    Parameters
+    ----------
+    roughness : str, optional
+        ISO 8608 class letter ("A".."H") or the paper's word ("medium", "high"); see
+        :data:`scenarios.roads.ROUGHNESS_WORDS`. Exactly one of ``roughness``,
+        ``gd_n0_m3`` and ``profile_csv`` is given.
+    gd_n0_m3 : float, m^3, optional
+        Displacement PSD at n0 = 0.1 cycle/m (ISO 8608).
+    profile_csv : str, optional
+        A measured profile (columns distance_m, left_m, right_m), relative to the scenario file.
+    waviness : float
+        ISO 8608 waviness w (PSD slope), dimensionless.
+    tracks : str
+        "identical", "independent" or "coherent" left and right tracks.
+    cuton_wavelength_m : float, m
+        Cut-on wavelength of the zero-phase high-pass applied to the profile in the distance
+        domain, identically for road and rig mode (a rig's stroke is 15.2 cm).
+    """
+
+    roughness: str | None = None
+    gd_n0_m3: float | None = None
+    profile_csv: str | None = None
+    waviness: float = 2.0
+    tracks: str = "independent"
+    cuton_wavelength_m: float = 40.0
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario.
+
+    Parameters
+    ----------
+    name : str
+        Identifier used in outputs.
+    speed_kmh : float, km/h
+        Vehicle speed over the road (the paper's 48 and 72 km/h). :attr:`speed_mps` in m/s.
+    duration_s : float, s
+        Analysed duration (after the lead-in).
+    seed : int
+        Seed of the road's random phases (``numpy.random.default_rng``).
+    road : RoadConfig
+    vehicle : TruckVariant
+        Overrides of the truck model.
+    actuator : Mapping[str, float]
+        Overrides of the hydraulic actuator parameters (used in rig mode).
+    lead_in_s : float, s
+        Simulated before t = 0 while the drive fades in (cosine taper over its first half),
+        so the run starts from rest and the statistics see no start-up transient.
+    output_rate_hz : float, Hz
+        Rate of the written time series (a divisor of the simulation rate, >= 1 kHz).
+    source : pathlib.Path, optional
+        The file the scenario was read from (for relative paths).
+    """
+
+    name: str
+    speed_kmh: float
+    duration_s: float
+    seed: int = 0
+    road: RoadConfig = field(default_factory=RoadConfig)
+    vehicle: TruckVariant = field(default_factory=TruckVariant)
+    actuator: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    lead_in_s: float = 2.0
+    output_rate_hz: float = 1000.0
+    source: pathlib.Path | None = None
+
+    @property
+    def speed_mps(self) -> float:
+        """Speed in m/s."""
+        return self.speed_kmh / 3.6
+
+
+_TOP_KEYS = {"name", "description", "speed_kmh", "duration_s", "seed", "lead_in_s", "output_rate_hz", "road", "vehicle", "actuator"}
+_ROAD_KEYS = {f.name for f in dataclasses.fields(RoadConfig)}
+_TRACKS = ("identical", "independent", "coherent")
+
+
+def _check_keys(table: Mapping, valid, where: str) -> None:
+    for key in table:
+        if key not in valid:
+            prefix = f"{where}." if where else ""
+            raise ScenarioError(f"unknown key {prefix}{key}{_closest(key, valid)}")
+
+
+def _road(table: Any) -> RoadConfig:
+    if not isinstance(table, Mapping):
+        raise ScenarioError("[road] must be a table")
+    _check_keys(table, _ROAD_KEYS, "road")
+    given = [k for k in ("roughness", "gd_n0_m3", "profile_csv") if k in table]
+    if len(given) != 1:
+        raise ScenarioError(
+            "road needs exactly one of roughness, gd_n0_m3 or profile_csv"
+            + (f", got {', '.join(given)}" if given else "")
+        )
+    kw: dict[str, Any] = {}
+    if "roughness" in table:
+        from scenarios.roads import ISO_CLASSES, ROUGHNESS_WORDS
+
+        r = table["roughness"]
+        valid = list(ISO_CLASSES) + list(ROUGHNESS_WORDS)
+        if not isinstance(r, str) or (r.upper() not in ISO_CLASSES and r.lower() not in ROUGHNESS_WORDS):
+            raise ScenarioError(f"road.roughness must be one of {', '.join(valid)}, got {r!r}")
+        kw["roughness"] = r
+    if "gd_n0_m3" in table:
+        kw["gd_n0_m3"] = _number("road.gd_n0_m3", table["gd_n0_m3"], lo=0, hi=1e-1, lo_open=True)
+    if "profile_csv" in table:
+        if not isinstance(table["profile_csv"], str):
+            raise ScenarioError("road.profile_csv must be a file path string")
+        kw["profile_csv"] = table["profile_csv"]
+    if "waviness" in table:
+        kw["waviness"] = _number("road.waviness", table["waviness"], lo=0.5, hi=5.0)
+    if "tracks" in table:
+        if table["tracks"] not in _TRACKS:
+            raise ScenarioError(f"road.tracks must be one of {', '.join(_TRACKS)}, got {table['tracks']!r}")
+        kw["tracks"] = table["tracks"]
+    if "cuton_wavelength_m" in table:
+        kw["cuton_wavelength_m"] = _number("road.cuton_wavelength_m", table["cuton_wavelength_m"], lo=1.0, hi=1e4)
+    return RoadConfig(**kw)
+
+
+def _dataclass_overrides(table: Any, cls, where: str):
+    if not isinstance(table, Mapping):
+        raise ScenarioError(f"[{where}] must be a table")
+    names = {f.name for f in dataclasses.fields(cls)}
+    _check_keys(table, names, where)
+    for key, value in table.items():
+        _number(f"{where}.{key}", value)
+    return {k: float(v) for k, v in table.items()}
+
+
+def _actuator_fields():
+    try:
+        from hydraulics.params import ActuatorParams
+    except ImportError:  # pragma: no cover - hydraulics is part of this distribution
+        return None
+    return ActuatorParams
+
+
+def parse_scenario(doc: Mapping, *, source: pathlib.Path | None = None) -> Scenario:
+    """Validate a parsed TOML document into a :class:`Scenario` (see the module docstring)."""
+    _check_keys(doc, _TOP_KEYS, "")
+    for key in ("name", "speed_kmh", "duration_s"):
+        if key not in doc:
+            raise ScenarioError(f"missing required key {key}")
+    name = doc["name"]
+    if not isinstance(name, str) or not name.strip():
+        raise ScenarioError("name must be a non-empty string")
+    kw: dict[str, Any] = {
+        "name": name,
+        "speed_kmh": _number("speed_kmh", doc["speed_kmh"], lo=0, hi=200, lo_open=True),
+        "duration_s": _number("duration_s", doc["duration_s"], lo=0, hi=3600, lo_open=True),
+        "source": source,
+    }
+    if "seed" in doc:
+        seed = doc["seed"]
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise ScenarioError(f"seed must be a non-negative integer, got {seed!r}")
+        kw["seed"] = seed
+    if "lead_in_s" in doc:
+        kw["lead_in_s"] = _number("lead_in_s", doc["lead_in_s"], lo=0.5, hi=60)
+    if "output_rate_hz" in doc:
+        kw["output_rate_hz"] = _number("output_rate_hz", doc["output_rate_hz"], lo=1000, hi=1e5)
+    if "road" not in doc:
+        raise ScenarioError("missing [road] table (give roughness, gd_n0_m3 or profile_csv)")
+    kw["road"] = _road(doc["road"])
+    if "vehicle" in doc:
+        try:
+            kw["vehicle"] = TruckVariant(**_dataclass_overrides(doc["vehicle"], TruckVariant, "vehicle"))
+        except ValueError as exc:
+            raise ScenarioError(str(exc)) from None
+    if "actuator" in doc:
+        params_cls = _actuator_fields()
+        overrides = _dataclass_overrides(doc["actuator"], params_cls, "actuator")
+        try:
+            params_cls(**overrides)  # validate now, before anything runs
+        except (TypeError, ValueError) as exc:
+            raise ScenarioError(str(exc)) from None
+        kw["actuator"] = MappingProxyType(overrides)
+    return Scenario(**kw)
+
+
+def load_scenario(path) -> Scenario:
+    """Read and validate a scenario TOML file.
+
+    Raises
+    ------
+    ScenarioError
+        Missing file, malformed TOML, unknown key, wrong type or value; one sentence.
+    """
+    p = pathlib.Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ScenarioError(f"scenario file {str(p)!r} does not exist") from None
+    except IsADirectoryError:
+        raise ScenarioError(f"scenario path {str(p)!r} is a directory, not a TOML file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"cannot read scenario file {str(p)!r}: {exc}") from None
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"scenario file {str(p)!r} is not valid TOML: {exc}") from None
+    try:
+        return parse_scenario(doc, source=p.resolve())
+    except ScenarioError as exc:
+        raise ScenarioError(f"{p.name}: {exc}") from None
+
+
+def paper_scenarios() -> list[pathlib.Path]:
+    """The shipped scenario files of the paper's three cases (Table 2 order)."""
+    import importlib.resources
+
+    base = importlib.resources.files("scenarios").joinpath("paper")
+    names = ("medium_72kmh_6360kg.toml", "high_48kmh_3640kg.toml", "high_72kmh_3640kg.toml")
+    return [pathlib.Path(str(base.joinpath(n))) for n in names]

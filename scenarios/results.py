@@ -1,0 +1,160 @@
+"""Result objects of scenario runs and their atomic writing.
+
+A :class:`RunResult` carries time, per-wheel signals with their units and labels, the
+per-wheel statistics, and the run's events (python-control style: the result object knows
+what its arrays are).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from correction.dlc import force_statistics
+from mjcf.build import CORNERS
+
+__all__ = ["RunResult", "atomic_write_bytes", "atomic_write_text", "write_run"]
+
+#: Units and descriptions of the per-wheel signals a run may carry.
+SIGNALS: dict[str, tuple[str, str]] = {
+    "profile_m": ("m", "road profile under the wheel (the drive signal x_p, high-passed)"),
+    "pan_m": ("m", "wheelpan displacement x_a (road mode: equals the profile)"),
+    "tire_force_N": ("N", "tire force on the pan, compression positive"),
+    "spool": ("1", "servovalve spool position, normalised to +-1"),
+    "p1_Pa": ("Pa", "pressure in the lifting chamber"),
+    "p2_Pa": ("Pa", "pressure in the lowering chamber"),
+}
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """Outcome of one scenario run.
+
+    Attributes
+    ----------
+    scenario_name : str
+    mode : str
+        "road" (pans follow the profile exactly) or "rig" (pans driven by the actuators).
+    t_s : numpy.ndarray, s
+        Sample times, shape (N,), from 0 (the end of the lead-in).
+    signals : Mapping[str, numpy.ndarray]
+        Per-wheel signals, each (N, 4) in :data:`mjcf.build.CORNERS` order; names and
+        units in :data:`SIGNALS`.
+    vehicle_mass_kg : float, kg
+        Mass of the truck (chassis, payload and axles; pans excluded).
+    events : Mapping[str, object]
+        Saturation and cavitation events (rig mode), empty in road mode.
+    info : Mapping[str, object]
+        Run facts: time step, wall time, seed, speed...
+    """
+
+    scenario_name: str
+    mode: str
+    t_s: np.ndarray
+    signals: Mapping[str, np.ndarray]
+    vehicle_mass_kg: float
+    events: Mapping = field(default_factory=dict)
+    info: Mapping = field(default_factory=dict)
+    corners: tuple[str, ...] = CORNERS
+
+    @property
+    def rate_hz(self) -> float:
+        """Sampling rate of the time series, Hz."""
+        return float(1.0 / np.mean(np.diff(self.t_s)))
+
+    def statistics(self) -> dict[str, dict[str, float]]:
+        """Per wheel: mean_force_N, std_force_N and dlc of the tire force."""
+        stats = force_statistics(self.signals["tire_force_N"], axis=0)
+        return {c: {k: float(v[i]) for k, v in stats.items()} for i, c in enumerate(self.corners)}
+
+    def summary(self) -> dict:
+        """Everything of ``result.json``."""
+        stats = self.statistics()
+        return {
+            "scenario": self.scenario_name,
+            "mode": self.mode,
+            "vehicle_mass_kg": self.vehicle_mass_kg,
+            "rate_hz": round(self.rate_hz, 9),
+            "samples": int(self.t_s.size),
+            "dlc_mean": float(np.mean([s["dlc"] for s in stats.values()])),
+            "wheels": stats,
+            "events": dict(self.events),
+            "info": dict(self.info),
+        }
+
+    def table(self) -> str:
+        """The per-wheel DLC table as text for the terminal."""
+        lines = [f"{self.scenario_name} ({self.mode} mode)", f"{'wheel':>6} {'mean N':>10} {'std N':>9} {'DLC':>7}"]
+        for c, s in self.statistics().items():
+            lines.append(f"{c:>6} {s['mean_force_N']:10.0f} {s['std_force_N']:9.0f} {s['dlc']:7.4f}")
+        lines.append(f"{'mean':>6} {'':>10} {'':>9} {self.summary()['dlc_mean']:7.4f}")
+        return "\n".join(lines)
+
+    def columns(self) -> tuple[list[str], np.ndarray]:
+        """Header and (N, 1 + 4 k) matrix of the time series file."""
+        names = ["time_s"]
+        blocks = [self.t_s[:, None]]
+        for key, arr in self.signals.items():
+            unit = key.rsplit("_", 1)[-1] if "_" in key else ""
+            stem = key[: -len(unit) - 1] if unit in ("m", "N", "Pa") else key
+            for c in self.corners:
+                names.append(f"{stem}_{c}" + (f"_{unit}" if unit in ("m", "N", "Pa") else ""))
+            blocks.append(arr)
+        return names, np.hstack(blocks)
+
+
+def atomic_write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename)."""
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def atomic_write_text(path, text: str) -> None:
+    """Write UTF-8 ``text`` to ``path`` atomically."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def _csv_bytes(names: list[str], matrix: np.ndarray) -> bytes:
+    import io
+
+    buf = io.StringIO()
+    np.savetxt(buf, matrix, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+    return buf.getvalue().encode("ascii")
+
+
+def write_run(result: RunResult, out_dir) -> dict[str, pathlib.Path]:
+    """Write ``result.json`` and ``timeseries.csv`` into ``out_dir``, each atomically.
+
+    Both files are fully formed in memory before either is written, so a failure leaves no
+    partial file. ``timeseries.csv`` reads in one line: ``numpy.genfromtxt(p, delimiter=",",
+    names=True)`` or ``pandas.read_csv(p)``.
+    """
+    out = pathlib.Path(out_dir)
+    names, matrix = result.columns()
+    summary = result.summary()
+    summary["timeseries"] = {"file": "timeseries.csv", "columns": names, "rate_hz": summary["rate_hz"]}
+    csv = _csv_bytes(names, matrix)
+    js = json.dumps(summary, indent=2, sort_keys=False) + "\n"
+    paths = {"timeseries": out / "timeseries.csv", "result": out / "result.json"}
+    atomic_write_bytes(paths["timeseries"], csv)
+    atomic_write_text(paths["result"], js)
+    return paths

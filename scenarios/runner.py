@@ -1,0 +1,242 @@
+"""Run a scenario in road mode (pans follow the profile) or rig mode (hydraulic actuators).
+
+Layers: the road and drive come from :mod:`scenarios.roads`, the model from :mod:`mjcf`,
+the actuators from :mod:`hydraulics`, the statistics from :mod:`correction`. This module
+only sequences them and records; it never prints (progress goes through a callback).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from mjcf.build import CORNERS, build_model
+from mjcf.physics import RigIndex, static_equilibrium
+from scenarios import roads
+from scenarios.config import Scenario, ScenarioError
+from scenarios.results import RunResult
+
+__all__ = ["SimulationError", "Drive", "prepare_drive", "run", "HALF_STROKE_M", "MODES"]
+
+#: DYNTRAC actuator stroke 15.2 cm total (paper): +-76 mm about mid-stroke.
+HALF_STROKE_M = 0.076
+MODES = ("road", "rig")
+_PROFILE_DX_M = 0.02  # m; resolves the ISO band up to 10 cycle/m with 2.5 points per shortest wave
+_CHECK_EVERY_S = 0.01  # s; MuJoCo warnings are checked this often and reported with this resolution
+
+ProgressFn = Callable[[float, float], None]
+"""progress(simulated_s, total_s), called a few hundred times per run."""
+
+
+class SimulationError(RuntimeError):
+    """A run that went wrong while simulating (MuJoCo warning, divergence); names the time."""
+
+
+@dataclass(frozen=True)
+class Drive:
+    """The four pan drive signals at the simulation rate, with the lead-in.
+
+    Attributes
+    ----------
+    t_s : numpy.ndarray, s
+        Times of the steps, from -lead_in to duration (t = 0 starts the analysed record).
+    z_m, v_mps : numpy.ndarray, m and m/s
+        Elevation and vertical velocity per corner, shape (N, 4), faded in over the first
+        half of the lead-in by a cosine taper.
+    """
+
+    t_s: np.ndarray
+    z_m: np.ndarray
+    v_mps: np.ndarray
+
+
+def _road_profile(scenario: Scenario, length_m: float) -> roads.Profile:
+    rc = scenario.road
+    if rc.profile_csv is not None:
+        base = scenario.source.parent if scenario.source is not None else None
+        path = rc.profile_csv if base is None else base / rc.profile_csv
+        try:
+            return roads.read_profile_csv(path)
+        except roads.ProfileError as exc:
+            raise ScenarioError(f"road.profile_csv: {exc}") from None
+    if rc.roughness is not None:
+        spec = roads.RoadSpec.from_class(rc.roughness, waviness=rc.waviness, tracks=rc.tracks)
+    else:
+        spec = roads.RoadSpec(gd_n0_m3=rc.gd_n0_m3, waviness=rc.waviness, tracks=rc.tracks)
+    rng = np.random.default_rng(scenario.seed)
+    return roads.generate_profile(spec, length_m, _PROFILE_DX_M, rng)
+
+
+def _wheelbase_m(model: mujoco.MjModel) -> float:
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    sid = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, f"wheel_{c}") for c in ("fl", "rl")]
+    return float(data.site_xpos[sid[0], 0] - data.site_xpos[sid[1], 0])
+
+
+def prepare_drive(scenario: Scenario, model: mujoco.MjModel) -> Drive:
+    """Road profile -> high-pass -> four pan drives at the simulation rate, stroke-checked.
+
+    Raises
+    ------
+    ScenarioError
+        If the profile cannot be made or read, or the drive leaves the stroke (naming the
+        corner, the time and the margin).
+    """
+    dt = model.opt.timestep
+    fs = 1.0 / dt
+    v = scenario.speed_mps
+    wheelbase = _wheelbase_m(model)
+    total_s = scenario.lead_in_s + scenario.duration_s
+    # Extra length: the rear axle starts a wheelbase behind, plus margins for the
+    # high-pass's edge effects at both ends.
+    margin = max(2.0 * scenario.road.cuton_wavelength_m, 20.0)
+    length = wheelbase + roads.START_MARGIN_M + v * total_s + 2 * margin
+    try:
+        profile = _road_profile(scenario, length)
+        profile = roads.highpass(profile, scenario.road.cuton_wavelength_m)
+        start = float(profile.x_m[0]) + margin + wheelbase + roads.START_MARGIN_M
+        wd = roads.sample_wheels(profile, v, wheelbase, fs, total_s, start_m=start)
+    except roads.ProfileError as exc:
+        raise ScenarioError(f"road: {exc}") from None
+    except ValueError as exc:
+        raise ScenarioError(f"road: {exc}") from None
+
+    t = wd.t_s - scenario.lead_in_s
+    # Cosine fade-in over the first half of the lead-in: w(t) rises from 0 to 1.
+    t_fade = 0.5 * scenario.lead_in_s
+    tau = np.clip((t + scenario.lead_in_s) / t_fade, 0.0, 1.0)
+    w = 0.5 - 0.5 * np.cos(np.pi * tau)
+    dw = np.where((tau > 0) & (tau < 1), 0.5 * np.pi / t_fade * np.sin(np.pi * tau), 0.0)
+    z = wd.z_m * w[:, None]
+    vz = wd.v_mps * w[:, None] + wd.z_m * dw[:, None]
+    try:
+        roads.WheelDrive(t, z, vz).check_stroke(HALF_STROKE_M)
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
+    return Drive(t_s=t, z_m=z, v_mps=vz)
+
+
+def _check_warnings(data: mujoco.MjData, t0: float, t1: float) -> None:
+    for kind, stat in enumerate(data.warning):
+        if stat.number:
+            text = mujoco.mju_warningText(kind, stat.lastinfo)
+            raise SimulationError(
+                f"MuJoCo warning between t = {t0:.4f} s and t = {t1:.4f} s of simulated time: {text}"
+            )
+
+
+def _truck_mass(model: mujoco.MjModel) -> float:
+    names = ("chassis", "payload", "front_axle", "rear_axle")
+    return float(sum(model.body_mass[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n)] for n in names))
+
+
+def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | None) -> dict[str, np.ndarray]:
+    """Road test: the pans are moved kinematically, exactly along the profile."""
+    data = mujoco.MjData(model)
+    idx = RigIndex.of(model)
+    static_equilibrium(model, data, pan_z_m=drive.z_m[0])
+    qa = idx.pan_qpos
+    da = idx.pan_dof
+    tires = idx.tire_actuator
+    dt = model.opt.timestep
+    decim = int(round(1.0 / (scenario.output_rate_hz * dt)))
+    n = drive.t_s.size
+    k0 = int(np.searchsorted(drive.t_s, -0.5 * dt))  # first step at t >= 0
+    n_out = (n - 1 - k0) // decim + 1
+    pan = np.empty((n_out, 4))
+    force = np.empty((n_out, 4))
+    check = max(1, int(round(_CHECK_EVERY_S / dt)))
+    report = max(check, n // 200)
+    z, vz = drive.z_m, drive.v_mps
+    total = float(drive.t_s[-1] - drive.t_s[0])
+    j = 0
+    for k in range(n):
+        data.qpos[qa] = z[k]
+        data.qvel[da] = vz[k]
+        record = k >= k0 and (k - k0) % decim == 0
+        if record:
+            pan[j] = data.qpos[qa]
+        mujoco.mj_step(model, data)
+        if record:
+            force[j] = data.actuator_force[tires]
+            j += 1
+        if k % check == check - 1:
+            _check_warnings(data, drive.t_s[k] - (check - 1) * dt, drive.t_s[k] + dt)
+            if progress is not None and k % report == report - 1:
+                progress(float(drive.t_s[k] - drive.t_s[0]), total)
+    _check_warnings(data, drive.t_s[-1] - check * dt, drive.t_s[-1] + dt)
+    if not np.all(np.isfinite(force)):
+        raise SimulationError("the simulation produced non-finite tire forces")
+    return {"pan_m": pan, "tire_force_N": force}
+
+
+def run(scenario: Scenario, mode: str = "road", *, progress: ProgressFn | None = None) -> RunResult:
+    """Run ``scenario`` in ``mode`` and return its result.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    mode : {"road", "rig"}
+        "road": the wheelpans follow the profile exactly (a road test). "rig": the pans are
+        driven by the hydraulic actuators with the profile as their drive signal.
+    progress : callable, optional
+        ``progress(simulated_s, total_s)``.
+
+    Raises
+    ------
+    ScenarioError
+        Bad input detected before the run starts.
+    SimulationError
+        A MuJoCo warning or divergence during the run, with its simulated time.
+    """
+    if mode not in MODES:
+        raise ScenarioError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
+    wall0 = time.perf_counter()
+    model = build_model(scenario.vehicle)
+    fs = 1.0 / model.opt.timestep
+    decim = fs / scenario.output_rate_hz
+    if abs(decim - round(decim)) > 1e-9:
+        raise ScenarioError(
+            f"output_rate_hz = {scenario.output_rate_hz:g} Hz must divide the simulation rate {fs:g} Hz"
+        )
+    drive = prepare_drive(scenario, model)
+    if mode == "road":
+        recorded = _run_road(scenario, model, drive, progress)
+    else:
+        from scenarios.rig import run_rig  # hydraulics in the loop
+
+        recorded = run_rig(scenario, model, drive, progress)
+    decim = int(round(decim))
+    k0 = int(np.searchsorted(drive.t_s, -0.5 * model.opt.timestep))
+    t_out = drive.t_s[k0::decim]
+    signals = {"profile_m": drive.z_m[k0::decim].copy()}
+    events = recorded.pop("events", {})
+    signals.update(recorded)
+    info = {
+        "timestep_s": model.opt.timestep,
+        "speed_kmh": scenario.speed_kmh,
+        "duration_s": scenario.duration_s,
+        "lead_in_s": scenario.lead_in_s,
+        "seed": scenario.seed,
+        "wall_time_s": round(time.perf_counter() - wall0, 3),
+        "simulated_steps": int(drive.t_s.size),
+    }
+    for key in signals:
+        signals[key].setflags(write=False)
+    t_out = t_out.copy()
+    t_out.setflags(write=False)
+    return RunResult(
+        scenario_name=scenario.name,
+        mode=mode,
+        t_s=t_out,
+        signals=signals,
+        vehicle_mass_kg=_truck_mass(model),
+        events=events,
+        info=info,
+        corners=CORNERS,
+    )

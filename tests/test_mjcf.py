@@ -1,0 +1,208 @@
+"""Tests of the truck-on-rig MJCF model (mjcf/).
+
+References are independent of the code under test: the total weight is the sum of the
+compiled body masses times g; the front/rear split is the lever rule on the actual body
+positions; tire deflection is measured geometrically between sites; the frequency bands are
+Cebon's (Handbook of Vehicle-Road Interaction, 1999: body bounce 1.5-4 Hz, axle hop 8-15 Hz).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from mjcf.build import CORNERS, TruckVariant, build_model, build_spec, resource_path
+from mjcf.physics import RigIndex, modal_analysis, static_equilibrium, tire_forces
+
+G = 9.81  # m/s^2, the model's gravity (checked below)
+PAPER_PAYLOADS_KG = (3640.0, 6360.0)  # the paper's two payloads
+
+
+def _rest(payload_kg: float, pans: str = "slide", **kw):
+    model = build_model(TruckVariant(payload_kg=payload_kg, **kw), pans=pans)
+    data = mujoco.MjData(model)
+    static_equilibrium(model, data)
+    return model, data
+
+
+def _site(model, data, name):
+    return data.site_xpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, name)].copy()
+
+
+def test_gravity_is_standard():
+    model = build_model()
+    assert np.allclose(model.opt.gravity, [0, 0, -G])
+
+
+@pytest.mark.parametrize("payload_kg", PAPER_PAYLOADS_KG)
+def test_static_wheel_loads_sum_to_weight_and_split_by_lever_rule(payload_kg):
+    model, data = _rest(payload_kg)
+    forces = tire_forces(model, data)
+    truck_bodies = ["chassis", "payload", "front_axle", "rear_axle"]
+    bid = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in truck_bodies]
+    masses = model.body_mass[bid]
+    weight = masses.sum() * G
+    # Reference 1: the sum of all truck body masses times g (not the solver's output).
+    assert forces.sum() == pytest.approx(weight, rel=1e-3)
+    assert masses[1] == pytest.approx(payload_kg)
+
+    # Reference 2: lever rule on the actual centres of mass and wheel-centre positions.
+    x_com = data.xipos[bid, 0]
+    x_front = _site(model, data, "wheel_fl")[0]
+    x_rear = _site(model, data, "wheel_rl")[0]
+    front_share = (x_com - x_rear) / (x_front - x_rear)
+    front_expected = G * np.sum(masses * front_share)
+    front = forces[0] + forces[1]
+    rear = forces[2] + forces[3]
+    print(f"payload {payload_kg:.0f} kg: wheel loads {np.round(forces)} N, front {front:.0f} N, rear {rear:.0f} N")
+    assert front == pytest.approx(front_expected, rel=1e-3)
+    assert rear == pytest.approx(weight - front_expected, rel=1e-3)
+    # Laterally symmetric truck: left equals right.
+    assert forces[0] == pytest.approx(forces[1], rel=1e-9)
+    assert forces[2] == pytest.approx(forces[3], rel=1e-9)
+
+
+def test_heavier_payload_loads_the_rear_more():
+    f_light = tire_forces(*_rest(3640.0))
+    f_heavy = tire_forces(*_rest(6360.0))
+    assert f_heavy[2] - f_light[2] > f_heavy[0] - f_light[0] > 0
+
+
+@pytest.mark.parametrize("corner,k_nominal", [("fl", 0.9e6), ("rl", 1.8e6)])
+def test_tire_force_linear_in_geometric_deflection_and_zero_after_liftoff(corner, k_nominal):
+    """Force against deflection measured between the wheel-centre and pan sites.
+
+    Expected stiffness: the value stated in truck_rig.xml (0.9 MN/m per steer tire, dual
+    pair 1.8 MN/m), and the value a TruckVariant sets (1.1 MN/m) - the model must honour it.
+    """
+    for k_set in (None, 1.1e6):
+        key = "tire_stiffness_front_N_per_m" if corner in ("fl", "fr") else "tire_stiffness_rear_N_per_m"
+        model, data = _rest(3640.0, **({key: k_set} if k_set else {}))
+        k_expected = k_set or k_nominal
+        idx = RigIndex.of(model)
+        i = CORNERS.index(corner)
+        r0 = 0.527  # free radius of an 11R22.5 tire, as stated in truck_rig.xml
+        deflections, forces = [], []
+        for z in np.linspace(-0.01, 0.01, 9):  # stays in contact (static deflection >= 16 mm)
+            data.qpos[idx.pan_qpos[i]] = z
+            mujoco.mj_forward(model, data)
+            gap = np.linalg.norm(_site(model, data, f"wheel_{corner}") - _site(model, data, f"pan_{corner}"))
+            deflections.append(r0 - gap)
+            forces.append(tire_forces(model, data)[i])
+        slope, intercept = np.polyfit(deflections, forces, 1)
+        assert slope == pytest.approx(k_expected, rel=0.01)
+        assert abs(intercept) < 0.01 * max(forces)
+        residual = np.array(forces) - (slope * np.array(deflections) + intercept)
+        assert np.max(np.abs(residual)) < 0.01 * max(forces)
+        # Lift-off: pan far below the free radius -> exactly zero force (unilateral).
+        data.qpos[idx.pan_qpos[i]] = -0.07
+        data.qvel[idx.pan_dof[i]] = -1.0  # even while moving apart (no sticky damping)
+        mujoco.mj_forward(model, data)
+        assert tire_forces(model, data)[i] == 0.0
+        data.qvel[:] = 0.0
+
+
+def test_tire_damping_honoured():
+    """A pan velocity v changes the tire force by ct v (ct = 1.5 kN s/m front, truck_rig.xml)."""
+    model, data = _rest(3640.0)
+    idx = RigIndex.of(model)
+    f0 = tire_forces(model, data)[0]
+    data.qvel[idx.pan_dof[0]] = 0.2  # pan moving up at 0.2 m/s compresses the tire
+    mujoco.mj_forward(model, data)
+    # rel 1e-4: the tendon is tilted by the chassis pitch at rest (~2 mrad), so the pan's
+    # vertical velocity projects onto it with cos(tilt) ~ 1 - 2e-6.
+    assert tire_forces(model, data)[0] - f0 == pytest.approx(1500.0 * 0.2, rel=1e-4)
+
+
+@pytest.mark.parametrize("payload_kg", PAPER_PAYLOADS_KG)
+def test_natural_frequencies_in_cebon_bands(payload_kg):
+    model, data = _rest(payload_kg, pans="fixed")
+    modes = {m.name: m for m in modal_analysis(model, data)}
+    print(f"\npayload {payload_kg:.0f} kg, pans fixed, leaf friction off:")
+    for m in modes.values():
+        print(f"  {m.name:16s} {m.frequency_hz:6.2f} Hz  damping ratio {m.damping_ratio:.3f}")
+    for name in ("body bounce", "body pitch"):
+        assert 1.5 <= modes[name].frequency_hz <= 4.0, name
+    for name in ("front axle hop", "rear axle hop"):
+        assert 8.0 <= modes[name].frequency_hz <= 15.0, name
+    # Second, independent estimate of the front axle hop: the axle alone on its two tires
+    # and two springs, chassis held still: sqrt(2 (kt + ks) / m) with XML values.
+    f_single = np.sqrt(2 * (0.9e6 + 3e5) / 700.0) / (2 * np.pi)
+    assert modes["front axle hop"].frequency_hz == pytest.approx(f_single, rel=0.03)
+
+
+def test_every_element_named_with_parallel_corners():
+    model = build_model()
+    kinds = {
+        "body": (mujoco.mjtObj.mjOBJ_BODY, model.nbody, 1),  # skip the world body
+        "joint": (mujoco.mjtObj.mjOBJ_JOINT, model.njnt, 0),
+        "geom": (mujoco.mjtObj.mjOBJ_GEOM, model.ngeom, 0),
+        "site": (mujoco.mjtObj.mjOBJ_SITE, model.nsite, 0),
+        "tendon": (mujoco.mjtObj.mjOBJ_TENDON, model.ntendon, 0),
+        "actuator": (mujoco.mjtObj.mjOBJ_ACTUATOR, model.nu, 0),
+        "sensor": (mujoco.mjtObj.mjOBJ_SENSOR, model.nsensor, 0),
+        "camera": (mujoco.mjtObj.mjOBJ_CAMERA, model.ncam, 0),
+        "light": (mujoco.mjtObj.mjOBJ_LIGHT, model.nlight, 0),
+    }
+    for kind, (obj, n, start) in kinds.items():
+        for i in range(start, n):
+            assert mujoco.mj_id2name(model, obj, i), f"unnamed {kind} #{i}"
+    per_corner = {
+        mujoco.mjtObj.mjOBJ_BODY: "pan_{}",
+        mujoco.mjtObj.mjOBJ_JOINT: "pan_{}_z",
+        mujoco.mjtObj.mjOBJ_TENDON: "tire_{}",
+        mujoco.mjtObj.mjOBJ_ACTUATOR: "tire_{}",
+        mujoco.mjtObj.mjOBJ_SENSOR: "tire_force_{}",
+    }
+    for obj, pattern in per_corner.items():
+        for c in CORNERS:
+            assert mujoco.mj_name2id(model, obj, pattern.format(c)) >= 0, pattern.format(c)
+    for pattern in ("wheel_{}", "pan_{}", "hanger_{}", "seat_{}"):
+        for c in CORNERS:
+            assert mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, pattern.format(c)) >= 0
+
+
+def test_angles_in_radians_and_stroke():
+    spec = build_spec()
+    assert spec.compiler.degree == 0
+    model = spec.compile()
+    j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "pan_fl_z")
+    # DYNTRAC stroke 15.2 cm total (paper).
+    assert model.jnt_range[j, 1] - model.jnt_range[j, 0] == pytest.approx(0.152)
+
+
+VARIANTS = {
+    "nominal": (TruckVariant(), "slide"),
+    "heavy": (TruckVariant(payload_kg=6360.0), "slide"),
+    "stiff_tires": (TruckVariant(tire_stiffness_front_N_per_m=1.2e6, tire_stiffness_rear_N_per_m=2.4e6), "slide"),
+    "fixed_pans": (TruckVariant(), "fixed"),
+}
+
+
+@pytest.mark.parametrize("name", VARIANTS)
+def test_every_model_steps_one_second_without_warning(name):
+    variant, pans = VARIANTS[name]
+    model = build_model(variant, pans=pans)
+    data = mujoco.MjData(model)
+    static_equilibrium(model, data)
+    # Pans on slides are held in place by their actuators in a run; here they are free and
+    # fall onto their lower end stops, a harsher test of the model than standing still.
+    mujoco.mj_step(model, data, int(round(1.0 / model.opt.timestep)))
+    assert data.time == pytest.approx(1.0)
+    assert all(w.number == 0 for w in data.warning), [w.number for w in data.warning]
+    assert np.all(np.isfinite(data.qpos))
+
+
+def test_scene_is_loadable_on_its_own():
+    model = mujoco.MjModel.from_xml_path(str(resource_path("scene.xml")))
+    assert model.nu == 4
+
+
+def test_variant_validation_names_the_field():
+    with pytest.raises(ValueError, match="vehicle.payload_kg"):
+        TruckVariant(payload_kg=-1.0)
+    with pytest.raises(ValueError, match="vehicle.tire_stiffness_front_N_per_m"):
+        TruckVariant(tire_stiffness_front_N_per_m=float("nan"))
+    with pytest.raises(ValueError, match="vehicle.timestep_s"):
+        TruckVariant(timestep_s=0.01)
