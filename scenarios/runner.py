@@ -101,6 +101,8 @@ def prepare_drive(scenario: Scenario, model: mujoco.MjModel) -> Drive:
         profile = roads.highpass(profile, scenario.road.cuton_wavelength_m)
         start = float(profile.x_m[0]) + margin + wheelbase + roads.START_MARGIN_M
         wd = roads.sample_wheels(profile, v, wheelbase, fs, total_s, start_m=start)
+    except ScenarioError:
+        raise
     except roads.ProfileError as exc:
         raise ScenarioError(f"road: {exc}") from None
     except ValueError as exc:
