@@ -142,8 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     pp = sub.add_parser("paper", help="run the paper's three cases and print the DLC table")
     pp.add_argument("--out", required=True, help="output folder")
-    pp.add_argument("--modes", nargs="+", choices=("road", "rig"), default=["road"],
-                    help="modes to run (default: road)")
+    pp.add_argument("--modes", nargs="+", choices=("road", "rig"), default=["road", "rig"],
+                    help="modes to run (default: road rig)")
     pp.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
     pp.set_defaults(func=_cmd_paper)

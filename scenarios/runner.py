@@ -20,7 +20,7 @@ from scenarios import roads
 from scenarios.config import Scenario, ScenarioError
 from scenarios.results import RunResult
 
-__all__ = ["SimulationError", "Drive", "prepare_drive", "run", "HALF_STROKE_M", "MODES"]
+__all__ = ["SimulationError", "Drive", "Watch", "output_schedule", "prepare_drive", "run", "HALF_STROKE_M", "MODES"]
 
 #: DYNTRAC actuator stroke 15.2 cm total (paper): +-76 mm about mid-stroke.
 HALF_STROKE_M = 0.076
@@ -132,6 +132,43 @@ def _check_warnings(data: mujoco.MjData, t0: float, t1: float) -> None:
             )
 
 
+def output_schedule(drive: Drive, dt: float, rate_hz: float) -> tuple[int, int, int]:
+    """(k0, decim, n_out): the first step at t >= 0, the steps per output sample, the samples."""
+    decim = int(round(1.0 / (rate_hz * dt)))
+    k0 = int(np.searchsorted(drive.t_s, -0.5 * dt))
+    return k0, decim, (drive.t_s.size - 1 - k0) // decim + 1
+
+
+class Watch:
+    """Checks MuJoCo's warnings every 10 ms of simulated time and reports progress.
+
+    Call :meth:`tick` after every step ``k``; it raises :class:`SimulationError` naming the
+    simulated-time window of the first warning, and :meth:`finish` after the last step.
+    """
+
+    def __init__(self, drive: Drive, dt: float, progress: ProgressFn | None, extra=None):
+        self.t = drive.t_s
+        self.dt = dt
+        self.progress = progress
+        self.extra = extra  # extra(data, t) -> None, raises on a bad state
+        self.check = max(1, int(round(_CHECK_EVERY_S / dt)))
+        self.report = max(self.check, self.t.size // 200)
+        self.total = float(self.t[-1] - self.t[0])
+
+    def tick(self, data: mujoco.MjData, k: int) -> None:
+        if k % self.check == self.check - 1:
+            t = float(self.t[k])
+            _check_warnings(data, t - (self.check - 1) * self.dt, t + self.dt)
+            if self.extra is not None:
+                self.extra(data, t)
+            if self.progress is not None and k % self.report == self.report - 1:
+                self.progress(t - float(self.t[0]), self.total)
+
+    def finish(self, data: mujoco.MjData) -> None:
+        t = float(self.t[-1])
+        _check_warnings(data, t - self.check * self.dt, t + self.dt)
+
+
 def _truck_mass(model: mujoco.MjModel) -> float:
     names = ("chassis", "payload", "front_axle", "rear_axle")
     return float(sum(model.body_mass[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n)] for n in names))
@@ -145,19 +182,13 @@ def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | No
     qa = idx.pan_qpos
     da = idx.pan_dof
     tires = idx.tire_actuator
-    dt = model.opt.timestep
-    decim = int(round(1.0 / (scenario.output_rate_hz * dt)))
-    n = drive.t_s.size
-    k0 = int(np.searchsorted(drive.t_s, -0.5 * dt))  # first step at t >= 0
-    n_out = (n - 1 - k0) // decim + 1
+    k0, decim, n_out = output_schedule(drive, model.opt.timestep, scenario.output_rate_hz)
     pan = np.empty((n_out, 4))
     force = np.empty((n_out, 4))
-    check = max(1, int(round(_CHECK_EVERY_S / dt)))
-    report = max(check, n // 200)
+    watch = Watch(drive, model.opt.timestep, progress)
     z, vz = drive.z_m, drive.v_mps
-    total = float(drive.t_s[-1] - drive.t_s[0])
     j = 0
-    for k in range(n):
+    for k in range(drive.t_s.size):
         data.qpos[qa] = z[k]
         data.qvel[da] = vz[k]
         record = k >= k0 and (k - k0) % decim == 0
@@ -167,11 +198,8 @@ def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | No
         if record:
             force[j] = data.actuator_force[tires]
             j += 1
-        if k % check == check - 1:
-            _check_warnings(data, drive.t_s[k] - (check - 1) * dt, drive.t_s[k] + dt)
-            if progress is not None and k % report == report - 1:
-                progress(float(drive.t_s[k] - drive.t_s[0]), total)
-    _check_warnings(data, drive.t_s[-1] - check * dt, drive.t_s[-1] + dt)
+        watch.tick(data, k)
+    watch.finish(data)
     if not np.all(np.isfinite(force)):
         raise SimulationError("the simulation produced non-finite tire forces")
     return {"pan_m": pan, "tire_force_N": force}
@@ -213,8 +241,7 @@ def run(scenario: Scenario, mode: str = "road", *, progress: ProgressFn | None =
         from scenarios.rig import run_rig  # hydraulics in the loop
 
         recorded = run_rig(scenario, model, drive, progress)
-    decim = int(round(decim))
-    k0 = int(np.searchsorted(drive.t_s, -0.5 * model.opt.timestep))
+    k0, decim, _ = output_schedule(drive, model.opt.timestep, scenario.output_rate_hz)
     t_out = drive.t_s[k0::decim]
     signals = {"profile_m": drive.z_m[k0::decim].copy()}
     events = recorded.pop("events", {})

@@ -1,0 +1,148 @@
+"""Rig-test mode: the wheelpans are driven by the nonlinear hydraulic actuators.
+
+The drive signal (the high-passed road profile, identical to road mode) is the actuator
+reference x_ref in ``ctrl``; the actuator states live in MuJoCo's activation vector and
+are advanced by the callbacks of :mod:`hydraulics.bridge`, installed for this run only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import mujoco
+import numpy as np
+
+from hydraulics.bridge import add_hydraulic_actuators, hydraulic_callbacks
+from hydraulics.equilibrium import equilibrium_activation
+from hydraulics.params import STATE_NAMES, ActuatorParams
+from mjcf.build import CORNERS, TruckVariant, build_spec
+from mjcf.physics import RigIndex, static_equilibrium
+from scenarios.config import Scenario, ScenarioError
+
+__all__ = ["actuator_params", "rig_model", "rest_state", "run_rig"]
+
+MPA = 1e6
+
+
+def actuator_params(scenario: Scenario) -> ActuatorParams:
+    """The scenario's actuator parameters (defaults with the ``[actuator]`` overrides)."""
+    try:
+        return ActuatorParams(**dict(scenario.actuator))
+    except (TypeError, ValueError) as exc:
+        raise ScenarioError(str(exc)) from None
+
+
+def rig_model(scenario: Scenario, params: ActuatorParams) -> mujoco.MjModel:
+    """Compile the truck on the rig with the hydraulic actuators added.
+
+    The pan mass is one physical quantity with two homes (the MuJoCo pan body and the
+    actuator parameters used by the linear models): a rig run uses the actuator's value
+    unless the scenario sets ``vehicle.pan_mass_kg``, and refuses two different values.
+    """
+    variant = scenario.vehicle
+    if variant.pan_mass_kg is None:
+        variant = dataclasses.replace(variant, pan_mass_kg=params.pan_mass_kg)
+    elif "pan_mass_kg" in scenario.actuator and scenario.actuator["pan_mass_kg"] != variant.pan_mass_kg:
+        raise ScenarioError(
+            f"vehicle.pan_mass_kg ({variant.pan_mass_kg:g} kg) and actuator.pan_mass_kg "
+            f"({scenario.actuator['pan_mass_kg']:g} kg) disagree; set only one of them"
+        )
+    spec = build_spec(variant)
+    add_hydraulic_actuators(spec, params, CORNERS)
+    return spec.compile()
+
+
+def _hyd_ids(model: mujoco.MjModel) -> np.ndarray:
+    return np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"hyd_{c}") for c in CORNERS])
+
+
+def rest_state(model: mujoco.MjModel, params: ActuatorParams) -> mujoco.MjData:
+    """MjData at static rest: truck in equilibrium on the pans at mid-stroke, each actuator's
+    pressures carrying its tire load plus the pan's weight, spool at the flow balance."""
+    data = mujoco.MjData(model)
+    static_equilibrium(model, data, pan_z_m=np.zeros(len(CORNERS)))
+    idx = RigIndex.of(model)
+    tire = data.actuator_force[idx.tire_actuator]
+    g = -model.opt.gravity[2]
+    hyd = _hyd_ids(model)
+    for i, act_id in enumerate(hyd):
+        body = model.jnt_bodyid[model.actuator_trnid[act_id, 0]]
+        load = float(tire[i] + model.body_mass[body] * g)
+        adr, dim = model.actuator_actadr[act_id], model.actuator_actnum[act_id]
+        data.act[adr: adr + dim] = equilibrium_activation(params, load)
+        data.ctrl[act_id] = 0.0
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def run_rig(scenario: Scenario, model_unused, drive, progress=None) -> dict:
+    """Run the rig test; returns the recorded per-wheel signals and the events.
+
+    ``model_unused`` is the road-mode model of the caller; the rig builds its own (with
+    the actuators added and the actuator's pan mass).
+    """
+    from hydraulics.events import events as hydraulic_events
+    from scenarios.runner import SimulationError, Watch, output_schedule
+
+    params = actuator_params(scenario)
+    model = rig_model(scenario, params)
+    data = rest_state(model, params)
+    idx = RigIndex.of(model)
+    hyd = _hyd_ids(model)
+    tires = idx.tire_actuator
+    qa = idx.pan_qpos
+    adr = model.actuator_actadr[hyd]
+    dim = int(model.actuator_actnum[hyd[0]])
+    act_index = (adr[:, None] + np.arange(dim)[None, :])  # (4, dim)
+    k0, decim, n_out = output_schedule(drive, model.opt.timestep, scenario.output_rate_hz)
+    pan = np.empty((n_out, 4))
+    force = np.empty((n_out, 4))
+    states = np.empty((n_out, 4, dim))
+
+    def diverged(data_: mujoco.MjData, t: float) -> None:
+        if not np.all(np.isfinite(data_.act)):
+            raise SimulationError(
+                f"the hydraulic states diverged by t = {t:.4f} s of simulated time; "
+                "the actuator parameters make the loop unstable"
+            )
+
+    watch = Watch(drive, model.opt.timestep, progress, extra=diverged)
+    z = drive.z_m
+    j = 0
+    with hydraulic_callbacks(model):
+        for k in range(drive.t_s.size):
+            data.ctrl[hyd] = z[k]
+            record = k >= k0 and (k - k0) % decim == 0
+            if record:
+                pan[j] = data.qpos[qa]
+                states[j] = data.act[act_index]
+            mujoco.mj_step(model, data)
+            if record:
+                force[j] = data.actuator_force[tires]
+                j += 1
+            watch.tick(data, k)
+        watch.finish(data)
+    names = list(STATE_NAMES)
+    spool = states[:, :, names.index("spool")]
+    p1 = states[:, :, names.index("p1_MPa")] * MPA
+    p2 = states[:, :, names.index("p2_MPa")] * MPA
+    ev = hydraulic_events(states, params)
+    t_out = drive.t_s[k0::decim]
+    events = {}
+    for name, mask in ev.items():
+        mask = np.asarray(mask)
+        per = {}
+        for i, c in enumerate(CORNERS):
+            m_c = mask[:, i] if mask.ndim == 2 else mask
+            if np.any(m_c):
+                per[c] = {"samples": int(np.sum(m_c)), "first_time_s": float(t_out[np.argmax(m_c)])}
+        if per:
+            events[name] = per
+    return {
+        "pan_m": pan,
+        "tire_force_N": force,
+        "spool": spool,
+        "p1_Pa": p1,
+        "p2_Pa": p2,
+        "events": events,
+    }
