@@ -205,7 +205,13 @@ def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | No
     return {"pan_m": pan, "tire_force_N": force}
 
 
-def run(scenario: Scenario, mode: str = "road", *, progress: ProgressFn | None = None) -> RunResult:
+def run(
+    scenario: Scenario,
+    mode: str = "road",
+    *,
+    progress: ProgressFn | None = None,
+    pan_drive: Callable[[Drive], Drive] | None = None,
+) -> RunResult:
     """Run ``scenario`` in ``mode`` and return its result.
 
     Parameters
@@ -216,6 +222,11 @@ def run(scenario: Scenario, mode: str = "road", *, progress: ProgressFn | None =
         driven by the hydraulic actuators with the profile as their drive signal.
     progress : callable, optional
         ``progress(simulated_s, total_s)``.
+    pan_drive : callable, optional
+        Road mode only: ``pan_drive(drive) -> Drive`` maps the scenario's drive (the road
+        profile) to the motion the pans follow instead, on the same time axis (for example
+        the profile passed through a linear actuator model T_a). ``profile_m`` still records
+        the road profile. The returned drive is stroke-checked like the profile.
 
     Raises
     ------
@@ -235,8 +246,19 @@ def run(scenario: Scenario, mode: str = "road", *, progress: ProgressFn | None =
             f"output_rate_hz = {scenario.output_rate_hz:g} Hz must divide the simulation rate {fs:g} Hz"
         )
     drive = prepare_drive(scenario, model)
+    if pan_drive is not None and mode != "road":
+        raise ScenarioError("pan_drive replaces the pan motion of a road-mode run only")
     if mode == "road":
-        recorded = _run_road(scenario, model, drive, progress)
+        follow = drive
+        if pan_drive is not None:
+            follow = pan_drive(drive)
+            if follow.t_s.shape != drive.t_s.shape or not np.array_equal(follow.t_s, drive.t_s):
+                raise ValueError("pan_drive must return a Drive on the same time axis as its input")
+            try:
+                roads.WheelDrive(follow.t_s, follow.z_m, follow.v_mps).check_stroke(HALF_STROKE_M)
+            except ValueError as exc:
+                raise ScenarioError(f"pan_drive: {exc}") from None
+        recorded = _run_road(scenario, model, follow, progress)
     else:
         from scenarios.rig import run_rig  # hydraulics in the loop
 
