@@ -12,8 +12,11 @@ Both runs are repeated alternately; the fastest of each is printed as one JSON l
 
 Usage::
 
-    python benchmarks/step_rate.py [--model four|single] [--steps N] [--repeats R]
-    python benchmarks/step_rate.py --spec package.module:function   # e.g. the full truck
+    python benchmarks/step_rate.py [--model truck|four|single] [--steps N] [--repeats R]
+    python benchmarks/step_rate.py --spec package.module:function
+
+``--model truck`` (the default) is the project's truck on the four pans (mjcf/), at its static
+equilibrium; ``four``/``single`` are stand-in quarter trucks.
 
 ``--spec`` names a function returning an ``mujoco.MjSpec`` that contains the slide joints
 ``pan_<c>_z`` (and no hydraulic actuators); its first keyframe, if any, is the static state.
@@ -71,7 +74,24 @@ def quarter_truck_spec(corners=CORNERS, *, tire=1.0e6, unsprung=450.0, sprung=25
     return spec
 
 
+def truck_spec() -> mujoco.MjSpec:
+    """The project's truck on the rig (pan mass from the actuator parameters) with a keyframe
+    at its static equilibrium on the pans at mid-stroke."""
+    from mjcf.build import TruckVariant, build_spec
+    from mjcf.physics import static_equilibrium
+
+    variant = TruckVariant(pan_mass_kg=PARAMS.pan_mass_kg)
+    model = build_spec(variant).compile()
+    data = mujoco.MjData(model)
+    qpos = static_equilibrium(model, data)
+    spec = build_spec(variant)
+    spec.add_key(name="rest", qpos=qpos)
+    return spec
+
+
 def _spec_from(args) -> tuple[mujoco.MjSpec, tuple]:
+    if args.model == "truck" and not args.spec:
+        return truck_spec(), CORNERS
     if args.spec:
         module, _, func = args.spec.partition(":")
         spec = getattr(importlib.import_module(module), func)()
@@ -142,7 +162,7 @@ def initial_state(model, corners, loads, hydraulic: bool) -> np.ndarray:
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--model", choices=("four", "single"), default="four")
+    ap.add_argument("--model", choices=("truck", "four", "single"), default="truck")
     ap.add_argument("--spec", help="module:function returning an MjSpec with pan_<c>_z joints")
     ap.add_argument("--steps", type=int, default=20_000)
     ap.add_argument("--repeats", type=int, default=7)
@@ -151,7 +171,10 @@ def main(argv=None) -> dict:
     rig, bare, corners = build_models(args)
     loads = static_loads(bare, corners)
     n = args.steps
-    x_ref = drive_signal(n, rig.opt.timestep, corners)
+    hyd = [mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_ACTUATOR, f"hyd_{c}") for c in corners]
+    sens = [int(rig.sensor_adr[mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_SENSOR, f"force_{c}")]) for c in corners]
+    x_ref = np.zeros((n, rig.nu))  # other actuators (the tires) take no control
+    x_ref[:, hyd] = drive_signal(n, rig.opt.timestep, corners)
     d_rig, d_bare = mujoco.MjData(rig), mujoco.MjData(bare)
     s_rig = initial_state(rig, corners, loads, True)
     s_bare = initial_state(bare, corners, loads, False)
@@ -163,9 +186,10 @@ def main(argv=None) -> dict:
     for _ in range(args.repeats):
         with hydraulic_callbacks(rig, fast=True):
             t0 = time.perf_counter()
-            state, sens = rollout.rollout(rig, d_rig, s_rig, x_ref)
+            state, sensordata = rollout.rollout(rig, d_rig, s_rig, x_ref)
             rig_times.append(time.perf_counter() - t0)
-        forces = sens[0, :, :len(corners)].copy()
+        forces = np.zeros((n, bare.nu))
+        forces[:, hyd] = sensordata[0][:, sens]
         qpos_rig = state[0, :, 1:1 + rig.nq]
         t0 = time.perf_counter()
         state_b, _ = rollout.rollout(bare, d_bare, s_bare, forces)
