@@ -19,7 +19,7 @@ from mjcf.build import CORNERS, TruckVariant, build_spec
 from mjcf.physics import RigIndex, static_equilibrium
 from scenarios.config import Scenario, ScenarioError
 
-__all__ = ["actuator_params", "rig_model", "rest_state", "run_rig"]
+__all__ = ["actuator_params", "rig_model", "rest_state", "plant_poles", "check_plant_stable", "run_rig"]
 
 MPA = 1e6
 
@@ -75,6 +75,48 @@ def rest_state(model: mujoco.MjModel, params: ActuatorParams) -> mujoco.MjData:
     return data
 
 
+def plant_poles(model: mujoco.MjModel, data: mujoco.MjData, eps: float = 1e-6) -> np.ndarray:
+    """Continuous-time poles (rad/s) of the closed-loop plant (truck + pans + hydraulics)
+    linearized about the state in ``data`` with ``mujoco.mjd_transitionFD``.
+
+    The callbacks are installed for the linearization only; leaf-spring dry friction is
+    off (it locks the springs at rest and has no derivative). Each discrete eigenvalue mu
+    maps to lambda = log(mu) / dt.
+    """
+    from mjcf.physics import friction_disabled
+
+    n = 2 * model.nv + model.na
+    a = np.zeros((n, n))
+    with hydraulic_callbacks(model), friction_disabled(model):
+        mujoco.mjd_transitionFD(model, data, eps, True, a, None, None, None)
+    mu = np.linalg.eigvals(a)
+    return np.log(mu.astype(complex)) / model.opt.timestep
+
+
+def check_plant_stable(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Refuse a rig whose linearized closed loop under this truck is unstable.
+
+    The actuator parameters check their loop under one reference wheel station on
+    construction; this checks the real plant (every wheel station, the truck's coupling
+    and MuJoCo's Euler step) before a run starts.
+
+    Raises
+    ------
+    ScenarioError
+        Naming the unstable pole and the parameters to change.
+    """
+    lam = plant_poles(model, data)
+    worst = lam[np.argmax(lam.real)]
+    # A growth rate below 1e-3 1/s is numerical noise of the finite differences around
+    # the neutrally stable integrator states, not an instability over a run of minutes.
+    if worst.real > 1e-3:
+        raise ScenarioError(
+            f"the rig's closed loop under this truck is unstable: pole {worst.real:.3g} "
+            f"{'+-' if worst.imag else ''}{abs(worst.imag):.4g}j rad/s ({abs(worst.imag) / (2 * np.pi):.1f} Hz); "
+            "raise actuator.kdp_per_Pa, lower actuator.kp_per_m or raise actuator.spool_hz"
+        )
+
+
 def run_rig(scenario: Scenario, model_unused, drive, progress=None) -> dict:
     """Run the rig test; returns the recorded per-wheel signals and the events.
 
@@ -87,6 +129,7 @@ def run_rig(scenario: Scenario, model_unused, drive, progress=None) -> dict:
     params = actuator_params(scenario)
     model = rig_model(scenario, params)
     data = rest_state(model, params)
+    check_plant_stable(model, data)
     idx = RigIndex.of(model)
     hyd = _hyd_ids(model)
     tires = idx.tire_actuator
