@@ -57,57 +57,6 @@ def _cmd_run(args) -> int:
     return 0
 
 
-def _run_job(path: str, mode: str):
-    """Worker of ``rigsim paper``: load and run one scenario in one mode (own process)."""
-    from scenarios.config import load_scenario
-    from scenarios.runner import run
-
-    return run(load_scenario(path), mode)
-
-
-def _cmd_paper(args) -> int:
-    import concurrent.futures as cf
-    import os
-
-    from scenarios.config import load_scenario, paper_scenarios
-    from scenarios.results import atomic_write_text, write_run
-
-    paths = paper_scenarios()
-    for p in paths:  # validate everything before anything runs
-        load_scenario(p)
-    jobs = [(str(p), mode) for p in paths for mode in args.modes]
-    workers = max(1, min(len(jobs), args.jobs or os.cpu_count() or 1))
-    results = {}
-    # One run per process: MuJoCo's actuator callbacks are process-global.
-    with cf.ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(_run_job, p, m): (p, m) for p, m in jobs}
-        try:
-            for n_done, fut in enumerate(cf.as_completed(futures), 1):
-                results[futures[fut]] = fut.result()
-                if not args.quiet:
-                    r = results[futures[fut]]
-                    print(f"[{n_done}/{len(jobs)}] {r.scenario_name} {r.mode}: DLC {r.summary()['dlc_mean']:.4f} "
-                          f"({r.info['wall_time_s']:.1f} s)", file=sys.stderr)
-        except BaseException:
-            for f in futures:
-                f.cancel()
-            raise
-    ordered = [results[j] for j in jobs]
-    out = pathlib.Path(args.out)
-    for r in ordered:
-        write_run(r, out / r.scenario_name / r.mode)
-    by_case: dict[str, dict[str, float]] = {}
-    for r in ordered:
-        by_case.setdefault(r.scenario_name, {})[f"dlc_{r.mode}"] = r.summary()["dlc_mean"]
-    rows = [f"{'case':32s}" + "".join(f"{'DLC ' + m:>12s}" for m in args.modes)]
-    for case, d in by_case.items():
-        rows.append(f"{case:32s}" + "".join(f"{d['dlc_' + m]:12.4f}" for m in args.modes))
-    print("\n".join(rows))
-    atomic_write_text(out / "paper.json", json.dumps({"cases": by_case}, indent=2) + "\n")
-    print(f"wrote {out / 'paper.json'} and one folder per case and mode")
-    return 0
-
-
 def _cmd_model(args) -> int:
     import mujoco
 
@@ -140,13 +89,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
-    pp = sub.add_parser("paper", help="run the paper's three cases and print the DLC table")
-    pp.add_argument("--out", required=True, help="output folder")
-    pp.add_argument("--modes", nargs="+", choices=("road", "rig"), default=["road", "rig"],
-                    help="modes to run (default: road rig)")
-    pp.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
-    pp.add_argument("--quiet", action="store_true", help="no progress output")
-    pp.set_defaults(func=_cmd_paper)
+    from scenarios import paper
+
+    paper.add_parser(sub)
 
     m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
     m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg (default 3640)")
