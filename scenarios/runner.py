@@ -7,6 +7,7 @@ only sequences them and records; it never prints (progress goes through a callba
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -132,6 +133,23 @@ def _check_warnings(data: mujoco.MjData, t0: float, t1: float) -> None:
             )
 
 
+@contextlib.contextmanager
+def mujoco_warnings_captured():
+    """Route MuJoCo's warning messages into a list for the duration of a run.
+
+    By default MuJoCo prints each warning and appends it to ``MUJOCO_LOG.TXT`` in the current
+    folder; a run must leave no such file behind. The warnings still stop the run: the
+    :class:`Watch` reads MuJoCo's warning counters. The previous handler is restored on exit.
+    """
+    previous = mujoco.get_mju_user_warning()
+    messages: list[str] = []
+    mujoco.set_mju_user_warning(messages.append)
+    try:
+        yield messages
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
 def output_schedule(drive: Drive, dt: float, rate_hz: float) -> tuple[int, int, int]:
     """(k0, decim, n_out): the first step at t >= 0, the steps per output sample, the samples."""
     decim = int(round(1.0 / (rate_hz * dt)))
@@ -205,6 +223,24 @@ def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | No
     return {"pan_m": pan, "tire_force_N": force}
 
 
+def _run_mode(scenario, mode, model, drive, progress, pan_drive) -> dict:
+    """Dispatch to the road or rig loop; returns the recorded signals (and events)."""
+    if mode == "road":
+        follow = drive
+        if pan_drive is not None:
+            follow = pan_drive(drive)
+            if follow.t_s.shape != drive.t_s.shape or not np.array_equal(follow.t_s, drive.t_s):
+                raise ValueError("pan_drive must return a Drive on the same time axis as its input")
+            try:
+                roads.WheelDrive(follow.t_s, follow.z_m, follow.v_mps).check_stroke(HALF_STROKE_M)
+            except ValueError as exc:
+                raise ScenarioError(f"pan_drive: {exc}") from None
+        return _run_road(scenario, model, follow, progress)
+    from scenarios.rig import run_rig  # hydraulics in the loop
+
+    return run_rig(scenario, model, drive, progress)
+
+
 def run(
     scenario: Scenario,
     mode: str = "road",
@@ -248,21 +284,8 @@ def run(
     drive = prepare_drive(scenario, model)
     if pan_drive is not None and mode != "road":
         raise ScenarioError("pan_drive replaces the pan motion of a road-mode run only")
-    if mode == "road":
-        follow = drive
-        if pan_drive is not None:
-            follow = pan_drive(drive)
-            if follow.t_s.shape != drive.t_s.shape or not np.array_equal(follow.t_s, drive.t_s):
-                raise ValueError("pan_drive must return a Drive on the same time axis as its input")
-            try:
-                roads.WheelDrive(follow.t_s, follow.z_m, follow.v_mps).check_stroke(HALF_STROKE_M)
-            except ValueError as exc:
-                raise ScenarioError(f"pan_drive: {exc}") from None
-        recorded = _run_road(scenario, model, follow, progress)
-    else:
-        from scenarios.rig import run_rig  # hydraulics in the loop
-
-        recorded = run_rig(scenario, model, drive, progress)
+    with mujoco_warnings_captured():
+        recorded = _run_mode(scenario, mode, model, drive, progress, pan_drive)
     k0, decim, _ = output_schedule(drive, model.opt.timestep, scenario.output_rate_hz)
     t_out = drive.t_s[k0::decim]
     signals = {"profile_m": drive.z_m[k0::decim].copy()}

@@ -153,7 +153,7 @@ def test_plant_check_catches_known_unstable_loops(change):
 
 
 @pytest.mark.parametrize("mode", ["road", "rig"])
-def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, mode):
+def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, tmp_path, mode):
     """A NaN in the drive at t = 1.5 s: MuJoCo warns (bad ctrl / bad qpos) and the run stops
     with a SimulationError naming the 10 ms window of simulated time that holds the bad
     step (warnings are checked every 10 ms); no callbacks remain."""
@@ -168,6 +168,10 @@ def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, mode
         return runner_module.Drive(d.t_s, z, d.v_mps)
 
     monkeypatch.setattr(runner_module, "prepare_drive", poisoned)
+    monkeypatch.chdir(tmp_path)
     with pytest.raises(SimulationError, match=r"between t = 1\.5000 s and t = 1\.5100 s"):
         run(parse_scenario(SHORT), mode)
     assert _callbacks_clear()
+    # MuJoCo's default handler would have written MUJOCO_LOG.TXT into the working folder.
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+    assert mujoco.get_mju_user_warning() is None
