@@ -89,9 +89,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
-    from scenarios import correct_cmd, paper
+    from scenarios import correct_cmd, paper, validate
 
     paper.add_parser(sub)
+    validate.add_parser(sub)
     correct_cmd.add_parser(sub)
 
     m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
