@@ -84,6 +84,9 @@ class RoadConfig:
     cuton_wavelength_m : float, m
         Cut-on wavelength of the zero-phase high-pass applied to the profile in the distance
         domain, identically for road and rig mode (a rig's stroke is 15.2 cm).
+    envelope_length_m : float, m
+        Tire enveloping: moving average of the profile over this length before anything else
+        (0.25 m, the IRI's tire model; 0 turns it off). See :func:`scenarios.roads.envelope`.
     """
 
     roughness: str | None = None
@@ -92,6 +95,7 @@ class RoadConfig:
     waviness: float = 2.0
     tracks: str = "independent"
     cuton_wavelength_m: float = 40.0
+    envelope_length_m: float = 0.25
 
 
 @dataclass(frozen=True)
@@ -182,6 +186,8 @@ def _road(table: Any) -> RoadConfig:
         if table["tracks"] not in _TRACKS:
             raise ScenarioError(f"road.tracks must be one of {', '.join(_TRACKS)}, got {table['tracks']!r}")
         kw["tracks"] = table["tracks"]
+    if "envelope_length_m" in table:
+        kw["envelope_length_m"] = _number("road.envelope_length_m", table["envelope_length_m"], lo=0.0, hi=2.0)
     if "cuton_wavelength_m" in table:
         kw["cuton_wavelength_m"] = _number("road.cuton_wavelength_m", table["cuton_wavelength_m"], lo=1.0, hi=1e4)
     return RoadConfig(**kw)

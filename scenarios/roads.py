@@ -381,6 +381,50 @@ def read_profile_csv(path) -> Profile:
     return Profile(data[:, 0], data[:, 1], data[:, -1])
 
 
+def envelope(profile: Profile, length_m: float) -> Profile:
+    """Tire enveloping: a moving average of the profile over the tire's contact length.
+
+    A tire does not follow the road at a point: its contact patch bridges short bumps and
+    dips. The standard model of this, used by the International Roughness Index (Sayers,
+    "On the calculation of IRI from longitudinal road profile", TRR 1501, 1995), is a moving
+    average over 250 mm. It attenuates a wave of length lambda by sinc(length / lambda)
+    (first null at lambda = length). Apply it to the profile once, for road and rig alike:
+    on the rig the tire stands on a flat pan, so the drive must already be the enveloped
+    (effective) profile.
+
+    Parameters
+    ----------
+    profile : Profile
+        Road profile (m).
+    length_m : float, m
+        Averaging length (0 returns the profile unchanged). Truck tires: ~0.2-0.3 m contact
+        length.
+
+    Returns
+    -------
+    Profile
+        The averaged profile on the same distance axis (ends padded with the edge value).
+    """
+    if length_m == 0:
+        return profile
+    _check_positive("envelope_length_m", length_m)
+    width = int(round(length_m / profile.dx_m))
+    if width < 2:
+        return profile
+    if width > profile.x_m.size // 2:
+        raise ValueError(f"envelope_length_m = {length_m} m is longer than half the profile "
+                         f"({profile.length_m:.6g} m); use a shorter averaging length.")
+    kernel = np.full(width, 1.0 / width)
+
+    def smooth(z):
+        lo = width // 2
+        padded = np.concatenate([np.full(lo, z[0]), z, np.full(width - 1 - lo, z[-1])])
+        return np.convolve(padded, kernel, mode="valid")
+
+    return Profile(profile.x_m, smooth(profile.left_m), smooth(profile.right_m),
+                   n_max_cyc_per_m=profile.n_max_cyc_per_m)
+
+
 def highpass(profile: Profile, cuton_wavelength_m: float, order: int = 2) -> Profile:
     """Zero-phase Butterworth high-pass of both tracks in the distance domain.
 

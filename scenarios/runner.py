@@ -99,6 +99,7 @@ def prepare_drive(scenario: Scenario, model: mujoco.MjModel) -> Drive:
     length = wheelbase + roads.START_MARGIN_M + v * total_s + 2 * margin
     try:
         profile = _road_profile(scenario, length)
+        profile = roads.envelope(profile, scenario.road.envelope_length_m)
         profile = roads.highpass(profile, scenario.road.cuton_wavelength_m)
         start = float(profile.x_m[0]) + margin + wheelbase + roads.START_MARGIN_M
         wd = roads.sample_wheels(profile, v, wheelbase, fs, total_s, start_m=start)

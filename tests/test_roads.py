@@ -235,3 +235,25 @@ def test_check_stroke_names_corner_and_time():
     with pytest.raises(ValueError, match=r"drive rl reaches -80.0 mm at t = 0.250 s, 4.0 mm "
                                          r"beyond the \+-76.0 mm stroke"):
         d.check_stroke(0.076)
+
+
+def test_envelope_is_a_moving_average_with_sinc_response():
+    """Reference: a moving average of length L passes a sine of wavelength lambda with gain
+    sin(pi L / lambda) / (pi L / lambda) (the Fourier transform of a box); L = 0.25 m is the
+    IRI's tire model (Sayers 1995)."""
+    from scenarios.roads import envelope
+
+    dx = 0.01
+    x = np.arange(0, 200.0, dx)
+    for lam in (2.0, 0.5, 0.4):
+        z = np.sin(2 * np.pi * x / lam)
+        p = envelope(Profile(x, z, z), 0.25)
+        core = slice(2000, -2000)
+        gain = np.std(p.left_m[core]) / np.std(z[core])
+        u = np.pi * 0.25 / lam
+        assert gain == pytest.approx(abs(np.sin(u) / u), abs=2e-3)
+    # A wavelength equal to the averaging length is removed; zero length changes nothing.
+    z = np.sin(2 * np.pi * x / 0.25)
+    assert np.max(np.abs(envelope(Profile(x, z, z), 0.25).left_m[2000:-2000])) < 1e-9
+    q = Profile(x, z, z)
+    assert envelope(q, 0.0) is q
