@@ -21,6 +21,7 @@ __all__ = [
     "friction_disabled",
     "static_equilibrium",
     "tire_forces",
+    "tire_stiffness",
     "Mode",
     "modal_analysis",
 ]
@@ -112,6 +113,12 @@ def friction_disabled(model: mujoco.MjModel):
         yield model
     finally:
         model.opt.disableflags = old
+
+
+def tire_stiffness(model: mujoco.MjModel, index: RigIndex | None = None) -> np.ndarray:
+    """Vertical stiffness of each wheel station's tire in N/m (fl, fr, rl, rr), as compiled."""
+    index = index or RigIndex.of(model)
+    return -model.actuator_biasprm[index.tire_actuator, 1].copy()
 
 
 def tire_forces(model: mujoco.MjModel, data: mujoco.MjData, index: RigIndex | None = None) -> np.ndarray:

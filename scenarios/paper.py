@@ -66,65 +66,104 @@ def run_cases(jobs: list[tuple[str, str]], *, workers: int | None = None, quiet:
     return [results[j] for j in jobs]
 
 
-def _table(by_case: dict, modes) -> str:
-    head = f"{'case':28s}" + "".join(f"{'DLC ' + m:>10s}{'paper':>8s}" for m in modes) + f"{'rig/road':>10s}{'paper':>8s}"
-    rows = [head, "-" * len(head)]
-    for case, d in by_case.items():
-        ref = PAPER_TABLE2.get(case, {})
-        row = f"{case:28s}"
-        for m in modes:
-            row += f"{d['dlc_' + m]:10.4f}{ref.get(m, float('nan')):8.4f}"
-        if "dlc_road" in d and "dlc_rig" in d:
-            row += f"{d['dlc_rig'] / d['dlc_road']:10.3f}{ref['rig'] / ref['road'] if ref else float('nan'):8.3f}"
-        rows.append(row)
-    return "\n".join(rows)
+def _table(rows: list[dict]) -> str:
+    """Table 2 analogue: means over the four wheels, the paper's values in brackets."""
+    head = (f"{'case':28s} {'road':>15s} {'rig':>15s} {'corr. paper':>15s} {'corrected':>10s} "
+            f"{'road LP':>8s} {'NRMSE':>6s}")
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        ref = r["paper"]
+        lines.append(
+            f"{r['case']:28s} {r['dlc_road']:7.4f} ({ref['road']:.4f}) {r['dlc_rig']:7.4f} ({ref['rig']:.4f}) "
+            f"{r['dlc_corrected_paper']:7.4f} ({ref['corrected']:.4f}) {r['dlc_corrected']:10.4f} "
+            f"{r['dlc_road_lowpassed']:8.4f} {r['nrmse_corrected']:6.3f}"
+        )
+    lines.append("DLC = std/mean of the wheel force, mean of the four wheels; (paper's Table 2). corr. paper: eq. 4 and")
+    lines.append("the paper's 16/24 Hz low-pass; corrected: T_a identified per wheel, 30 Hz low-pass; road LP: the road")
+    lines.append("force through the same low-pass; NRMSE = rms(corrected - road LP) / std(road LP).")
+    return "\n".join(lines)
+
+
+def _row(case: str, ev) -> dict:
+    """paper.json's entry of one case: means over the wheels, per wheel, the paper's values."""
+    m = ev.mean
+    keys = {
+        "dlc_road": "dlc_road",
+        "dlc_rig": "dlc_rig",
+        "dlc_corrected_paper": "dlc_corrected_paper",
+        "dlc_corrected": "dlc_corrected_best",
+        "dlc_road_lowpassed": "dlc_road_lowpassed_best",
+        "nrmse_corrected": "nrmse_corrected_best",
+        "dlc_road_lowpassed_paper": "dlc_road_lowpassed_paper",
+        "nrmse_corrected_paper": "nrmse_corrected_paper",
+    }
+    row = {"case": case}
+    row.update({k: round(m[v], 6) for k, v in keys.items()})
+    row["wheels"] = {c: {k: round(w[v], 6) for k, v in keys.items()} for c, w in ev.wheels.items()}
+    row["paper"] = PAPER_TABLE2.get(case, {})
+    row["noise_N"] = ev.noise_N
+    row["analysed_s"] = round(float(ev.settled.sum()) / (1.0 / float(ev.t_s[1] - ev.t_s[0])), 3)
+    return row
 
 
 def cmd_paper(args) -> int:
-    from scenarios.config import load_scenario, paper_scenarios
+    from mjcf.build import build_model
+    from mjcf.physics import tire_stiffness
+    from scenarios.config import ScenarioError, load_scenario, paper_scenarios
+    from scenarios.evaluation import METHODS, evaluate
+    from scenarios.paper_report import write_report
     from scenarios.results import atomic_write_text, write_run
-
-    from scenarios.config import ScenarioError
+    from scenarios.rig import actuator_params
 
     paths = paper_scenarios()
-    for p in paths:  # validate everything before anything runs
-        load_scenario(p)
+    scenarios = [load_scenario(p) for p in paths]  # validate everything before anything runs
     if args.duration_s is not None and not 0 < args.duration_s <= 3600:
         raise ScenarioError(f"--duration-s must be in (0, 3600] s, got {args.duration_s:g}")
+    if args.duration_s is not None and args.duration_s < 10:
+        raise ScenarioError(
+            f"--duration-s {args.duration_s:g} s is too short: the correction's start-up transient alone "
+            "lasts ~4 s; use at least 10 s"
+        )
     if args.jobs is not None and args.jobs < 1:
         raise ScenarioError(f"--jobs must be at least 1, got {args.jobs}")
-    jobs = [(str(p), mode) for p in paths for mode in args.modes]
+    if not args.noise_N >= 0:
+        raise ScenarioError(f"--noise-N must be >= 0 N, got {args.noise_N:g}")
+    jobs = [(str(p), mode) for p in paths for mode in ("road", "rig")]
     results = run_cases(jobs, workers=args.jobs, quiet=args.quiet, duration_s=args.duration_s)
+    rows, evaluations = [], {}
+    for scenario, road, rig in zip(scenarios, results[0::2], results[1::2]):
+        kt = tire_stiffness(build_model(scenario.vehicle))
+        ev = evaluate(road, rig, params=actuator_params(scenario), tire_N_per_m=kt, noise_N=args.noise_N,
+                      seed=scenario.seed)
+        evaluations[scenario.name] = (road, rig, ev)
+        rows.append(_row(scenario.name, ev))
+    doc = {
+        "cases": rows,
+        "methods": {m.name: m.description for m in METHODS},
+        "note": ("means over the four wheels (per wheel under 'wheels'); statistics over the samples where "
+                 "every correction filter has settled; 'paper': Table 2 of the reference paper"),
+    }
+    table = _table(rows)
     out = pathlib.Path(args.out)
     for r in results:
         write_run(r, out / r.scenario_name / r.mode)
-    by_case: dict[str, dict[str, float]] = {}
-    for r in results:
-        by_case.setdefault(r.scenario_name, {})[f"dlc_{r.mode}"] = r.summary()["dlc_mean"]
-    doc = {
-        "cases": [
-            {"case": case, **{k: round(v, 6) for k, v in d.items()},
-             "paper": PAPER_TABLE2.get(case, {}),
-             "wheels": {r.mode: {c: s["dlc"] for c, s in r.statistics().items()}
-                        for r in results if r.scenario_name == case}}
-            for case, d in by_case.items()
-        ],
-        "note": "dlc_* are means over the four wheels; paper: Table 2 of the reference paper",
-    }
-    print(_table(by_case, args.modes))
+    report_files = write_report(out, evaluations, rows, table)
     atomic_write_text(out / "paper.json", json.dumps(doc, indent=2) + "\n")
-    print(f"wrote {out / 'paper.json'} and one folder per case and mode")
+    print(table)
+    print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {len(report_files) - 1} figures and one folder per case and mode")
     return 0
 
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim paper``."""
-    pp = subparsers.add_parser("paper", help="run the paper's three cases and compare with its tables")
+    from scenarios.evaluation import NOISE_N
+
+    pp = subparsers.add_parser("paper", help="the paper's three cases: road and rig runs, output correction, Table 2")
     pp.add_argument("--out", required=True, help="output folder")
-    pp.add_argument("--modes", nargs="+", choices=("road", "rig"), default=["road", "rig"],
-                    help="modes to run (default: road rig)")
     pp.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     pp.add_argument("--duration-s", type=float, default=None,
                     help="override every case's duration in s (a quick look; the paper's cases run 60 s)")
+    pp.add_argument("--noise-N", type=float, default=NOISE_N,
+                    help=f"rms of the white noise added to the measured rig force, N (default {NOISE_N:g}; 0: off)")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
     pp.set_defaults(func=cmd_paper)

@@ -1,0 +1,157 @@
+"""Figures and ``report.md`` of ``rigsim paper`` (matplotlib, Agg backend, written atomically)."""
+
+from __future__ import annotations
+
+import io
+import pathlib
+
+import numpy as np
+
+from scenarios.results import atomic_write_bytes, atomic_write_text
+
+__all__ = ["write_report"]
+
+_WINDOW_S = 3.0  # s of trace shown in the Figure 8 analogue
+
+
+def _png(fig) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    return buf.getvalue()
+
+
+def _figure8(name: str, road, ev) -> bytes:
+    """Road (band-limited), rig and corrected tire forces over a few seconds, front and rear left."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = ev.t_s
+    settled = np.flatnonzero(ev.settled)
+    start = settled[0] + (settled[-1] - settled[0]) // 3
+    sl = slice(start, min(start + int(round(_WINDOW_S / (t[1] - t[0]))), settled[-1]))
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
+    for ax, i, label in zip(axes, (0, 2), ("front left (fl)", "rear left (rl)")):
+        kn = 1e-3
+        ax.plot(t[sl], ev.road_lowpassed_N["best"][sl, i] * kn, color="k", lw=1.6, label="road (30 Hz low-pass)")
+        ax.plot(t[sl], ev.rig_N[sl, i] * kn, color="tab:red", lw=1.0, label="rig, measured")
+        ax.plot(t[sl], ev.corrected_N["paper"][sl, i] * kn, color="tab:orange", lw=1.0, ls="--",
+                label="corrected, paper's method")
+        ax.plot(t[sl], ev.corrected_N["best"][sl, i] * kn, color="tab:blue", lw=1.2, label="corrected, this project")
+        ax.set_ylabel("tire force, kN")
+        ax.set_title(label, loc="left", fontsize=10)
+        ax.grid(alpha=0.3)
+    axes[0].legend(ncol=2, fontsize=8, loc="upper right")
+    axes[-1].set_xlabel("time, s")
+    fig.suptitle(f"{name}: measured and corrected tire forces (Figure 8 analogue)", fontsize=11)
+    data = _png(fig)
+    plt.close(fig)
+    return data
+
+
+def _bars(rows) -> bytes:
+    """Table 2 as bars: road, rig, corrected (paper's method and this project's), with the paper's."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    x = np.arange(len(rows))
+    series = [
+        ("road", "dlc_road", "k"),
+        ("rig", "dlc_rig", "tab:red"),
+        ("corrected, paper's method", "dlc_corrected_paper", "tab:orange"),
+        ("corrected, this project", "dlc_corrected", "tab:blue"),
+    ]
+    w = 0.18
+    for k, (label, key, color) in enumerate(series):
+        ax.bar(x + (k - 1.5) * w, [r[key] for r in rows], w, color=color, label=label)
+    for k, key in enumerate(("road", "rig", "corrected")):
+        pos = {0: -1.5, 1: -0.5, 2: 0.5}[k]
+        ax.scatter(x + pos * w, [r["paper"][key] for r in rows], marker="_", s=400, color="gold", zorder=3,
+                   label="paper (Table 2)" if k == 0 else None)
+    ax.set_xticks(x, [r["case"].replace("paper-", "") for r in rows])
+    ax.set_ylabel("DLC (mean of four wheels)")
+    ax.legend(fontsize=8, ncol=3)
+    ax.grid(axis="y", alpha=0.3)
+    data = _png(fig)
+    plt.close(fig)
+    return data
+
+
+def _report_md(rows, table: str, figures: list[str]) -> str:
+    lines = [
+        "# rigsim paper: Table 2 reproduced and corrected",
+        "",
+        "The paper's three cases (`scenarios/paper/*.toml`) run as road tests (pans follow the",
+        "profile) and rig tests (pans driven by the nonlinear DYNTRAC actuator model); the rig's",
+        "measured wheel force (with load-cell noise) is then corrected two ways.",
+        "",
+        "```",
+        table,
+        "```",
+        "",
+        "![Table 2 as bars](table2.png)",
+        "",
+        "## How far each correction lands from the road",
+        "",
+        "| case | corrected (this project) vs road | vs road through the same low-pass | NRMSE | paper's method vs road | paper's own result vs its road |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for r in rows:
+        ref = r["paper"]
+        lines.append(
+            f"| {r['case']} | {100 * (r['dlc_corrected'] / r['dlc_road'] - 1):+.1f} % | "
+            f"{100 * (r['dlc_corrected'] / r['dlc_road_lowpassed'] - 1):+.1f} % | {r['nrmse_corrected']:.3f} | "
+            f"{100 * (r['dlc_corrected_paper'] / r['dlc_road'] - 1):+.1f} % | "
+            f"{100 * (ref['corrected'] / ref['road'] - 1):+.1f} % |"
+        )
+    lines += [
+        "",
+        "## Why the paper's method falls short here",
+        "",
+        "The paper's low-pass T_F (two critically damped sections at 16 and 24 Hz) is already",
+        "3 dB down near 8 Hz, inside the axle-hop band (9-11 Hz for this truck), where most of",
+        "the dynamic wheel load lives; the corrected force therefore loses real dynamic load, and",
+        "its DLC lands below the road's even when T_a is right. Compared with the road force",
+        "through the same low-pass (`dlc_road_lowpassed_paper` in paper.json) it is close. The",
+        "paper's truck evidently had less of its dynamic load above 8 Hz than this model's.",
+        "",
+        "This project's correction identifies T_a per wheel from the drive and the LVDT signal",
+        "of the same rig run (no hydraulic parameters needed) and inverts it under a 6th-order",
+        "30 Hz Butterworth low-pass, so the inverse is within 0.4 % of exact up to 20 Hz. What",
+        "remains is (1) the content above ~25 Hz that no band-limited correction restores,",
+        "(2) the truck's coupling between wheels: a single-input correction per wheel assumes",
+        "each wheel force responds to its own pan only, but the four actuators lag differently",
+        "(front tires 0.9 MN/m, rear duals 1.8 MN/m) and the chassis couples them, and (3) the",
+        "leaf springs' dry friction, which makes the truck nonlinear.",
+        "",
+        "## Figure 8 analogue",
+        "",
+    ]
+    lines += [f"![{f}]({f})" for f in figures]
+    lines.append("")
+    return "\n".join(lines)
+
+
+def write_report(out, evaluations: dict, rows: list[dict], table: str) -> list[pathlib.Path]:
+    """Write the Figure 8 analogues, the Table 2 bars and ``report.md`` into ``out``.
+
+    Everything is rendered in memory first; each file is then written atomically.
+    """
+    out = pathlib.Path(out)
+    files = {}
+    for name, (road, _rig, ev) in evaluations.items():
+        files[f"figure8_{name}.png"] = _figure8(name, road, ev)
+    files["table2.png"] = _bars(rows)
+    figures = [f for f in files if f.startswith("figure8_")]
+    md = _report_md(rows, table, figures)
+    written = []
+    for fname, data in files.items():
+        atomic_write_bytes(out / fname, data)
+        written.append(out / fname)
+    atomic_write_text(out / "report.md", md)
+    written.append(out / "report.md")
+    return written
