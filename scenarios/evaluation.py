@@ -200,7 +200,7 @@ def evaluate(road: RunResult, rig: RunResult, *, params, tire_N_per_m, noise_N: 
         corrected[method.name] = out
         road_lp[method.name] = band_limit(road_f, fs, method.lowpass, method.mode)
         actuators[method.name] = tas
-    if settled.sum() < 10 * fs:
+    if settled.sum() < 5 * fs:
         raise ValueError(
             f"only {settled.sum() / fs:.1f} s of the {n / fs:.1f} s record remain once the correction filters "
             "have settled; run a longer scenario (at least ~30 s)"

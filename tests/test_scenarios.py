@@ -227,17 +227,28 @@ def test_cli_model_prints_loads_and_modes(capsys):
 
 def test_cli_paper_short_run_writes_table_with_papers_values(tmp_path, capsys):
     out = tmp_path / "paper"
-    assert main(["paper", "--out", str(out), "--duration-s", "3", "--modes", "road", "rig", "--jobs", "2", "--quiet"]) == 0
+    assert main(["paper", "--out", str(out), "--duration-s", "12", "--jobs", "2", "--quiet"]) == 0
     printed = capsys.readouterr().out
     doc = json.loads((out / "paper.json").read_text())
     cases = {c["case"]: c for c in doc["cases"]}
     assert list(cases) == ["paper-medium-72kmh-6360kg", "paper-high-48kmh-3640kg", "paper-high-72kmh-3640kg"]
     # The paper's Table 2 values travel with the results (reference: the paper).
     assert cases["paper-high-72kmh-3640kg"]["paper"] == {"road": 0.2105, "rig": 0.1754, "corrected": 0.2139}
+    keys = ("dlc_road", "dlc_rig", "dlc_corrected_paper", "dlc_corrected", "dlc_road_lowpassed", "nrmse_corrected")
     for case in cases.values():
+        assert set(keys) <= set(case)
         assert case["dlc_rig"] < case["dlc_road"]
         assert f"{case['dlc_road']:.4f}" in printed
         # The mean over the wheels is the mean of the per-wheel values written beside it.
-        assert case["dlc_road"] == pytest.approx(np.mean(list(case["wheels"]["road"].values())), rel=1e-5)
+        for key in keys:
+            assert case[key] == pytest.approx(np.mean([w[key] for w in case["wheels"].values()]), abs=2e-6)
         for mode in ("road", "rig"):
             assert (out / case["case"] / mode / "result.json").is_file()
+        assert (out / f"figure8_{case['case']}.png").stat().st_size > 10_000
+    assert "figure8_paper-high-72kmh-3640kg.png" in (out / "report.md").read_text()
+
+
+def test_cli_paper_refuses_a_too_short_duration(tmp_path, capsys):
+    assert main(["paper", "--out", str(tmp_path / "p"), "--duration-s", "3", "--quiet"]) == 2
+    assert "too short" in capsys.readouterr().err
+    assert not (tmp_path / "p").exists()
