@@ -89,11 +89,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
-    from scenarios import correct_cmd, paper, validate
+    from scenarios import correct_cmd, paper, sweep, validate
 
     paper.add_parser(sub)
     validate.add_parser(sub)
     correct_cmd.add_parser(sub)
+    sweep.add_parser(sub)
 
     m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
     m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg (default 3640)")
@@ -119,7 +120,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"rigsim: error: cannot write output: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("rigsim: interrupted; nothing more was written", file=sys.stderr)
+        print("rigsim: interrupted", file=sys.stderr)
         return 130
 
 
