@@ -47,9 +47,19 @@ def _cmd_run(args) -> int:
     from scenarios.runner import run
 
     scenario = load_scenario(args.scenario)
+    pose_rate = None
+    if args.rrd:
+        from scenarios.recording import DEFAULT_POSE_RATE_HZ
+
+        pose_rate = DEFAULT_POSE_RATE_HZ
     with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
-        result = run(scenario, args.mode, progress=progress)
+        result = run(scenario, args.mode, progress=progress, pose_rate_hz=pose_rate)
     paths = write_run(result, args.out)
+    if args.rrd:
+        from scenarios.recording import write_recording
+
+        write_recording(args.rrd, [result], dlc_table=result.table(), spawn=args.view)
+        print(f"wrote recording {args.rrd}" + (" and opened the viewer" if args.view else ""))
     print(result.table())
     if result.events:
         print("events: " + json.dumps(result.events))
@@ -86,6 +96,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--mode", choices=("road", "rig"), default="road",
                    help="road: pans follow the profile exactly; rig: hydraulic actuators drive the pans")
     r.add_argument("--out", required=True, help="output folder (result.json, timeseries.csv)")
+    r.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd) of the run")
+    r.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 

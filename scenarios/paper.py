@@ -28,7 +28,7 @@ PAPER_TABLE2: dict[str, dict[str, float]] = {
 PAPER_TABLE1: dict[str, float] = {"road": 0.2105, "rig": 0.1754, "nonlinear_model": 0.1748, "linearized_model": 0.1724}
 
 
-def _run_job(path: str, mode: str, duration_s: float | None = None):
+def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None):
     """Worker: load and run one scenario in one mode (in its own process)."""
     import dataclasses
 
@@ -38,11 +38,11 @@ def _run_job(path: str, mode: str, duration_s: float | None = None):
     scenario = load_scenario(path)
     if duration_s is not None:
         scenario = dataclasses.replace(scenario, duration_s=duration_s)
-    return run(scenario, mode)
+    return run(scenario, mode, pose_rate_hz=pose_rate_hz)
 
 
 def run_cases(jobs: list[tuple[str, str]], *, workers: int | None = None, quiet: bool = False,
-              duration_s: float | None = None) -> list:
+              duration_s: float | None = None, pose_rate_hz: float | None = None) -> list:
     """Run ``(scenario_path, mode)`` jobs in a process pool; results in the order of ``jobs``.
 
     One run per process at a time: MuJoCo's actuator callbacks are process-global.
@@ -51,7 +51,7 @@ def run_cases(jobs: list[tuple[str, str]], *, workers: int | None = None, quiet:
     workers = max(1, min(len(jobs), workers or os.cpu_count() or 1))
     results = {}
     with cf.ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(_run_job, p, m, duration_s): (p, m) for p, m in jobs}
+        futures = {pool.submit(_run_job, p, m, duration_s, pose_rate_hz): (p, m) for p, m in jobs}
         try:
             for n_done, fut in enumerate(cf.as_completed(futures), 1):
                 r = fut.result()
@@ -129,7 +129,13 @@ def cmd_paper(args) -> int:
     if not args.noise_N >= 0:
         raise ScenarioError(f"--noise-N must be >= 0 N, got {args.noise_N:g}")
     jobs = [(str(p), mode) for p in paths for mode in ("road", "rig")]
-    results = run_cases(jobs, workers=args.jobs, quiet=args.quiet, duration_s=args.duration_s)
+    pose_rate = None
+    if args.rrd:
+        from scenarios.recording import DEFAULT_POSE_RATE_HZ
+
+        pose_rate = DEFAULT_POSE_RATE_HZ
+    results = run_cases(jobs, workers=args.jobs, quiet=args.quiet, duration_s=args.duration_s,
+                        pose_rate_hz=pose_rate)
     rows, evaluations = [], {}
     for scenario, road, rig in zip(scenarios, results[0::2], results[1::2]):
         kt = tire_stiffness(build_model(scenario.vehicle))
@@ -148,6 +154,12 @@ def cmd_paper(args) -> int:
     for r in results:
         write_run(r, out / r.scenario_name / r.mode)
     report_files = write_report(out, evaluations, rows, table)
+    if args.rrd:
+        from scenarios.recording import write_recording
+
+        write_recording(args.rrd, results, corrected={n: e[2].corrected_N["best"] for n, e in evaluations.items()},
+                        dlc_table=table, spawn=args.view)
+        print(f"wrote recording {args.rrd} (one recording per case)")
     atomic_write_text(out / "paper.json", json.dumps(doc, indent=2) + "\n")
     print(table)
     print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {len(report_files) - 1} figures and one folder per case and mode")
@@ -165,5 +177,7 @@ def add_parser(subparsers) -> None:
                     help="override every case's duration in s (a quick look; the paper's cases run 60 s)")
     pp.add_argument("--noise-N", type=float, default=NOISE_N,
                     help=f"rms of the white noise added to the measured rig force, N (default {NOISE_N:g}; 0: off)")
+    pp.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd), one recording per case")
+    pp.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
     pp.set_defaults(func=cmd_paper)

@@ -50,6 +50,8 @@ class RunResult:
         Mass of the truck (chassis, payload and axles; pans excluded).
     events : Mapping[str, object]
         Saturation and cavitation events (rig mode), empty in road mode.
+    poses : scenarios.recording.PoseTrack, optional
+        Body poses at video rate for the 3D view of a recording (None unless asked for).
     info : Mapping[str, object]
         Run facts: time step, wall time, seed, speed...
     """
@@ -62,6 +64,7 @@ class RunResult:
     events: Mapping = field(default_factory=dict)
     info: Mapping = field(default_factory=dict)
     corners: tuple[str, ...] = CORNERS
+    poses: object = None  # scenarios.recording.PoseTrack at video rate, when asked for (--rrd)
 
     @property
     def rate_hz(self) -> float:
@@ -119,6 +122,7 @@ def atomic_write_bytes(path, data: bytes) -> None:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
+        os.chmod(tmp, 0o644)  # mkstemp creates 0600; results are meant to be shared
         os.replace(tmp, path)
     except BaseException:
         try:

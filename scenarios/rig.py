@@ -118,7 +118,7 @@ def check_plant_stable(model: mujoco.MjModel, data: mujoco.MjData) -> None:
         )
 
 
-def run_rig(scenario: Scenario, model_unused, drive, progress=None) -> dict:
+def run_rig(scenario: Scenario, model_unused, drive, progress=None, *, pose_rate_hz: float | None = None) -> dict:
     """Run the rig test; returns the recorded per-wheel signals and the events.
 
     ``model_unused`` is the road-mode model of the caller; the rig builds its own (with
@@ -162,6 +162,13 @@ def run_rig(scenario: Scenario, model_unused, drive, progress=None) -> dict:
                         for c in CORNERS])
     n = drive.t_s.size
     chunk = watch.check
+    poses = scratch = None
+    if pose_rate_hz is not None:
+        from scenarios.recording import PoseRecorder  # numpy only, no rerun import
+
+        poses = PoseRecorder(model, drive.t_s, pose_rate_hz, every=decim)
+        scratch = mujoco.MjData(model)
+        frames = set(int(k) for k in poses.steps)
     ctrl = np.zeros((chunk, model.nu))
     with hydraulic_callbacks(model):
         for k in range(0, n, chunk):
@@ -181,6 +188,12 @@ def run_rig(scenario: Scenario, model_unused, drive, progress=None) -> dict:
                 pan[j] = pre[:, q0 + qa]
                 states[j] = pre[:, a0 + act_index]
                 force[j] = out_sensor[0, i][:, sensors]
+                if poses is not None:
+                    for row, k_row in zip(pre, rows):
+                        if int(k_row) in frames:
+                            scratch.qpos[:] = row[q0:q0 + model.nq]
+                            mujoco.mj_kinematics(model, scratch)
+                            poses(scratch, int(k_row))
             state = out_state[0, -1].copy()
             watch.tick(data, k + kk - 1)
         watch.finish(data)
@@ -207,4 +220,5 @@ def run_rig(scenario: Scenario, model_unused, drive, progress=None) -> dict:
         "p1_Pa": p1,
         "p2_Pa": p2,
         "events": events,
+        **({"poses": poses.track()} if poses is not None else {}),
     }

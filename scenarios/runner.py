@@ -193,7 +193,8 @@ def _truck_mass(model: mujoco.MjModel) -> float:
     return float(sum(model.body_mass[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n)] for n in names))
 
 
-def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | None) -> dict[str, np.ndarray]:
+def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | None,
+              pose_rate_hz: float | None = None) -> dict[str, np.ndarray]:
     """Road test: the pans are moved kinematically, exactly along the profile."""
     data = mujoco.MjData(model)
     idx = RigIndex.of(model)
@@ -205,6 +206,11 @@ def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | No
     pan = np.empty((n_out, 4))
     force = np.empty((n_out, 4))
     watch = Watch(drive, model.opt.timestep, progress)
+    poses = None
+    if pose_rate_hz is not None:
+        from scenarios.recording import PoseRecorder  # no rerun import: PoseRecorder is numpy only
+
+        poses = PoseRecorder(model, drive.t_s, pose_rate_hz, every=decim)
     z, vz = drive.z_m, drive.v_mps
     j = 0
     for k in range(drive.t_s.size):
@@ -217,14 +223,19 @@ def _run_road(scenario: Scenario, model, drive: Drive, progress: ProgressFn | No
         if record:
             force[j] = data.actuator_force[tires]
             j += 1
+            if poses is not None:
+                poses(data, k)
         watch.tick(data, k)
     watch.finish(data)
     if not np.all(np.isfinite(force)):
         raise SimulationError("the simulation produced non-finite tire forces")
-    return {"pan_m": pan, "tire_force_N": force}
+    out = {"pan_m": pan, "tire_force_N": force}
+    if poses is not None:
+        out["poses"] = poses.track()
+    return out
 
 
-def _run_mode(scenario, mode, model, drive, progress, pan_drive) -> dict:
+def _run_mode(scenario, mode, model, drive, progress, pan_drive, pose_rate_hz) -> dict:
     """Dispatch to the road or rig loop; returns the recorded signals (and events)."""
     if mode == "road":
         follow = drive
@@ -236,10 +247,10 @@ def _run_mode(scenario, mode, model, drive, progress, pan_drive) -> dict:
                 roads.WheelDrive(follow.t_s, follow.z_m, follow.v_mps).check_stroke(HALF_STROKE_M)
             except ValueError as exc:
                 raise ScenarioError(f"pan_drive: {exc}") from None
-        return _run_road(scenario, model, follow, progress)
+        return _run_road(scenario, model, follow, progress, pose_rate_hz)
     from scenarios.rig import run_rig  # hydraulics in the loop
 
-    return run_rig(scenario, model, drive, progress)
+    return run_rig(scenario, model, drive, progress, pose_rate_hz=pose_rate_hz)
 
 
 def run(
@@ -248,6 +259,7 @@ def run(
     *,
     progress: ProgressFn | None = None,
     pan_drive: Callable[[Drive], Drive] | None = None,
+    pose_rate_hz: float | None = None,
 ) -> RunResult:
     """Run ``scenario`` in ``mode`` and return its result.
 
@@ -264,6 +276,8 @@ def run(
         profile) to the motion the pans follow instead, on the same time axis (for example
         the profile passed through a linear actuator model T_a). ``profile_m`` still records
         the road profile. The returned drive is stroke-checked like the profile.
+    pose_rate_hz : float, Hz, optional
+        Also record the bodies' poses at this (video) rate for a rerun recording.
 
     Raises
     ------
@@ -286,11 +300,12 @@ def run(
     if pan_drive is not None and mode != "road":
         raise ScenarioError("pan_drive replaces the pan motion of a road-mode run only")
     with mujoco_warnings_captured():
-        recorded = _run_mode(scenario, mode, model, drive, progress, pan_drive)
+        recorded = _run_mode(scenario, mode, model, drive, progress, pan_drive, pose_rate_hz)
     k0, decim, _ = output_schedule(drive, model.opt.timestep, scenario.output_rate_hz)
     t_out = drive.t_s[k0::decim]
     signals = {"profile_m": drive.z_m[k0::decim].copy()}
     events = recorded.pop("events", {})
+    poses = recorded.pop("poses", None)
     signals.update(recorded)
     info = {
         "timestep_s": model.opt.timestep,
@@ -314,4 +329,5 @@ def run(
         events=events,
         info=info,
         corners=CORNERS,
+        poses=poses,
     )

@@ -175,3 +175,17 @@ def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, tmp_
     # MuJoCo's default handler would have written MUJOCO_LOG.TXT into the working folder.
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
     assert mujoco.get_mju_user_warning() is None
+
+
+@pytest.mark.parametrize("mode", ["road", "rig"])
+def test_pose_track_follows_the_run(mode):
+    """Poses recorded for the 3D view (rig mode: from the rollout states) put each pan exactly
+    where the run's pan displacement says, at 50 Hz from t = 0."""
+    r = run(parse_scenario(SHORT), mode, pose_rate_hz=50.0)
+    track = r.poses
+    assert track.t_s[0] == 0.0 and np.allclose(np.diff(track.t_s), 0.02)
+    i = track.bodies.index("pan_fl")
+    rows = np.searchsorted(r.t_s, track.t_s)
+    assert np.array_equal(track.position_m[:, i, 2], r.signals["pan_m"][rows, 0])
+    chassis = track.bodies.index("chassis")
+    assert np.ptp(track.position_m[:, chassis, 2]) > 1e-3  # the truck moves

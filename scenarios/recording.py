@@ -1,0 +1,410 @@
+"""Rerun recordings (.rrd) of scenario runs, for review in the Rerun viewer.
+
+One file holds one recording per scenario (its road-mode and/or rig-mode runs, the corrected
+forces, the body poses), all under the application id :data:`APPLICATION_ID`, so the one
+blueprint of :mod:`scenarios.blueprint` lays out every case; the viewer lists the recordings
+by scenario name. Each recording holds, on the time line ``time`` (s, 0 at the end of the
+lead-in, as ``RunResult.t_s``):
+
+- ``/rig/<corner>/<plot>`` (corners ``fl fr rl rr``), one row per analysis sample (1 kHz) with
+  one value per series, named in the entity's static ``SeriesLines``:
+  ``displacement`` (m): drive, pan rig (and pan road when it is not the drive itself);
+  ``tire_force`` (N): road, rig, corrected; ``pressure`` (Pa): p1, p2; ``spool`` (1, +-1);
+- ``/scene/<body>``: the world pose of each MuJoCo body at video rate (``Transform3D``), with
+  its visual geoms logged once, static, under ``/scene/<body>/<box|cylinder|capsule>`` in the
+  body's frame; ``/scene/world/plane`` the lab floor; ``/scene/road/left|right`` the road
+  profile under each track, moving under the truck;
+- ``/info/dlc``, ``/info/parameters`` (and ``/info/dlc_table`` when given): static text.
+
+Pose sampling (:class:`PoseRecorder`) is numpy on MuJoCo's arrays and imports no rerun: rerun
+is imported inside :func:`write_recording` only (and by :mod:`scenarios.blueprint`, which
+only it imports), so a run without a recording never loads rerun. Each recording is logged
+through its own ``rerun.RecordingStream`` (never the global one) with ``send_columns`` of the
+finished arrays.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import uuid
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from mjcf.build import CORNERS
+from scenarios.results import RunResult, atomic_write_bytes
+
+__all__ = [
+    "APPLICATION_ID",
+    "DEFAULT_POSE_RATE_HZ",
+    "Geoms",
+    "PoseTrack",
+    "PoseRecorder",
+    "model_geoms",
+    "rest_track",
+    "write_recording",
+    "open_viewer",
+]
+
+#: Application id of every recording; the viewer keys its blueprint on it.
+APPLICATION_ID = "rigsim"
+#: Video rate of the body poses, Hz (divides MuJoCo's 10 kHz; 60 s make 3000 frames).
+DEFAULT_POSE_RATE_HZ = 50.0
+_KINDS = {
+    int(mujoco.mjtGeom.mjGEOM_PLANE): "plane",
+    int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
+    int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule",
+    int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder",
+    int(mujoco.mjtGeom.mjGEOM_BOX): "box",
+}
+
+
+@dataclass(frozen=True)
+class Geoms:
+    """Visual geoms of a compiled model, each in its body's frame (MuJoCo conventions).
+
+    Attributes
+    ----------
+    body : tuple of str
+        Name of each geom's body (``"world"`` for static scenery).
+    kind : tuple of str
+        ``"box"``, ``"cylinder"``, ``"capsule"``, ``"sphere"`` or ``"plane"``.
+    size_m : numpy.ndarray, m, (G, 3)
+        MuJoCo ``geom_size``: half sizes (box), radius and half length (cylinder, capsule).
+    pos_m : numpy.ndarray, m, (G, 3)
+        Centre in the body frame.
+    quat_wxyz : numpy.ndarray, (G, 4)
+        Orientation in the body frame, MuJoCo's scalar-first order.
+    rgba : numpy.ndarray, (G, 4)
+        Colour, 0..1.
+    """
+
+    body: tuple[str, ...]
+    kind: tuple[str, ...]
+    size_m: np.ndarray
+    pos_m: np.ndarray
+    quat_wxyz: np.ndarray
+    rgba: np.ndarray
+
+
+def model_geoms(model: mujoco.MjModel, groups: Sequence[int] = (0, 1, 2)) -> Geoms:
+    """The geoms of ``model`` in ``groups`` whose shape can be drawn (see :class:`Geoms`).
+
+    Meshes and height fields are skipped (the truck model has none).
+    """
+    keep = [g for g in range(model.ngeom)
+            if int(model.geom_group[g]) in groups and int(model.geom_type[g]) in _KINDS]
+    rgba = model.geom_rgba[keep].copy()
+    for i, g in enumerate(keep):
+        if model.geom_matid[g] >= 0:
+            rgba[i] = model.mat_rgba[model.geom_matid[g]]
+    return Geoms(
+        body=tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, int(model.geom_bodyid[g])) for g in keep),
+        kind=tuple(_KINDS[int(model.geom_type[g])] for g in keep),
+        size_m=model.geom_size[keep].copy(),
+        pos_m=model.geom_pos[keep].copy(),
+        quat_wxyz=model.geom_quat[keep].copy(),
+        rgba=rgba,
+    )
+
+
+@dataclass(frozen=True)
+class PoseTrack:
+    """World poses of the model's bodies over time, with the geoms that draw them.
+
+    Attributes
+    ----------
+    t_s : numpy.ndarray, s, (M,)
+        Sample times, on the run's time axis (0 = end of the lead-in).
+    bodies : tuple of str
+        Body names, B of them.
+    position_m : numpy.ndarray, m, (M, B, 3)
+        Body frame origins in the world (MuJoCo ``data.xpos``).
+    quat_wxyz : numpy.ndarray, (M, B, 4)
+        Body orientations in the world, scalar first (MuJoCo ``data.xquat``).
+    geoms : Geoms
+        The visual geoms, each attached to one of ``bodies`` or to ``"world"``.
+    """
+
+    t_s: np.ndarray
+    bodies: tuple[str, ...]
+    position_m: np.ndarray
+    quat_wxyz: np.ndarray
+    geoms: Geoms
+
+    def __post_init__(self):
+        m, b = np.shape(self.t_s)[0], len(self.bodies)
+        if np.shape(self.position_m) != (m, b, 3) or np.shape(self.quat_wxyz) != (m, b, 4):
+            raise ValueError(
+                f"PoseTrack: position_m {np.shape(self.position_m)} and quat_wxyz "
+                f"{np.shape(self.quat_wxyz)} must be ({m}, {b}, 3) and ({m}, {b}, 4)"
+            )
+
+
+def _drawn_bodies(model: mujoco.MjModel, geoms: Geoms) -> tuple[list[int], tuple[str, ...]]:
+    names = tuple(dict.fromkeys(n for n in geoms.body if n != "world"))
+    return [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names], names
+
+
+class PoseRecorder:
+    """Samples the world poses of the drawn bodies at video rate during a run.
+
+    Construct it once the run's model is compiled and call it after ``mujoco.mj_step`` with
+    the step's index ``k``; take :meth:`track` at the end. After ``mj_step`` for step ``k``,
+    ``data.xpos``/``data.xquat`` hold the kinematics of the state at ``t_s[k]`` (the forward
+    pass precedes the integration): the instant of the tire force read there, so the sample is
+    stamped ``t_s[k]``.
+
+    It may be called at every step or only every ``every``-th step from the first step at
+    t >= 0 (for example inside the runner's ``if record:`` block at the output rate): the
+    frame interval is rounded to a whole multiple of ``every`` steps, so every frame falls on a
+    call. A call between frames costs one integer compare.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The model being stepped.
+    t_s : numpy.ndarray, s
+        Time of every step (``Drive.t_s``: negative during the lead-in). Frames are taken from
+        the first step at t >= 0, as the runner's output schedule.
+    rate_hz : float, Hz
+        Video rate.
+    every : int
+        The steps between two calls (1: every step).
+    """
+
+    def __init__(self, model: mujoco.MjModel, t_s: np.ndarray, rate_hz: float = DEFAULT_POSE_RATE_HZ,
+                 every: int = 1):
+        if not rate_hz > 0:
+            raise ValueError(f"rate_hz must be > 0, got {rate_hz!r}")
+        if int(every) != every or every < 1:
+            raise ValueError(f"every must be a positive whole number of steps, got {every!r}")
+        dt = float(model.opt.timestep)
+        decim = int(every) * max(1, int(round(1.0 / (rate_hz * dt * every))))
+        self._t_all = np.asarray(t_s, dtype=float)
+        k0 = int(np.searchsorted(self._t_all, -0.5 * dt))
+        self.steps = np.arange(k0, self._t_all.size, decim)
+        self._k0, self._decim = k0, decim
+        self.geoms = model_geoms(model)
+        ids, self.bodies = _drawn_bodies(model, self.geoms)
+        self._ids = np.asarray(ids, dtype=np.intp)
+        self._t = np.full(self.steps.size, np.nan)
+        self._pos = np.full((self.steps.size, len(self._ids), 3), np.nan)
+        self._quat = np.full((self.steps.size, len(self._ids), 4), np.nan)
+        self._j = 0
+        self._next = int(self.steps[0]) if self.steps.size else self._t_all.size
+
+    def __call__(self, data: mujoco.MjData, k: int) -> None:
+        """Record the poses if frame time has come at step ``k`` (call after ``mj_step``)."""
+        if k < self._next:
+            return
+        j = self._j
+        self._t[j] = self._t_all[k]
+        self._pos[j] = data.xpos[self._ids]
+        self._quat[j] = data.xquat[self._ids]
+        self._j = j + 1
+        self._next = self._k0 + ((k - self._k0) // self._decim + 1) * self._decim
+        if j + 1 >= self.steps.size:
+            self._next = self._t_all.size
+
+    def track(self) -> PoseTrack:
+        """The frames taken so far as a :class:`PoseTrack`."""
+        j = self._j
+        return PoseTrack(self._t[:j].copy(), self.bodies, self._pos[:j].copy(), self._quat[:j].copy(), self.geoms)
+
+
+def rest_track(result: RunResult, rate_hz: float = DEFAULT_POSE_RATE_HZ) -> PoseTrack:
+    """A stand-in :class:`PoseTrack` when a run recorded no poses.
+
+    The nominal truck (:class:`mjcf.build.TruckVariant` defaults) stands still at its static
+    equilibrium; the pans move with the result's ``pan_m``, decimated to ``rate_hz``. The
+    chassis and axles do not move: only a :class:`PoseRecorder` in the run can show that.
+    """
+    from mjcf.build import TruckVariant, build_model
+    from mjcf.physics import static_equilibrium
+
+    model = build_model(TruckVariant())
+    data = mujoco.MjData(model)
+    static_equilibrium(model, data)
+    geoms = model_geoms(model)
+    ids, names = _drawn_bodies(model, geoms)
+    step = max(1, int(round(result.rate_hz / rate_hz)))
+    t = np.asarray(result.t_s)[::step]
+    pos = np.repeat(data.xpos[ids][None], t.size, axis=0)
+    quat = np.repeat(data.xquat[ids][None], t.size, axis=0)
+    pan = np.asarray(result.signals["pan_m"])[::step]
+    for i, c in enumerate(result.corners):
+        if f"pan_{c}" in names:
+            pos[:, names.index(f"pan_{c}"), 2] += pan[:, i]
+    return PoseTrack(t, names, pos, quat, geoms)
+
+
+@dataclass(frozen=True)
+class _Case:
+    name: str
+    runs: dict  # mode -> RunResult, in the order given
+    corrected: np.ndarray | None
+    poses: PoseTrack | None
+    dlc_table: str | None
+
+
+def _cases(results, poses, corrected, dlc_table) -> list[_Case]:
+    runs: dict[str, dict[str, RunResult]] = {}
+    for r in results:
+        per = runs.setdefault(r.scenario_name, {})
+        if r.mode in per:
+            raise ValueError(f"two {r.mode}-mode results of scenario {r.scenario_name!r}")
+        per[r.mode] = r
+    if not runs:
+        raise ValueError("write_recording needs at least one RunResult")
+    for label, given in (("poses", poses), ("corrected", corrected)):
+        unknown = set(given or {}) - set(runs)
+        if unknown:
+            raise ValueError(f"{label} names unknown scenarios: {', '.join(sorted(unknown))}")
+    cases = []
+    for name, per in runs.items():
+        t0 = next(iter(per.values())).t_s
+        if any(not np.array_equal(r.t_s, t0) for r in per.values()):
+            raise ValueError(f"the runs of scenario {name!r} have different time axes")
+        n = {t0.size}
+        cor = None if corrected is None or name not in corrected else np.asarray(corrected[name], dtype=float)
+        if cor is not None and cor.shape != (n.pop(), len(CORNERS)):
+            raise ValueError(f"corrected[{name!r}] has shape {cor.shape}; expected the runs' (N, 4)")
+        track = (poses or {}).get(name)
+        if track is None:  # a runner that records poses may attach them to its results
+            track = next((getattr(r, "poses", None) for r in (per.get("rig"), per.get("road"))
+                          if r is not None and getattr(r, "poses", None) is not None), None)
+        table = dlc_table.get(name) if isinstance(dlc_table, Mapping) else dlc_table
+        cases.append(_Case(name, per, cor, track, table))
+    return cases
+
+
+def write_recording(
+    path,
+    results: Sequence[RunResult],
+    *,
+    poses: Mapping[str, PoseTrack] | None = None,
+    corrected: Mapping[str, np.ndarray] | None = None,
+    dlc_table: str | Mapping[str, str] | None = None,
+    spawn: bool = False,
+    pose_rate_hz: float = DEFAULT_POSE_RATE_HZ,
+) -> pathlib.Path:
+    """Write the runs as one .rrd file, one recording per scenario, atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The .rrd file. It is written to a temporary file in the same folder and renamed, so an
+        error leaves neither a partial file nor a temporary one.
+    results : sequence of RunResult
+        Grouped by ``scenario_name`` (one road-mode and/or one rig-mode run per scenario).
+    poses : mapping of str to PoseTrack, optional
+        Per scenario, the body poses (from a :class:`PoseRecorder` in the rig run, preferably).
+        Falls back to a ``poses`` attribute of the rig or road result, then to
+        :func:`rest_track` (truck at rest, pans moving).
+    corrected : mapping of str to numpy.ndarray, N, optional
+        Per scenario, the corrected tire forces, (N, 4) on the scenario's time axis.
+    dlc_table : str or mapping of str to str, optional
+        A DLC table as text (the terminal's), for every recording or per scenario.
+    spawn : bool
+        Open the written file in the Rerun viewer (a detached process). Otherwise no window
+        is ever opened.
+    pose_rate_hz : float, Hz
+        Frame rate of the stand-in poses of :func:`rest_track`.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    ValueError
+        Results that do not fit together (two runs of one mode and scenario, different time
+        axes, ``poses``/``corrected`` for unknown scenarios, a wrong shape), before anything
+        is written.
+    RuntimeError
+        ``rerun rrd merge`` failed (several scenarios only).
+    OSError
+        The file cannot be written.
+
+    Notes
+    -----
+    Each scenario is logged into a memory sink. One scenario's stream is the file; several
+    are merged by the ``rerun rrd merge`` of the pinned wheel's CLI, because an RRD stream ends
+    with a footer that indexes its own chunks and streams cannot be concatenated byte-wise.
+    """
+    import rerun as rr
+
+    from scenarios import blueprint as bp
+
+    path = pathlib.Path(path)
+    cases = _cases(results, poses, corrected, dlc_table)
+    plots = dict.fromkeys(["tire_force", "displacement"])
+    for case in cases:
+        plots.update(dict.fromkeys(bp.case_series(case.runs, case.corrected)))
+    layout = bp.review_blueprint(next(iter(cases[0].runs.values())).corners, tuple(plots))
+    streams = []
+    for i, case in enumerate(cases):
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+        storage = rec.memory_recording().storage
+        if i == 0:  # the blueprint belongs to the application: one for every case
+            rec.send_blueprint(layout)
+        first = next(iter(case.runs.values()))
+        track = case.poses if case.poses is not None else rest_track(case.runs.get("rig", first), pose_rate_hz)
+        bp.log_case(rec, case.name, case.runs, track=track, corrected=case.corrected, dlc_table=case.dlc_table)
+        rec.flush()
+        streams.append(storage.concat_as_bytes())
+        del rec
+    if len(streams) == 1:
+        atomic_write_bytes(path, streams[0])
+    else:
+        _merge_atomic(path, streams)
+    if spawn:
+        open_viewer(path)
+    return path
+
+
+def _rerun_cli() -> list[str]:
+    return [sys.executable, "-m", "rerun_cli"]
+
+
+def _merge_atomic(path: pathlib.Path, streams: list[bytes]) -> None:
+    """Merge single-recording RRD streams into one file with ``rerun rrd merge`` (the CLI of
+    the pinned rerun-sdk wheel): RRD streams cannot be concatenated byte-wise, since each ends
+    with a footer indexing its own chunks. Temporary files live beside ``path``; an error
+    leaves nothing behind."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp_dir = pathlib.Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"))
+    try:
+        parts = []
+        for i, data in enumerate(streams):
+            parts.append(tmp_dir / f"case{i}.rrd")
+            parts[-1].write_bytes(data)
+        out = tmp_dir / "merged.rrd"
+        proc = subprocess.run([*_rerun_cli(), "rrd", "merge", *map(str, parts), "-o", str(out)],
+                              stdin=subprocess.DEVNULL, capture_output=True, text=True)
+        if proc.returncode != 0 or not out.is_file():
+            tail = proc.stderr.strip().splitlines()[-1:] or ["no output"]
+            raise RuntimeError(f"rerun rrd merge failed (exit {proc.returncode}): {tail[0]}")
+        with open(out, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(out, path)
+    finally:
+        shutil.rmtree(tmp_dir, ignore_errors=True)
+
+
+def open_viewer(path) -> subprocess.Popen:
+    """Open ``path`` in the Rerun viewer shipped with rerun-sdk, as a detached process."""
+    return subprocess.Popen(
+        [*_rerun_cli(), str(path)],
+        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
