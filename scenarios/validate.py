@@ -506,10 +506,16 @@ def _summary(result) -> dict:
             "events": s["events"], "wall_time_s": s["info"]["wall_time_s"]}
 
 
-def _job_scenario(path: str, duration_s: float | None, mode: str) -> dict:
+def _job_scenario(path: str, duration_s: float | None, mode: str, pose_rate_hz: float | None = None) -> dict:
+    """Run the Table 1 scenario in ``mode``; the summary, plus the whole result when poses are
+    asked for (a recording is wanted)."""
     from scenarios.runner import run
 
-    return _summary(run(_scenario(path, duration_s), mode))
+    result = run(_scenario(path, duration_s), mode, pose_rate_hz=pose_rate_hz)
+    out = _summary(result)
+    if pose_rate_hz is not None:
+        out["result"] = result
+    return out
 
 
 def _job_linear(path: str, duration_s: float | None, kind: str, model) -> dict:
@@ -564,7 +570,8 @@ def _steps_linear(lin: PlantLinearization, eq4: list, fits: list, size_m: float,
 
 
 def validate(*, duration_s: float | None = None, ident_duration_s: float | None = None,
-             jobs: int | None = None, progress: ProgressFn | None = None) -> dict:
+             jobs: int | None = None, progress: ProgressFn | None = None,
+             pose_rate_hz: float | None = None) -> dict:
     """Compute the whole validation (routes 1-3, Figure 7 and Table 1 analogues).
 
     Parameters
@@ -600,8 +607,8 @@ def validate(*, duration_s: float | None = None, ident_duration_s: float | None 
         try:
             # Longest first; all of these are independent of the linearizations below.
             futures["ident"] = pool.submit(_job_ident, path, ident_s)
-            futures["rig"] = pool.submit(_job_scenario, path, table_s, "rig")
-            futures["road"] = pool.submit(_job_scenario, path, table_s, "road")
+            futures["rig"] = pool.submit(_job_scenario, path, table_s, "rig", pose_rate_hz)
+            futures["road"] = pool.submit(_job_scenario, path, table_s, "road", pose_rate_hz)
             futures["step_small"] = pool.submit(_job_step, path, STEP_SMALL_M)
             futures["step_large"] = pool.submit(_job_step, path, STEP_LARGE_M)
             # Diagnostics: the same without leaf-spring dry friction (route 2 linearizes without it).
@@ -639,7 +646,8 @@ def validate(*, duration_s: float | None = None, ident_duration_s: float | None 
     _say(progress, "validate: route 3, H1 estimate and rational fits; comparing")
     js, arrays = _assemble(sc, params, lin, r1, results, table_s, ident_s)
     js["wall_time_s"] = round(time.perf_counter() - wall0, 2)
-    return {"json": js, "arrays": arrays}
+    runs = {k: results[k].pop("result") for k in ("road", "rig") if "result" in results[k]}
+    return {"json": js, "arrays": arrays, "runs": runs}
 
 
 def _assemble(sc, params, lin, r1, results, table_s, ident_s):
@@ -1309,6 +1317,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--ident-duration-s", type=float, default=None,
                    help="identification record in s (default: twice --duration-s, at least 10 s)")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--rrd", default=None, help="also write a rerun recording of the Table 1 road and rig runs")
+    p.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=cmd_validate)
     return p
@@ -1325,9 +1335,22 @@ def cmd_validate(args) -> int:
         raise ScenarioError(f"--out {out} exists and is not a folder")
     quiet = getattr(args, "quiet", False)
     progress = None if quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    rrd = getattr(args, "rrd", None)
+    pose_rate = None
+    if rrd:
+        from scenarios.recording import DEFAULT_POSE_RATE_HZ
+
+        pose_rate = DEFAULT_POSE_RATE_HZ
     result = validate(duration_s=args.duration_s, ident_duration_s=getattr(args, "ident_duration_s", None),
-                      jobs=getattr(args, "jobs", None), progress=progress)
+                      jobs=getattr(args, "jobs", None), progress=progress, pose_rate_hz=pose_rate)
     paths = write_report(result, args.out)
+    if rrd:
+        from scenarios.recording import write_recording
+
+        runs = [result["runs"][k] for k in ("road", "rig") if k in result.get("runs", {})]
+        write_recording(rrd, runs, dlc_table="\n".join(summary_lines(result["json"])),
+                        spawn=getattr(args, "view", False))
+        print(f"wrote recording {rrd} (Table 1 road and rig runs)")
     for line in summary_lines(result["json"]):
         print(line)
     print(f"wrote {paths['validate.json']}, {paths['report.md']} and {len(paths) - 2} PNGs")

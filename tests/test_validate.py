@@ -73,7 +73,8 @@ def _parse(argv):
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("validate")
-    args = _parse(["--out", str(out), "--duration-s", "3", "--ident-duration-s", "8", "--quiet"])
+    args = _parse(["--out", str(out), "--duration-s", "3", "--ident-duration-s", "8", "--quiet",
+                   "--rrd", str(out / "validate.rrd")])
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         rc = args.func(args)
@@ -114,6 +115,21 @@ def test_validate_json_matches_the_numbers_printed(short_run):
             assert value == str(expected), key
         else:
             assert float(value) == pytest.approx(expected, rel=1e-5), key
+
+
+def test_recording_of_the_table1_runs_is_written(short_run):
+    """--rrd writes one recording of the Table 1 road and rig runs (read back: entity paths)."""
+    out, printed, _ = short_run
+    path = out / "validate.rrd"
+    assert path.stat().st_size > 100_000
+    assert "wrote recording" in printed
+    from tests.test_recording import read_rrd
+
+    recordings = read_rrd(path)
+    assert len(recordings) == 1
+    (entities,) = recordings.values()
+    assert any(p.startswith("/rig/fl") for p in entities)
+    assert any(p.startswith("/scene/chassis") for p in entities)
 
 
 def test_table1_ordering_road_above_rig(short_run):
