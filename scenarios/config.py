@@ -87,6 +87,8 @@ class RoadConfig:
     envelope_length_m : float, m
         Tire enveloping: moving average of the profile over this length before anything else
         (0.25 m, the IRI's tire model; 0 turns it off). See :func:`scenarios.roads.envelope`.
+    n_min_cyc_per_m, n_max_cyc_per_m : float, cycle/m
+        Spatial band of a synthesized profile (ISO 8608 roughness or gd_n0_m3).
     """
 
     roughness: str | None = None
@@ -96,6 +98,8 @@ class RoadConfig:
     tracks: str = "independent"
     cuton_wavelength_m: float = 40.0
     envelope_length_m: float = 0.25
+    n_min_cyc_per_m: float = 0.01
+    n_max_cyc_per_m: float = 10.0
 
 
 @dataclass(frozen=True)
@@ -186,6 +190,11 @@ def _road(table: Any) -> RoadConfig:
         if table["tracks"] not in _TRACKS:
             raise ScenarioError(f"road.tracks must be one of {', '.join(_TRACKS)}, got {table['tracks']!r}")
         kw["tracks"] = table["tracks"]
+    for key, lo, hi in (("n_min_cyc_per_m", 1e-4, 10.0), ("n_max_cyc_per_m", 0.1, 50.0)):
+        if key in table:
+            kw[key] = _number(f"road.{key}", table[key], lo=lo, hi=hi, lo_open=True)
+    if kw.get("n_min_cyc_per_m", 0.01) >= kw.get("n_max_cyc_per_m", 10.0):
+        raise ScenarioError("road.n_min_cyc_per_m must be below road.n_max_cyc_per_m; widen the band")
     if "envelope_length_m" in table:
         kw["envelope_length_m"] = _number("road.envelope_length_m", table["envelope_length_m"], lo=0.0, hi=2.0)
     if "cuton_wavelength_m" in table:

@@ -64,10 +64,12 @@ def _road_profile(scenario: Scenario, length_m: float) -> roads.Profile:
             return roads.read_profile_csv(path)
         except roads.ProfileError as exc:
             raise ScenarioError(f"road.profile_csv: {exc}") from None
+    band = {"waviness": rc.waviness, "tracks": rc.tracks, "n_min_cyc_per_m": rc.n_min_cyc_per_m,
+            "n_max_cyc_per_m": rc.n_max_cyc_per_m}
     if rc.roughness is not None:
-        spec = roads.RoadSpec.from_class(rc.roughness, waviness=rc.waviness, tracks=rc.tracks)
+        spec = roads.RoadSpec.from_class(rc.roughness, **band)
     else:
-        spec = roads.RoadSpec(gd_n0_m3=rc.gd_n0_m3, waviness=rc.waviness, tracks=rc.tracks)
+        spec = roads.RoadSpec(gd_n0_m3=rc.gd_n0_m3, **band)
     rng = np.random.default_rng(scenario.seed)
     return roads.generate_profile(spec, length_m, _PROFILE_DX_M, rng)
 

@@ -74,6 +74,7 @@ def test_paper_scenarios_load_with_the_papers_cases():
         (('roughness = "C"', 'roughness = "Q"'), r"road\.roughness must be one of"),
         (('roughness = "C"', 'roughness = "C"\ngd_n0_m3 = 1e-4'), r"exactly one of roughness, gd_n0_m3"),
         (("seed = 7", "seed = -1"), r"seed must be a non-negative integer"),
+        (('roughness = "C"', 'roughness = "C"\nn_min_cyc_per_m = 20.0'), r"road\.n_min_cyc_per_m must be <= 10"),
         (("duration_s = 2.0", ""), r"missing required key duration_s"),
     ],
 )
@@ -167,6 +168,20 @@ def test_measured_profile_csv_and_nan(tmp_path):
     np.savetxt(tmp_path / "p.csv", np.c_[x, z, z], delimiter=",", header="distance_m,left_m,right_m", comments="")
     with pytest.raises(ScenarioError, match=r"line 1236, column left_m: 'nan' is not finite"):
         run(load_scenario(_write(tmp_path, text)), "road")
+
+
+def test_spatial_band_reaches_the_profile(tmp_path):
+    """A band limited to 1 cycle/m (wavelengths >= 1 m) leaves no content above 20 Hz at
+    72 km/h; the default band (to 10 cycle/m, then the tire's 0.25 m enveloping) does."""
+    from scipy.signal import welch
+
+    def hf_share(extra):
+        r = run(load_scenario(_write(tmp_path, SHORT.replace('roughness = "C"', 'roughness = "C"' + extra))), "road")
+        f, p = welch(r.signals["profile_m"][:, 0], fs=r.rate_hz, nperseg=512)
+        return p[f > 25].sum() / p.sum()
+
+    assert hf_share("\nn_max_cyc_per_m = 1.0") < 1e-6
+    assert hf_share("") > 1e-4
 
 
 def test_parse_scenario_in_memory():
