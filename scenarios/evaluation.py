@@ -147,8 +147,8 @@ def identify_wheel_actuator(drive_m, pan_m, fs: float, *, orders=ID_ORDERS, f_ma
         if gap[ip] < 0.1 * max(abs(z), 1e-3) + 1e-3:
             keep_p[ip] = keep_z[iz] = False
     if not (keep_p.all() and keep_z.all()):
-        num = np.real(np.poly(zeros[keep_z])) * num[0]
-        den = np.real(np.poly(poles[keep_p])) * den[0]
+        num = np.atleast_1d(np.real(np.poly(zeros[keep_z]))) * num[0]
+        den = np.atleast_1d(np.real(np.poly(poles[keep_p]))) * den[0]
     # The anchors pin the static gain near 1; make it exactly 1 (the PI loop's integral action).
     return num * (den[-1] / num[-1]), den
 
