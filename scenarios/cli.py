@@ -101,12 +101,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
-    from scenarios import correct_cmd, paper, sweep, validate
+    from scenarios import correct_cmd, iterate_cmd, paper, sweep, validate
 
     paper.add_parser(sub)
     validate.add_parser(sub)
     correct_cmd.add_parser(sub)
     sweep.add_parser(sub)
+    iterate_cmd.add_parser(sub)
 
     m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
     m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg (default 3640)")
