@@ -16,7 +16,7 @@ from mujoco import rollout
 from hydraulics.bridge import add_hydraulic_actuators, hydraulic_callbacks
 from hydraulics.equilibrium import equilibrium_activation
 from hydraulics.params import STATE_NAMES, ActuatorParams
-from mjcf.build import CORNERS, TruckVariant, build_spec
+from mjcf.build import CORNERS, build_spec
 from mjcf.physics import RigIndex, static_equilibrium
 from scenarios.config import Scenario, ScenarioError
 
@@ -133,7 +133,6 @@ def run_rig(scenario: Scenario, model_unused, drive, progress=None, *, pose_rate
     check_plant_stable(model, data)
     idx = RigIndex.of(model)
     hyd = _hyd_ids(model)
-    tires = idx.tire_actuator
     qa = idx.pan_qpos
     adr = model.actuator_actadr[hyd]
     dim = int(model.actuator_actnum[hyd[0]])

@@ -154,7 +154,7 @@ def _report_md(js: dict) -> str:
     r1, r2, r3, t1 = js["route1"], js["route2"], js["route3"], js["table1"]
     bw = js["bandwidth_hz"]
     lines = [
-        f"# Validation of the linearized actuator model (paper eq. 4) against the multibody plant",
+        "# Validation of the linearized actuator model (paper eq. 4) against the multibody plant",
         "",
         f"Scenario `{js['scenario']}` (truck 3640 kg payload on the four-post rig), time step "
         f"{js['timestep_s']:g} s. Table 1 runs {js['duration_s']:g} s, identification record "

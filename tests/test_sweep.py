@@ -208,6 +208,7 @@ def test_pool_sweep_records_every_case(reference):
     for r in good:
         road, rig, corr = float(r["dlc_road"]), float(r["dlc_rig"]), float(r["dlc_corrected"])
         assert 0.02 < rig < road  # the rig attenuates the dynamic load
+        assert corr > rig  # the correction restores some of it
         assert float(r["nrmse_corrected"]) < float(r["nrmse_rig"])  # the correction helps
         assert float(r["wall_time_s"]) > 0
     assert (out / "summary.png").stat().st_size > 10_000
