@@ -527,12 +527,14 @@ def _job_linear(path: str, duration_s: float | None, kind: str, model) -> dict:
             y = _modal_simulate(a, b, c, drive.z_m, diagonal=(kind == "route2_per_wheel"))
             z, v = y[:, :4], y[:, 4:]
         else:
+            # First-order hold (exact for the piecewise-linear drive; a zero-order hold adds half
+            # a step of delay), and the profile's velocity through the same T_a (d/dt commutes).
             z = np.empty_like(drive.z_m)
             v = np.empty_like(drive.z_m)
             for i, (num, den) in enumerate(model):
-                tf = control.tf(num, den)
-                z[:, i] = apply_transfer_function(tf, drive.z_m[:, i], dt)
-                v[:, i] = apply_transfer_function(tf, drive.z_m[:, i], dt, derivative=True)
+                bd, ad, _ = signal.cont2discrete((num, den), dt, method="foh")
+                z[:, i] = signal.lfilter(np.ravel(bd), ad, drive.z_m[:, i])
+                v[:, i] = signal.lfilter(np.ravel(bd), ad, drive.v_mps[:, i])
         return Drive(t_s=drive.t_s, z_m=z, v_mps=v)
 
     return _summary(run(_scenario(path, duration_s), "road", pan_drive=pan_drive))
