@@ -26,7 +26,7 @@ EQ4_ORDERS = (1, 4)
 
 
 def identify_actuator(drive_m, displacement_m, fs: float, *, f_max_hz: float | None = None,
-                      nperseg: int | None = None):
+                      nperseg: int | None = None, orders: tuple[int, int] = EQ4_ORDERS):
     """Identify ``T_a = X_a / X_p`` from a drive record and the measured pan displacement.
 
     Parameters
@@ -42,6 +42,8 @@ def identify_actuator(drive_m, displacement_m, fs: float, *, f_max_hz: float | N
         mode of DYNTRAC-sized actuators).
     nperseg : int, optional
         Welch segment length (default: about 8 s, at least 8 segments in the record).
+    orders : (int, int)
+        Numerator and denominator orders of the fit (default: eq. 4's shape, 1 and 4).
 
     Returns
     -------
@@ -70,4 +72,4 @@ def identify_actuator(drive_m, displacement_m, fs: float, *, f_max_hz: float | N
     h = np.concatenate([np.ones(anchor_f.size, dtype=complex), h])
     weight = np.concatenate([np.full(anchor_f.size, top), weight])
     f_max = min(0.4 * fs, 80.0) if f_max_hz is None else float(f_max_hz)
-    return identify.fit_rational(f, h, EQ4_ORDERS[0], EQ4_ORDERS[1], weight=weight, f_max=f_max)
+    return identify.fit_rational(f, h, orders[0], orders[1], weight=weight, f_max=f_max)

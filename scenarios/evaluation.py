@@ -27,7 +27,7 @@ import numpy as np
 
 from correction.apply import band_limit, correct
 from correction.filters import design_correction
-from correction.identify import fit_rational, h1_estimate
+from correction.actuator_id import identify_actuator
 from scenarios.results import RunResult
 
 __all__ = ["NOISE_N", "Method", "CaseEvaluation", "evaluate", "identify_wheel_actuator", "paper_actuator"]
@@ -102,25 +102,15 @@ def paper_actuator(params, kt_N_per_m: float, load_N: float):
 
 
 def identify_wheel_actuator(drive_m, pan_m, fs: float, *, orders=ID_ORDERS, f_max_hz: float = 60.0):
-    """T_a(s) of one wheel from the rig run's drive and pan displacement.
+    """T_a(s) = (num, den) of one wheel from the rig run's drive and pan displacement.
 
-    H1 estimate (Welch, ~8 s segments) weighted by coherence, three anchor points at T_a = 1
-    far below the first frequency bin (the slow integral-action pole-zero pair near 1 rad/s
-    is below the estimate's resolution and the static gain of a PI loop is exactly 1), and a
-    stable rational fit up to ``f_max_hz``.
+    The fit of :func:`correction.actuator_id.identify_actuator` (H1 estimate weighted by
+    coherence, anchors at T_a = 1 below the first bin, stable rational fit up to ``f_max_hz``),
+    with the larger orders a truck-loaded actuator needs, then made usable as an inverse:
+    right-half-plane zeros reflected, slow near-cancelling pole-zero pairs removed, T_a(0) = 1.
     """
-    u = np.asarray(drive_m, dtype=float)
-    y = np.asarray(pan_m, dtype=float)
-    nperseg = int(min(8192, max(256, u.size // 8)))
-    f, h, coh = h1_estimate(u, y, fs, nperseg)
-    c = np.clip(np.nan_to_num(coh), 0.0, 0.999)
-    weight = np.sqrt(c / (1.0 - c))
-    anchor = (fs / nperseg) * np.array([0.01, 0.02, 0.05])
-    top = float(np.max(weight)) if np.any(weight > 0) else 1.0
-    f = np.concatenate([anchor, f])
-    h = np.concatenate([np.ones(anchor.size, dtype=complex), h])
-    weight = np.concatenate([np.full(anchor.size, top), weight])
-    fit = fit_rational(f, h, orders[0], orders[1], weight=weight, f_max=f_max_hz)
+    nperseg = int(min(8192, max(256, np.asarray(drive_m).size // 8)))
+    fit = identify_actuator(drive_m, pan_m, fs, f_max_hz=f_max_hz, nperseg=nperseg, orders=orders)
     num = np.asarray(fit.num[0][0], dtype=float)
     den = np.asarray(fit.den[0][0], dtype=float)
     # A free fit may place a zero in the right half-plane where the data do not constrain it
