@@ -158,12 +158,10 @@ def static_equilibrium(
     -------
     numpy.ndarray
         The equilibrium ``qpos`` (also left in ``data.qpos``, with ``qvel`` zero and
-        ``mj_forward`` evaluated).
+        ``mj_forward`` evaluated; ``data.act`` is left as the caller set it).
     """
     idx = RigIndex.of(model)
     data.qvel[:] = 0.0
-    if data.act.size:
-        pass  # activation (hydraulics) is the caller's business; left as it is
     if idx.pan_qpos.size:
         data.qpos[idx.pan_qpos] = 0.0 if pan_z_m is None else np.asarray(pan_z_m, dtype=float)
     q_adr, dof = idx.truck_qpos, idx.truck_dof

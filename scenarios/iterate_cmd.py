@@ -110,7 +110,7 @@ def _rig_runner(scenario, base_drive, decim: int, k0: int):
         for i in range(z.shape[1]):
             z[k0:, i] = np.interp(t[k0:], t_out, drive_1k[:, i])
         d = Drive(t_s=t, z_m=z, v_mps=np.gradient(z, t, axis=0))
-        return run_rig(scenario, None, d)
+        return run_rig(scenario, d)
 
     return run
 
@@ -124,7 +124,7 @@ def _identify(scenario, target: str, duration_s: float, dt: float, decim: int):
 
     z = identification_drive(duration_s + IDENT_SKIP_S, dt)
     t = np.arange(z.shape[0]) * dt
-    rec = run_rig(scenario, None, Drive(t_s=t, z_m=z, v_mps=np.gradient(z, t, axis=0)))
+    rec = run_rig(scenario, Drive(t_s=t, z_m=z, v_mps=np.gradient(z, t, axis=0)))
     u = z[::decim][: rec["pan_m"].shape[0]]
     y = rec["pan_m"] if target == "displacement" else rec["tire_force_N"]
     fs = 1.0 / (dt * decim)

@@ -118,11 +118,11 @@ def check_plant_stable(model: mujoco.MjModel, data: mujoco.MjData) -> None:
         )
 
 
-def run_rig(scenario: Scenario, model_unused, drive, progress=None, *, pose_rate_hz: float | None = None) -> dict:
+def run_rig(scenario: Scenario, drive, progress=None, *, pose_rate_hz: float | None = None) -> dict:
     """Run the rig test; returns the recorded per-wheel signals and the events.
 
-    ``model_unused`` is the road-mode model of the caller; the rig builds its own (with
-    the actuators added and the actuator's pan mass).
+    The rig model is built here (the truck with the actuators added and the actuator's pan
+    mass); ``drive`` is any :class:`scenarios.runner.Drive` on the simulation's time step.
     """
     from hydraulics.events import events as hydraulic_events
     from scenarios.runner import SimulationError, Watch, output_schedule

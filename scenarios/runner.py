@@ -252,7 +252,7 @@ def _run_mode(scenario, mode, model, drive, progress, pan_drive, pose_rate_hz) -
         return _run_road(scenario, model, follow, progress, pose_rate_hz)
     from scenarios.rig import run_rig  # hydraulics in the loop
 
-    return run_rig(scenario, model, drive, progress, pose_rate_hz=pose_rate_hz)
+    return run_rig(scenario, drive, progress, pose_rate_hz=pose_rate_hz)
 
 
 def run(
