@@ -1,4 +1,4 @@
-"""Rig-test mode: the full truck on four hydraulic actuators (scenarios/rig.py).
+"""Rig-test mode: the full truck on four hydraulic actuators (scenarios/core/rig.py).
 
 References: static force balance (weight of truck and pans), the paper's finding that the
 rig's DLC lies below the road's (Table 1 and 2: 13-22 % below), determinism, and MuJoCo's
@@ -18,10 +18,11 @@ from hydraulics.bridge import hydraulic_callbacks
 from hydraulics.params import STATE_NAMES
 from mjcf.build import CORNERS
 from mjcf.physics import RigIndex
-from scenarios.cli import main
-from scenarios.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
-from scenarios.rig import actuator_params, rest_state, rig_model
-from scenarios.runner import SimulationError, run
+from scenarios.cli.main import main
+from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
+from scenarios.core.rig import Rig
+from scenarios.core.run import run
+from scenarios.core.watch import SimulationError
 
 SHORT = {
     "name": "rig-short",
@@ -44,10 +45,9 @@ def _p_index(name):
 
 
 def test_rest_pressures_carry_tire_load_and_pan_weight_and_stay():
-    scenario = parse_scenario(SHORT)
-    params = actuator_params(scenario)
-    model = rig_model(scenario, params)
-    data = rest_state(model, params)
+    rig = Rig(parse_scenario(SHORT))
+    params, model = rig.params, rig.model
+    data = rig.rest_state()
     idx = RigIndex.of(model)
     tire = data.actuator_force[idx.tire_actuator].copy()
     g = 9.81
@@ -118,9 +118,11 @@ def test_two_rig_runs_in_one_process_are_bit_identical():
 
 
 def test_unstable_parameters_refused_before_the_run(tmp_path, capsys):
-    doc = dict(SHORT, actuator={"kdp_per_Pa": 0.0})
+    """Actuator parameters are plain data (parse_scenario accepts them); the rig refuses
+    them when it is built, before any step, naming the parameter to change."""
+    scenario = parse_scenario(dict(SHORT, actuator={"kdp_per_Pa": 0.0}))
     with pytest.raises(ScenarioError, match="kdp_per_Pa"):
-        parse_scenario(doc)
+        Rig(scenario)
     path = tmp_path / "bad.toml"
     path.write_text(
         'name = "bad"\nspeed_kmh = 72.0\nduration_s = 2.0\n[road]\nroughness = "C"\n[actuator]\nkdp_per_Pa = 0.0\n'
@@ -132,13 +134,12 @@ def test_unstable_parameters_refused_before_the_run(tmp_path, capsys):
 
 
 def test_unstable_plant_caught_by_the_plant_check_and_callbacks_removed():
-    """Parameters that pass no check of their own (the construction check turned off) are
-    refused by the linearization of the whole plant before any step is taken."""
-    s = dataclasses.replace(
-        parse_scenario(SHORT), actuator=MappingProxyType({"kdp_per_Pa": 0.0, "check_loop_on_init": False})
-    )
+    """Parameters that pass the design-station check (here it is skipped) are refused by the
+    linearization of the whole plant before any step is taken."""
+    s = dataclasses.replace(parse_scenario(SHORT), actuator=MappingProxyType({"kdp_per_Pa": 0.0}))
+    rig = Rig(s, check_stability=False)
     with pytest.raises(ScenarioError, match=r"unstable: pole .* Hz"):
-        run(s, "rig")
+        rig.check_stable()
     assert _callbacks_clear()
 
 
@@ -146,9 +147,9 @@ def test_unstable_plant_caught_by_the_plant_check_and_callbacks_removed():
 def test_plant_check_catches_known_unstable_loops(change):
     """Both instabilities the issue names: no pressure feedback, and a servovalve much slower
     than the hydraulic mode (40 Hz against ~110 Hz), are refused by the plant check."""
-    s = dataclasses.replace(parse_scenario(SHORT), actuator=MappingProxyType(dict(change, check_loop_on_init=False)))
+    s = dataclasses.replace(parse_scenario(SHORT), actuator=MappingProxyType(change))
     with pytest.raises(ScenarioError, match="unstable"):
-        run(s, "rig")
+        Rig(s, check_stability=False).check_stable()
     assert _callbacks_clear()
 
 
@@ -157,17 +158,20 @@ def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, tmp_
     """A NaN in the drive at t = 1.5 s: MuJoCo warns (bad ctrl / bad qpos) and the run stops
     with a SimulationError naming the 10 ms window of simulated time that holds the bad
     step (warnings are checked every 10 ms); no callbacks remain."""
-    import scenarios.runner as runner_module
+    from scenarios.core.drive import Drive
 
-    real = runner_module.prepare_drive
+    real = Rig.road_drive
 
-    def poisoned(scenario, model):
-        d = real(scenario, model)
+    def poisoned(self):
+        d = real(self)
         z = d.z_m.copy()
         z[np.searchsorted(d.t_s, 1.5), 0] = np.nan
-        return runner_module.Drive(d.t_s, z, d.v_mps)
+        out = object.__new__(Drive)  # Drive refuses NaN; bypass its check to poison the run
+        for name, value in (("t_s", d.t_s), ("z_m", z), ("v_mps", d.v_mps), ("corners", d.corners)):
+            object.__setattr__(out, name, value)
+        return out
 
-    monkeypatch.setattr(runner_module, "prepare_drive", poisoned)
+    monkeypatch.setattr(Rig, "road_drive", poisoned)
     monkeypatch.chdir(tmp_path)
     with pytest.raises(SimulationError, match=r"between t = 1\.5000 s and t = 1\.5100 s"):
         run(parse_scenario(SHORT), mode)

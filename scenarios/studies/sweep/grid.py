@@ -30,8 +30,8 @@ axis of the product (every explicit case is combined with every point of the axe
 alone is the list. A key may not be both an axis and a key of an explicit case. Setting one of
 ``road.roughness``, ``road.gd_n0_m3``, ``road.profile_csv`` replaces the base's choice among them.
 
-Every case is validated with :func:`scenarios.config.parse_scenario` before anything runs; an
-unknown axis name or an invalid value is a :class:`~scenarios.config.ScenarioError` naming it.
+Every case is validated with :func:`scenarios.core.config.parse_scenario` before anything runs; an
+unknown axis name or an invalid value is a :class:`~scenarios.core.config.ScenarioError` naming it.
 Each case gets a stable id from its own values (keys sorted, so the order of the axes in the file
 does not matter), e.g. ``road.roughness=high__speed_kmh=72__vehicle.payload_kg=3640``.
 """
@@ -52,7 +52,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from scenarios.config import RoadConfig, Scenario, ScenarioError, parse_scenario
+from scenarios.core.config import RoadConfig, Scenario, ScenarioError, parse_scenario
 
 __all__ = ["Case", "SweepGrid", "EvalSettings", "axis_keys", "load_grid", "parse_grid", "format_value",
            "GRID_FORMAT"]
@@ -68,7 +68,7 @@ _MAX_ID = 180  # characters; longer ids end in a hash (file names stay below com
 
 @dataclass(frozen=True)
 class EvalSettings:
-    """How each case is corrected and scored (see :func:`scenarios.sweep_eval.evaluate_case`).
+    """How each case is corrected and scored (see :func:`scenarios.studies.sweep.case.evaluate_case`).
 
     Parameters
     ----------

@@ -98,7 +98,7 @@ def corrected_forces(scenario, road, rig, *, lowpass: str = "regularized", corre
     from correction.filters import design_correction, reference_filter
     from hydraulics.linearization import eq4_coefficients
     from hydraulics.params import GRAVITY_M_S2
-    from scenarios.rig import actuator_params
+    from scenarios.core.rig import actuator_params
 
     params = actuator_params(scenario)
     fs = float(scenario.output_rate_hz)
@@ -176,8 +176,8 @@ def evaluate_case(scenario, *, lowpass: str = "regularized", correction_mode: st
         The correction filter cannot be designed for this actuator (one sentence).
     """
     from mjcf.build import CORNERS
-    from scenarios.config import ScenarioError
-    from scenarios.runner import run
+    from scenarios.core.config import ScenarioError
+    from scenarios.core.runner import run
 
     wall0 = time.perf_counter()
     road = run(scenario, "road")
@@ -237,8 +237,8 @@ def evaluate_payload(case_id: str, doc: dict, source: str | None, settings: dict
         "result": dict | None, "wall_time_s": float}``. ``retry`` is True for errors that are not
         a property of the case (an unexpected exception), so a resumed sweep runs it again.
     """
-    from scenarios.config import ScenarioError, parse_scenario
-    from scenarios.runner import SimulationError
+    from scenarios.core.config import ScenarioError, parse_scenario
+    from scenarios.core.runner import SimulationError
 
     wall0 = time.perf_counter()
     record: dict[str, Any] = {"case_id": case_id, "status": "ok", "error": None, "retry": False, "result": None}

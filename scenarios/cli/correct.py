@@ -15,7 +15,7 @@ displacement: H1 estimate and an eq.-4-shaped rational fit, :mod:`correction.act
 
 Rows inside the correction's start-up (and, zero-phase, run-out) transient are dropped by default
 (``--transient mark`` keeps them and adds a ``settled`` column of 0/1; ``keep`` keeps them as they
-are). Bad input raises :class:`scenarios.config.ScenarioError` (one sentence naming the column or
+are). Bad input raises :class:`scenarios.core.config.ScenarioError` (one sentence naming the column or
 line and the fix); nothing is written then. The output is written atomically.
 """
 
@@ -62,7 +62,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _error(message: str):
-    from scenarios.config import ScenarioError
+    from scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
@@ -172,7 +172,7 @@ def cmd_correct(args) -> int:
     from correction.actuator_id import identify_actuator  # imports correction.identify lazily
     from correction.apply import correct
     from correction.filters import design_correction
-    from scenarios.results import atomic_write_text
+    from scenarios.core.results import atomic_write_text
 
     if (args.actuator is None) == (args.identify is None):
         raise _error("give exactly one of --actuator ACT.toml and --identify DRIVE_COL,DISP_COL")

@@ -16,7 +16,7 @@ import sys
 __all__ = ["PAPER_TABLE1", "PAPER_TABLE2", "add_parser", "cmd_paper", "run_cases"]
 
 #: Table 2 of the paper: DLC of the road test, of DYNTRAC, and of DYNTRAC corrected, keyed by
-#: the shipped scenario names (scenarios/paper/*.toml).
+#: the shipped scenario names (scenarios/data/paper/*.toml).
 PAPER_TABLE2: dict[str, dict[str, float]] = {
     "paper-medium-72kmh-6360kg": {"road": 0.0985, "rig": 0.0854, "corrected": 0.0994},
     "paper-high-48kmh-3640kg": {"road": 0.1912, "rig": 0.1497, "corrected": 0.1794},
@@ -33,8 +33,8 @@ def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz
     """Worker: load and run one scenario in one mode (in its own process)."""
     import dataclasses
 
-    from scenarios.config import load_scenario
-    from scenarios.runner import run
+    from scenarios.core.config import load_scenario
+    from scenarios.core.runner import run
 
     scenario = load_scenario(path)
     if duration_s is not None:
@@ -110,11 +110,11 @@ def _row(case: str, ev) -> dict:
 def cmd_paper(args) -> int:
     from mjcf.build import build_model
     from mjcf.physics import tire_stiffness
-    from scenarios.config import ScenarioError, load_scenario, paper_scenarios
-    from scenarios.evaluation import METHODS, evaluate
-    from scenarios.paper_report import write_report
-    from scenarios.results import atomic_write_text, write_run
-    from scenarios.rig import actuator_params
+    from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
+    from scenarios.studies.evaluation import METHODS, evaluate
+    from scenarios.studies.paper.report import write_report
+    from scenarios.core.results import atomic_write_text, write_run
+    from scenarios.core.rig import actuator_params
 
     paths = paper_scenarios()
     scenarios = [load_scenario(p) for p in paths]  # validate everything before anything runs
@@ -132,7 +132,7 @@ def cmd_paper(args) -> int:
     jobs = [(str(p), mode) for p in paths for mode in ("road", "rig")]
     pose_rate = None
     if args.rrd:
-        from scenarios.recording import DEFAULT_POSE_RATE_HZ
+        from scenarios.review.recording import DEFAULT_POSE_RATE_HZ
 
         pose_rate = DEFAULT_POSE_RATE_HZ
     results = run_cases(jobs, workers=args.jobs, quiet=args.quiet, duration_s=args.duration_s,
@@ -156,7 +156,7 @@ def cmd_paper(args) -> int:
         write_run(r, out / r.scenario_name / r.mode)
     report_files = write_report(out, evaluations, rows, table)
     if args.rrd:
-        from scenarios.recording import write_recording
+        from scenarios.review.recording import write_recording
 
         write_recording(args.rrd, results, corrected={n: e[2].corrected_N["best"] for n, e in evaluations.items()},
                         dlc_table=table, spawn=args.view)
@@ -169,7 +169,7 @@ def cmd_paper(args) -> int:
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim paper``."""
-    from scenarios.evaluation import NOISE_N
+    from scenarios.studies.evaluation import NOISE_N
 
     pp = subparsers.add_parser("paper", help="the paper's three cases: road and rig runs, output correction, Table 2")
     pp.add_argument("--out", required=True, help="output folder")

@@ -5,8 +5,8 @@ cores or on a Dask cluster, with nothing lost.
 
     rigsim sweep GRID.toml --out DIR [--scheduler tcp://HOST:PORT] [--workers N] [--no-resume]
 
-The grid file format is in :mod:`scenarios.sweep_grid`; the evaluation of one case in
-:mod:`scenarios.sweep_eval`; the summary plot in :mod:`scenarios.sweep_plot`.
+The grid file format is in :mod:`scenarios.studies.sweep.grid`; the evaluation of one case in
+:mod:`scenarios.studies.sweep.case`; the summary plot in :mod:`scenarios.studies.sweep.plot`.
 
 Executors. The work goes through one ``concurrent.futures.Executor`` code path: by default a
 local ``ProcessPoolExecutor`` with one worker per core (MuJoCo's callbacks are process-global: one
@@ -49,9 +49,9 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from scenarios.config import ScenarioError
-from scenarios.sweep_eval import METRIC_COLUMNS, evaluate_payload
-from scenarios.sweep_grid import GRID_FORMAT, Case, SweepGrid, format_value, load_grid
+from scenarios.core.config import ScenarioError
+from scenarios.studies.sweep.case import METRIC_COLUMNS, evaluate_payload
+from scenarios.studies.sweep.grid import GRID_FORMAT, Case, SweepGrid, format_value, load_grid
 
 __all__ = ["SweepOutcome", "add_parser", "cmd_sweep", "collect_results", "dask_executor", "local_executor",
            "read_case_files", "results_columns", "run_sweep", "RESULTS_FILE", "CASES_DIR"]
@@ -225,7 +225,7 @@ def collect_results(grid: SweepGrid, out_dir) -> pathlib.Path:
     A swept key a case does not set (an explicit case without it) shows the base's value.
     Failed cases have empty scores and their error.
     """
-    from scenarios.results import atomic_write_text
+    from scenarios.core.results import atomic_write_text
 
     out = pathlib.Path(out_dir)
     records = read_case_files(grid, out)
@@ -250,7 +250,7 @@ def collect_results(grid: SweepGrid, out_dir) -> pathlib.Path:
 
 
 def _write_case(out: pathlib.Path, case: Case, record: dict) -> None:
-    from scenarios.results import atomic_write_text
+    from scenarios.core.results import atomic_write_text
 
     doc = {"format": GRID_FORMAT, "case_id": case.case_id, "fingerprint": case.fingerprint,
            "values": dict(case.values), **{k: v for k, v in record.items() if k != "case_id"},
@@ -345,7 +345,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
     KeyboardInterrupt
         After Ctrl-C: every finished case is kept and ``results.csv`` written first.
     """
-    from scenarios.results import atomic_write_text
+    from scenarios.core.results import atomic_write_text
 
     out = pathlib.Path(out_dir)
     (out / CASES_DIR).mkdir(parents=True, exist_ok=True)
@@ -398,7 +398,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
         }
         atomic_write_text(out / "sweep.json", json.dumps(meta, indent=2, default=str) + "\n")
         if plot and records:
-            from scenarios.sweep_plot import plot_summary
+            from scenarios.studies.sweep.plot import plot_summary
 
             plot_summary(grid, records, out / SUMMARY_FILE)
     outcome = SweepOutcome(total=len(grid.cases), skipped=len(grid.cases) - len(todo), ok=n_ok,

@@ -1,6 +1,6 @@
 """How a scenario is put into a rerun recording and laid out in the viewer.
 
-- :func:`log_case`: the entity tree of one scenario (described in :mod:`scenarios.recording`):
+- :func:`log_case`: the entity tree of one scenario (described in :mod:`scenarios.review.recording`):
   the per-wheel series grouped by plot (:func:`case_series`, :data:`PLOTS`), the 3D scene
   (:func:`geom_shapes`, MuJoCo's wxyz quaternions turned into rerun's xyzw; the road under
   the tracks, :func:`road_lines`) and the text panels (:func:`dlc_markdown`,
@@ -11,7 +11,7 @@
   the truck seen from above (fl fr / rl rr); road, rig and corrected tire forces of a wheel
   are overlaid on one plot.
 
-Imported only by :func:`scenarios.recording.write_recording`, so rerun is loaded only when a
+Imported only by :func:`scenarios.review.recording.write_recording`, so rerun is loaded only when a
 recording is written.
 """
 
@@ -71,7 +71,7 @@ def series_lines(names, unit: str) -> rr.SeriesLines:
 
 
 def geom_shapes(geoms) -> dict[str, dict[str, object]]:
-    """Rerun shapes of :class:`scenarios.recording.Geoms`: ``{body: {kind: archetype}}``, each
+    """Rerun shapes of :class:`scenarios.core.poses.Geoms`: ``{body: {kind: archetype}}``, each
     in its body's frame (one archetype per body and geom type)."""
     g = geoms
     rgba = np.array(g.rgba, dtype=float)
@@ -149,7 +149,7 @@ def log_case(rec, name: str, runs, *, track, corrected=None, dlc_table: str | No
         The scenario, also the recording's name.
     runs : mapping of str to RunResult
         Mode -> result, on one time axis.
-    track : scenarios.recording.PoseTrack
+    track : scenarios.core.poses.PoseTrack
         The poses and geoms of the 3D scene.
     corrected : numpy.ndarray, N, optional
         (N, 4) corrected tire forces.
@@ -277,7 +277,7 @@ def review_blueprint(corners, plots=("tire_force", "displacement", "pressure", "
 
 def dlc_markdown(name: str, stats: Mapping[str, Mapping[str, Mapping[str, float]]]) -> str:
     """The DLC table of one scenario: ``stats[source][corner]`` holds ``mean_force_N`` and
-    ``dlc`` (as :meth:`scenarios.results.RunResult.statistics`)."""
+    ``dlc`` (as :meth:`scenarios.core.results.RunResult.statistics`)."""
     head = "| wheel | " + " | ".join(f"{m} mean (N) | {m} DLC" for m in stats) + " |"
     lines = [f"# DLC: {name}", "", head, "|---" * (1 + 2 * len(stats)) + "|"]
     for c in next(iter(stats.values())):

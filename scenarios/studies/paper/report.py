@@ -7,7 +7,7 @@ import pathlib
 
 import numpy as np
 
-from scenarios.results import atomic_write_bytes, atomic_write_text
+from scenarios.core.results import atomic_write_bytes, atomic_write_text
 
 __all__ = ["write_report"]
 
@@ -85,7 +85,7 @@ def _report_md(rows, table: str, figures: list[str]) -> str:
     lines = [
         "# rigsim paper: Table 2 reproduced and corrected",
         "",
-        "The paper's three cases (`scenarios/paper/*.toml`) run as road tests (pans follow the",
+        "The paper's three cases (`scenarios/data/paper/*.toml`) run as road tests (pans follow the",
         "profile) and rig tests (pans driven by the nonlinear DYNTRAC actuator model); the rig's",
         "measured wheel force (with load-cell noise) is then corrected two ways.",
         "",

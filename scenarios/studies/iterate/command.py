@@ -5,25 +5,25 @@
     rigsim iterate SCENARIO.toml --target displacement|force --out DIR [--gain G]
                    [--max-iterations K] [--tolerance TOL] [--band-hz LO HI] [--duration-s S]
 
-Sequence (every rig run is the nonlinear MuJoCo + hydraulics rig of :func:`scenarios.rig.run_rig`,
+Sequence (every rig run is the nonlinear MuJoCo + hydraulics rig of :func:`scenarios.core.rig.run_rig`,
 which accepts any drive):
 
 1. road run (the target of the force iteration, the reference of every comparison) and the rig
    run with the original drive (the road profile; also the output correction's only rig run);
 2. identification run: four independent broadband drives
-   (:func:`scenarios.validate.identification_drive`), H1 FRF matrix drive -> pan displacement
+   (:func:`scenarios.studies.validate.compute.identification_drive`), H1 FRF matrix drive -> pan displacement
    (``displacement``) or drive -> tire force (``force``), :func:`correction.iterate.identify_frf`;
 3. the iteration :func:`correction.iterate.iterate_drive` on the analysed record (t >= 0; the
    lead-in's fade-in stays as it is, the update is tapered to zero at both ends), starting from
    the road profile: Moran's target (pan = profile) or the RPC-style target (tire force = road
    run's tire force);
-4. :func:`scenarios.evaluation.evaluate` on the original and on the iterated rig run: the DLC of
+4. :func:`scenarios.studies.evaluation.evaluate` on the original and on the iterated rig run: the DLC of
    road, rig with the original drive, rig with the iterated drive, and the output-corrected rig
    force (this project's method), with NRMSE against the road.
 
 Writes ``DIR/drive.csv`` (the iterated drive, 1 kHz, t >= 0), ``DIR/iteration.json`` (error per
 iteration, DLC table, run count, wall times) and ``DIR/iteration.png``. Bad input raises
-:class:`scenarios.config.ScenarioError` before any run.
+:class:`scenarios.core.config.ScenarioError` before any run.
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _check_args(args) -> None:
-    from scenarios.config import ScenarioError
+    from scenarios.core.config import ScenarioError
 
     if not (math.isfinite(args.gain) and 0 < args.gain <= 4):
         raise ScenarioError(f"--gain must be in (0, 4], got {args.gain:g}")
@@ -99,8 +99,8 @@ def _check_args(args) -> None:
 
 def _rig_runner(scenario, base_drive, decim: int, k0: int):
     """``run(drive_1k (N, 4)) -> recorded dict``: the rig with the drive replaced for t >= 0."""
-    from scenarios.rig import run_rig
-    from scenarios.runner import Drive
+    from scenarios.core.rig import run_rig
+    from scenarios.core.runner import Drive
 
     t = base_drive.t_s
     t_out = t[k0::decim]
@@ -118,9 +118,9 @@ def _rig_runner(scenario, base_drive, decim: int, k0: int):
 def _identify(scenario, target: str, duration_s: float, dt: float, decim: int):
     """Broadband identification run and the H1 FRF matrix (drive -> pan or tire force)."""
     from correction.iterate import identify_frf
-    from scenarios.rig import run_rig
-    from scenarios.runner import Drive
-    from scenarios.validate import IDENT_SKIP_S, identification_drive
+    from scenarios.core.rig import run_rig
+    from scenarios.core.runner import Drive
+    from scenarios.studies.validate.compute import IDENT_SKIP_S, identification_drive
 
     z = identification_drive(duration_s + IDENT_SKIP_S, dt)
     t = np.arange(z.shape[0]) * dt
@@ -139,17 +139,17 @@ def iterate_scenario(scenario, target: str, *, gain: float = 0.8, max_iterations
     """Run road, rig, identification and the iteration; return everything for the report.
 
     Returns a dict with ``iteration`` (:class:`correction.iterate.IterationResult`), ``road``,
-    ``rig`` and ``rig_iterated`` (:class:`scenarios.results.RunResult`), ``eval_original`` and
-    ``eval_iterated`` (:class:`scenarios.evaluation.CaseEvaluation`), ``summary`` (JSON-ready).
+    ``rig`` and ``rig_iterated`` (:class:`scenarios.core.results.RunResult`), ``eval_original`` and
+    ``eval_iterated`` (:class:`scenarios.studies.evaluation.CaseEvaluation`), ``summary`` (JSON-ready).
     """
     from correction.iterate import IterationStabilityError, iterate_drive
     from mjcf.build import build_model
-    from scenarios.config import ScenarioError
-    from scenarios.evaluation import NOISE_N, evaluate
-    from scenarios.results import RunResult
-    from scenarios.rig import actuator_params
-    from scenarios.runner import HALF_STROKE_M, output_schedule, prepare_drive, run
-    from scenarios.sweep_eval import tire_stiffness
+    from scenarios.core.config import ScenarioError
+    from scenarios.studies.evaluation import NOISE_N, evaluate
+    from scenarios.core.results import RunResult
+    from scenarios.core.rig import actuator_params
+    from scenarios.core.runner import HALF_STROKE_M, output_schedule, prepare_drive, run
+    from scenarios.studies.sweep.case import tire_stiffness
 
     if target not in TARGETS:
         raise ScenarioError(f"target must be one of {', '.join(TARGETS)}, got {target!r}")
@@ -302,8 +302,8 @@ def _plot(summary: dict) -> bytes:
 def cmd_iterate(args) -> int:
     import sys
 
-    from scenarios.config import load_scenario
-    from scenarios.results import atomic_write_bytes, atomic_write_text
+    from scenarios.core.config import load_scenario
+    from scenarios.core.results import atomic_write_bytes, atomic_write_text
 
     _check_args(args)
     scenario = load_scenario(args.scenario)

@@ -52,9 +52,9 @@ from hydraulics.packing import pack
 from hydraulics.params import ActuatorParams
 from mjcf.build import CORNERS
 from mjcf.physics import RigIndex, friction_disabled
-from scenarios.config import Scenario, ScenarioError, load_scenario, paper_scenarios
-from scenarios.paper import PAPER_TABLE1  # the paper's Table 1, one home for its numbers
-from scenarios.rig import actuator_params, rest_state, rig_model
+from scenarios.core.config import Scenario, ScenarioError, load_scenario, paper_scenarios
+from scenarios.studies.paper.command import PAPER_TABLE1  # the paper's Table 1, one home for its numbers
+from scenarios.core.rig import actuator_params, rest_state, rig_model
 
 __all__ = [
     "PAPER_TABLE1", "PlantLinearization", "table1_scenario_path", "linearize_plant",
@@ -102,7 +102,7 @@ def table1_scenario_path() -> pathlib.Path:
     for p in paper_scenarios():
         if p.name == "high_72kmh_3640kg.toml":
             return p
-    raise FileNotFoundError("scenarios/paper/high_72kmh_3640kg.toml is missing")  # pragma: no cover
+    raise FileNotFoundError("scenarios/data/paper/high_72kmh_3640kg.toml is missing")  # pragma: no cover
 
 
 def _scenario(path, duration_s: float | None, *, friction: bool = True) -> Scenario:
@@ -344,11 +344,11 @@ def run_rig_drive(scenario: Scenario, x_ref_m, *, record_every: int = 1,
 
     Raises
     ------
-    scenarios.runner.SimulationError
+    scenarios.core.runner.SimulationError
         On a MuJoCo warning or diverging hydraulic states, naming the simulated time.
     """
     from hydraulics.params import STATE_NAMES
-    from scenarios.runner import Drive, SimulationError, Watch
+    from scenarios.core.runner import Drive, SimulationError, Watch
 
     x_ref = np.asarray(x_ref_m, dtype=float)
     if x_ref.ndim != 2 or x_ref.shape[1] != len(CORNERS):
@@ -503,7 +503,7 @@ def _summary(result) -> dict:
 def _job_scenario(path: str, duration_s: float | None, mode: str, pose_rate_hz: float | None = None) -> dict:
     """Run the Table 1 scenario in ``mode``; the summary, plus the whole result when poses are
     asked for (a recording is wanted)."""
-    from scenarios.runner import run
+    from scenarios.core.runner import run
 
     result = run(_scenario(path, duration_s), mode, pose_rate_hz=pose_rate_hz)
     out = _summary(result)
@@ -518,7 +518,7 @@ def _job_linear(path: str, duration_s: float | None, kind: str, model) -> dict:
     ``kind``: "route2_per_wheel" / "route2_mimo" (``model`` = (A, B, C)) or "eq4" (``model`` =
     per-corner (num, den)).
     """
-    from scenarios.runner import Drive, run
+    from scenarios.core.runner import Drive, run
 
     def pan_drive(drive: Drive) -> Drive:
         dt = float(drive.t_s[1] - drive.t_s[0])
@@ -966,16 +966,16 @@ def cmd_validate(args) -> int:
     rrd = getattr(args, "rrd", None)
     pose_rate = None
     if rrd:
-        from scenarios.recording import DEFAULT_POSE_RATE_HZ
+        from scenarios.review.recording import DEFAULT_POSE_RATE_HZ
 
         pose_rate = DEFAULT_POSE_RATE_HZ
     result = validate(duration_s=args.duration_s, ident_duration_s=getattr(args, "ident_duration_s", None),
                       jobs=getattr(args, "jobs", None), progress=progress, pose_rate_hz=pose_rate)
-    from scenarios.validate_report import summary_lines, write_report
+    from scenarios.studies.validate.report import summary_lines, write_report
 
     paths = write_report(result, args.out)
     if rrd:
-        from scenarios.recording import write_recording
+        from scenarios.review.recording import write_recording
 
         runs = [result["runs"][k] for k in ("road", "rig") if k in result.get("runs", {})]
         write_recording(rrd, runs, dlc_table="\n".join(summary_lines(result["json"])),

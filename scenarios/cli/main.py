@@ -41,21 +41,21 @@ def _progress_bar(label: str, quiet: bool):
 
 
 def _cmd_run(args) -> int:
-    from scenarios.config import load_scenario
-    from scenarios.results import write_run
-    from scenarios.runner import run
+    from scenarios.core.config import load_scenario
+    from scenarios.core.results import write_run
+    from scenarios.core.runner import run
 
     scenario = load_scenario(args.scenario)
     pose_rate = None
     if args.rrd:
-        from scenarios.recording import DEFAULT_POSE_RATE_HZ
+        from scenarios.review.recording import DEFAULT_POSE_RATE_HZ
 
         pose_rate = DEFAULT_POSE_RATE_HZ
     with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
         result = run(scenario, args.mode, progress=progress, pose_rate_hz=pose_rate)
     paths = write_run(result, args.out)
     if args.rrd:
-        from scenarios.recording import write_recording
+        from scenarios.review.recording import write_recording
 
         write_recording(args.rrd, [result], dlc_table=result.table(), spawn=args.view)
         print(f"wrote recording {args.rrd}" + (" and opened the viewer" if args.view else ""))
@@ -100,7 +100,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
-    from scenarios import correct_cmd, iterate_cmd, paper, sweep, validate
+    from scenarios import correct_cmd
+    from scenarios.studies.iterate import command as iterate_cmd
+    from scenarios import paper
+    from scenarios.studies.sweep import command as sweep
+    from scenarios.studies.validate import compute as validate
 
     paper.add_parser(sub)
     validate.add_parser(sub)
@@ -116,8 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``rigsim`` console command; returns the exit code."""
-    from scenarios.config import ScenarioError
-    from scenarios.runner import SimulationError
+    from scenarios.core.config import ScenarioError
+    from scenarios.core.runner import SimulationError
 
     args = build_parser().parse_args(argv)
     try:

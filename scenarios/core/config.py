@@ -71,7 +71,7 @@ class RoadConfig:
     ----------
     roughness : str, optional
         ISO 8608 class letter ("A".."H") or the paper's word ("medium", "high"); see
-        :data:`scenarios.roads.ROUGHNESS_WORDS`. Exactly one of ``roughness``,
+        :data:`scenarios.core.roads.ROUGHNESS_WORDS`. Exactly one of ``roughness``,
         ``gd_n0_m3`` and ``profile_csv`` is given.
     gd_n0_m3 : float, m^3, optional
         Displacement PSD at n0 = 0.1 cycle/m (ISO 8608).
@@ -86,7 +86,7 @@ class RoadConfig:
         domain, identically for road and rig mode (a rig's stroke is 15.2 cm).
     envelope_length_m : float, m
         Tire enveloping: moving average of the profile over this length before anything else
-        (0.25 m, the IRI's tire model; 0 turns it off). See :func:`scenarios.roads.envelope`.
+        (0.25 m, the IRI's tire model; 0 turns it off). See :func:`scenarios.core.roads.envelope`.
     n_min_cyc_per_m, n_max_cyc_per_m : float, cycle/m
         Spatial band of a synthesized profile (ISO 8608 roughness or gd_n0_m3).
     """
@@ -171,7 +171,7 @@ def _road(table: Any) -> RoadConfig:
         )
     kw: dict[str, Any] = {}
     if "roughness" in table:
-        from scenarios.roads import ISO_CLASSES, ROUGHNESS_WORDS
+        from scenarios.core.roads import ISO_CLASSES, ROUGHNESS_WORDS
 
         r = table["roughness"]
         valid = list(ISO_CLASSES) + list(ROUGHNESS_WORDS)
@@ -294,6 +294,6 @@ def paper_scenarios() -> list[pathlib.Path]:
     """The shipped scenario files of the paper's three cases (Table 2 order)."""
     import importlib.resources
 
-    base = importlib.resources.files("scenarios").joinpath("paper")
+    base = importlib.resources.files("scenarios").joinpath("data", "paper")
     names = ("medium_72kmh_6360kg.toml", "high_48kmh_3640kg.toml", "high_72kmh_3640kg.toml")
     return [pathlib.Path(str(base.joinpath(n))) for n in names]

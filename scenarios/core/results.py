@@ -50,7 +50,7 @@ class RunResult:
         Mass of the truck (chassis, payload and axles; pans excluded).
     events : Mapping[str, object]
         Saturation and cavitation events (rig mode), empty in road mode.
-    poses : scenarios.recording.PoseTrack, optional
+    poses : scenarios.core.poses.PoseTrack, optional
         Body poses at video rate for the 3D view of a recording (None unless asked for).
     info : Mapping[str, object]
         Run facts: time step, wall time, seed, speed...
@@ -64,7 +64,7 @@ class RunResult:
     events: Mapping = field(default_factory=dict)
     info: Mapping = field(default_factory=dict)
     corners: tuple[str, ...] = CORNERS
-    poses: object = None  # scenarios.recording.PoseTrack at video rate, when asked for (--rrd)
+    poses: object = None  # scenarios.core.poses.PoseTrack at video rate, when asked for (--rrd)
 
     @property
     def rate_hz(self) -> float:

@@ -1,6 +1,6 @@
 """Figures and ``report.md`` of ``rigsim validate`` (matplotlib Agg), written atomically.
 
-Split from :mod:`scenarios.validate`, which computes the three routes, the steps and Table 1;
+Split from :mod:`scenarios.studies.validate.compute`, which computes the three routes, the steps and Table 1;
 this module only renders their results.
 """
 
@@ -14,8 +14,8 @@ import pathlib
 import numpy as np
 
 from mjcf.build import CORNERS
-from scenarios.results import atomic_write_bytes, atomic_write_text
-from scenarios.validate import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, GOAL_FRF_DB, GOAL_FRF_DEG,
+from scenarios.core.results import atomic_write_bytes, atomic_write_text
+from scenarios.studies.validate.compute import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, GOAL_FRF_DB, GOAL_FRF_DEG,
                                 GOAL_TABLE1_PCT, _err_db_deg, _freqresp)
 
 __all__ = ["summary_lines", "write_report"]

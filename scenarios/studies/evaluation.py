@@ -28,7 +28,7 @@ import numpy as np
 from correction.apply import band_limit, correct
 from correction.filters import design_correction
 from correction.actuator_id import identify_actuator
-from scenarios.results import RunResult
+from scenarios.core.results import RunResult
 
 __all__ = ["NOISE_N", "Method", "CaseEvaluation", "evaluate", "identify_wheel_actuator", "paper_actuator"]
 

@@ -1,0 +1,65 @@
+"""The names of the model's elements: the one home of every string other packages look up.
+
+The MJCF (``truck_rig.xml``) names each element after its wheel station; :mod:`hydraulics`
+adds one user actuator per station and :mod:`scenarios` reads joints, actuators, sensors and
+sites. All of them spell the names through this module, so a renamed element is renamed here
+once (``tests/test_mjcf.py`` checks every name below exists in the compiled model).
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CORNERS", "FRONT", "REAR", "TRUCK_BODIES",
+    "pan_body", "pan_joint", "tire_actuator", "tire_sensor", "wheel_site", "hydraulic_actuator",
+    "axle_body",
+]
+
+#: Wheel stations, in the order every per-wheel array of this project uses:
+#: front-left, front-right, rear-left, rear-right.
+CORNERS: tuple[str, ...] = ("fl", "fr", "rl", "rr")
+FRONT: tuple[str, ...] = ("fl", "fr")
+REAR: tuple[str, ...] = ("rl", "rr")
+
+#: Bodies of the truck (pans excluded): their masses sum to the vehicle mass.
+TRUCK_BODIES: tuple[str, ...] = ("chassis", "payload", "front_axle", "rear_axle")
+
+
+def _check(corner: str) -> str:
+    if corner not in CORNERS:
+        raise ValueError(f"corner must be one of {', '.join(CORNERS)}, got {corner!r}")
+    return corner
+
+
+def pan_body(corner: str) -> str:
+    """Body of the wheelpan under ``corner``."""
+    return f"pan_{_check(corner)}"
+
+
+def pan_joint(corner: str) -> str:
+    """Vertical slide joint of the wheelpan (qpos in m, 0 = mid-stroke, + up)."""
+    return f"pan_{_check(corner)}_z"
+
+
+def tire_actuator(corner: str) -> str:
+    """The tire's force element (an actuator on a spatial tendon, N, compression positive)."""
+    return f"tire_{_check(corner)}"
+
+
+def tire_sensor(corner: str) -> str:
+    """Sensor of the tire force on the pan (N)."""
+    return f"tire_force_{_check(corner)}"
+
+
+def wheel_site(corner: str) -> str:
+    """Site at the wheel centre."""
+    return f"wheel_{_check(corner)}"
+
+
+def hydraulic_actuator(corner: str) -> str:
+    """The servo-hydraulic user actuator that :mod:`hydraulics.bridge` adds on the pan joint."""
+    return f"hyd_{_check(corner)}"
+
+
+def axle_body(corner: str) -> str:
+    """The axle body that carries ``corner``'s wheel."""
+    return "front_axle" if _check(corner) in FRONT else "rear_axle"

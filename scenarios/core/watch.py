@@ -1,0 +1,112 @@
+"""Watching a run: MuJoCo warnings as errors with their simulated time, progress, schedules.
+
+dm_control's rule: a MuJoCo warning during a run is a :class:`SimulationError`, not a line in
+a log file. :class:`Watch` reads MuJoCo's warning counters every 10 ms of simulated time and
+names the window of the first warning; :func:`mujoco_warnings_captured` keeps MuJoCo from
+printing them or writing ``MUJOCO_LOG.TXT``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+__all__ = ["SimulationError", "ProgressFn", "Watch", "mujoco_warnings_captured", "output_schedule",
+           "CHECK_EVERY_S"]
+
+#: MuJoCo warnings are checked this often and reported with this resolution, s.
+CHECK_EVERY_S = 0.01
+
+ProgressFn = Callable[[float, float], None]
+"""progress(simulated_s, total_s), in s, called a few hundred times per run."""
+
+
+class SimulationError(RuntimeError):
+    """A run that went wrong while simulating (MuJoCo warning, divergence); names the time."""
+
+
+def _check_warnings(data: mujoco.MjData, t0: float, t1: float) -> None:
+    for kind, stat in enumerate(data.warning):
+        if stat.number:
+            text = mujoco.mju_warningText(kind, stat.lastinfo)
+            raise SimulationError(
+                f"MuJoCo warning between t = {t0:.4f} s and t = {t1:.4f} s of simulated time: {text}"
+            )
+
+
+@contextlib.contextmanager
+def mujoco_warnings_captured():
+    """Route MuJoCo's warning messages into a list for the duration of a run.
+
+    By default MuJoCo prints each warning and appends it to ``MUJOCO_LOG.TXT`` in the current
+    folder; a run must leave no such file behind. The warnings still stop the run: the
+    :class:`Watch` reads MuJoCo's warning counters. The previous handler is restored on exit.
+    """
+    previous = mujoco.get_mju_user_warning()
+    messages: list[str] = []
+    mujoco.set_mju_user_warning(messages.append)
+    try:
+        yield messages
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def output_schedule(t_s: np.ndarray, dt_s: float, rate_hz: float) -> tuple[int, int, int]:
+    """(k0, decim, n_out): the first step at t >= 0, the steps per output sample, the samples.
+
+    Parameters
+    ----------
+    t_s : numpy.ndarray, s
+        Times of the steps (a lead-in has t < 0).
+    dt_s : float, s
+        Time step.
+    rate_hz : float, Hz
+        Output rate; must divide ``1 / dt_s``.
+    """
+    decim = int(round(1.0 / (rate_hz * dt_s)))
+    k0 = int(np.searchsorted(t_s, -0.5 * dt_s))
+    return k0, decim, (t_s.size - 1 - k0) // decim + 1
+
+
+class Watch:
+    """Checks MuJoCo's warnings every 10 ms of simulated time and reports progress.
+
+    Call :meth:`tick` after every step ``k``; it raises :class:`SimulationError` naming the
+    simulated-time window of the first warning, and :meth:`finish` after the last step.
+
+    Parameters
+    ----------
+    t_s : numpy.ndarray, s
+        Times of the steps.
+    dt_s : float, s
+    progress : ProgressFn, optional
+    extra : callable, optional
+        ``extra(data, t_s)`` runs at every check and raises on a bad state.
+    """
+
+    def __init__(self, t_s: np.ndarray, dt_s: float, progress: ProgressFn | None = None, extra=None):
+        self.t = t_s
+        self.dt = dt_s
+        self.progress = progress
+        self.extra = extra
+        self.check = max(1, int(round(CHECK_EVERY_S / dt_s)))
+        self.report = max(self.check, self.t.size // 200)
+        self.total = float(self.t[-1] - self.t[0])
+
+    def tick(self, data: mujoco.MjData, k: int) -> None:
+        if k % self.check == self.check - 1:
+            t = float(self.t[k])
+            _check_warnings(data, t - (self.check - 1) * self.dt, t + self.dt)
+            if self.extra is not None:
+                self.extra(data, t)
+            if self.progress is not None and k % self.report == self.report - 1:
+                self.progress(t - float(self.t[0]), self.total)
+
+    def finish(self, data: mujoco.MjData) -> None:
+        t = float(self.t[-1])
+        _check_warnings(data, t - self.check * self.dt, t + self.dt)
+        if self.extra is not None:
+            self.extra(data, t)
