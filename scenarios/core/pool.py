@@ -1,0 +1,106 @@
+"""The one worker pool: independent runs on all cores, one run per process at a time.
+
+MuJoCo's actuator callbacks are process-global, so two runs never share a process at the same
+time; each worker ignores Ctrl-C (the parent handles it and terminates the workers, so nothing
+is left running); jobs are plain picklable calls. :func:`local_executor` is the executor the
+studies and ``rigsim sweep`` use (a Dask cluster's executor can stand in for it);
+:func:`run_jobs` runs a list of calls on it and returns their results in order.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import os
+import signal
+from collections.abc import Callable, Iterator, Sequence
+
+__all__ = ["worker_count", "local_executor", "stop_process_pool", "run_jobs"]
+
+
+def worker_count(requested: int | None, jobs: int | None = None) -> int:
+    """Worker processes to start: ``requested`` (default: all cores), at most ``jobs``, at least 1.
+
+    Raises
+    ------
+    ValueError
+        If ``requested`` is given and below 1.
+    """
+    if requested is not None and (isinstance(requested, bool) or int(requested) != requested or requested < 1):
+        raise ValueError(f"the number of worker processes must be a whole number >= 1, got {requested!r}")
+    n = int(requested) if requested is not None else (os.cpu_count() or 1)
+    return max(1, min(n, jobs) if jobs else n)
+
+
+def _ignore_sigint() -> None:
+    """Pool-worker initializer: Ctrl-C is handled by the parent, which stops the workers."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def stop_process_pool(pool: cf.ProcessPoolExecutor) -> None:
+    """Cancel what has not started and terminate the workers (running jobs are abandoned)."""
+    terminate = getattr(pool, "terminate_workers", None)  # Python >= 3.14
+    if terminate is not None:
+        terminate()
+        return
+    # Before 3.14 there is no public way to stop a running task: terminate the pool's worker
+    # processes (its private process table, read before shutdown clears it), then shut down.
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.terminate()
+
+
+@contextlib.contextmanager
+def local_executor(workers: int | None = None) -> Iterator[cf.Executor]:
+    """A process pool of ``workers`` processes (default: all cores), each one job at a time.
+
+    On an exception (Ctrl-C included) the workers are terminated before it propagates.
+    """
+    pool = cf.ProcessPoolExecutor(max_workers=worker_count(workers), initializer=_ignore_sigint)
+    try:
+        yield pool
+    except BaseException:
+        stop_process_pool(pool)
+        raise
+    else:
+        pool.shutdown(wait=True)
+
+
+def run_jobs(jobs: Sequence[tuple[Callable, tuple]], *, workers: int | None = None,
+             on_done: Callable[[int, object], None] | None = None, executor: cf.Executor | None = None) -> list:
+    """Run ``fn(*args)`` for each ``(fn, args)`` of ``jobs`` in worker processes.
+
+    Parameters
+    ----------
+    jobs : sequence of (callable, tuple)
+        Picklable module-level functions and their arguments.
+    workers : int, optional
+        Worker processes (default: all cores, at most one per job).
+    on_done : callable, optional
+        ``on_done(index, result)`` in the parent as each job finishes (progress lines).
+    executor : concurrent.futures.Executor, optional
+        Use this executor instead of starting a pool.
+
+    Returns
+    -------
+    list
+        The results in the order of ``jobs``. The first job that raises stops the others and its
+        exception propagates.
+    """
+    with contextlib.ExitStack() as stack:
+        ex = executor if executor is not None else stack.enter_context(local_executor(worker_count(workers, len(jobs))))
+        futures = {ex.submit(fn, *args): i for i, (fn, args) in enumerate(jobs)}
+        results: list = [None] * len(jobs)
+        try:
+            for fut in cf.as_completed(futures):
+                i = futures[fut]
+                results[i] = fut.result()
+                if on_done is not None:
+                    on_done(i, results[i])
+        except BaseException:
+            for fut in futures:
+                fut.cancel()
+            raise
+        return results
