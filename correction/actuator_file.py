@@ -29,15 +29,12 @@ one). Errors are :class:`ActuatorFileError` (a ``ValueError``), one sentence nam
 
 from __future__ import annotations
 
-import difflib
-import math
-import pathlib
-import tomllib
 from collections.abc import Mapping
 
 import numpy as np
 
 from .eq4 import EQ4_PARAMETERS, eq4_coefficients_from
+from .tomlfile import check_keys, number, read_toml
 
 __all__ = ["ActuatorFileError", "parse_actuator", "read_actuator_file"]
 
@@ -49,26 +46,11 @@ class ActuatorFileError(ValueError):
     """An actuator file that cannot be used as written; the message is one sentence naming the key."""
 
 
-def _unknown(where: str, key: str, valid) -> ActuatorFileError:
-    match = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.5)
-    hint = f"; did you mean {match[0]!r}?" if match else f"; valid keys are {', '.join(sorted(valid))}"
-    return ActuatorFileError(f"unknown key {where}{key}{hint}")
-
-
-def _number(where: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ActuatorFileError(f"{where} must be a number, got {value!r}")
-    return float(value)
-
-
 def _coefficients(where: str, value) -> np.ndarray:
     if not isinstance(value, list) or not value:
         raise ActuatorFileError(f"{where} must be a non-empty list of numbers (descending powers of s), "
                                 f"got {value!r}")
-    out = np.array([_number(f"{where}[{i}]", v) for i, v in enumerate(value)])
-    if not np.all(np.isfinite(out)):
-        raise ActuatorFileError(f"{where} must contain finite numbers, got {value!r}")
-    return out
+    return np.array([number(f"{where}[{i}]", v, error=ActuatorFileError) for i, v in enumerate(value)])
 
 
 def parse_actuator(data: Mapping) -> tuple[np.ndarray, np.ndarray]:
@@ -90,9 +72,7 @@ def parse_actuator(data: Mapping) -> tuple[np.ndarray, np.ndarray]:
     ActuatorFileError
         Unknown, missing or mistyped keys, neither or both tables, or parameters out of range.
     """
-    for key in data:
-        if key not in _TABLES:
-            raise _unknown("", key, _TABLES)
+    check_keys(data, _TABLES, "", ActuatorFileError)
     present = [t for t in _TABLES if t in data]
     if len(present) != 1:
         raise ActuatorFileError("an actuator file needs exactly one of the tables [transfer_function] "
@@ -102,24 +82,17 @@ def parse_actuator(data: Mapping) -> tuple[np.ndarray, np.ndarray]:
         raise ActuatorFileError(f"{present[0]} must be a table, got {table!r}")
     if present[0] == "transfer_function":
         valid = ("num", "den")
-        for key in table:
-            if key not in valid:
-                raise _unknown("transfer_function.", key, valid)
+        check_keys(table, valid, "transfer_function.", ActuatorFileError)
         for key in valid:
             if key not in table:
                 raise ActuatorFileError(f"transfer_function.{key} is missing (coefficients in descending powers of s)")
         return (_coefficients("transfer_function.num", table["num"]),
                 _coefficients("transfer_function.den", table["den"]))
-    for key in table:
-        if key not in EQ4_PARAMETERS:
-            raise _unknown("parameters.", key, EQ4_PARAMETERS)
+    check_keys(table, EQ4_PARAMETERS, "parameters.", ActuatorFileError)
     missing = [k for k in EQ4_PARAMETERS if k not in table and k not in _OPTIONAL]
     if missing:
         raise ActuatorFileError(f"parameters.{missing[0]} is missing ({EQ4_PARAMETERS[missing[0]]})")
-    values = {k: _number(f"parameters.{k}", v) for k, v in table.items()}
-    for k, v in values.items():
-        if not math.isfinite(v):
-            raise ActuatorFileError(f"parameters.{k} must be finite, got {v!r}")
+    values = {k: number(f"parameters.{k}", v, error=ActuatorFileError) for k, v in table.items()}
     try:
         return eq4_coefficients_from(**values)
     except ValueError as exc:
@@ -141,17 +114,7 @@ def read_actuator_file(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     ActuatorFileError
-        A missing or unreadable file, malformed TOML, or any error of :func:`parse_actuator`.
+        A missing, unreadable or malformed file (:func:`correction.tomlfile.read_toml`), or any
+        error of :func:`parse_actuator`.
     """
-    p = pathlib.Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ActuatorFileError(f"actuator file {str(p)!r} does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ActuatorFileError(f"cannot read actuator file {str(p)!r}: {exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ActuatorFileError(f"actuator file {str(p)!r} is not valid TOML: {exc}") from None
-    return parse_actuator(data)
+    return parse_actuator(read_toml(path, "actuator file", ActuatorFileError))

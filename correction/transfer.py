@@ -20,6 +20,8 @@ import control
 import numpy as np
 from scipy import optimize, signal
 
+from .eq4 import eq4_coefficients_from
+
 __all__ = [
     "eq4_transfer_function",
     "frequency_response_hz",
@@ -31,71 +33,37 @@ __all__ = [
 ]
 
 
-def eq4_transfer_function(
-    *,
-    ksv: float,
-    kq_m3_s: float,
-    kc_m3_s_Pa: float,
-    kp_per_m: float,
-    kdp_per_Pa: float,
-    piston_area_m2: float,
-    fluid_volume_m3: float,
-    bulk_modulus_Pa: float,
-    mass_kg: float,
-    damping_N_s_m: float,
-    tire_N_per_m: float,
-    ti_s: float = 1.0,
-) -> control.TransferFunction:
-    """The paper's eq. 4, ``T_a(s) = X_a(s) / X_p(s)`` of one wheelpan actuator.
+def eq4_transfer_function(**parameters: float) -> control.TransferFunction:
+    """The paper's eq. 4, ``T_a(s) = X_a(s) / X_p(s)`` of one wheelpan actuator, as a transfer function.
 
-    With ``Ke = Kp / Ap``, ``K = Ksv Kq Ke`` and ``Kc' = Kc + Kdp Ksv Kq``::
-
-        b1 = K,   b0 = a0 = K / Ti             (Ti = 1 s: b0 = b1 = a0 = Ksv Kq Ke, as printed)
-        a1 = K + Kc' kt / Ap^2                 (printed "a0 + ...": the same for Ti = 1 s)
-        a2 = Kc' bp / Ap^2 + Vf kt / (4 beta_e Ap^2) + 1
-        a3 = Kc' mp / Ap^2 + Vf bp / (4 beta_e Ap^2)
-        a4 = Vf mp / (4 beta_e Ap^2)
+    A thin wrapper of :func:`correction.eq4.eq4_coefficients_from`, the one implementation of
+    the formula and of its parameter checks (see there for the coefficients).
 
     Parameters
     ----------
-    ksv : float, 1
-        Static servovalve gain: spool opening per unit controller output (normalised units).
-    kq_m3_s : float, m^3/s per unit spool opening
-        Valve flow gain ``Kq = dQL/dxv`` at the operating point (Merritt).
-    kc_m3_s_Pa : float, m^3/(s Pa)
-        Total flow-pressure coefficient ``Kc = -dQL/dPL`` at the operating point, cross-piston
-        leakage included (Merritt's ``Kce``).
-    kp_per_m : float, 1/m
-        Proportional gain of the position loop: controller output per metre of position error.
-    kdp_per_Pa : float, 1/Pa
-        Differential-pressure feedback gain: controller output per Pa of ``P1 - P2``.
-    piston_area_m2 : float, m^2
-        Piston area ``Ap`` of each side (double-ended actuator).
-    fluid_volume_m3 : float, m^3
-        Total oil volume of both chambers ``Vf`` (each holds ``Vf / 2`` at mid-stroke).
-    bulk_modulus_Pa : float, Pa
-        Effective bulk modulus ``beta_e`` of the oil column.
-    mass_kg : float, kg
-        Moving mass ``mp`` (wheelpan, piston and rod).
-    damping_N_s_m : float, N s/m
-        Viscous friction ``bp`` of the piston and guides.
-    tire_N_per_m : float, N/m
-        Tire stiffness ``kt``: the spring from the pan to rigid ground.
-    ti_s : float, s
-        Integral time of the PI position controller ``Kp (1 + 1 / (Ti s))``. The paper prints
-        eq. 4 for ``Ti = 1 s`` (``b0 = b1 = a0``); ``math.inf`` is a P-only loop.
+    **parameters : float
+        Exactly the keyword arguments of :func:`correction.eq4.eq4_coefficients_from` (names
+        and SI units in :data:`correction.eq4.EQ4_PARAMETERS`): ``ksv`` (1), ``kq_m3_s``
+        (m^3/s per unit spool), ``kc_m3_s_Pa`` (m^3/(s Pa), leakage included), ``kp_per_m``
+        (1/m), ``kdp_per_Pa`` (1/Pa), ``piston_area_m2`` (m^2), ``fluid_volume_m3`` (m^3),
+        ``bulk_modulus_Pa`` (Pa), ``mass_kg`` (kg), ``damping_N_s_m`` (N s/m),
+        ``tire_N_per_m`` (N/m) and optionally ``ti_s`` (s, default 1 s as printed;
+        ``math.inf`` is a P-only loop).
 
     Returns
     -------
     control.TransferFunction
         Continuous time, s in rad/s, input x_p (m), output x_a (m). Static gain 1 and a zero
-        at ``-1 / Ti`` rad/s (``-1`` rad/s as printed) for any valid parameters.
+        at ``-1 / Ti`` rad/s (``-1`` rad/s as printed) for any valid parameters; for a P-only
+        loop the common root at ``s = 0`` of ``b0 = a0 = 0`` is cancelled.
 
     Raises
     ------
     ValueError
-        If a parameter is not finite, a gain, area, volume, modulus, mass or stiffness is not
-        positive, or ``kc_m3_s_Pa``, ``kdp_per_Pa`` or ``damping_N_s_m`` is negative.
+        If a parameter is not a finite real number or out of its range (raised by
+        :func:`correction.eq4.eq4_coefficients_from`, naming the parameter).
+    TypeError
+        If a parameter is missing or unknown.
 
     Notes
     -----
@@ -115,45 +83,10 @@ def eq4_transfer_function(
       wheels, tire always on the pan. ``T_a`` depends on the vehicle through ``kt``.
     * **PI position loop with Ti = 1 s** plus differential-pressure feedback, without
       saturation: this makes ``b0 = b1 = a0`` as printed.
-
-    The polynomials are scaled as in the paper: the ``1`` in ``a2`` is the piston's own term,
-    so ``a_n`` has units s^n (s in rad/s) and ``b0``, ``a0`` have units 1/s.
     """
-    values = {
-        "ksv": ksv, "kq_m3_s": kq_m3_s, "kc_m3_s_Pa": kc_m3_s_Pa, "kp_per_m": kp_per_m,
-        "kdp_per_Pa": kdp_per_Pa, "piston_area_m2": piston_area_m2,
-        "fluid_volume_m3": fluid_volume_m3, "bulk_modulus_Pa": bulk_modulus_Pa,
-        "mass_kg": mass_kg, "damping_N_s_m": damping_N_s_m, "tire_N_per_m": tire_N_per_m,
-    }
-    for name, value in values.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-            raise ValueError(f"{name} must be a real number, got {value!r}")
-        if not math.isfinite(value):
-            raise ValueError(f"{name} must be finite, got {value!r}")
-    for name in ("ksv", "kq_m3_s", "kp_per_m", "piston_area_m2", "fluid_volume_m3",
-                 "bulk_modulus_Pa", "mass_kg", "tire_N_per_m"):
-        if not values[name] > 0:
-            raise ValueError(f"{name} must be > 0, got {values[name]!r}")
-    for name in ("kc_m3_s_Pa", "kdp_per_Pa", "damping_N_s_m"):
-        if not values[name] >= 0:
-            raise ValueError(f"{name} must be >= 0, got {values[name]!r}")
-    if isinstance(ti_s, bool) or not (isinstance(ti_s, (int, float, np.floating)) and ti_s > 0):
-        raise ValueError(f"ti_s must be > 0 (math.inf for P only), got {ti_s!r}")
-
-    ap2 = float(piston_area_m2) ** 2
-    k = float(ksv) * float(kq_m3_s) * float(kp_per_m) / float(piston_area_m2)
-    inv_ti = 0.0 if math.isinf(ti_s) else 1.0 / float(ti_s)
-    kc_tot = float(kc_m3_s_Pa) + float(kdp_per_Pa) * float(ksv) * float(kq_m3_s)
-    comp = float(fluid_volume_m3) / (4.0 * float(bulk_modulus_Pa) * ap2)
-    mp, bp, kt = float(mass_kg), float(damping_N_s_m), float(tire_N_per_m)
-    num = [k, k * inv_ti]
-    den = [comp * mp,
-           kc_tot * mp / ap2 + comp * bp,
-           kc_tot * bp / ap2 + comp * kt + 1.0,
-           k + kc_tot * kt / ap2,
-           k * inv_ti]
-    if inv_ti == 0.0:  # P only: cancel the common root at s = 0
-        num, den = num[:1], den[:-1]
+    num, den = eq4_coefficients_from(**parameters)
+    if num[-1] == 0.0 and den[-1] == 0.0:  # P only (ti_s = inf): cancel the common root at s = 0
+        num, den = num[:-1], den[:-1]
     return control.tf(num, den, inputs="x_p_m", outputs="x_a_m", name="T_a_eq4")
 
 

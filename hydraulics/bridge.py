@@ -28,6 +28,8 @@ import mujoco
 import numpy as np
 from mujoco.introspect import structs as _structs
 
+from mjcf.names import CORNERS, hydraulic_actuator, pan_body, pan_joint
+
 from .kernels import RawOffsets, make_raw_callbacks
 from .model import derivatives_core, force_core
 from .packing import LAYOUT_TAG, NPACK, NSTATE, P_NPACK, P_NSTATE, P_TAG, pack, unpack
@@ -36,8 +38,7 @@ from .params import GRAVITY_M_S2, ActuatorParams
 __all__ = ["CORNERS", "add_hydraulic_actuators", "single_pan_spec", "hydraulic_callbacks", "actuator_id",
            "activation_slice", "set_activation", "params_from_model", "LayoutError"]
 
-#: Wheel corners of the rig, in the project's order.
-CORNERS = ("fl", "fr", "rl", "rr")
+# CORNERS (re-exported above) and every element name come from mjcf.names.
 
 
 class LayoutError(RuntimeError):
@@ -72,14 +73,14 @@ def add_hydraulic_actuators(spec: mujoco.MjSpec, params: ActuatorParams | Mappin
     else:
         raise ValueError(f"params must be ActuatorParams or a mapping of them, got {type(params).__name__}")
     for c in corners:
-        if spec.joint(f"pan_{c}_z") is None:
-            raise ValueError(f"spec has no joint 'pan_{c}_z'; build the rig model first")
+        if spec.joint(pan_joint(c)) is None:
+            raise ValueError(f"spec has no joint {pan_joint(c)!r}; build the rig model first")
     nuser = max(int(spec.nuser_actuator), NPACK)
     spec.nuser_actuator = nuser
     for c in corners:
         row = np.zeros(nuser)
         row[:NPACK] = pack(per_corner[c])
-        act = spec.add_actuator(name=f"hyd_{c}", target=f"pan_{c}_z",
+        act = spec.add_actuator(name=hydraulic_actuator(c), target=pan_joint(c),
                                 trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.dyntype = mujoco.mjtDyn.mjDYN_USER
         act.gaintype = mujoco.mjtGain.mjGAIN_USER
@@ -121,12 +122,12 @@ def single_pan_spec(params: ActuatorParams, *, spring_N_per_m: float = 0.0, load
     spec.option.timestep = timestep_s
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
     spec.option.gravity = [0.0, 0.0, -GRAVITY_M_S2 if gravity else 0.0]
-    body = spec.worldbody.add_body(name=f"pan_{corner}")
+    body = spec.worldbody.add_body(name=pan_body(corner))
     mass = params.pan_mass_kg if pan_mass_kg is None else float(pan_mass_kg)
     body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.5, 0.3, 0.05], mass=mass,
                   contype=0, conaffinity=0)
     half = params.half_stroke_m
-    body.add_joint(name=f"pan_{corner}_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1],
+    body.add_joint(name=pan_joint(corner), type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1],
                    range=[-half, half], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
                    stiffness=float(spring_N_per_m),
                    springref=(-load_N / spring_N_per_m) if spring_N_per_m > 0 else 0.0)
@@ -136,9 +137,10 @@ def single_pan_spec(params: ActuatorParams, *, spring_N_per_m: float = 0.0, load
 
 def actuator_id(model: mujoco.MjModel, corner: str) -> int:
     """Index of actuator ``hyd_<corner>`` (ValueError if absent)."""
-    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"hyd_{corner}")
+    name = hydraulic_actuator(corner)
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
     if i < 0:
-        raise ValueError(f"model has no actuator 'hyd_{corner}'; add it with add_hydraulic_actuators")
+        raise ValueError(f"model has no actuator {name!r}; add it with add_hydraulic_actuators")
     return i
 
 
@@ -159,7 +161,7 @@ def set_activation(model: mujoco.MjModel, data: mujoco.MjData, corner: str, act)
 
 def params_from_model(model: mujoco.MjModel, corner: str) -> ActuatorParams:
     """The ``ActuatorParams`` packed into ``hyd_<corner>``'s ``actuator_user`` row."""
-    return unpack(model.actuator_user[actuator_id(model, corner)], check_loop_on_init=False)
+    return unpack(model.actuator_user[actuator_id(model, corner)])
 
 
 def _is_hydraulic_row(row) -> bool:

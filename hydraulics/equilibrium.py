@@ -28,7 +28,7 @@ def inverse_soft_clip(y: float, limit: float) -> float:
     return u if y > 0 else -u
 
 
-def _static_flows(params: ActuatorParams, load_N: float) -> tuple[float, float, float]:
+def static_flows(params: ActuatorParams, load_N: float) -> tuple[float, float, float]:
     """Spool opening and chamber pressures (Pa) at which the valve supplies exactly the leakage."""
     p = params
     pl = load_N / p.piston_area_m2
@@ -81,7 +81,7 @@ def equilibrium_activation(params: ActuatorParams, load_N: float) -> np.ndarray:
     if not math.isfinite(load_N):
         raise ValueError(f"load_N must be finite, got {load_N!r}")
     p = params
-    xv, p1, p2 = _static_flows(p, float(load_N))
+    xv, p1, p2 = static_flows(p, float(load_N))
     u0 = inverse_soft_clip(xv / p.ksv, p.command_limit)
     need = u0 + p.kdp_per_Pa * (p1 - p2)  # = Kp * integral / Ti at zero error
     if math.isinf(p.ti_s):

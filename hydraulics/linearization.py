@@ -14,24 +14,23 @@ symmetric, the mean-pressure mode decouples, and the two-chamber model linearize
 to eq. 4. Under a static load the two flow paths differ and eq. 4 (one load pressure) is an
 approximation of the two-pressure linearization (see :mod:`hydraulics.loop` for the exact one).
 
-Eq. 4 lumps leakage into its ``Kc``: :func:`eq4_coefficients` uses ``Kce = Kc + Ctp`` (valve
-coefficient plus cross-piston leakage), Merritt's total flow-pressure coefficient.
+Eq. 4 lumps leakage into its ``Kc``: :func:`eq4_parameters` passes ``Kce = Kc + Ctp`` (valve
+coefficient plus cross-piston leakage), Merritt's total flow-pressure coefficient. The formula
+itself lives in ``correction.eq4.eq4_coefficients_from`` (which this package may not import):
+``eq4_coefficients_from(**eq4_parameters(params, kt, load))``.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-import numpy as np
-
-from .equilibrium import _static_flows, inverse_soft_clip
+from .equilibrium import static_flows, inverse_soft_clip
 from .model import (bulk_factor, land_coefficient, orifice_root, orifice_root_slope, smooth_opening,
                     smooth_opening_slope, soft_clip_slope)
 from .packing import pack
 from .params import ActuatorParams
 
-__all__ = ["ValveLinearization", "linearization", "eq4_coefficients"]
+__all__ = ["ValveLinearization", "linearization", "eq4_parameters"]
 
 
 @dataclass(frozen=True)
@@ -75,7 +74,7 @@ class ValveLinearization:
 def linearization(params: ActuatorParams, load_N: float = 0.0) -> ValveLinearization:
     """Merritt's Kq, Kc (and Kce, Ksv, Vf, beta_e) at the static point carrying ``load_N`` (N)."""
     p = params
-    xv, p1, p2 = _static_flows(p, float(load_N))
+    xv, p1, p2 = static_flows(p, float(load_N))
     prm = pack(p).tolist()
     kv = land_coefficient(prm)
     ps, pr, lam, w = p.supply_pressure_Pa, p.return_pressure_Pa, p.laminar_drop_Pa, p.null_opening
@@ -99,23 +98,23 @@ def linearization(params: ActuatorParams, load_N: float = 0.0) -> ValveLineariza
                               vf_m3=2.0 * p.mid_volume_m3, beta_e_Pa=p.bulk_modulus_Pa * fac)
 
 
-def eq4_coefficients(params: ActuatorParams, kt_N_per_m: float, load_N: float = 0.0,
-                     mass_kg: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Numerator and denominator of the paper's eq. 4, ``Ta(s) = Xa/Xp``, descending powers of s.
+def eq4_parameters(params: ActuatorParams, kt_N_per_m: float, load_N: float = 0.0,
+                   mass_kg: float | None = None) -> dict[str, float]:
+    """The physical parameters of the paper's eq. 4 for ``params`` linearized at ``load_N``.
 
-    With ``Ke = Kp/Ap``, ``K = Ksv Kq Ke`` and ``Kc' = Kce + Kdp Ksv Kq``::
+    The keys are exactly the keyword arguments of ``correction.eq4.eq4_coefficients_from``
+    (``correction.eq4.EQ4_PARAMETERS``), the one implementation of the formula::
 
-        b1 = K,  b0 = a0 = K / Ti          (Ti = 1 s: b0 = b1 = a0 = Ksv Kq Ke, as printed)
-        a1 = K + Kc' kt / Ap^2             (printed: a0 + ..., equal for Ti = 1 s)
-        a2 = Kc' bp / Ap^2 + Vf kt / (4 beta_e Ap^2) + 1
-        a3 = Kc' mp / Ap^2 + Vf bp / (4 beta_e Ap^2)
-        a4 = Vf mp / (4 beta_e Ap^2)
+        num, den = eq4_coefficients_from(**eq4_parameters(params, kt, load))
+
+    (this package does not import :mod:`correction`: it only supplies the numbers).
 
     Parameters
     ----------
     params : ActuatorParams
     kt_N_per_m : float, N/m
-        Tire stiffness, the spring from pan to ground of eq. 4's load model.
+        Tire stiffness, the spring from pan to ground of eq. 4's load model (passed through
+        unchecked as ``tire_N_per_m``; ``eq4_coefficients_from`` requires ``>= 0``).
     load_N : float, N
         Static load of the linearization point (0: valve null, Merritt's usual choice; the
         linearization is then exact for this package's symmetric actuator).
@@ -124,29 +123,27 @@ def eq4_coefficients(params: ActuatorParams, kt_N_per_m: float, load_N: float = 
 
     Returns
     -------
-    num : ndarray, shape (2,)
-        ``[b1, b0]``.
-    den : ndarray, shape (5,)
-        ``[a4, a3, a2, a1, a0]``.
-
-    Notes
-    -----
-    Both polynomials are scaled as in the paper (the ``s^2`` coefficient's "1" is the piston
-    term), so ``a_n`` carries units s^(n-2) with s in rad/s. A P-only controller
-    (``ti_s = inf``) gives ``b0 = a0 = 0``.
+    dict[str, float]
+        ``ksv`` (1, effective static valve gain at the operating point), ``kq_m3_s`` (m^3/s per
+        unit spool, Merritt's Kq), ``kc_m3_s_Pa`` (m^3/(s Pa), Kce = valve Kc plus cross-piston
+        leakage), ``kp_per_m`` (1/m), ``kdp_per_Pa`` (1/Pa), ``piston_area_m2`` (m^2),
+        ``fluid_volume_m3`` (m^3, Vf of both chambers at mid-stroke), ``bulk_modulus_Pa`` (Pa,
+        effective at the operating pressures), ``mass_kg`` (kg), ``damping_N_s_m`` (N s/m),
+        ``tire_N_per_m`` (N/m) and ``ti_s`` (s, may be ``math.inf`` for P only).
     """
     p = params
     lin = linearization(p, load_N)
-    mp = p.pan_mass_kg if mass_kg is None else float(mass_kg)
-    ap2 = p.piston_area_m2 ** 2
-    k = lin.ksv * lin.kq_m3_s * (p.kp_per_m / p.piston_area_m2)
-    inv_ti = 0.0 if math.isinf(p.ti_s) else 1.0 / p.ti_s
-    kc_tot = lin.kce_m3_s_Pa + p.kdp_per_Pa * lin.ksv * lin.kq_m3_s
-    comp = lin.vf_m3 / (4.0 * lin.beta_e_Pa * ap2)
-    bp, kt = p.friction_N_s_m, float(kt_N_per_m)
-    a0 = k * inv_ti
-    a1 = k + kc_tot * kt / ap2
-    a2 = kc_tot * bp / ap2 + comp * kt + 1.0
-    a3 = kc_tot * mp / ap2 + comp * bp
-    a4 = comp * mp
-    return np.array([k, k * inv_ti]), np.array([a4, a3, a2, a1, a0])
+    return {
+        "ksv": float(lin.ksv),
+        "kq_m3_s": float(lin.kq_m3_s),
+        "kc_m3_s_Pa": float(lin.kce_m3_s_Pa),
+        "kp_per_m": float(p.kp_per_m),
+        "kdp_per_Pa": float(p.kdp_per_Pa),
+        "piston_area_m2": float(p.piston_area_m2),
+        "fluid_volume_m3": float(lin.vf_m3),
+        "bulk_modulus_Pa": float(lin.beta_e_Pa),
+        "mass_kg": float(p.pan_mass_kg if mass_kg is None else mass_kg),
+        "damping_N_s_m": float(p.friction_N_s_m),
+        "tire_N_per_m": float(kt_N_per_m),
+        "ti_s": float(p.ti_s),
+    }

@@ -22,7 +22,7 @@ from .packing import pack
 from .params import GRAVITY_M_S2, STATE_NAMES, ActuatorParams
 
 __all__ = ["LoopReport", "loop_matrices", "loop_report", "assert_stable", "check_stable",
-           "frequency_response", "euler_map"]
+           "check_design_station", "frequency_response", "euler_map"]
 
 _HZ_GRID = np.geomspace(0.01, 2000.0, 4000)
 
@@ -191,7 +191,7 @@ def assert_stable(params: ActuatorParams, kt_N_per_m: float, load_mass_kg: float
              + (f"a {load_mass_kg:.4g} kg unsprung mass" if math.isfinite(load_mass_kg) else "ground"))
     cases = [(1.0, p)]
     if gain_margin > 1.0:
-        cases.append((gain_margin, p.replace(kp_per_m=p.kp_per_m * gain_margin, check_loop_on_init=False)))
+        cases.append((gain_margin, p.replace(kp_per_m=p.kp_per_m * gain_margin)))
     for factor, q in cases:
         a, _, _, names = loop_matrices(q, kt_N_per_m, load_mass_kg, load_N)
         pole, kind = _unstable_pole(a, names, dt_s)
@@ -206,15 +206,59 @@ def assert_stable(params: ActuatorParams, kt_N_per_m: float, load_mass_kg: float
             f"actuator loop under {where} {what}: pole {pole.real:.4g} {'+-' if pole.imag else ''}"
             f"{abs(pole.imag):.4g}j rad/s ({f_hz:.1f} Hz), so raise kdp_per_Pa, lower kp_per_m or "
             f"raise spool_hz (now kdp_per_Pa = {p.kdp_per_Pa:.3g}, kp_per_m = {p.kp_per_m:.3g}, "
-            f"spool_hz = {p.spool_hz:.4g}), or pass check_loop_on_init=False to build it anyway")
+            f"spool_hz = {p.spool_hz:.4g})")
 
 
 def check_stable(params: ActuatorParams, kt_N_per_m: float, load_mass_kg: float, *,
                  load_N: float | None = None, gain_margin: float = 2.0,
                  dt_s: float | None = None) -> LoopReport:
-    """:func:`assert_stable`, then return the nominal :class:`LoopReport`.
+    """Raise ValueError unless the linearized closed loop under a tire load is stable with margin.
 
-    See :meth:`hydraulics.params.ActuatorParams.check_stable`.
+    The loop (spool, both chamber pressures, integrator, pan, tire spring, unsprung mass) is
+    linearized about the static equilibrium carrying ``load_N``; it must be asymptotically
+    stable with the nominal gains and still with ``kp_per_m`` multiplied by ``gain_margin``
+    (:func:`assert_stable`).
+
+    Parameters
+    ----------
+    params : ActuatorParams
+    kt_N_per_m : float, N/m
+        Tire stiffness between pan and unsprung mass.
+    load_mass_kg : float, kg
+        Unsprung mass on the tire (``math.inf``: the tire is anchored to ground, as in eq. 4).
+    load_N : float, N, optional
+        Static load the pan carries (default: weight of pan plus ``load_mass_kg``, or of the
+        pan alone when the load mass is infinite).
+    gain_margin : float, 1
+        Factor on Kp the loop must tolerate (2 = 6 dB gain margin).
+    dt_s : float, s, optional
+        If given, also require MuJoCo's Euler step of the loop (explicit for velocities and
+        activations, positions from the new velocities) to be stable.
+
+    Returns
+    -------
+    LoopReport
+        Poles, -3 dB bandwidth and resonance peak of the nominal loop.
     """
     assert_stable(params, kt_N_per_m, load_mass_kg, load_N=load_N, gain_margin=gain_margin, dt_s=dt_s)
     return loop_report(params, kt_N_per_m, load_mass_kg, load_N)
+
+
+def check_design_station(params: ActuatorParams) -> None:
+    """Raise ValueError unless ``params`` is stable on its own reference wheel station.
+
+    Runs :func:`assert_stable` with ``params.design_tire_N_per_m`` (N/m) and
+    ``params.design_load_mass_kg`` (kg) and the default 6 dB gain margin: the check a rig
+    builder makes once per actuator when it builds a rig (``ActuatorParams`` itself only
+    validates its values).
+
+    Parameters
+    ----------
+    params : ActuatorParams
+
+    Raises
+    ------
+    ValueError
+        One sentence naming the unstable pole and the gains to change.
+    """
+    assert_stable(params, params.design_tire_N_per_m, params.design_load_mass_kg)

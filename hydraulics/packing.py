@@ -16,8 +16,9 @@ from .params import STATE_NAMES, ActuatorParams
 
 __all__ = ["pack", "unpack", "LAYOUT_TAG", "NSTATE", "NPACK", "FIELD_NAMES"]
 
-#: Arbitrary tag in slot 0 marking a row packed by this module (layout version 1).
-LAYOUT_TAG = 7311.0625
+#: Arbitrary tag in slot 0 marking a row packed by this module (layout version 2: no
+#: ``check_loop_on_init`` slot; version 1 was 7311.0625). Change it whenever the layout changes.
+LAYOUT_TAG = 7311.125
 #: Number of activation states per actuator (``len(STATE_NAMES)``).
 NSTATE = 5
 
@@ -55,44 +56,37 @@ P_TI = 26
 P_KDP = 27
 P_DESIGN_KT = 28
 P_DESIGN_MASS = 29
-P_CHECK = 30
 #: Length of a packed vector.
-NPACK = 31
+NPACK = 30
 
 _EXPECTED = ("supply_pressure_Pa", "return_pressure_Pa", "rated_flow_m3_s", "rated_valve_drop_Pa",
              "spool_hz", "spool_damping", "ksv", "command_limit", "null_opening", "laminar_drop_Pa",
              "piston_area_m2", "stroke_m", "dead_volume_m3", "bulk_modulus_Pa", "leakage_m3_s_Pa",
              "cavitation_pressure_Pa", "cavitation_band_Pa", "cavitation_min_fraction",
              "relief_pressure_Pa", "relief_conductance_m3_s_Pa", "pan_mass_kg", "friction_N_s_m",
-             "kp_per_m", "ti_s", "kdp_per_Pa", "design_tire_N_per_m", "design_load_mass_kg",
-             "check_loop_on_init")
+             "kp_per_m", "ti_s", "kdp_per_Pa", "design_tire_N_per_m", "design_load_mass_kg")
 if FIELD_NAMES != _EXPECTED or NPACK != 3 + len(FIELD_NAMES) or NSTATE != len(STATE_NAMES):
     raise ImportError("hydraulics.packing is out of date with ActuatorParams: update the P_* slots")
 
 
 def pack(params: ActuatorParams) -> np.ndarray:
-    """Pack ``params`` into a flat float64 vector of length ``NPACK`` (bools become 0.0/1.0)."""
+    """Pack ``params`` into a flat float64 vector of length ``NPACK``."""
     if not isinstance(params, ActuatorParams):
         raise TypeError(f"pack() needs an ActuatorParams, got {type(params).__name__}")
     values = [float(getattr(params, name)) for name in FIELD_NAMES]
     return np.array([LAYOUT_TAG, float(NSTATE), float(NPACK), *values], dtype=np.float64)
 
 
-def unpack(vector, *, check_loop_on_init: bool | None = None) -> ActuatorParams:
+def unpack(vector) -> ActuatorParams:
     """Rebuild the validated ``ActuatorParams`` from a packed vector.
 
     Parameters
     ----------
     vector : array_like of float, shape (NPACK,) or longer (extra slots are ignored)
-    check_loop_on_init : bool, optional
-        Override the packed flag (e.g. False to skip the stability check when only reading).
     """
     v = np.asarray(vector, dtype=np.float64).ravel()
     if v.size < NPACK or v[P_TAG] != LAYOUT_TAG or v[P_NSTATE] != NSTATE or v[P_NPACK] != NPACK:
         raise ValueError("vector is not a packed ActuatorParams (wrong length or layout tag); "
                          "pack it with hydraulics.packing.pack")
     kwargs = {name: float(v[3 + i]) for i, name in enumerate(FIELD_NAMES)}
-    kwargs["check_loop_on_init"] = bool(kwargs["check_loop_on_init"] != 0.0)
-    if check_loop_on_init is not None:
-        kwargs["check_loop_on_init"] = check_loop_on_init
     return ActuatorParams(**kwargs)

@@ -36,9 +36,6 @@ INPUT_NAMES = ("x_ref_m", "x_a_m", "v_a_m_s")
 #: Standard gravity (m/s^2), the value the project's MuJoCo models use.
 GRAVITY_M_S2 = 9.81
 
-_BOOL_FIELDS = ("check_loop_on_init",)
-
-
 @dataclass(frozen=True)
 class ActuatorParams:
     """Parameters of one servo-hydraulic wheelpan actuator and its analog controller.
@@ -107,13 +104,17 @@ class ActuatorParams:
     kdp_per_Pa : float, 1/Pa
         Differential-pressure feedback gain Kdp: normalised command per Pa of ``P1 - P2``.
     design_tire_N_per_m : float, N/m
-        Tire stiffness of the reference wheel station the defaults were tuned for (used by
-        the stability check on construction).
+        Tire stiffness of the reference wheel station the defaults were tuned for (checked by
+        :func:`hydraulics.loop.check_design_station` when a rig is built).
     design_load_mass_kg : float, kg
         Unsprung mass of that reference wheel station (``math.inf`` = tire to ground).
-    check_loop_on_init : bool
-        Run ``check_stable(design_tire_N_per_m, design_load_mass_kg)`` in ``__post_init__``; set
-        False only to build a deliberately unstable parameter set (e.g. for tests).
+
+    Notes
+    -----
+    Construction only validates each value (type, sign, finiteness, pressure ordering); it
+    never checks the closed loop. Stability is a property of the parameters *and* a load:
+    use :func:`hydraulics.loop.check_stable` / :func:`hydraulics.loop.assert_stable` with a
+    tire and unsprung mass, or :func:`hydraulics.loop.check_design_station`.
     """
 
     # --- supply and servovalve ------------------------------------------------------------
@@ -153,18 +154,13 @@ class ActuatorParams:
     ti_s: float = 1.0  # Ti = 1 s: the structure under which the paper's eq. 4 is exact (issue 3)
     kdp_per_Pa: float = 2.0e-8  # damps the oil-column mode to zeta ~ 0.18 (Euler at 1e-4 s removes
     # omega^2 dt/2 = 24 1/s of its 126 1/s decay rate; tuned with hydraulics.loop)
-    # --- reference wheel station for the construction-time stability check ------------------
+    # --- reference wheel station for hydraulics.loop.check_design_station -------------------
     design_tire_N_per_m: float = 1.0e6  # truck tire 0.9-1.8 MN/m (brief); the soft end
     design_load_mass_kg: float = 450.0  # unsprung mass per wheel station 300-600 kg (brief)
-    check_loop_on_init: bool = True
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if f.name in _BOOL_FIELDS:
-                if not isinstance(value, bool):
-                    raise ValueError(f"actuator.{f.name} must be a bool, got {value!r}")
-                continue
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise ValueError(f"actuator.{f.name} must be a real number, got {value!r}")
             if math.isnan(value):
@@ -182,7 +178,7 @@ class ActuatorParams:
             if not getattr(self, name) >= 0:
                 raise ValueError(f"actuator.{name} must be >= 0, got {getattr(self, name)!r}")
         finite = [f.name for f in dataclasses.fields(self)
-                  if f.name not in _BOOL_FIELDS + ("spool_hz", "ti_s", "design_load_mass_kg")]
+                  if f.name not in ("spool_hz", "ti_s", "design_load_mass_kg")]
         for name in finite:
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"actuator.{name} must be finite, got {getattr(self, name)!r}")
@@ -202,10 +198,6 @@ class ActuatorParams:
         if not self.relief_pressure_Pa > self.supply_pressure_Pa:
             raise ValueError(f"actuator.relief_pressure_Pa must exceed supply_pressure_Pa "
                              f"({self.supply_pressure_Pa} Pa), got {self.relief_pressure_Pa}")
-        if self.check_loop_on_init:
-            from .loop import assert_stable  # local import: loop imports this module
-
-            assert_stable(self, self.design_tire_N_per_m, self.design_load_mass_kg)
 
     # ----------------------------------------------------------------------------------------
     @property
@@ -226,36 +218,3 @@ class ActuatorParams:
     def replace(self, **changes) -> "ActuatorParams":
         """Return a copy with ``changes`` applied (validated again)."""
         return dataclasses.replace(self, **changes)
-
-    def check_stable(self, kt_N_per_m: float, load_mass_kg: float, *, load_N: float | None = None,
-                     gain_margin: float = 2.0, dt_s: float | None = None):
-        """Raise ValueError unless the linearized closed loop under a tire load is stable with margin.
-
-        The loop (spool, both chamber pressures, integrator, pan, tire spring, unsprung mass) is
-        linearized about the static equilibrium carrying ``load_N``; it must be asymptotically
-        stable with the nominal gains and still with ``kp_per_m`` multiplied by ``gain_margin``.
-
-        Parameters
-        ----------
-        kt_N_per_m : float, N/m
-            Tire stiffness between pan and unsprung mass.
-        load_mass_kg : float, kg
-            Unsprung mass on the tire (``math.inf``: the tire is anchored to ground, as in eq. 4).
-        load_N : float, N, optional
-            Static load the pan carries (default: weight of pan plus ``load_mass_kg``, or of the
-            pan alone when the load mass is infinite).
-        gain_margin : float, 1
-            Factor on Kp the loop must tolerate (2 = 6 dB gain margin).
-        dt_s : float, s, optional
-            If given, also require MuJoCo's Euler step of the loop (explicit for velocities and
-            activations, positions from the new velocities) to be stable.
-
-        Returns
-        -------
-        hydraulics.loop.LoopReport
-            Poles, -3 dB bandwidth and resonance peak of the nominal loop.
-        """
-        from .loop import check_stable  # local import: loop imports this module
-
-        return check_stable(self, kt_N_per_m, load_mass_kg, load_N=load_N,
-                            gain_margin=gain_margin, dt_s=dt_s)

@@ -14,8 +14,9 @@ from dataclasses import dataclass
 
 import mujoco
 
+from mjcf import names
+
 __all__ = [
-    "CORNERS",
     "MODEL_FILE",
     "SCENE_FILE",
     "TruckVariant",
@@ -25,15 +26,8 @@ __all__ = [
     "build_model",
 ]
 
-#: Wheel stations, in the order every per-wheel array of this project uses:
-#: front-left, front-right, rear-left, rear-right.
-CORNERS: tuple[str, ...] = ("fl", "fr", "rl", "rr")
-
 MODEL_FILE = "truck_rig.xml"
 SCENE_FILE = "scene.xml"
-
-_FRONT = ("fl", "fr")
-_REAR = ("rl", "rr")
 
 
 def resource_path(name: str = SCENE_FILE):
@@ -143,7 +137,7 @@ class TruckVariant:
 
 
 def _set_tire(spec: mujoco.MjSpec, corner: str, k: float | None, c: float | None, r0: float | None) -> None:
-    act = spec.actuator(f"tire_{corner}")
+    act = spec.actuator(names.tire_actuator(corner))
     prm = list(act.biasprm)
     k_old = -prm[1]
     r0_old = prm[0] / k_old
@@ -184,8 +178,8 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
     if v.payload_x_m is not None:
         body = spec.body("payload")
         body.pos = [float(v.payload_x_m), body.pos[1], body.pos[2]]
-    for corner in CORNERS:
-        front = corner in _FRONT
+    for corner in names.CORNERS:
+        front = corner in names.FRONT
         _set_tire(
             spec,
             corner,
@@ -197,9 +191,9 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
         if friction is not None:
             spec.tendon(f"spring_{corner}").frictionloss = float(friction)
         if v.pan_mass_kg is not None:
-            spec.body(f"pan_{corner}").mass = float(v.pan_mass_kg)
+            spec.body(names.pan_body(corner)).mass = float(v.pan_mass_kg)
         if pans == "fixed":
-            spec.delete(spec.joint(f"pan_{corner}_z"))
+            spec.delete(spec.joint(names.pan_joint(corner)))
     if v.timestep_s is not None:
         spec.option.timestep = float(v.timestep_s)
     return spec

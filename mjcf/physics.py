@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from mjcf.build import CORNERS
+from mjcf.names import CORNERS, pan_joint, tire_actuator
 
 __all__ = [
     "TRUCK_JOINTS",
@@ -26,7 +26,7 @@ __all__ = [
     "modal_analysis",
 ]
 
-#: The truck's degrees of freedom (the pans' are ``pan_<corner>_z``).
+#: The truck's degrees of freedom (the pans' are :func:`mjcf.names.pan_joint`).
 TRUCK_JOINTS: tuple[str, ...] = (
     "chassis_z",
     "chassis_pitch",
@@ -58,10 +58,10 @@ class RigIndex:
     truck_qpos, truck_dof : numpy.ndarray of int
         qpos and dof addresses of :data:`TRUCK_JOINTS`, in that order.
     pan_qpos, pan_dof : numpy.ndarray of int
-        qpos and dof addresses of ``pan_<corner>_z`` in :data:`mjcf.build.CORNERS` order
+        qpos and dof addresses of :func:`mjcf.names.pan_joint` in :data:`mjcf.names.CORNERS` order
         (empty when the pans are fixed).
     tire_actuator : numpy.ndarray of int
-        Actuator ids of ``tire_<corner>``.
+        Actuator ids of :func:`mjcf.names.tire_actuator`, in the same order.
     """
 
     truck_qpos: np.ndarray
@@ -79,14 +79,14 @@ class RigIndex:
             return i
 
         truck = [jid(n) for n in TRUCK_JOINTS]
-        pan_names = [f"pan_{c}_z" for c in CORNERS]
+        pan_names = [pan_joint(c) for c in CORNERS]
         has_pans = all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) >= 0 for n in pan_names)
         pans = [jid(n) for n in pan_names] if has_pans else []
         tires = []
         for c in CORNERS:
-            i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"tire_{c}")
+            i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, tire_actuator(c))
             if i < 0:
-                raise KeyError(f"the model has no actuator named 'tire_{c}'")
+                raise KeyError(f"the model has no actuator named {tire_actuator(c)!r}")
             tires.append(i)
         as_int = lambda v: np.asarray(v, dtype=np.intp)  # noqa: E731
         return cls(

@@ -3,8 +3,8 @@
 Expected values come from outside the code under test: the actuator and the low-passes are
 simulated with scipy (``scipy.signal.lsim`` on polynomials written out here from the paper's
 eq. 5), frequency-domain references are FFTs with the continuous magnitude computed here, and
-eq. 4 is checked against the paper's printed formulas and against ``hydraulics``' independent
-implementation.
+eq. 4 is checked against the paper's printed formulas and, fed with the parameters
+``hydraulics.eq4_parameters`` derives from an ``ActuatorParams``, against its known properties.
 """
 
 from __future__ import annotations
@@ -104,21 +104,18 @@ def test_eq4_coefficients_follow_the_printed_formulas():
     np.testing.assert_allclose(den, expected_den, rtol=1e-14)
 
 
-def test_eq4_agrees_with_the_hydraulics_package():
-    """hydraulics.linearization.eq4_coefficients is an independent implementation (from ActuatorParams)."""
-    from hydraulics import eq4_coefficients, linearization
-    from hydraulics.params import ActuatorParams
+@pytest.mark.parametrize("kt, load", [(1.2e6, 0.0), (1.8e6, 34.5e3)])
+def test_eq4_properties_with_the_hydraulics_parameters(kt, load):
+    """eq. 4 fed by hydraulics.eq4_parameters: T_a(0) = 1, b1 = Ksv Kq Kp / Ap, a4 = Vf mp / (4 beta Ap^2)."""
+    from hydraulics import ActuatorParams, eq4_parameters
 
-    p = ActuatorParams()
-    lin = linearization(p)
-    num, den = eq4_coefficients_from(
-        ksv=lin.ksv, kq_m3_s=lin.kq_m3_s, kc_m3_s_Pa=lin.kce_m3_s_Pa, kp_per_m=p.kp_per_m,
-        kdp_per_Pa=p.kdp_per_Pa, piston_area_m2=p.piston_area_m2, fluid_volume_m3=lin.vf_m3,
-        bulk_modulus_Pa=lin.beta_e_Pa, mass_kg=p.pan_mass_kg, damping_N_s_m=p.friction_N_s_m,
-        tire_N_per_m=1.2e6)
-    num_h, den_h = eq4_coefficients(p, 1.2e6)
-    np.testing.assert_allclose(num, num_h, rtol=1e-12)
-    np.testing.assert_allclose(den, den_h, rtol=1e-12)
+    v = eq4_parameters(ActuatorParams(), kt, load)
+    num, den = eq4_coefficients_from(**v)
+    ap = v["piston_area_m2"]
+    assert num[0] == pytest.approx(v["ksv"] * v["kq_m3_s"] * v["kp_per_m"] / ap, rel=1e-14)
+    assert den[0] == pytest.approx(v["fluid_volume_m3"] * v["mass_kg"] / (4 * v["bulk_modulus_Pa"] * ap ** 2),
+                                   rel=1e-14)
+    assert np.polyval(num, 0.0) / np.polyval(den, 0.0) == pytest.approx(1.0, rel=1e-14)
 
 
 def test_eq4_refuses_a_bad_parameter_by_name():

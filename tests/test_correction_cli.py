@@ -19,8 +19,8 @@ from scipy import signal
 from correction.apply import band_limit, correct
 from correction.eq4 import eq4_coefficients_from
 from correction.filters import design_correction
-from scenarios.config import ScenarioError
-from scenarios.correct_cmd import add_parser, cmd_correct
+from scenarios.core.config import ScenarioError
+from scenarios.cli.correct import add_parser, cmd_correct
 
 EQ4_VALUES = dict(ksv=1.0, kq_m3_s=0.0109, kc_m3_s_Pa=1.26e-11, kp_per_m=50.0, kdp_per_Pa=2.0e-8,
                   piston_area_m2=7.43e-3, fluid_volume_m3=2.13e-3, bulk_modulus_Pa=1.0e9, mass_kg=500.0,

@@ -12,9 +12,10 @@ import pathlib
 import numpy as np
 import pytest
 
+from correction.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
 from hydraulics import (STATE_NAMES, ActuatorParams, actuator_derivatives, actuator_force,
-                        eq4_coefficients, equilibrium_activation, events, linearization, loop_matrices,
-                        pack, unpack)
+                        check_design_station, check_stable, eq4_parameters, equilibrium_activation,
+                        events, linearization, loop_matrices, pack, unpack)
 from hydraulics.kernels import derivatives_array, force_array, step_euler
 from hydraulics.loop import frequency_response
 from hydraulics.model import (MPA, chamber_flows, orifice_root, orifice_root_slope, soft_clip,
@@ -147,8 +148,7 @@ def test_continuity_with_closed_valve_matches_compliance_law():
     # Merritt ch. 2: dP/dt = beta/V (Q - A dx/dt). Closed valve (no null flow, no leakage, no
     # controller), pan moved 0.5 mm at constant speed: P1 - P10 = -beta ln(V1/V10) exactly, about
     # -beta A dx / V0 (the displaced volume over the chamber volume) for small dx.
-    p = DEFAULT.replace(null_opening=0.0, leakage_m3_s_Pa=0.0, kp_per_m=0.0, kdp_per_Pa=0.0,
-                        check_loop_on_init=False)
+    p = DEFAULT.replace(null_opening=0.0, leakage_m3_s_Pa=0.0, kp_per_m=0.0, kdp_per_Pa=0.0)
     x = np.array([0.0, 0.0, 10.0, 10.0, 0.0])
     speed, dt, n = 0.05, 1e-6, 10_000
     for k in range(n):  # explicit midpoint (RK2) of the prescribed motion x_a = speed * t
@@ -171,7 +171,7 @@ def test_continuity_with_closed_valve_matches_compliance_law():
 def test_bulk_modulus_falls_near_cavitation_so_pressure_stays_above_floor():
     # Pull the pan hard (1 m/s) against a closed valve: the chamber that expands must approach
     # the cavitation floor without crossing it far (Euler at the simulator's dt = 1e-4 s).
-    p = DEFAULT.replace(null_opening=0.0, kp_per_m=0.0, kdp_per_Pa=0.0, check_loop_on_init=False)
+    p = DEFAULT.replace(null_opening=0.0, kp_per_m=0.0, kdp_per_Pa=0.0)
     prm = pack(p)
     x = np.array([0.0, 0.0, 10.0, 10.0, 0.0])
     lowest = 10.0
@@ -215,8 +215,7 @@ def test_equilibrium_refuses_a_load_beyond_stall():
 # --- reference vs compiled kernels ---------------------------------------------------------------
 def test_compiled_kernels_match_reference():
     rng = np.random.default_rng(3)
-    for p in (DEFAULT, DEFAULT.replace(spool_hz=math.inf, check_loop_on_init=False),
-              DEFAULT.replace(ti_s=math.inf, check_loop_on_init=False)):
+    for p in (DEFAULT, DEFAULT.replace(spool_hz=math.inf), DEFAULT.replace(ti_s=math.inf)):
         prm = pack(p)
         for _ in range(200):
             x = np.array([rng.uniform(-1.2, 1.2), rng.uniform(-500, 500), rng.uniform(-0.5, 27),
@@ -234,7 +233,7 @@ def test_eq4_structure_matches_the_paper():
     # Paper eq. 4: b0 = b1 = a0 = Ksv Kq Ke with Ke = Kp/Ap (Ti = 1 s), unit static gain.
     p = DEFAULT
     kt = 1.2e6
-    num, den = eq4_coefficients(p, kt)
+    num, den = eq4_coefficients_from(**eq4_parameters(p, kt))
     lin = linearization(p)
     k = lin.ksv * lin.kq_m3_s * p.kp_per_m / p.piston_area_m2
     assert num[0] == num[1] == den[4] == pytest.approx(k, rel=1e-15)
@@ -251,10 +250,10 @@ def test_two_chamber_linearization_reproduces_eq4_at_null():
     # Independent route: central-difference Jacobian of the nonlinear two-chamber equations
     # (static valve, tire to ground, unloaded so the valve sits at null) must give eq. 4's
     # frequency response; the mean-pressure mode decouples there.
-    p = DEFAULT.replace(spool_hz=math.inf, check_loop_on_init=False)
+    p = DEFAULT.replace(spool_hz=math.inf)
     kt = 1e6
     a, b, c, _ = loop_matrices(p, kt, math.inf, load_N=0.0)
-    num, den = eq4_coefficients(p, kt)
+    num, den = eq4_coefficients_from(**eq4_parameters(p, kt))
     hz = np.geomspace(0.1, 200.0, 25)
     s = 2j * np.pi * hz
     h_eq4 = np.polyval(num, s) / np.polyval(den, s)
@@ -287,14 +286,67 @@ def test_default_loop_meets_the_design_brief(kt, mass):
     # Issue 3: stable with margin (here: 6 dB gain margin, and the explicit-Euler map at the
     # simulator's 1e-4 s) under a truck wheel (tire 0.9-1.8 MN/m, unsprung 300-600 kg), and a
     # -3 dB bandwidth of about 10-20 Hz (envelope: ignoring the narrow wheel-hop notch).
-    report = DEFAULT.check_stable(kt, mass, gain_margin=2.0, dt_s=1e-4)
+    report = check_stable(DEFAULT, kt, mass, gain_margin=2.0, dt_s=1e-4)
     assert 10.0 <= report.envelope_bandwidth_hz <= 20.0
     assert np.all(report.poles.real < 0)
 
 
 def test_check_stable_explains_the_fix():
-    p = DEFAULT.replace(kdp_per_Pa=0.0, check_loop_on_init=False)
+    p = DEFAULT.replace(kdp_per_Pa=0.0)  # plain data: constructing an unstable set is allowed
     with pytest.raises(ValueError) as err:
-        p.check_stable(1e6, 450.0)
+        check_stable(p, 1e6, 450.0)
     msg = str(err.value)
     assert "unstable" in msg and "raise kdp_per_Pa" in msg and msg.count(". ") == 0
+
+
+
+def test_check_design_station_checks_the_reference_wheel_station():
+    # The defaults pass on their own station; an unstable set (no pressure feedback) is built
+    # without complaint and refused by the check, with the same one-sentence explanation.
+    check_design_station(DEFAULT)
+    p = DEFAULT.replace(kdp_per_Pa=0.0)
+    with pytest.raises(ValueError) as err:
+        check_design_station(p)
+    msg = str(err.value)
+    assert f"{p.design_tire_N_per_m:.3g} N/m tire on a {p.design_load_mass_kg:.4g} kg" in msg
+    assert "raise kdp_per_Pa" in msg and msg.count(". ") == 0 and "check_loop_on_init" not in msg
+
+
+@pytest.mark.parametrize("kt, load, mass", [(1.2e6, 0.0, None), (1.8e6, 34.5e3, 700.0), (0.0, 0.0, None)])
+@pytest.mark.parametrize("ti", [1.0, 0.25])
+def test_eq4_parameters_feed_the_one_formula(kt, load, mass, ti):
+    # eq4_parameters supplies exactly eq4_coefficients_from's keywords, from the linearization
+    # at the load, and the formula keeps eq. 4's properties: T_a(0) = b0/a0 = 1,
+    # b1 = Ksv Kq Kp / Ap, b0 = b1 / Ti, a4 = Vf mp / (4 beta_e Ap^2) (paper's eq. 4, Ti = 1 s).
+    p = DEFAULT.replace(ti_s=ti)
+    args = eq4_parameters(p, kt, load, mass_kg=mass)
+    assert set(args) == set(EQ4_PARAMETERS)
+    lin = linearization(p, load)
+    mp = p.pan_mass_kg if mass is None else mass
+    assert args["mass_kg"] == mp and args["tire_N_per_m"] == kt and args["ti_s"] == ti
+    assert args["kc_m3_s_Pa"] == lin.kce_m3_s_Pa and args["bulk_modulus_Pa"] == lin.beta_e_Pa
+    num, den = eq4_coefficients_from(**args)
+    ap = p.piston_area_m2
+    assert num[0] == pytest.approx(lin.ksv * lin.kq_m3_s * p.kp_per_m / ap, rel=1e-14)
+    assert num[1] == pytest.approx(num[0] / ti, rel=1e-14)
+    assert den[0] == pytest.approx(lin.vf_m3 * mp / (4 * lin.beta_e_Pa * ap ** 2), rel=1e-14)
+    assert np.polyval(num, 0.0) / np.polyval(den, 0.0) == pytest.approx(1.0, rel=1e-14)
+
+
+def test_tire_stiffness_is_checked_by_the_formula_only():
+    # One rule (correction.eq4): tire_N_per_m >= 0; eq4_parameters passes the value through.
+    with pytest.raises(ValueError, match="tire_N_per_m must be >= 0"):
+        eq4_coefficients_from(**eq4_parameters(DEFAULT, -1.0))
+
+
+def test_params_are_plain_data_and_the_stability_check_is_separate():
+    # ActuatorParams only validates values: a set without pressure feedback constructs (it used to
+    # run a stability check on construction); hydraulics.loop.check_design_station refuses it,
+    # naming the gain to change. (Import circles are tested project-wide in tests/test_layers.py.)
+    from hydraulics.loop import check_design_station
+
+    p = DEFAULT.replace(kdp_per_Pa=0.0)
+    assert p.kdp_per_Pa == 0.0
+    with pytest.raises(ValueError, match="raise kdp_per_Pa"):
+        check_design_station(p)
+    check_design_station(DEFAULT)  # the defaults pass

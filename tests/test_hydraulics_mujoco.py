@@ -12,7 +12,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from hydraulics import ActuatorParams, eq4_coefficients, equilibrium_activation, events
+from correction.eq4 import eq4_coefficients_from
+from hydraulics import (ActuatorParams, check_design_station, check_stable, eq4_parameters,
+                        equilibrium_activation, events)
 from hydraulics.bridge import (LayoutError, _find_offsets, _layout, _verify_offsets, activation_slice,
                                add_hydraulic_actuators, hydraulic_callbacks, params_from_model,
                                set_activation, single_pan_spec)
@@ -63,7 +65,7 @@ def test_actuator_layout_in_the_compiled_model():
     assert model.actuator_biastype[i] == mujoco.mjtBias.mjBIAS_USER
     assert model.actuator_actnum[i] == 5 and model.na == 5
     assert model.jnt_qposadr[model.actuator_trnid[i, 0]] == 0
-    assert params_from_model(model, "fl") == DEFAULT.replace(check_loop_on_init=False)
+    assert params_from_model(model, "fl") == DEFAULT
 
 
 def test_add_hydraulic_actuators_checks_its_inputs():
@@ -105,8 +107,7 @@ def test_stall_force_of_a_blocked_pan_with_the_valve_wide_open(direction):
 def test_continuity_valve_closed_no_leakage(fast):
     # Merritt ch. 2 with the valve closed and no leakage: dP1 = -beta A dx / V1, so
     # P1 - P10 = -beta ln(V1(x)/V1(0)) exactly and ~ -beta (A dx) / V0 for small dx.
-    p = DEFAULT.replace(null_opening=0.0, leakage_m3_s_Pa=0.0, kp_per_m=0.0, kdp_per_Pa=0.0,
-                        check_loop_on_init=False)
+    p = DEFAULT.replace(null_opening=0.0, leakage_m3_s_Pa=0.0, kp_per_m=0.0, kdp_per_Pa=0.0)
     model, data = _rig(p, spring=0.0, wheel=0.0, pan_mass_kg=1e9, gravity=False)
     set_activation(model, data, "fl", [0.0, 0.0, 10.0, 10.0, 0.0])
     data.qvel[0] = 0.01  # m/s: 0.5 mm in 0.05 s, nearly constant (1e9 kg)
@@ -242,11 +243,11 @@ def test_default_loop_is_stable_in_the_discrete_model():
     ({"spool_hz": 40.0}, "spool_hz"),      # valve well below the ~110 Hz oil-column mode
 ])
 def test_unstable_parameter_sets_are_refused_and_really_unstable(change, field):
+    p = DEFAULT.replace(**change)  # plain data: construction checks values, not the loop
     with pytest.raises(ValueError, match=field):
-        DEFAULT.replace(**change)  # refused on construction (stability check of the design load)
-    p = DEFAULT.replace(check_loop_on_init=False, **change)
+        check_design_station(p)  # what the rig builder runs (stability on the design station)
     with pytest.raises(ValueError, match="unstable"):
-        p.check_stable(TIRE, 450.0, gain_margin=1.0)
+        check_stable(p, TIRE, 450.0, gain_margin=1.0)
     _, a, _ = _transition_matrices(p)
     assert np.max(np.abs(np.linalg.eigvals(a))) > 1.0  # MuJoCo's own linearization agrees
 
@@ -256,7 +257,7 @@ def test_transition_fd_reproduces_eq4():
     # sits at null) converted to continuous time must give the paper's eq. 4 frequency response.
     # Euler: v' = v + dt a(x), act' = act + dt f(x), so the v and act rows of A and B are
     # I + dt * (continuous Jacobian) exactly; q' = q + dt v' gives dq/dt = v.
-    p = DEFAULT.replace(spool_hz=math.inf, check_loop_on_init=False)
+    p = DEFAULT.replace(spool_hz=math.inf)
     model, a, b = _transition_matrices(p, static_load=False)
     nv, nx = model.nv, a.shape[0]
     ac = np.zeros_like(a)
@@ -264,7 +265,7 @@ def test_transition_fd_reproduces_eq4():
     ac[nv:] = (a[nv:] - np.eye(nx)[nv:]) / DT
     bc = np.zeros_like(b)
     bc[nv:] = b[nv:] / DT
-    num, den = eq4_coefficients(p, TIRE)
+    num, den = eq4_coefficients_from(**eq4_parameters(p, TIRE))
     hz = np.geomspace(0.1, 200.0, 30)
     h = np.array([np.linalg.solve(2j * np.pi * f * np.eye(nx) - ac, bc)[0, 0] for f in hz])
     s = 2j * np.pi * hz

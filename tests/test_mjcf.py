@@ -12,7 +12,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf.build import CORNERS, TruckVariant, build_model, build_spec, resource_path
+from mjcf.build import TruckVariant, build_model, build_spec, resource_path
+from mjcf.names import CORNERS
 from mjcf.physics import RigIndex, modal_analysis, static_equilibrium, tire_forces
 
 G = 9.81  # m/s^2, the model's gravity (checked below)
@@ -161,6 +162,44 @@ def test_every_element_named_with_parallel_corners():
     for pattern in ("wheel_{}", "pan_{}", "hanger_{}", "seat_{}"):
         for c in CORNERS:
             assert mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, pattern.format(c)) >= 0
+
+
+def test_every_name_of_mjcf_names_exists_in_the_compiled_model():
+    """mjcf.names is the one home of element names: each name it gives is an element of the
+    compiled rig (the hydraulic actuators once hydraulics.bridge has added them), of the
+    right kind and attached where its docstring says."""
+    from hydraulics import ActuatorParams
+    from hydraulics.bridge import add_hydraulic_actuators
+    from mjcf import names
+
+    spec = build_spec()
+    add_hydraulic_actuators(spec, ActuatorParams(), names.CORNERS)
+    model = spec.compile()
+    obj = mujoco.mjtObj
+
+    def eid(kind, name):
+        i = mujoco.mj_name2id(model, kind, name)
+        assert i >= 0, f"{kind.name} {name!r} of mjcf.names is not in the compiled model"
+        return i
+
+    assert names.CORNERS == names.FRONT + names.REAR
+    for c in names.CORNERS:
+        pan = eid(obj.mjOBJ_BODY, names.pan_body(c))
+        joint = eid(obj.mjOBJ_JOINT, names.pan_joint(c))
+        assert model.jnt_bodyid[joint] == pan and model.jnt_type[joint] == mujoco.mjtJoint.mjJNT_SLIDE
+        tire = eid(obj.mjOBJ_ACTUATOR, names.tire_actuator(c))
+        sensor = eid(obj.mjOBJ_SENSOR, names.tire_sensor(c))
+        assert model.sensor_objid[sensor] == tire
+        site = eid(obj.mjOBJ_SITE, names.wheel_site(c))
+        assert model.site_bodyid[site] == eid(obj.mjOBJ_BODY, names.axle_body(c))
+        hyd = eid(obj.mjOBJ_ACTUATOR, names.hydraulic_actuator(c))
+        assert model.actuator_trnid[hyd, 0] == joint
+    # The truck bodies are every body but the world and the pans.
+    pans = {names.pan_body(c) for c in names.CORNERS}
+    others = {mujoco.mj_id2name(model, obj.mjOBJ_BODY, i) for i in range(1, model.nbody)} - pans
+    assert others == set(names.TRUCK_BODIES)
+    with pytest.raises(ValueError, match="corner must be one of fl, fr, rl, rr"):
+        names.pan_joint("front")
 
 
 def test_angles_in_radians_and_stroke():

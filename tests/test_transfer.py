@@ -1,7 +1,7 @@
 """correction.transfer: the paper's eq. 4 and the frequency-response helpers.
 
 Expected values come from eq. 4 as printed (b0 = b1 = a0: static gain 1, zero at -1 rad/s),
-from the independent implementation in hydraulics.linearization.eq4_coefficients, from
+from correction.eq4.eq4_coefficients_from (which eq4_transfer_function wraps), from
 closed-form first/second-order systems, or from python-control's own evaluation and ZOH
 discretization -- never from a previous run of this module.
 """
@@ -15,17 +15,16 @@ import pytest
 from correction.transfer import (apply_transfer_function, bandwidth_hz, describe_roots,
                                  eq4_transfer_function, frequency_response_hz,
                                  state_space_frequency_response, transfer_bandwidth_hz)
-from hydraulics import ActuatorParams, eq4_coefficients, linearization
+from correction.eq4 import eq4_coefficients_from
+from hydraulics import ActuatorParams, eq4_parameters
 
 DEFAULT = ActuatorParams()
 
 
 def _eq4_args(params=DEFAULT, kt=1.0e6, load=0.0):
-    lin = linearization(params, load)
-    return dict(ksv=lin.ksv, kq_m3_s=lin.kq_m3_s, kc_m3_s_Pa=lin.kce_m3_s_Pa, kp_per_m=params.kp_per_m,
-                kdp_per_Pa=params.kdp_per_Pa, piston_area_m2=params.piston_area_m2,
-                fluid_volume_m3=lin.vf_m3, bulk_modulus_Pa=lin.beta_e_Pa, mass_kg=params.pan_mass_kg,
-                damping_N_s_m=params.friction_N_s_m, tire_N_per_m=kt)
+    args = eq4_parameters(params, kt, load)
+    del args["ti_s"]  # the printed Ti = 1 s by default; tests pass their own
+    return args
 
 
 def _random_args(rng):
@@ -57,12 +56,33 @@ def test_eq4_zero_follows_the_integral_time():
 
 
 @pytest.mark.parametrize("kt, load", [(0.9e6, 0.0), (1.8e6, 34.5e3)])
-def test_eq4_equals_the_hydraulics_package_coefficients(kt, load):
-    # hydraulics.eq4_coefficients computes the same printed coefficients from ActuatorParams.
-    num, den = eq4_coefficients(DEFAULT, kt, load)
-    tf = eq4_transfer_function(**_eq4_args(DEFAULT, kt, load))
-    assert np.allclose(np.ravel(tf.num[0][0]), num, rtol=1e-12, atol=0)
-    assert np.allclose(np.ravel(tf.den[0][0]), den, rtol=1e-12, atol=0)
+def test_eq4_transfer_function_wraps_the_one_formula(kt, load):
+    # eq4_transfer_function is control.tf of eq4_coefficients_from (no second copy), with unit
+    # static gain for the hydraulics package's parameters at any linearization point.
+    args = eq4_parameters(DEFAULT, kt, load)
+    num, den = eq4_coefficients_from(**args)
+    tf = eq4_transfer_function(**args)
+    assert np.array_equal(np.ravel(tf.num[0][0]), num)
+    assert np.array_equal(np.ravel(tf.den[0][0]), den)
+    assert float(np.real(tf.dcgain())) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_eq4_p_only_cancels_the_root_at_zero():
+    # ti_s = inf: b0 = a0 = 0; the transfer function drops the common root at s = 0 and keeps
+    # the P loop's static error against the tire spring: T_a(0) = b1 / a1 = K / (K + Kc' kt / Ap^2).
+    args = _eq4_args()
+    tf = eq4_transfer_function(**args, ti_s=math.inf)
+    assert len(tf.poles()) == 3 and tf.zeros().size == 0
+    k = args["ksv"] * args["kq_m3_s"] * args["kp_per_m"] / args["piston_area_m2"]
+    kc = args["kc_m3_s_Pa"] + args["kdp_per_Pa"] * args["ksv"] * args["kq_m3_s"]
+    expected = k / (k + kc * args["tire_N_per_m"] / args["piston_area_m2"] ** 2)
+    assert float(np.real(tf.dcgain())) == pytest.approx(expected, rel=1e-12)
+
+
+def test_eq4_accepts_a_zero_tire_stiffness():
+    # One rule for kt (eq4_coefficients_from): >= 0; a pan without a tire is still eq. 4.
+    tf = eq4_transfer_function(**{**_eq4_args(), "tire_N_per_m": 0.0})
+    assert float(np.real(tf.dcgain())) == pytest.approx(1.0, rel=1e-12)
 
 
 def test_eq4_coefficients_by_hand():
@@ -80,7 +100,7 @@ def test_eq4_coefficients_by_hand():
     assert np.allclose(np.ravel(tf.den[0][0]), den, rtol=1e-14)
 
 
-@pytest.mark.parametrize("name, value", [("mass_kg", -1.0), ("tire_N_per_m", 0.0), ("kc_m3_s_Pa", -1e-12),
+@pytest.mark.parametrize("name, value", [("mass_kg", -1.0), ("tire_N_per_m", -1.0), ("kc_m3_s_Pa", -1e-12),
                                          ("bulk_modulus_Pa", math.nan), ("kq_m3_s", math.inf),
                                          ("ksv", True)])
 def test_eq4_refuses_invalid_parameters(name, value):

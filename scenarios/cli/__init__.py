@@ -1,5 +1,1 @@
-"""The rigsim command line (console command ``rigsim``)."""
-
-from scenarios.cli.main import main
-
-__all__ = ["main"]
+"""The rigsim command line: ``main`` in :mod:`scenarios.cli.main` (console command ``rigsim``)."""

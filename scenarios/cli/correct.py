@@ -172,7 +172,7 @@ def cmd_correct(args) -> int:
     from correction.actuator_id import identify_actuator  # imports correction.identify lazily
     from correction.apply import correct
     from correction.filters import design_correction
-    from scenarios.core.results import atomic_write_text
+    from scenarios.core.files import atomic_write_text
 
     if (args.actuator is None) == (args.identify is None):
         raise _error("give exactly one of --actuator ACT.toml and --identify DRIVE_COL,DISP_COL")

@@ -43,12 +43,12 @@ def _progress_bar(label: str, quiet: bool):
 def _cmd_run(args) -> int:
     from scenarios.core.config import load_scenario
     from scenarios.core.results import write_run
-    from scenarios.core.runner import run
+    from scenarios.core.run import run
 
     scenario = load_scenario(args.scenario)
     pose_rate = None
     if args.rrd:
-        from scenarios.review.recording import DEFAULT_POSE_RATE_HZ
+        from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
 
         pose_rate = DEFAULT_POSE_RATE_HZ
     with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
@@ -69,7 +69,8 @@ def _cmd_run(args) -> int:
 def _cmd_model(args) -> int:
     import mujoco
 
-    from mjcf.build import CORNERS, TruckVariant, build_model
+    from mjcf.build import TruckVariant, build_model
+    from mjcf.names import CORNERS
     from mjcf.physics import modal_analysis, static_equilibrium, tire_forces
 
     variant = TruckVariant(payload_kg=args.payload_kg)
@@ -100,9 +101,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
-    from scenarios import correct_cmd
+    from scenarios.cli import correct as correct_cmd
     from scenarios.studies.iterate import command as iterate_cmd
-    from scenarios import paper
+    from scenarios.studies.paper import command as paper
     from scenarios.studies.sweep import command as sweep
     from scenarios.studies.validate import compute as validate
 
@@ -121,7 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``rigsim`` console command; returns the exit code."""
     from scenarios.core.config import ScenarioError
-    from scenarios.core.runner import SimulationError
+    from scenarios.core.watch import SimulationError
 
     args = build_parser().parse_args(argv)
     try:

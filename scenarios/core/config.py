@@ -25,15 +25,13 @@ Example::
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import math
 import pathlib
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
+from correction.tomlfile import check_keys, number, read_toml
 from mjcf.build import TruckVariant
 
 __all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios"]
@@ -43,24 +41,8 @@ class ScenarioError(ValueError):
     """A scenario that cannot be run as written; the message is one sentence naming the field."""
 
 
-def _closest(key: str, valid) -> str:
-    match = difflib.get_close_matches(key, list(valid), n=1, cutoff=0.5)
-    if match:
-        return f"; did you mean {match[0]!r}?"
-    return f"; valid keys are {', '.join(sorted(valid))}"
-
-
 def _number(where: str, value: Any, *, lo: float | None = None, hi: float | None = None, lo_open=False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ScenarioError(f"{where} must be a number, got {value!r}")
-    v = float(value)
-    if not math.isfinite(v):
-        raise ScenarioError(f"{where} must be finite, got {value!r}")
-    if lo is not None and (v < lo or (lo_open and v == lo)):
-        raise ScenarioError(f"{where} must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
-    if hi is not None and v > hi:
-        raise ScenarioError(f"{where} must be <= {hi:g}, got {value!r}")
-    return v
+    return number(where, value, lo=lo, hi=hi, lo_open=lo_open, error=ScenarioError)
 
 
 @dataclass(frozen=True)
@@ -153,10 +135,7 @@ _TRACKS = ("identical", "independent", "coherent")
 
 
 def _check_keys(table: Mapping, valid, where: str) -> None:
-    for key in table:
-        if key not in valid:
-            prefix = f"{where}." if where else ""
-            raise ScenarioError(f"unknown key {prefix}{key}{_closest(key, valid)}")
+    check_keys(table, valid, f"{where}." if where else "", error=ScenarioError)
 
 
 def _road(table: Any) -> RoadConfig:
@@ -272,18 +251,7 @@ def load_scenario(path) -> Scenario:
         Missing file, malformed TOML, unknown key, wrong type or value; one sentence.
     """
     p = pathlib.Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(f"scenario file {str(p)!r} does not exist") from None
-    except IsADirectoryError:
-        raise ScenarioError(f"scenario path {str(p)!r} is a directory, not a TOML file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"cannot read scenario file {str(p)!r}: {exc}") from None
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"scenario file {str(p)!r} is not valid TOML: {exc}") from None
+    doc = read_toml(p, "scenario file", error=ScenarioError)
     try:
         return parse_scenario(doc, source=p.resolve())
     except ScenarioError as exc:

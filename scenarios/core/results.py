@@ -7,19 +7,17 @@ what its arrays are).
 
 from __future__ import annotations
 
-import json
-import os
 import pathlib
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from correction.dlc import force_statistics
-from mjcf.build import CORNERS
+from scenarios.core.files import atomic_write_bytes, atomic_write_text, to_json
+from mjcf.names import CORNERS
 
-__all__ = ["RunResult", "atomic_write_bytes", "atomic_write_text", "write_run"]
+__all__ = ["RunResult", "write_run", "SIGNALS"]
 
 #: Units and descriptions of the per-wheel signals a run may carry.
 SIGNALS: dict[str, tuple[str, str]] = {
@@ -44,7 +42,7 @@ class RunResult:
     t_s : numpy.ndarray, s
         Sample times, shape (N,), from 0 (the end of the lead-in).
     signals : Mapping[str, numpy.ndarray]
-        Per-wheel signals, each (N, 4) in :data:`mjcf.build.CORNERS` order; names and
+        Per-wheel signals, each (N, 4) in :data:`mjcf.names.CORNERS` order; names and
         units in :data:`SIGNALS`.
     vehicle_mass_kg : float, kg
         Mass of the truck (chassis, payload and axles; pans excluded).
@@ -112,31 +110,6 @@ class RunResult:
         return names, np.hstack(blocks)
 
 
-def atomic_write_bytes(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename)."""
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600; results are meant to be shared
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
-def atomic_write_text(path, text: str) -> None:
-    """Write UTF-8 ``text`` to ``path`` atomically."""
-    atomic_write_bytes(path, text.encode("utf-8"))
-
-
 def _csv_bytes(names: list[str], matrix: np.ndarray) -> bytes:
     import io
 
@@ -157,7 +130,7 @@ def write_run(result: RunResult, out_dir) -> dict[str, pathlib.Path]:
     summary = result.summary()
     summary["timeseries"] = {"file": "timeseries.csv", "columns": names, "rate_hz": summary["rate_hz"]}
     csv = _csv_bytes(names, matrix)
-    js = json.dumps(summary, indent=2, sort_keys=False) + "\n"
+    js = to_json(summary)
     paths = {"timeseries": out / "timeseries.csv", "result": out / "result.json"}
     atomic_write_bytes(paths["timeseries"], csv)
     atomic_write_text(paths["result"], js)

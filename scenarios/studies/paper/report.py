@@ -7,9 +7,9 @@ import pathlib
 
 import numpy as np
 
-from scenarios.core.results import atomic_write_bytes, atomic_write_text
+from scenarios.core.files import atomic_write_bytes
 
-__all__ = ["write_report"]
+__all__ = ["render_report", "write_files"]
 
 _WINDOW_S = 3.0  # s of trace shown in the Figure 8 analogue
 
@@ -136,22 +136,20 @@ def _report_md(rows, table: str, figures: list[str]) -> str:
     return "\n".join(lines)
 
 
-def write_report(out, evaluations: dict, rows: list[dict], table: str) -> list[pathlib.Path]:
-    """Write the Figure 8 analogues, the Table 2 bars and ``report.md`` into ``out``.
-
-    Everything is rendered in memory first; each file is then written atomically.
-    """
-    out = pathlib.Path(out)
-    files = {}
-    for name, (road, _rig, ev) in evaluations.items():
-        files[f"figure8_{name}.png"] = _figure8(name, road, ev)
+def render_report(result) -> dict[str, bytes]:
+    """The Figure 8 analogues, the Table 2 bars and ``report.md`` of a
+    :class:`scenarios.studies.paper.compute.PaperResult`, rendered in memory: ``{file name: bytes}``."""
+    rows = result.rows()
+    files = {f"figure8_{c.name}.png": _figure8(c.name, c.road, c.score) for c in result.cases}
     files["table2.png"] = _bars(rows)
     figures = [f for f in files if f.startswith("figure8_")]
-    md = _report_md(rows, table, figures)
-    written = []
+    files["report.md"] = _report_md(rows, result.table(), figures).encode("utf-8")
+    return files
+
+
+def write_files(out, files: dict[str, bytes]) -> list[pathlib.Path]:
+    """Write rendered files into ``out``, each atomically."""
+    out = pathlib.Path(out)
     for fname, data in files.items():
         atomic_write_bytes(out / fname, data)
-        written.append(out / fname)
-    atomic_write_text(out / "report.md", md)
-    written.append(out / "report.md")
-    return written
+    return [out / f for f in files]

@@ -1,0 +1,165 @@
+"""The paper's cases: each run on the road and on the rig, the rig force corrected and scored.
+
+The main job of the project. The three shipped scenarios (``scenarios/data/paper/*.toml``) run
+in road and rig mode on all cores (:mod:`scenarios.core.pool`); each pair is scored by
+:func:`scenarios.studies.scoring.score_pair` with the paper's method and this project's; the
+result (:class:`PaperResult`) holds everything ``paper.json``, the terminal table, the report
+and the recording need.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from scenarios.core.config import Scenario, load_scenario
+from scenarios.core.pool import run_jobs
+from scenarios.core.results import RunResult
+from scenarios.core.rig import Rig
+from scenarios.core.run import run
+from scenarios.studies.paper.table import PAPER_TABLE2
+from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, score_pair
+
+__all__ = ["PaperCase", "PaperResult", "run_cases", "run_paper", "ROW_KEYS"]
+
+#: paper.json's figures of a case (means over the wheels and per wheel) -> PairScore keys.
+ROW_KEYS = {
+    "dlc_road": "dlc_road",
+    "dlc_rig": "dlc_rig",
+    "dlc_corrected_paper": "dlc_corrected_paper",
+    "dlc_corrected": "dlc_corrected_best",
+    "dlc_road_lowpassed": "dlc_road_band_best",
+    "nrmse_corrected": "nrmse_corrected_best",
+    "dlc_road_lowpassed_paper": "dlc_road_band_paper",
+    "nrmse_corrected_paper": "nrmse_corrected_paper",
+}
+
+
+@dataclass(frozen=True)
+class PaperCase:
+    """One case: its road and rig runs and their score.
+
+    Attributes
+    ----------
+    scenario : Scenario
+    road, rig : RunResult
+    score : PairScore
+        The rig force measured (with noise) and corrected by both methods.
+    """
+
+    scenario: Scenario
+    road: RunResult
+    rig: RunResult
+    score: PairScore
+
+    @property
+    def name(self) -> str:
+        return self.scenario.name
+
+    def row(self) -> dict:
+        """paper.json's entry: DLC (1) and NRMSE (1) means over the wheels, per wheel, the
+        paper's values, the noise (N) and the seconds each method scored (s)."""
+        m, w = self.score.mean, self.score.wheels
+        row = {"case": self.name}
+        row.update({k: round(m[v], 6) for k, v in ROW_KEYS.items()})
+        row["wheels"] = {c: {k: round(wc[v], 6) for k, v in ROW_KEYS.items()} for c, wc in w.items()}
+        row["paper"] = dict(PAPER_TABLE2.get(self.name, {}))
+        row["noise_N"] = self.score.noise_N
+        row["analysed_s"] = {k: round(ms.scored_s, 3) for k, ms in self.score.methods.items()}
+        return row
+
+
+@dataclass(frozen=True)
+class PaperResult:
+    """The Table 2 analogue.
+
+    Attributes
+    ----------
+    cases : tuple of PaperCase
+        In the paper's order (medium 72 km/h, high 48 km/h, high 72 km/h).
+    noise_N : float, N
+        rms of the measurement noise added to the rig forces.
+    """
+
+    cases: tuple
+    noise_N: float
+
+    def rows(self) -> list[dict]:
+        return [c.row() for c in self.cases]
+
+    def to_dict(self) -> dict:
+        """Everything of ``paper.json``."""
+        return {
+            "cases": self.rows(),
+            "methods": {m.name: m.description for m in METHODS},
+            "note": ("means over the four wheels (per wheel under 'wheels'); the unfiltered road and rig DLC "
+                     "over the whole record, every corrected figure over the samples where that method's "
+                     "filters have settled ('analysed_s' per method); 'paper': Table 2 of the reference paper"),
+        }
+
+    def table(self) -> str:
+        """Table 2 analogue for the terminal: means over the four wheels, the paper's values in brackets."""
+        head = (f"{'case':28s} {'road':>15s} {'rig':>15s} {'corr. paper':>15s} {'corrected':>10s} "
+                f"{'road LP':>8s} {'NRMSE':>6s}")
+        lines = [head, "-" * len(head)]
+        for r in self.rows():
+            ref = r["paper"]
+            lines.append(
+                f"{r['case']:28s} {r['dlc_road']:7.4f} ({ref['road']:.4f}) {r['dlc_rig']:7.4f} ({ref['rig']:.4f}) "
+                f"{r['dlc_corrected_paper']:7.4f} ({ref['corrected']:.4f}) {r['dlc_corrected']:10.4f} "
+                f"{r['dlc_road_lowpassed']:8.4f} {r['nrmse_corrected']:6.3f}")
+        lines.append("DLC = std/mean of the wheel force, mean of the four wheels; (paper's Table 2). corr. paper: eq. 4 and")
+        lines.append("the paper's 16/24 Hz low-pass; corrected: T_a identified per wheel, 30 Hz low-pass; road LP: the road")
+        lines.append("force through the same low-pass; NRMSE = rms(corrected - road LP) / std(road LP).")
+        return "\n".join(lines)
+
+
+def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None) -> RunResult:
+    """Worker: load and run one scenario in one mode (in its own process)."""
+    scenario = load_scenario(path)
+    if duration_s is not None:
+        scenario = dataclasses.replace(scenario, duration_s=duration_s)
+    return run(scenario, mode, pose_rate_hz=pose_rate_hz)
+
+
+def run_cases(jobs: Sequence[tuple[str, str]], *, workers: int | None = None, duration_s: float | None = None,
+              pose_rate_hz: float | None = None, on_done: Callable[[RunResult], None] | None = None) -> list:
+    """Run ``(scenario_path, mode)`` jobs in worker processes; results in the order of ``jobs``.
+
+    ``duration_s`` (s) overrides every scenario's duration; ``on_done(result)`` as each finishes.
+    """
+    calls = [(_run_job, (str(p), m, duration_s, pose_rate_hz)) for p, m in jobs]
+    return run_jobs(calls, workers=workers, on_done=None if on_done is None else (lambda i, r: on_done(r)))
+
+
+def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float | None = None,
+              noise_N: float = NOISE_N, pose_rate_hz: float | None = None,
+              on_done: Callable[[RunResult], None] | None = None) -> PaperResult:
+    """Run the cases of ``paths`` on the road and on the rig, and score each pair.
+
+    Parameters
+    ----------
+    paths : sequence of path
+        Scenario files (validated here before anything runs).
+    workers : int, optional
+        Worker processes (default: all cores).
+    duration_s : float, s, optional
+        Overrides every case's duration.
+    noise_N : float, N
+        rms of the white measurement noise added to the rig force; seeded by the scenario's seed.
+    pose_rate_hz : float, Hz, optional
+        Also record body poses for a recording.
+    on_done : callable, optional
+        ``on_done(run_result)`` as each run finishes (progress).
+    """
+    scenarios = [load_scenario(p) for p in paths]
+    if duration_s is not None:
+        scenarios = [dataclasses.replace(s, duration_s=duration_s) for s in scenarios]
+    results = run_cases([(str(p), mode) for p in paths for mode in ("road", "rig")], workers=workers,
+                        duration_s=duration_s, pose_rate_hz=pose_rate_hz, on_done=on_done)
+    cases = []
+    for scenario, road, rig in zip(scenarios, results[0::2], results[1::2]):
+        score = score_pair(road, rig, Rig(scenario), methods=METHODS, noise_N=noise_N, seed=scenario.seed)
+        cases.append(PaperCase(scenario=scenario, road=road, rig=rig, score=score))
+    return PaperResult(cases=tuple(cases), noise_N=float(noise_N))

@@ -1,0 +1,59 @@
+"""correction.dlc: the NRMSE against a reference force, on hand-worked examples.
+
+Over a whole number of periods a sampled unit sine has mean 0 and mean square exactly 1/2, so
+its population standard deviation is 1/sqrt(2). A copy shifted by a constant c has an error of
+RMS |c|, hence NRMSE = |c| / (1/sqrt(2)) = sqrt(2) |c|. A constant equal to the reference's mean
+has an error of RMS std(reference): NRMSE 1.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from correction.dlc import dlc, nrmse
+
+N = 400  # samples over exactly 4 periods
+
+
+def _sine():
+    t = np.arange(N) / N
+    return np.sin(2 * np.pi * 4 * t)
+
+
+def test_nrmse_of_a_sine_shifted_by_a_constant_is_sqrt2_times_the_shift():
+    ref = _sine()
+    assert float(nrmse(ref + 0.1, ref)) == pytest.approx(0.1 * math.sqrt(2), rel=1e-12)
+    assert float(nrmse(ref - 0.3, ref)) == pytest.approx(0.3 * math.sqrt(2), rel=1e-12)
+
+
+def test_nrmse_is_per_column_and_along_the_given_axis():
+    ref = np.column_stack([_sine(), 30e3 + 3e3 * _sine()])  # N: the static load is not in the denominator
+    x = ref + np.array([0.1, 600.0])
+    expected = [0.1 * math.sqrt(2), 600.0 / (3e3 / math.sqrt(2))]
+    np.testing.assert_allclose(nrmse(x, ref), expected, rtol=1e-12)
+    np.testing.assert_allclose(nrmse(x.T, ref.T, axis=1), expected, rtol=1e-12)
+
+
+def test_nrmse_is_zero_for_the_reference_and_one_for_its_mean():
+    ref = 30e3 + 3e3 * _sine()
+    assert float(nrmse(ref, ref)) == 0.0
+    assert float(nrmse(np.full(N, ref.mean()), ref)) == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("x, ref, match", [
+    (np.zeros(3), np.zeros(4), "same shape"),
+    ([1.0], [2.0], "at least two samples"),
+    ([1.0, np.nan], [1.0, 2.0], "NaN or infinite"),
+    ([1.0, 2.0], [5.0, 5.0], "constant"),
+])
+def test_nrmse_refuses_what_has_no_nrmse(x, ref, match):
+    with pytest.raises(ValueError, match=match):
+        nrmse(x, ref)
+
+
+def test_dlc_of_a_sine_on_a_static_load():
+    force = 30e3 + 3e3 * _sine()  # N
+    assert float(dlc(force)) == pytest.approx((3e3 / math.sqrt(2)) / 30e3, rel=1e-12)
