@@ -1,11 +1,11 @@
 """Cost of a rerun recording relative to the run it records, and the size of the file.
 
 A 60 s case of the paper (high roughness, 72 km/h, 3640 kg) is run in road mode and in rig
-mode with :func:`scenarios.runner.run`; their wall times are the reference. The recording
+mode with :func:`scenarios.core.run.run`; their wall times are the reference. The recording
 of the case (both runs, the causally corrected rig forces, the body poses at video rate) is
-then written with :func:`scenarios.recording.write_recording`, repeated, and the fastest
+then written with :func:`scenarios.review.recording.write_recording`, repeated, and the fastest
 write is kept. The poses come from a road-mode loop that mirrors the runner's with a
-:class:`scenarios.recording.PoseRecorder` hooked in after every ``mj_step``; what the hook
+:class:`scenarios.core.poses.PoseRecorder` hooked in after every ``mj_step``; what the hook
 adds to a run is measured separately, as the cost of calling the recorder once per output
 sample (inside the runner's existing ``if record:`` block; the runner does nothing else for it).
 
@@ -39,34 +39,23 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from correction.apply import correct  # noqa: E402
 from correction.filters import reference_filter  # noqa: E402
-from mjcf.build import build_model  # noqa: E402
-from mjcf.physics import RigIndex, static_equilibrium  # noqa: E402
-from scenarios.config import parse_scenario  # noqa: E402
-from scenarios.recording import DEFAULT_POSE_RATE_HZ, PoseRecorder, write_recording  # noqa: E402
-from scenarios.runner import output_schedule, prepare_drive, run  # noqa: E402
+from scenarios.core.config import parse_scenario  # noqa: E402
+from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, PoseRecorder  # noqa: E402
+from scenarios.review.recording import write_recording  # noqa: E402
+from scenarios.core.rig import Rig  # noqa: E402
+from scenarios.core.run import run  # noqa: E402
+from scenarios.core.watch import output_schedule  # noqa: E402
 
 TARGET_RATIO = 0.05
 
 
 def road_poses(scenario, rate_hz: float = DEFAULT_POSE_RATE_HZ):
-    """Body poses of a road-mode run: the runner's road loop with the pose hook in its
-    ``if record:`` block (called at the output rate)."""
-    model = build_model(scenario.vehicle)
-    drive = prepare_drive(scenario, model)
-    data = mujoco.MjData(model)
-    idx = RigIndex.of(model)
-    static_equilibrium(model, data, pan_z_m=drive.z_m[0])
-    k0, decim, _ = output_schedule(drive, model.opt.timestep, scenario.output_rate_hz)
-    recorder = PoseRecorder(model, drive.t_s, rate_hz, every=decim)
-    z, vz = drive.z_m, drive.v_mps
-    for k in range(drive.t_s.size):
-        data.qpos[idx.pan_qpos] = z[k]
-        data.qvel[idx.pan_dof] = vz[k]
-        record = k >= k0 and (k - k0) % decim == 0
-        mujoco.mj_step(model, data)
-        if record:
-            recorder(data, k)
-    return recorder.track(), model, drive, (k0, decim)
+    """Body poses of a road-mode run (the one Rig's road loop with its pose hook)."""
+    rig = Rig(scenario, hydraulic=False)
+    drive = rig.road_drive()
+    rec = rig.run(drive, rate_hz=scenario.output_rate_hz, pose_rate_hz=rate_hz)
+    k0, decim, _ = output_schedule(drive.t_s, rig.dt_s, scenario.output_rate_hz)
+    return rec.poses, rig.model, drive, (k0, decim)
 
 
 def hook_cost_s(model, drive, data, schedule, rate_hz: float = DEFAULT_POSE_RATE_HZ) -> float:

@@ -1,14 +1,13 @@
-"""Tests of scenarios.roads; each states where its expected value comes from."""
+"""Tests of the road and profile modules (scenarios/core/roads.py, profiles.py) and of sampling a
+profile as drives (scenarios/core/drive.py); each states where its expected value comes from."""
 
 import numpy as np
 import pytest
 from scipy import signal
 
-from scenarios.roads import (
-    ISO_CLASSES, ROUGHNESS_WORDS, Profile, ProfileError, RoadSpec, WheelDrive,
-    generate_profile, highpass, iso8608_psd, read_profile_csv, sample_wheels,
-    welch_psd_spatial, write_profile_csv,
-)
+from scenarios.core.drive import Drive, sample_wheels
+from scenarios.core.profiles import Profile, ProfileError, highpass, read_profile_csv, write_profile_csv
+from scenarios.core.roads import ISO_CLASSES, ROUGHNESS_WORDS, RoadSpec, generate_profile, iso8608_psd, welch_psd_spatial
 
 
 def _octave_bands(lo=0.05, hi=5.0):
@@ -230,7 +229,7 @@ def test_check_stroke_names_corner_and_time():
     z = np.zeros((101, 4))
     z[25, 2] = -0.080
     z[60, 0] = 0.070
-    d = WheelDrive(t, z, np.zeros_like(z))
+    d = Drive(t, z, np.zeros_like(z))
     d.check_stroke(0.081)
     with pytest.raises(ValueError, match=r"drive rl reaches -80.0 mm at t = 0.250 s, 4.0 mm "
                                          r"beyond the \+-76.0 mm stroke"):
@@ -241,7 +240,7 @@ def test_envelope_is_a_moving_average_with_sinc_response():
     """Reference: a moving average of length L passes a sine of wavelength lambda with gain
     sin(pi L / lambda) / (pi L / lambda) (the Fourier transform of a box); L = 0.25 m is the
     IRI's tire model (Sayers 1995)."""
-    from scenarios.roads import envelope
+    from scenarios.core.profiles import envelope
 
     dx = 0.01
     x = np.arange(0, 200.0, dx)

@@ -68,7 +68,7 @@ class RoadConfig:
         domain, identically for road and rig mode (a rig's stroke is 15.2 cm).
     envelope_length_m : float, m
         Tire enveloping: moving average of the profile over this length before anything else
-        (0.25 m, the IRI's tire model; 0 turns it off). See :func:`scenarios.core.roads.envelope`.
+        (0.25 m, the IRI's tire model; 0 turns it off). See :func:`scenarios.core.profiles.envelope`.
     n_min_cyc_per_m, n_max_cyc_per_m : float, cycle/m
         Spatial band of a synthesized profile (ISO 8608 roughness or gd_n0_m3).
     """

@@ -40,7 +40,7 @@ from hydraulics.params import GRAVITY_M_S2
 from scenarios.core.config import ScenarioError
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
-           "PairScore", "score_pair", "identify_wheel_actuator", "measured_force"]
+           "PairScore", "score_pair", "SETTLING_TOLERANCE", "identify_wheel_actuator", "measured_force"]
 
 #: Default rms of the white measurement noise added to the rig's wheel forces, N. A strain-gauge
 #: load cell rated for the 156 kN actuator force resolves ~0.05 % of its range (~80 N);
@@ -49,6 +49,10 @@ NOISE_N = 100.0
 
 #: Fewer settled seconds than this cannot give a meaningful DLC, s.
 MIN_SCORED_S = 0.25
+
+#: Relative tolerance of the filters' transients: samples where a filter's start-up (and, zero-phase,
+#: end) transient still exceeds this fraction of a step are not scored (the correction's default).
+SETTLING_TOLERANCE = 1e-3
 
 #: Orders (numerator, denominator) of the rational fit of the identified T_a(s): eq. 4 has one
 #: zero and four poles; the spool dynamics (2nd order) and the truck's loading need more.
@@ -260,7 +264,7 @@ def _actuator(method: Method, rig_model, rig, force_N: np.ndarray, i: int, fs: f
 
 
 def score_pair(road, rig, rig_model, *, methods=METHODS, noise_N: float = NOISE_N, seed: int = 0,
-               settling_tolerance: float = 1e-2) -> PairScore:
+               settling_tolerance: float = SETTLING_TOLERANCE) -> PairScore:
     """Correct ``rig``'s wheel forces by each method and compare them with ``road``'s.
 
     Parameters

@@ -1,4 +1,4 @@
-"""The whole output-correction chain on the multibody truck (scenarios/evaluation.py).
+"""The whole output-correction chain on the multibody truck and its one scoring (scenarios/studies/scoring.py).
 
 Reference for the first test: for a linear time-invariant truck T_t and the SAME actuator
 T_a under every wheel, F_rig = T_t (T_a x_p) = T_a (T_t x_p) = T_a F_road, so correcting
@@ -19,13 +19,14 @@ import pytest
 import scipy.signal
 
 from correction.apply import band_limit, correct
-from correction.filters import design_correction
+from correction.filters import design_correction, reference_filter
 from correction.transfer import apply_transfer_function
 from mjcf.build import TruckVariant
-from scenarios.config import parse_scenario
-from scenarios.evaluation import evaluate, identify_wheel_actuator
-from scenarios.rig import actuator_params
-from scenarios.runner import Drive, run
+from scenarios.core.config import parse_scenario
+from scenarios.core.rig import Rig, actuator_params
+from scenarios.studies.scoring import BEST, METHODS, PAPER, identify_wheel_actuator, score_pair
+from scenarios.core.drive import Drive
+from scenarios.core.run import run
 
 DOC = {
     "name": "eval",
@@ -42,9 +43,10 @@ def test_eq4_rig_corrected_with_eq4_and_the_papers_filter_gives_the_road_force()
     doc = dict(DOC, road={"gd_n0_m3": 1e-6})
     scenario = parse_scenario(doc)
     params = actuator_params(scenario)
-    from hydraulics.linearization import eq4_coefficients
+    from correction.eq4 import eq4_coefficients_from
+    from hydraulics.linearization import eq4_parameters
 
-    num, den = eq4_coefficients(params, 1.2e6, 25e3)
+    num, den = eq4_coefficients_from(**eq4_parameters(params, 1.2e6, 25e3))
 
     def through_ta(drive: Drive) -> Drive:
         # T_a applied with scipy (first-order hold: exact for the piecewise-linear drive; a
@@ -96,12 +98,11 @@ def test_identified_actuator_matches_the_rig(road_rig):
         assert np.sqrt(np.mean((pred[k:] - y[k:]) ** 2)) / y[k:].std() < 0.05
 
 
-def test_evaluation_best_method_restores_road_dlc_and_noise_is_seeded(road_rig):
+def test_best_method_restores_road_dlc_and_noise_is_seeded(road_rig):
     s, road, rig = road_rig
-    params = actuator_params(s)
-    kt = [0.9e6, 0.9e6, 1.8e6, 1.8e6]  # mjcf/truck_rig.xml
-    a = evaluate(road, rig, params=params, tire_N_per_m=kt, noise_N=100.0, seed=5)
-    b = evaluate(road, rig, params=params, tire_N_per_m=kt, noise_N=100.0, seed=5)
+    rig_model = Rig(s)
+    a = score_pair(road, rig, rig_model, noise_N=100.0, seed=5)
+    b = score_pair(road, rig, rig_model, noise_N=100.0, seed=5)
     assert np.array_equal(a.rig_N, b.rig_N)
     # The noise is there, at the stated level (reference: its definition).
     noise = a.rig_N - rig.signals["tire_force_N"]
@@ -112,10 +113,53 @@ def test_evaluation_best_method_restores_road_dlc_and_noise_is_seeded(road_rig):
     # better than the raw rig on the time history.
     assert m["dlc_rig"] < 0.9 * m["dlc_road"]
     assert m["dlc_corrected_best"] == pytest.approx(m["dlc_road"], rel=0.03)
-    rig_err = np.sqrt(np.mean((a.rig_N[a.settled] - a.road_lowpassed_N["best"][a.settled]) ** 2))
-    cor_err = np.sqrt(np.mean((a.corrected_N["best"][a.settled] - a.road_lowpassed_N["best"][a.settled]) ** 2))
+    best = a.methods["best"]
+    ok = best.settled
+    rig_err = np.sqrt(np.mean((a.rig_N[ok] - best.road_band_N[ok]) ** 2))
+    cor_err = np.sqrt(np.mean((best.corrected_N[ok] - best.road_band_N[ok]) ** 2))
     assert cor_err < 0.5 * rig_err
     # The paper's low-pass removes real dynamic load: its corrected DLC stays well below the
     # road's but close to the road force through the same low-pass.
     assert m["dlc_corrected_paper"] < 0.9 * m["dlc_road"]
-    assert m["dlc_corrected_paper"] == pytest.approx(m["dlc_road_lowpassed_paper"], rel=0.06)
+    assert m["dlc_corrected_paper"] == pytest.approx(m["dlc_road_band_paper"], rel=0.06)
+
+
+def test_each_method_is_scored_on_exactly_its_own_settled_samples(road_rig):
+    """The scored samples of a method are those outside every transient of its own filters (the
+    four corrections and the band-limit reference) and nothing else: re-derived here from the
+    filters themselves; a method's figures do not depend on which other methods are scored."""
+    s, road, rig = road_rig
+    rig_model = Rig(s)
+    both = score_pair(road, rig, rig_model, methods=METHODS, noise_N=100.0, seed=2)
+    alone = score_pair(road, rig, rig_model, methods=(BEST,), noise_N=100.0, seed=2)
+    fs, n = road.rate_hz, road.t_s.size
+    for m in METHODS:
+        ms = both.methods[m.name]
+        expected = np.ones(n, dtype=bool)
+        for ta in ms.actuators:
+            expected &= design_correction(ta, fs, m.lowpass).transient_mask(n, m.mode)
+        from correction.filters import reference_filter
+
+        expected &= reference_filter(fs, m.lowpass).transient_mask(n, m.mode)
+        assert np.array_equal(ms.settled, expected), m.name
+        assert 0 < ms.settled.sum() < n  # each method loses some samples, keeps most
+    for key, value in alone.methods["best"].figures.items():
+        assert np.array_equal(value, both.methods["best"].figures[key]), key
+
+
+def test_papers_method_uses_eq4_at_the_static_actuator_load(road_rig):
+    """eq. 4 is linearized at each wheel's static actuator load: the mean measured tire force
+    plus the pan's weight (the pan's free-body balance at rest), with the rig's pan mass."""
+    from correction.eq4 import eq4_coefficients_from
+    from hydraulics.linearization import eq4_parameters
+
+    s, road, rig = road_rig
+    rig_model = Rig(s)
+    score = score_pair(road, rig, rig_model, methods=(PAPER,), noise_N=0.0, seed=0)
+    f = np.asarray(rig.signals["tire_force_N"])
+    for i in range(4):
+        load = f[:, i].mean() + rig_model.pan_mass_kg * 9.81
+        num, den = eq4_coefficients_from(**eq4_parameters(rig_model.params, rig_model.tire_stiffness_N_per_m[i],
+                                                          load, mass_kg=rig_model.pan_mass_kg))
+        got = score.methods["paper"].actuators[i]
+        assert np.array_equal(got[0], num) and np.array_equal(got[1], den)
