@@ -39,7 +39,8 @@ from mujoco import rollout
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from hydraulics import ActuatorParams, equilibrium_activation  # noqa: E402
-from hydraulics.bridge import CORNERS, activation_slice, add_hydraulic_actuators, hydraulic_callbacks  # noqa: E402
+from hydraulics.bridge import activation_slice, add_hydraulic_actuators, hydraulic_callbacks  # noqa: E402
+from mjcf.names import CORNERS  # noqa: E402
 
 PARAMS = ActuatorParams()
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS

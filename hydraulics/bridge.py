@@ -35,10 +35,10 @@ from .model import derivatives_core, force_core
 from .packing import LAYOUT_TAG, NPACK, NSTATE, P_NPACK, P_NSTATE, P_TAG, pack, unpack
 from .params import GRAVITY_M_S2, ActuatorParams
 
-__all__ = ["CORNERS", "add_hydraulic_actuators", "single_pan_spec", "hydraulic_callbacks", "actuator_id",
+__all__ = ["add_hydraulic_actuators", "single_pan_spec", "hydraulic_callbacks", "actuator_id",
            "activation_slice", "set_activation", "params_from_model", "LayoutError"]
 
-# CORNERS (re-exported above) and every element name come from mjcf.names.
+# Every element name (and CORNERS) comes from mjcf.names.
 
 
 class LayoutError(RuntimeError):

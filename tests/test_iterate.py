@@ -15,9 +15,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.iterate import (FRF, IterationStabilityError, error_map_spectral_radius, identify_frf,
-                                inverse_frf, iterate_drive, nrmse)
-from hydraulics import ActuatorParams, eq4_coefficients
+from correction.convergence import IterationStabilityError, error_map_spectral_radius, nrmse
+from correction.frf import FRF, identify_frf, inverse_frf
+from correction.iterate import iterate_drive
+from correction.eq4 import eq4_coefficients_from
+from hydraulics import ActuatorParams, eq4_parameters
 
 FS = 500.0  # Hz: eq. 4's poles are at 0.15, 13.5 and 69 Hz; a 30 Hz band needs little more
 
@@ -26,7 +28,7 @@ def _discrete(num, den):
     return signal.bilinear(num, den, fs=FS)
 
 
-TA = _discrete(*eq4_coefficients(ActuatorParams(), 1.8e6, 30e3))
+TA = _discrete(*eq4_coefficients_from(**eq4_parameters(ActuatorParams(), 1.8e6, 30e3)))
 W_C = 2 * np.pi * 10.0
 TC = _discrete([0.1 * W_C ** 2], [1.0, 2 * 0.3 * W_C, W_C ** 2])
 NEIGHBOURS = {0: (1, 2), 1: (0, 3), 2: (0, 3), 3: (1, 2)}  # fl-fr, fl-rl, fr-rr, rl-rr
@@ -171,12 +173,12 @@ def test_drive_limit_stops_the_iteration(frf):
     assert res.status == "drive_limit" and res.runs == 1
 
 
-# --- the command line side (scenarios.iterate_cmd): bad input is refused before any run ---------
+# --- the scenarios side (scenarios.studies.iterate): bad input is refused before any run ----------------------
 
 def _parse(argv):
     import argparse
 
-    from scenarios import iterate_cmd
+    from scenarios.studies.iterate import command as iterate_cmd
 
     p = argparse.ArgumentParser()
     sub = p.add_subparsers(dest="command", required=True)
@@ -192,11 +194,13 @@ def _parse(argv):
     (["--tolerance", "2"], "--tolerance"),
     (["--duration-s", "3"], "--duration-s"),
     (["--coherence-min", "1.5"], "--coherence-min"),
+    (["--noise-N", "-1"], "--noise-N"),
+    (["--max-iterations", "51"], "--max-iterations"),
 ])
 def test_iterate_command_refuses_bad_options(tmp_path, extra, match):
-    from scenarios.config import ScenarioError
+    from scenarios.core.config import ScenarioError
 
-    args = _parse(["iterate", "scenarios/paper/high_72kmh_3640kg.toml", "--target", "force",
+    args = _parse(["iterate", "scenarios/data/paper/high_72kmh_3640kg.toml", "--target", "force",
                    "--out", str(tmp_path / "o"), *extra])
     with pytest.raises(ScenarioError, match=match):
         args.func(args)
@@ -204,7 +208,7 @@ def test_iterate_command_refuses_bad_options(tmp_path, extra, match):
 
 
 def test_iterate_command_refuses_a_missing_scenario(tmp_path):
-    from scenarios.config import ScenarioError
+    from scenarios.core.config import ScenarioError
 
     args = _parse(["iterate", str(tmp_path / "nope.toml"), "--target", "displacement", "--out", str(tmp_path / "o")])
     with pytest.raises(ScenarioError):
@@ -212,12 +216,41 @@ def test_iterate_command_refuses_a_missing_scenario(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def test_iterate_scenario_refuses_an_unknown_target():
-    from scenarios.config import ScenarioError, load_scenario
-    from scenarios.iterate_cmd import iterate_scenario
+@pytest.mark.parametrize("target, kw, match", [
+    ("velocity", {}, "target must be one of displacement, force"),
+    ("force", {"gain": 3.0}, "not stable even with an exact rig model"),
+    ("force", {"band_hz": (5.0, 1.0)}, "band_hz"),
+])
+def test_iterate_scenario_refuses_bad_options_before_building_the_rig(monkeypatch, target, kw, match):
+    # Expected: the ScenarioError comes before the rig is built or anything runs.
+    from scenarios.core.config import ScenarioError, load_scenario
+    from scenarios.studies.iterate import compute
 
-    with pytest.raises(ScenarioError, match="target must be one of displacement, force"):
-        iterate_scenario(load_scenario("scenarios/paper/high_72kmh_3640kg.toml"), "velocity")
+    def no_work(*a, **k):
+        raise AssertionError("a rig was built or run before the options were checked")
+
+    monkeypatch.setattr(compute, "Rig", no_work)
+    monkeypatch.setattr(compute, "run", no_work)
+    with pytest.raises(ScenarioError, match=match):
+        compute.iterate_scenario(load_scenario("scenarios/data/paper/high_72kmh_3640kg.toml"), target, **kw)
+
+
+def test_splice_drive_keeps_the_lead_in_and_interpolates_the_new_drive():
+    # A 1 s lead-in and 2 s record at 10 kHz; the new drive at 1 kHz is a ramp per corner, which
+    # linear interpolation reproduces exactly; the lead-in must be the base drive's, bit for bit.
+    from scenarios.core.drive import Drive
+    from scenarios.studies.iterate.compute import splice_drive
+
+    dt = 1e-4
+    t = np.arange(-10000, 20001) * dt
+    base = Drive.from_positions(t, 0.01 * np.sin(2 * np.pi * np.outer(t, [1.0, 2.0, 3.0, 4.0])))
+    t_out = t[10000::10]
+    slopes = np.array([1e-3, -2e-3, 3e-3, 0.0])  # m/s
+    out = splice_drive(base, t_out, np.outer(t_out, slopes))
+    assert np.array_equal(out.t_s, base.t_s)
+    assert np.array_equal(out.z_m[:10000], base.z_m[:10000])
+    assert np.allclose(out.z_m[10000:], np.outer(t[10000:], slopes), rtol=0, atol=1e-15)
+    assert np.allclose(out.v_mps[10001:-1], slopes, rtol=0, atol=1e-12)
 
 
 def test_rigsim_iterate_end_to_end_on_the_simulated_rig(tmp_path, capsys):
@@ -226,7 +259,7 @@ def test_rigsim_iterate_end_to_end_on_the_simulated_rig(tmp_path, capsys):
     exist. References: the road run's own DLC and the rig run with the original drive."""
     import json
 
-    from scenarios.cli import main
+    from scenarios.cli.main import main
 
     scenario = tmp_path / "s.toml"
     scenario.write_text('name = "it"\nspeed_kmh = 72.0\nduration_s = 12.0\nseed = 5\n[road]\nroughness = "C"\n')
@@ -240,4 +273,16 @@ def test_rigsim_iterate_end_to_end_on_the_simulated_rig(tmp_path, capsys):
     lost = comp["rig_original_drive"]["dlc"] - comp["road"]["dlc"]
     remaining = comp["rig_iterated_drive"]["dlc"] - comp["road"]["dlc"]
     assert lost < 0 and abs(remaining) < 0.3 * abs(lost)
-    assert (out / "drive.csv").stat().st_size > 0 and (out / "iteration.png").stat().st_size > 0
+    assert comp["rig_iterated_drive"]["rig_runs"] == 2 + doc["iteration"]["runs"] == 4
+    # Every row on the best output correction's settled samples (the shared scoring's).
+    best = doc["scoring"]["methods"]["best"]
+    assert doc["compared_samples"]["seconds"] == pytest.approx(best["scored_s"], abs=1e-9)
+    assert 0.5 <= doc["compared_samples"]["first_s"] < doc["compared_samples"]["last_s"] <= 12.0
+    assert comp["output_corrected"]["nrmse_vs_road_lowpassed"] == pytest.approx(
+        doc["scoring"]["mean"]["nrmse_corrected_best"], rel=1e-12)
+    drive = np.loadtxt(out / "drive.csv", delimiter=",", skiprows=1)
+    assert drive.shape == (12001, 5) and np.allclose(np.diff(drive[:, 0]), 1e-3)
+    assert np.abs(drive[:, 1:]).max() <= 0.076  # within DYNTRAC's half stroke
+    assert (out / "iteration.png").stat().st_size > 0
+    printed = capsys.readouterr().out
+    assert "rig_iterated_drive" in printed and "output_corrected" in printed

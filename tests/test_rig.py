@@ -16,7 +16,7 @@ import pytest
 
 from hydraulics.bridge import hydraulic_callbacks
 from hydraulics.params import STATE_NAMES
-from mjcf.build import CORNERS
+from mjcf.names import CORNERS
 from mjcf.physics import RigIndex
 from scenarios.cli.main import main
 from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario

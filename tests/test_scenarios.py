@@ -11,9 +11,9 @@ import pytest
 import mjcf
 import scenarios
 from mjcf.build import resource_path
-from scenarios.cli import main
-from scenarios.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
-from scenarios.runner import run
+from scenarios.cli.main import main
+from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
+from scenarios.core.run import run
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 
@@ -49,7 +49,7 @@ def test_packages_and_resources_belong_to_this_project():
     for name in ("truck_rig.xml", "scene.xml"):
         assert resource_path(name).resolve() == REPO / "mjcf" / name
     for p in paper_scenarios():
-        assert p.resolve().parent == REPO / "scenarios" / "paper"
+        assert p.resolve().parent == REPO / "scenarios" / "data" / "paper"
 
 
 # ---------------------------------------------------------------- scenario files

@@ -105,7 +105,7 @@ def build_parser() -> argparse.ArgumentParser:
     from scenarios.studies.iterate import command as iterate_cmd
     from scenarios.studies.paper import command as paper
     from scenarios.studies.sweep import command as sweep
-    from scenarios.studies.validate import compute as validate
+    from scenarios.studies.validate import command as validate
 
     paper.add_parser(sub)
     validate.add_parser(sub)

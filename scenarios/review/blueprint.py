@@ -24,6 +24,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from correction.dlc import force_statistics
+from mjcf.names import pan_body
 
 __all__ = ["COLORS", "PLOTS", "case_series", "log_case", "road_lines", "xyzw", "series_lines", "geom_shapes",
            "review_blueprint", "dlc_markdown", "parameters_markdown"]
@@ -213,7 +214,7 @@ def road_lines(result, track) -> tuple[dict[str, np.ndarray], np.ndarray] | None
     the speed or the pans are unknown.
     """
     speed = float(result.info.get("speed_kmh", 0.0)) / 3.6
-    pans = [f"pan_{c}" for c in result.corners]
+    pans = [pan_body(c) for c in result.corners]
     if speed <= 0 or not all(p in track.bodies for p in pans) or track.t_s.size == 0:
         return None
     fl, fr, rl, rr_ = (track.position_m[0, track.bodies.index(p)] for p in pans)
@@ -253,7 +254,7 @@ def review_blueprint(corners, plots=("tire_force", "displacement", "pressure", "
     Parameters
     ----------
     corners : sequence of str
-        Wheel names, in :data:`mjcf.build.CORNERS` order (two per axle, left first).
+        Wheel names, in :data:`mjcf.names.CORNERS` order (two per axle, left first).
     plots : sequence of str
         The per-wheel plots ``/rig/<corner>/<plot>``, one tab each, the first one shown.
     """

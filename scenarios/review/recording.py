@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from mjcf.build import CORNERS
+from mjcf.names import CORNERS, pan_body
 from scenarios.core.files import atomic_write_bytes
 from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, PoseTrack, drawn_bodies, model_geoms
 from scenarios.core.results import RunResult
@@ -70,8 +70,8 @@ def rest_track(result: RunResult, rate_hz: float = DEFAULT_POSE_RATE_HZ) -> Pose
     quat = np.repeat(data.xquat[ids][None], t.size, axis=0)
     pan = np.asarray(result.signals["pan_m"])[::step]
     for i, c in enumerate(result.corners):
-        if f"pan_{c}" in names:
-            pos[:, names.index(f"pan_{c}"), 2] += pan[:, i]
+        if pan_body(c) in names:
+            pos[:, names.index(pan_body(c)), 2] += pan[:, i]
     return PoseTrack(t, names, pos, quat, geoms)
 
 

@@ -1,146 +1,23 @@
-"""Figures and ``report.md`` of ``rigsim validate`` (matplotlib Agg), written atomically.
+"""``report.md`` of ``rigsim validate``, the lines the command prints, and writing the folder.
 
-Split from :mod:`scenarios.studies.validate.compute`, which computes the three routes, the steps and Table 1;
-this module only renders their results.
+:func:`write_report` renders the figures (:mod:`scenarios.studies.validate.figures`) and
+``report.md`` in memory from a :class:`~scenarios.studies.validate.result.ValidateResult`,
+then writes every file atomically, ``validate.json`` (through
+:func:`scenarios.core.files.write_json`) last.
 """
 
 from __future__ import annotations
 
-import io
-import json
 import math
 import pathlib
 
-import numpy as np
+from mjcf.names import CORNERS
+from scenarios.core.files import atomic_write_bytes, write_json
+from scenarios.studies.validate.figures import render_figures
+from scenarios.studies.validate.result import ValidateResult
+from scenarios.studies.validate.settings import GOAL_FRF_DB, GOAL_FRF_DEG, GOAL_TABLE1_PCT
 
-from mjcf.build import CORNERS
-from scenarios.core.results import atomic_write_bytes, atomic_write_text
-from scenarios.studies.validate.compute import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, GOAL_FRF_DB, GOAL_FRF_DEG,
-                                GOAL_TABLE1_PCT, _err_db_deg, _freqresp)
-
-__all__ = ["summary_lines", "write_report"]
-
-
-def _phase_deg(h) -> np.ndarray:
-    """Phase in degrees, unwrapped along the finite values (NaN stays NaN)."""
-    h = np.asarray(h)
-    out = np.full(h.shape, np.nan)
-    ok = np.isfinite(h)
-    out[ok] = np.degrees(np.unwrap(np.angle(h[ok])))
-    return out
-
-
-def _png(fig) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    return buf.getvalue()
-
-
-def _plots(js: dict, arrays: dict) -> dict[str, bytes]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out = {}
-    fb, f3 = arrays["f_bode"], arrays["f3"]
-    for i, c in enumerate(CORNERS):
-        fig, ax = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
-        h2 = arrays["h2"][:, i, i]
-        h1 = arrays["h1"][c]
-        h3 = arrays["h3"][:, i, i]
-        good = arrays["coh3"][:, i] > COHERENCE_MIN
-        hf = _freqresp(arrays["fits"][i], fb)
-        for h, style, label in ((h1, "C0--", "route 1: eq. 4"), (h2, "k-", "route 2: linearized plant"),
-                                (hf, "C2-", "route 3: rational fit")):
-            ax[0].semilogx(fb, 20 * np.log10(np.abs(h)), style, label=label)
-            ax[1].semilogx(fb, _phase_deg(h), style)
-        ax[0].semilogx(f3, 20 * np.log10(np.abs(h3)), "C1.", ms=3, label="route 3: H1 estimate")
-        ax[1].semilogx(f3, _phase_deg(h3), "C1.", ms=3)
-        d1db, d1deg = _err_db_deg(h1, h2)
-        ax[2].semilogx(fb, d1db, "C0--", label="route 1 - route 2, dB")
-        ax[2].semilogx(fb, d1deg / 10, "C0:", label="route 1 - route 2, deg/10")
-        h2f3 = arrays["h2_at_f3"][:, i, i]
-        d3db, d3deg = _err_db_deg(h3, h2f3)
-        ax[2].semilogx(f3[good], d3db[good], "C1.", ms=3, label="route 3 (H1) - route 2, dB")
-        ax[2].semilogx(f3[good], d3deg[good] / 10, "C3.", ms=3, label="route 3 (H1) - route 2, deg/10")
-        for a in ax:
-            a.axvline(COMPARE_MAX_HZ, color="0.7", lw=0.8)
-            a.grid(True, which="both", lw=0.3)
-        ax[0].set_ylabel("|x_a / x_ref| (dB)")
-        ax[1].set_ylabel("phase (deg)")
-        ax[2].set_ylabel("difference")
-        ax[2].set_xlabel("frequency (Hz)")
-        ax[2].set_xlim(*BODE_RANGE_HZ)
-        ax[2].set_ylim(-6, 6)
-        ax[0].set_ylim(-16, 3)
-        ax[1].set_ylim(-240, 20)
-        ax[0].legend(fontsize=8, loc="lower left")
-        ax[2].legend(fontsize=7, loc="lower left", ncol=2)
-        fig.suptitle(f"T_a of wheel {c}: three routes (grey line: {COMPARE_MAX_HZ:g} Hz)")
-        fig.tight_layout()
-        out[f"bode_{c}.png"] = _png(fig)
-
-    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for i, c in enumerate(CORNERS):
-        ax[0].semilogx(f3, arrays["coh3"][:, i], label=c)
-    ax[0].axhline(COHERENCE_MIN, color="k", lw=0.8)
-    ax[0].set_ylabel("multiple coherence")
-    ax[0].set_ylim(0.8, 1.005)
-    ax[0].set_xlim(*BODE_RANGE_HZ)
-    ax[0].legend(fontsize=8)
-    for i, c in enumerate(CORNERS):
-        for j, c2 in enumerate(CORNERS):
-            if i != j:
-                ax[1].semilogx(fb, 20 * np.log10(np.abs(arrays["h2"][:, i, j]) + 1e-12), lw=0.8)
-    ax[1].set_ylabel("|x_a,i / x_ref,j|, i != j (dB)")
-    ax[1].set_title("cross-coupling between wheels, route 2 (one line per path)", fontsize=9)
-    ax[1].set_xlabel("frequency (Hz)")
-    ax[1].set_ylim(-80, 0)
-    for a in ax:
-        a.grid(True, which="both", lw=0.3)
-    fig.tight_layout()
-    out["coherence_coupling.png"] = _png(fig)
-
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4.5))
-    for a, key in zip(ax, ("small", "large")):
-        cur = arrays["steps"][key]
-        t = cur["t_s"]
-        for i, c in ((0, "fl"), (2, "rl")):
-            a.plot(t, 1e3 * cur["nonlinear"][:, i], "k-" if i == 0 else "k-.", label=f"nonlinear rig {c}")
-            a.plot(t, 1e3 * cur["route2"][:, i], "C3--", lw=1, label=f"route 2 {c}")
-            a.plot(t, 1e3 * cur["route1"][:, i], "C0:", lw=1.2, label=f"eq. 4 {c}")
-        a.set_xlim(0, 0.6)
-        a.set_xlabel("time (s)")
-        a.set_ylabel("pan displacement (mm)")
-        e = js["steps"][key]
-        a.set_title(f"{1e3 * e['step_m']:g} mm step: nonlinear vs route 2 max "
-                    f"{e['route2']['max_error_mm']:.3f} mm ({e['route2']['max_error_pct']:.2f} %)", fontsize=9)
-        a.grid(True, lw=0.3)
-    ax[0].legend(fontsize=7)
-    fig.tight_layout()
-    out["steps.png"] = _png(fig)
-
-    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    fc = arrays["f_cmp"]
-    for name, style in (("eq4", "C0--"), ("two_chamber_static_valve", "C1:"), ("plus_spool_dynamics", "C2-")):
-        h = arrays["budget"]["fl"][name]
-        db, deg = _err_db_deg(h, arrays["h2_cmp"][:, 0, 0])
-        ax[0].semilogx(fc, db, style, label=name)
-        ax[1].semilogx(fc, deg, style)
-    ax[0].set_ylabel("minus route 2 (dB)")
-    ax[1].set_ylabel("minus route 2 (deg)")
-    ax[1].set_xlabel("frequency (Hz)")
-    ax[0].legend(fontsize=8)
-    for a in ax:
-        a.grid(True, which="both", lw=0.3)
-    fig.suptitle("Where eq. 4 departs from the plant (wheel fl)")
-    fig.tight_layout()
-    out["departure_fl.png"] = _png(fig)
-    return out
+__all__ = ["events_text", "summary_lines", "write_report"]
 
 
 def _fmt(x, nd=4) -> str:
@@ -292,6 +169,13 @@ def _report_md(js: dict) -> str:
     dg = js["diagnostics_friction_off"]
     lines += [
         "",
+        "Hydraulic events (spool saturation, cavitation, over-pressure; samples at each record's rate): "
+        f"identification record {events_text(js['route3']['events'])}; 1 mm step "
+        f"{events_text(js['steps']['small']['events'])}; 1 cm step {events_text(js['steps']['large']['events'])}; "
+        f"Table 1 rig run {events_text(js['table1']['rig_events'])}.",
+    ]
+    lines += [
+        "",
         "## Diagnostic: the same without leaf-spring friction",
         "",
         f"{dg['what'][0].upper()}{dg['what'][1:]}.",
@@ -332,6 +216,17 @@ def _report_md(js: dict) -> str:
     return "\n".join(lines)
 
 
+def events_text(events) -> str:
+    """A run's hydraulic events ``{event: {corner: {"samples", "first_time_s"}}}`` in words."""
+    parts = []
+    for name, corners in events.items():
+        per = [f"{c} {e['samples']} samples from {e['first_time_s']:.3f} s" for c, e in corners.items()
+               if e.get("samples")]
+        if per:
+            parts.append(f"{name.replace('_', ' ')}: " + ", ".join(per))
+    return "; ".join(parts) if parts else "none"
+
+
 def _variant_spread(r1: dict) -> float:
     bws = [v["corners"][c]["bandwidth_hz"] for v in r1["variants"].values() for c in ("fl", "rl")]
     base = [r1["variants"]["static_mean"]["corners"][c]["bandwidth_hz"] for c in ("fl", "rl")]
@@ -350,8 +245,9 @@ def _roots_md(roots: list[dict]) -> str:
     return ", ".join(parts)
 
 
-def summary_lines(js: dict) -> list[str]:
+def summary_lines(result: ValidateResult) -> list[str]:
     """The key numbers of ``validate.json`` as ``key = value`` lines (what the command prints)."""
+    js = result.to_dict()
     out = []
     for k in ("step_max_error_small_mm", "step_max_error_small_pct", "step_max_error_large_mm",
               "step_max_error_large_pct", "step_max_error_small_pct_eq4", "step_max_error_large_pct_eq4"):
@@ -370,18 +266,15 @@ def summary_lines(js: dict) -> list[str]:
     return out
 
 
-def write_report(result: dict, out_dir) -> dict[str, pathlib.Path]:
+def write_report(result: ValidateResult, out_dir) -> dict[str, pathlib.Path]:
     """Render the PNGs and ``report.md`` in memory, then write every file atomically
-    (``validate.json`` last, so its presence means the folder is complete)."""
-    js, arrays = result["json"], result["arrays"]
+    (``validate.json`` last, so its presence means the folder is complete); returns file name -> path."""
     out = pathlib.Path(out_dir)
-    files: dict[str, bytes] = dict(_plots(js, arrays))
-    files["report.md"] = _report_md(js).encode("utf-8")
-    text = json.dumps(js, indent=2, allow_nan=True) + "\n"
+    files: dict[str, bytes] = dict(render_figures(result))
+    files["report.md"] = _report_md(result.to_dict()).encode("utf-8")
     paths = {}
     for name, data in files.items():
         atomic_write_bytes(out / name, data)
         paths[name] = out / name
-    atomic_write_text(out / "validate.json", text)
-    paths["validate.json"] = out / "validate.json"
+    paths["validate.json"] = write_json(out / "validate.json", result)
     return paths
