@@ -2,10 +2,10 @@
 
 ::
 
-    python benchmarks/sweep_throughput.py [--cases 6] [--duration-s 4] [--executor local|dask]
+    python benchmarks/sweep_throughput.py [--cases 6] [--duration-s 8] [--executor local|dask]
 
 Every case is the same scenario with another road seed (equal cost), run in road and rig mode
-and corrected (:func:`scenarios.sweep_eval.evaluate_case`). The workers are warmed up first
+and corrected (:func:`scenarios.studies.sweep.case.evaluate_case`). The workers are warmed up first
 (imports and the hydraulic kernels' compilation, a few seconds per process), so the figure is
 the steady throughput of a long sweep. Prints one JSON line with, for judging the speed-up on a
 shared machine, its load average and ``machine_speedup``: the speed-up of pure-Python CPU work on
@@ -25,8 +25,8 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from scenarios import sweep  # noqa: E402
-from scenarios.sweep_grid import parse_grid  # noqa: E402
+from scenarios.studies.sweep import command as sweep  # noqa: E402
+from scenarios.studies.sweep.grid import parse_grid  # noqa: E402
 
 TARGET_SPEEDUP = 1.9
 
@@ -87,7 +87,8 @@ def measure(kind: str, workers: int, cases: int, duration_s: float, tmp: pathlib
     with _executor(kind, workers) as ex:
         warm = _grid(workers, 0.5, tmp / "warm.toml")
         warm = type(warm)(name=warm.name, source=warm.source, axes=warm.axes, cases=warm.cases,
-                          settings=type(warm.settings)(settling_tolerance=0.2))
+                          settings=type(warm.settings)(actuator="eq4", lowpass="paper", correction_mode="causal",
+                                                        settling_tolerance=0.2))  # warm-up: imports, compilation
         sweep.run_sweep(warm, tmp / f"warm-{kind}-{workers}", ex, progress=False, plot=False)
         grid = _grid(cases, duration_s, tmp / "grid.toml")
         t0 = time.perf_counter()
@@ -101,7 +102,8 @@ def measure(kind: str, workers: int, cases: int, duration_s: float, tmp: pathlib
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", type=int, default=6, help="cases per measurement (default 6; even for 2 workers)")
-    ap.add_argument("--duration-s", type=float, default=4.0, help="record length of each case in s (default 4)")
+    ap.add_argument("--duration-s", type=float, default=8.0,
+                    help="record length of each case in s (default 8: the identified T_a needs ~8 s)")
     ap.add_argument("--executor", choices=("local", "dask"), default="local")
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="rigsim-sweep-bench-") as d:

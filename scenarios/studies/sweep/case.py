@@ -1,17 +1,10 @@
-"""One case of a sweep: road run, rig run, output correction and the row of scores.
+"""One case of a sweep: road run, rig run, and their score by the one scoring of the project.
 
-:func:`evaluate_case` is the whole per-case evaluation; :func:`evaluate_payload` is what a worker
-process runs (plain, picklable arguments in, a JSON-ready record out, errors caught and recorded).
-
-The correction (:func:`corrected_forces`): each wheel's rig force is filtered by ``T_a^-1 T_F``
-(:mod:`correction.filters`, :mod:`correction.apply`), ``T_a`` being the paper's eq. 4 from the
-scenario's actuator parameters (:func:`hydraulics.linearization.eq4_coefficients`), linearized at
-that wheel's static actuator load (mean tire force plus the pan's weight), with the wheel station's
-tire stiffness from the compiled truck (front: one tire, rear: the dual pair) and the rig's pan
-mass. The reference for the corrected force is the road force through the same band limit
-(:func:`correction.apply.band_limit`): a corrected force can at best equal the road force through
-``T_F``. Samples inside the correction's transients (both ends in zero-phase mode, the start in
-causal mode) are left out of every band-limited score.
+:func:`evaluate_case` runs a scenario on the road and on the rig and scores the pair with
+:func:`scenarios.studies.scoring.score_pair` (the scoring of ``rigsim paper`` too), by the one
+method the sweep's :class:`~scenarios.studies.sweep.settings.EvalSettings` name, with their
+measurement noise (seeded by the scenario's seed). :func:`evaluate_payload` is what a worker
+process runs: plain, picklable arguments in, a JSON-ready record out, errors caught and recorded.
 """
 
 from __future__ import annotations
@@ -19,16 +12,21 @@ from __future__ import annotations
 import math
 import pathlib
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["CorrectedForces", "corrected_forces", "evaluate_case", "evaluate_payload", "tire_stiffness",
-           "METRIC_COLUMNS", "EVENT_NAMES"]
+from scenarios.studies.sweep.settings import EvalSettings
+
+__all__ = ["CaseResult", "evaluate_case", "evaluate_payload", "METRIC_COLUMNS", "EVENT_NAMES"]
 
 #: Hydraulic events counted per case (output samples, summed over the four wheels).
 EVENT_NAMES = ("spool_saturation", "cavitation", "overpressure")
+
+#: The figures of one method (:attr:`scenarios.studies.scoring.MethodScore.figures`), by name.
+_FIGURES = ("dlc_corrected", "dlc_road_band", "dlc_rig_band", "nrmse_rig", "nrmse_corrected")
 
 #: The scores of one case, in the order of ``results.csv``.
 METRIC_COLUMNS = (
@@ -37,133 +35,93 @@ METRIC_COLUMNS = (
     *(f"{e}_samples" for e in EVENT_NAMES),
 )
 
-_MIN_SCORED_S = 0.25  # s; fewer settled seconds than this cannot give a meaningful DLC
-
 
 @dataclass(frozen=True)
-class CorrectedForces:
-    """The corrected rig forces and their reference, per wheel.
+class CaseResult:
+    """The scores of one case (means over the four wheels unless stated).
 
     Attributes
     ----------
-    corrected_N : numpy.ndarray, N, shape (n, 4)
-        Rig tire forces filtered by ``T_a^-1 T_F``.
-    road_band_N, rig_band_N : numpy.ndarray, N, shape (n, 4)
-        Road and rig tire forces through ``T_F`` alone (same mode).
-    settled : numpy.ndarray of bool, shape (n,)
-        Samples outside every filter's transients (the scored samples).
-    description : str
-        One line: low-pass, mode, linearization.
+    dlc_road : float, 1
+        DLC of the road-test tire force, whole record.
+    dlc_rig : float, 1
+        DLC of the measured rig force (with the measurement noise), whole record.
+    dlc_corrected, dlc_road_band, dlc_rig_band : float, 1
+        DLC of the corrected rig force, and of the road and measured rig forces through the
+        correction's band limit T_F, on the settled samples.
+    nrmse_rig, nrmse_corrected : float, 1
+        NRMSE of the band-limited rig force and of the corrected force against the
+        band-limited road force, on the settled samples.
+    scored_s : float, s
+        Settled (scored) time.
+    events : Mapping[str, int]
+        ``<event>_samples`` for each of :data:`EVENT_NAMES`: output samples of the rig run with
+        that hydraulic event, summed over the wheels.
+    wheels : Mapping[str, Mapping[str, float]]
+        Per corner, the DLCs and NRMSEs above (1).
+    event_detail : Mapping
+        The rig run's events per corner (samples, first time in s).
+    method : str
+        The scoring method's name (``best``, ``paper`` or ``custom``).
+    correction : str
+        The method in one line.
+    noise_N : float, N
+        rms of the measurement noise.
+    wall_time_s : float, s
+        Wall time of the two runs and the scoring.
     """
 
-    corrected_N: np.ndarray
-    road_band_N: np.ndarray
-    rig_band_N: np.ndarray
-    settled: np.ndarray
-    description: str
+    dlc_road: float
+    dlc_rig: float
+    dlc_corrected: float
+    dlc_road_band: float
+    dlc_rig_band: float
+    nrmse_rig: float
+    nrmse_corrected: float
+    scored_s: float
+    events: Mapping[str, int]
+    wheels: Mapping[str, Mapping[str, float]]
+    event_detail: Mapping
+    method: str
+    correction: str
+    noise_N: float
+    wall_time_s: float
+
+    @classmethod
+    def from_score(cls, pair, events: Mapping, wall_time_s: float) -> CaseResult:
+        """The result from a one-method :class:`~scenarios.studies.scoring.PairScore` and the
+        rig run's ``events``."""
+        (ms,) = pair.methods.values()
+        per = {"dlc_road": pair.dlc_road, "dlc_rig": pair.dlc_rig, **{k: ms.figures[k] for k in _FIGURES}}
+        counts = {f"{e}_samples": int(sum(int(v.get("samples", 0)) for v in (events.get(e) or {}).values()))
+                  for e in EVENT_NAMES}
+        return cls(**{k: float(np.mean(v)) for k, v in per.items()}, scored_s=float(ms.scored_s), events=counts,
+                   wheels={c: {k: float(v[i]) for k, v in per.items()} for i, c in enumerate(pair.corners)},
+                   event_detail=dict(events), method=ms.method.name, correction=ms.method.description,
+                   noise_N=float(pair.noise_N), wall_time_s=round(float(wall_time_s), 3))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The case file's ``result``: :data:`METRIC_COLUMNS` flat, then the details."""
+        row: dict[str, Any] = {k: self.events[k] if k in self.events else getattr(self, k) for k in METRIC_COLUMNS}
+        row.update(wheels={c: dict(v) for c, v in self.wheels.items()}, events=dict(self.event_detail),
+                   method=self.method, correction=self.correction, noise_N=self.noise_N,
+                   wall_time_s=self.wall_time_s)
+        return row
 
 
-def tire_stiffness(vehicle) -> np.ndarray:
-    """Tire stiffness (N/m) of each wheel station of the truck variant, in ``CORNERS`` order.
-
-    Read from the model as built (``biasprm[1] = -k`` of each ``tire_<corner>`` actuator), so it
-    is the value the simulation uses, overrides included.
-    """
-    from mjcf.build import CORNERS, build_spec
-
-    spec = build_spec(vehicle, scene=False)
-    return np.array([-float(spec.actuator(f"tire_{c}").biasprm[1]) for c in CORNERS])
-
-
-def corrected_forces(scenario, road, rig, *, lowpass: str = "regularized", correction_mode: str = "zerophase",
-                     settling_tolerance: float = 1e-2) -> CorrectedForces:
-    """Correct the rig forces of ``rig`` and band-limit the road forces of ``road``.
-
-    Parameters
-    ----------
-    scenario : Scenario
-        The case (actuator parameters, truck variant).
-    road, rig : RunResult
-        The road-mode and rig-mode runs of ``scenario`` (same time axis).
-    lowpass : {"regularized", "paper"}
-    correction_mode : {"zerophase", "causal"}
-    settling_tolerance : float, 1
-        Tolerance of the filters' transients (:func:`correction.filters.design_correction`).
-
-    Returns
-    -------
-    CorrectedForces
-    """
-    from correction.apply import band_limit, correct
-    from correction.filters import design_correction, reference_filter
-    from hydraulics.linearization import eq4_coefficients
-    from hydraulics.params import GRAVITY_M_S2
-    from scenarios.core.rig import actuator_params
-
-    params = actuator_params(scenario)
-    fs = float(scenario.output_rate_hz)
-    f_rig = np.asarray(rig.signals["tire_force_N"])
-    f_road = np.asarray(road.signals["tire_force_N"])
-    n = f_rig.shape[0]
-    kt = tire_stiffness(scenario.vehicle)
-    mp = scenario.vehicle.pan_mass_kg if scenario.vehicle.pan_mass_kg is not None else params.pan_mass_kg
-    corrected = np.empty_like(f_rig)
-    settled = np.ones(n, dtype=bool)
-    for i in range(f_rig.shape[1]):
-        load = float(np.mean(f_rig[:, i])) + mp * GRAVITY_M_S2  # static actuator load of this wheel
-        num, den = eq4_coefficients(params, float(kt[i]), load, mass_kg=mp)
-        filt = design_correction((num, den), fs, lowpass, settling_tolerance=settling_tolerance)
-        corrected[:, i] = correct(f_rig[:, i], filt, correction_mode)
-        settled &= filt.transient_mask(n, correction_mode)
-    ref = reference_filter(fs, lowpass, settling_tolerance=settling_tolerance)
-    settled &= ref.transient_mask(n, correction_mode)
-    return CorrectedForces(
-        corrected_N=corrected,
-        road_band_N=band_limit(f_road, fs, lowpass, correction_mode),
-        rig_band_N=band_limit(f_rig, fs, lowpass, correction_mode),
-        settled=settled,
-        description=f"T_a eq. 4 at the static load per wheel, low-pass {lowpass}, {correction_mode}",
-    )
-
-
-def _dlc(f: np.ndarray) -> np.ndarray:
-    from correction.dlc import dlc
-
-    return dlc(f, axis=0)
-
-
-def _nrmse(f: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    """RMS of ``f - ref`` over the standard deviation of ``ref`` (the dynamic load), per column."""
-    return np.sqrt(np.mean((f - ref) ** 2, axis=0)) / np.std(ref, axis=0)
-
-
-def _event_counts(events) -> dict[str, int]:
-    out = {}
-    for name in EVENT_NAMES:
-        per_corner = events.get(name, {}) or {}
-        out[f"{name}_samples"] = int(sum(int(v.get("samples", 0)) for v in per_corner.values()))
-    return out
-
-
-def evaluate_case(scenario, *, lowpass: str = "regularized", correction_mode: str = "zerophase",
-                  settling_tolerance: float = 1e-2) -> dict[str, Any]:
+def evaluate_case(scenario, settings: EvalSettings = EvalSettings()) -> CaseResult:
     """Run a scenario on the road and on the rig, correct the rig forces, and score them.
 
     Parameters
     ----------
     scenario : Scenario
-    lowpass : {"regularized", "paper"}
-        The correction's low-pass ``T_F`` (:mod:`correction.lowpass`).
-    correction_mode : {"zerophase", "causal"}
-    settling_tolerance : float, 1
-        Samples inside the filters' transients at this tolerance are not scored.
+    settings : EvalSettings
+        The method (actuator, low-pass, mode), the measurement noise (N rms) and the
+        settling tolerance; the defaults are the paper study's ``best`` method and noise.
 
     Returns
     -------
-    dict
-        :data:`METRIC_COLUMNS` (means over the four wheels; DLC and NRMSE dimensionless,
-        ``scored_s`` in s, event counts in output samples), ``wall_time_s`` (s), and ``wheels``:
-        per wheel the same DLC and NRMSE values.
+    CaseResult
 
     Raises
     ------
@@ -175,41 +133,16 @@ def evaluate_case(scenario, *, lowpass: str = "regularized", correction_mode: st
     ValueError
         The correction filter cannot be designed for this actuator (one sentence).
     """
-    from mjcf.build import CORNERS
-    from scenarios.core.config import ScenarioError
-    from scenarios.core.runner import run
+    from scenarios.core.rig import Rig
+    from scenarios.core.run import run
+    from scenarios.studies.scoring import score_pair
 
     wall0 = time.perf_counter()
     road = run(scenario, "road")
     rig = run(scenario, "rig")
-    cf = corrected_forces(scenario, road, rig, lowpass=lowpass, correction_mode=correction_mode,
-                          settling_tolerance=settling_tolerance)
-    m = cf.settled
-    scored_s = float(np.count_nonzero(m)) / float(scenario.output_rate_hz)
-    if scored_s < _MIN_SCORED_S:
-        lost = (m.size - np.count_nonzero(m)) / float(scenario.output_rate_hz)
-        raise ScenarioError(
-            f"duration_s = {scenario.duration_s:g} s leaves {scored_s:.2f} s to score after the correction's "
-            f"transients ({lost:.2f} s); use duration_s >= {lost + 1.0:.0f} s")
-    f_road = np.asarray(road.signals["tire_force_N"])
-    f_rig = np.asarray(rig.signals["tire_force_N"])
-    per = {
-        "dlc_road": _dlc(f_road),
-        "dlc_rig": _dlc(f_rig),
-        "dlc_corrected": _dlc(cf.corrected_N[m]),
-        "dlc_road_band": _dlc(cf.road_band_N[m]),
-        "dlc_rig_band": _dlc(cf.rig_band_N[m]),
-        "nrmse_rig": _nrmse(cf.rig_band_N[m], cf.road_band_N[m]),
-        "nrmse_corrected": _nrmse(cf.corrected_N[m], cf.road_band_N[m]),
-    }
-    row: dict[str, Any] = {k: float(np.mean(v)) for k, v in per.items()}
-    row["scored_s"] = scored_s
-    row.update(_event_counts(rig.events))
-    row["wheels"] = {c: {k: float(v[i]) for k, v in per.items()} for i, c in enumerate(CORNERS)}
-    row["events"] = dict(rig.events)
-    row["correction"] = cf.description
-    row["wall_time_s"] = round(time.perf_counter() - wall0, 3)
-    return row
+    pair = score_pair(road, rig, Rig(scenario, hydraulic=True), methods=(settings.method,),
+                      noise_N=settings.noise_N, seed=scenario.seed, settling_tolerance=settings.settling_tolerance)
+    return CaseResult.from_score(pair, rig.events, time.perf_counter() - wall0)
 
 
 def _one_sentence(exc: BaseException) -> str:
@@ -228,29 +161,29 @@ def evaluate_payload(case_id: str, doc: dict, source: str | None, settings: dict
     source : str or None
         Path relative scenario paths are resolved against.
     settings : dict
-        Keyword arguments of :func:`evaluate_case`.
+        :meth:`EvalSettings.as_dict` of the sweep.
 
     Returns
     -------
     dict
         ``{"case_id", "status": "ok" | "failed", "error": str | None, "retry": bool,
-        "result": dict | None, "wall_time_s": float}``. ``retry`` is True for errors that are not
-        a property of the case (an unexpected exception), so a resumed sweep runs it again.
+        "result": dict | None (CaseResult.to_dict()), "wall_time_s": float (s)}``. ``retry`` is
+        True for errors that are not a property of the case (an unexpected exception), so a
+        resumed sweep runs it again.
     """
     from scenarios.core.config import ScenarioError, parse_scenario
-    from scenarios.core.runner import SimulationError
+    from scenarios.core.watch import SimulationError
 
     wall0 = time.perf_counter()
     record: dict[str, Any] = {"case_id": case_id, "status": "ok", "error": None, "retry": False, "result": None}
     try:
         scenario = parse_scenario(doc, source=pathlib.Path(source) if source else None)
-        record["result"] = evaluate_case(scenario, **settings)
+        record["result"] = evaluate_case(scenario, EvalSettings(**settings)).to_dict()
     except (ScenarioError, SimulationError, ValueError, ArithmeticError) as exc:
         record.update(status="failed", error=_one_sentence(exc))
     except Exception as exc:  # noqa: BLE001 - any other error of one case must not stop the sweep
         record.update(status="failed", error=f"{type(exc).__name__}: {_one_sentence(exc)}", retry=True)
     record["wall_time_s"] = round(time.perf_counter() - wall0, 3)
-    if record["result"] is not None and not all(
-            math.isfinite(record["result"][k]) for k in METRIC_COLUMNS):
+    if record["result"] is not None and not all(math.isfinite(record["result"][k]) for k in METRIC_COLUMNS):
         record.update(status="failed", error="a score is not finite (NaN or infinity)")
     return record

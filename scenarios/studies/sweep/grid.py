@@ -5,8 +5,10 @@ A grid file is TOML::
     [sweep]
     name = "example"                 # optional; default: the file's stem
     base = "../paper/high_72kmh_3640kg.toml"   # the base scenario file (relative to this file)
-    lowpass = "regularized"          # correction low-pass: "regularized" (default) or "paper"
-    correction_mode = "zerophase"    # "zerophase" (default, offline) or "causal"
+    actuator = "identified"          # how each case is corrected and scored (all optional; the
+    lowpass = "regularized"          # defaults are the paper study's "best" method and noise):
+    correction_mode = "zerophase"    # see scenarios.studies.sweep.settings
+    noise_N = 100.0
 
     [base]                           # ... or the base scenario inline (exactly one of the two)
     name = "base"
@@ -40,54 +42,31 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import difflib
 import hashlib
 import itertools
 import json
 import pathlib
 import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
+from correction.tomlfile import check_keys, read_toml
 from scenarios.core.config import RoadConfig, Scenario, ScenarioError, parse_scenario
+from scenarios.studies.sweep.settings import SETTING_KEYS, EvalSettings, parse_settings
 
 __all__ = ["Case", "SweepGrid", "EvalSettings", "axis_keys", "load_grid", "parse_grid", "format_value",
            "GRID_FORMAT"]
 
 #: Version of the case-file format and of the fingerprint recipe (part of every fingerprint).
-GRID_FORMAT = 1
+#: 2: cases scored by scenarios.studies.scoring.score_pair (settings gained actuator, noise_N).
+GRID_FORMAT = 2
 
-_SWEEP_KEYS = {"name", "base", "lowpass", "correction_mode", "settling_tolerance"}
+_SWEEP_KEYS = {"name", "base", *SETTING_KEYS}
 _GRID_KEYS = {"sweep", "base", "axes", "cases"}
 _ROAD_CHOICE = ("roughness", "gd_n0_m3", "profile_csv")
 _MAX_ID = 180  # characters; longer ids end in a hash (file names stay below common limits)
-
-
-@dataclass(frozen=True)
-class EvalSettings:
-    """How each case is corrected and scored (see :func:`scenarios.studies.sweep.case.evaluate_case`).
-
-    Parameters
-    ----------
-    lowpass : {"regularized", "paper"}
-        The correction's low-pass T_F.
-    correction_mode : {"zerophase", "causal"}
-        Offline zero-phase correction or the causal (real-time) filter.
-    settling_tolerance : float, 1
-        Tolerance of the correction's transients; samples inside them are left out of the
-        corrected DLC and the NRMSE.
-    """
-
-    lowpass: str = "regularized"
-    correction_mode: str = "zerophase"
-    settling_tolerance: float = 1e-2
-
-    def as_dict(self) -> dict:
-        """The settings as a plain dict (keyword arguments of ``evaluate_case``)."""
-        return dataclasses.asdict(self)
 
 
 @dataclass(frozen=True)
@@ -174,27 +153,33 @@ def format_value(value: Any) -> str:
     return str(value)
 
 
+class _UnknownKey(Exception):
+    """A key :func:`correction.tomlfile.check_keys` refused (its close-match hint is reused)."""
+
+
 def _check_key(key: str, where: str) -> None:
+    """Refuse a swept key that is not a scenario key, suggesting the closest one."""
     valid = axis_keys()
-    parts = key.split(".")
-    if len(parts) == 1:
-        table, name = "", parts[0]
-    elif len(parts) == 2 and parts[0] in ("road", "vehicle", "actuator"):
-        table, name = parts
-    else:
-        everything = [k for k in valid[""]] + [f"{t}.{n}" for t in ("road", "vehicle", "actuator") for n in valid[t]]
-        match = difflib.get_close_matches(key, everything, n=1, cutoff=0.6)
-        hint = f"; did you mean {match[0]!r}?" if match else \
-            "; sweep a top-level key (speed_kmh, seed...) or road.*, vehicle.*, actuator.*"
-        raise ScenarioError(f"{where} {key} is not a scenario key{hint}")
-    if name not in valid[table]:
-        match = [k for k in valid[table] if k.startswith(name + "_")] or \
-            difflib.get_close_matches(name, valid[table], n=1, cutoff=0.5)
-        prefix = f"{table}." if table else ""
-        hint = f"; did you mean {prefix + match[0]!r}?" if match else ""
-        if not table and name in ("name", "description"):
-            hint = "; each case's name is made from the base's name and the case id"
-        raise ScenarioError(f"{where} {key} is not a scenario key{hint}")
+    everything = [*valid[""], *(f"{t}.{n}" for t in ("road", "vehicle", "actuator") for n in valid[t])]
+    if key in everything:
+        return
+    # A unit suffix left out ("speed" for "speed_kmh") first, else the closest key.
+    hint = next((f"; did you mean {k!r}?" for k in everything if k.startswith(key + "_")), "")
+    if not hint:
+        try:
+            check_keys({key: None}, everything, "", error=_UnknownKey)
+        except _UnknownKey as exc:
+            _, found, match = str(exc).rpartition("; did you mean ")
+            hint = found + match if found else \
+                "; sweep a top-level key (speed_kmh, seed...) or road.*, vehicle.*, actuator.*"
+    if key in ("name", "description"):
+        hint = "; each case's name is made from the base's name and the case id"
+    raise ScenarioError(f"{where} {key} is not a scenario key{hint}")
+
+
+def _refuse(where: str):
+    """The ``error`` of :mod:`correction.tomlfile` checks: a ScenarioError prefixed by ``where``."""
+    return lambda message: ScenarioError(f"{where}{message}")
 
 
 def _flatten(table: Mapping, prefix: str = "") -> dict[str, Any]:
@@ -258,38 +243,6 @@ def _fingerprint(doc: Mapping, source: pathlib.Path | None, settings: EvalSettin
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
-def _settings(table: Mapping, where: str) -> EvalSettings:
-    kw: dict[str, Any] = {}
-    if "lowpass" in table:
-        if table["lowpass"] not in ("regularized", "paper"):
-            raise ScenarioError(f"{where}sweep.lowpass must be 'regularized' or 'paper', got {table['lowpass']!r}")
-        kw["lowpass"] = table["lowpass"]
-    if "correction_mode" in table:
-        if table["correction_mode"] not in ("zerophase", "causal"):
-            raise ScenarioError(f"{where}sweep.correction_mode must be 'zerophase' or 'causal', "
-                                f"got {table['correction_mode']!r}")
-        kw["correction_mode"] = table["correction_mode"]
-    if "settling_tolerance" in table:
-        tol = table["settling_tolerance"]
-        if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 1:
-            raise ScenarioError(f"{where}sweep.settling_tolerance must be a number in (0, 1), got {tol!r}")
-        kw["settling_tolerance"] = float(tol)
-    return EvalSettings(**kw)
-
-
-def _read_toml(path: pathlib.Path, what: str) -> dict:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(f"{what} {str(path)!r} does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"cannot read {what} {str(path)!r}: {exc}") from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
-
-
 def _base(doc: Mapping, source: pathlib.Path | None, where: str) -> tuple[dict, pathlib.Path | None]:
     sweep = doc.get("sweep", {})
     if ("base" in sweep) == ("base" in doc):
@@ -307,7 +260,7 @@ def _base(doc: Mapping, source: pathlib.Path | None, where: str) -> tuple[dict, 
     if not path.is_absolute() and source is not None:
         path = source.parent / path
     path = path.resolve()
-    return _read_toml(path, "base scenario file"), path
+    return read_toml(path, "base scenario file", error=ScenarioError), path
 
 
 def _validate(base: Mapping, values: Mapping, source, case_id: str, where: str) -> tuple[dict, Scenario]:
@@ -345,20 +298,12 @@ def parse_grid(doc: Mapping, *, source: pathlib.Path | None = None) -> SweepGrid
         One sentence naming the unknown key, axis or value, or the case that is refused.
     """
     where = f"{source.name}: " if source is not None else ""
-    for key in doc:
-        if key not in _GRID_KEYS:
-            match = difflib.get_close_matches(key, list(_GRID_KEYS), n=1, cutoff=0.5)
-            hint = f"; did you mean {match[0]!r}?" if match else "; a grid has [sweep], [base], [axes], [[cases]]"
-            raise ScenarioError(f"{where}unknown grid key {key}{hint}")
+    check_keys(doc, _GRID_KEYS, "", error=_refuse(where))
     sweep = doc.get("sweep", {})
     if not isinstance(sweep, Mapping):
         raise ScenarioError(f"{where}[sweep] must be a table")
-    for key in sweep:
-        if key not in _SWEEP_KEYS:
-            match = difflib.get_close_matches(key, list(_SWEEP_KEYS), n=1, cutoff=0.5)
-            hint = f"; did you mean {match[0]!r}?" if match else f"; valid keys are {', '.join(sorted(_SWEEP_KEYS))}"
-            raise ScenarioError(f"{where}unknown key sweep.{key}{hint}")
-    settings = _settings(sweep, where)
+    check_keys(sweep, _SWEEP_KEYS, "sweep.", error=_refuse(where))
+    settings = parse_settings(sweep, where)
     base, base_source = _base(doc, source, where)
     name = sweep.get("name", source.stem if source is not None else "sweep")
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9._-]+", name):
@@ -434,4 +379,4 @@ def load_grid(path) -> SweepGrid:
         Missing file, malformed TOML, unknown key or axis, invalid value; one sentence.
     """
     p = pathlib.Path(path).resolve()
-    return parse_grid(_read_toml(p, "grid file"), source=p)
+    return parse_grid(read_toml(p, "grid file", error=ScenarioError), source=p)

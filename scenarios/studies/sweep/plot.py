@@ -55,7 +55,7 @@ def plot_summary(grid, records: Mapping[str, dict], path) -> pathlib.Path:
     ----------
     grid : SweepGrid
     records : Mapping[str, dict]
-        Case files by case id (:func:`scenarios.studies.sweep.command.read_case_files`).
+        Case files by case id (:func:`scenarios.studies.sweep.store.read_case_files`).
     path : path
         The PNG to write (atomically).
 
@@ -67,7 +67,7 @@ def plot_summary(grid, records: Mapping[str, dict], path) -> pathlib.Path:
 
     from matplotlib.figure import Figure  # no pyplot: the Agg canvas, no global figure state
 
-    from scenarios.core.results import atomic_write_bytes
+    from scenarios.core.files import atomic_write_bytes
 
     cases = {c.case_id: c for c in grid.cases}
     ok = [(cases[cid], rec["result"]) for cid, rec in sorted(records.items())
@@ -86,7 +86,8 @@ def plot_summary(grid, records: Mapping[str, dict], path) -> pathlib.Path:
     fig = Figure(figsize=(4.2 * ncols, 3.4 * (rows_top + rows_bot)), layout="constrained")
     fig.suptitle(f"sweep {grid.name}: {len(ok)} of {len(grid.cases)} cases"
                  + (f", {n_failed} failed" if n_failed else "")
-                 + f" (low-pass {grid.settings.lowpass}, {grid.settings.correction_mode})")
+                 + f" (T_a {grid.settings.actuator}, low-pass {grid.settings.lowpass}, "
+                   f"{grid.settings.correction_mode}, noise {grid.settings.noise_N:g} N)")
     nrows = rows_top + rows_bot
 
     for i, (label, by_speed) in enumerate(sorted(groups.items())):

@@ -1,0 +1,201 @@
+"""Running a sweep: the unfinished cases of a grid on an executor, each kept as it finishes.
+
+Resume is the default: a case whose file exists with the same fingerprint (same scenario and
+evaluation settings) is not run again, unless it failed for a reason that is not a property of
+the case (``retry`` in its file: a worker lost, an unexpected exception). A failing case (a
+MuJoCo warning, a divergence, a drive beyond the stroke, an unstable rig) is recorded with its
+error in one sentence and does not stop the others. Ctrl-C stops the run, keeps every finished
+case and writes ``results.csv`` of them; running again resumes.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import pathlib
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from scenarios.studies.sweep.case import evaluate_payload
+from scenarios.studies.sweep.grid import Case, SweepGrid
+from scenarios.studies.sweep.store import CASES_DIR, collect_results, read_case_files, write_case, write_meta
+
+__all__ = ["SweepOutcome", "run_sweep", "SUMMARY_FILE"]
+
+SUMMARY_FILE = "summary.png"
+
+
+@dataclass(frozen=True)
+class SweepOutcome:
+    """What a call of :func:`run_sweep` did.
+
+    Attributes
+    ----------
+    total : int
+        Cases in the grid.
+    skipped : int
+        Finished cases found from an earlier run (resumed).
+    ok, failed : int
+        Cases run now that finished, that failed.
+    interrupted : bool
+        The run was stopped (Ctrl-C) before every case finished.
+    wall_time_s : float, s
+        Time from the first submission to the last result.
+    results : pathlib.Path
+        The results.csv written.
+    """
+
+    total: int
+    skipped: int
+    ok: int
+    failed: int
+    interrupted: bool
+    wall_time_s: float
+    results: pathlib.Path
+
+    @property
+    def cases_per_min(self) -> float:
+        """Throughput of this run: cases run now (ok or failed) per minute of wall time, 1/min."""
+        n = self.ok + self.failed
+        return 60.0 * n / self.wall_time_s if self.wall_time_s > 0 else float("nan")
+
+
+class _Progress:
+    """Finished / failed / remaining counts and an ETA: a tqdm bar on a terminal, else one line
+    per finished case on stderr."""
+
+    def __init__(self, total: int, skipped: int, enabled: bool, stream=None):
+        self.total, self.done, self.failed = total, skipped, 0
+        self.stream = stream if stream is not None else sys.stderr
+        self.enabled = enabled
+        self.t0 = time.perf_counter()
+        self.started = 0
+        self.bar = None
+        if enabled and getattr(self.stream, "isatty", lambda: False)():
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, initial=skipped, unit="case", file=self.stream, dynamic_ncols=True,
+                            bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}] {postfix}")
+            self._postfix()
+
+    def _postfix(self) -> None:
+        self.bar.set_postfix_str(f"failed {self.failed}, remaining {self.total - self.done}")
+
+    def update(self, case_id: str, record: dict) -> None:
+        self.done += 1
+        self.started += 1
+        ok = record["status"] == "ok"
+        self.failed += 0 if ok else 1
+        if not self.enabled:
+            return
+        note = f"{case_id}: {'ok' if ok else 'FAILED: ' + str(record.get('error'))} " \
+               f"({record.get('wall_time_s') or 0:.1f} s)"
+        if self.bar is not None:
+            self.bar.update(1)
+            self._postfix()
+            if not ok:
+                self.bar.write(note, file=self.stream)
+            return
+        elapsed = time.perf_counter() - self.t0
+        left = self.total - self.done
+        eta = elapsed / self.started * left
+        print(f"[{self.done}/{self.total} finished, {self.failed} failed, {left} remaining, ETA "
+              f"{time.strftime('%H:%M:%S', time.gmtime(eta))}] {note}", file=self.stream, flush=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _lost(case: Case, exc: BaseException) -> dict:
+    """The record of a case whose worker failed (not a property of the case: retried on resume)."""
+    return {"case_id": case.case_id, "status": "failed", "retry": True, "result": None,
+            "error": f"the worker running it failed ({type(exc).__name__}: {' '.join(str(exc).split())})",
+            "wall_time_s": None}
+
+
+def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool = True, progress: bool = True,
+              plot: bool = True, on_record: Callable[[str, dict], None] | None = None,
+              executor_label: str = "") -> SweepOutcome:
+    """Run the cases of ``grid`` that are not finished in ``out_dir`` on ``executor``.
+
+    Parameters
+    ----------
+    grid : SweepGrid
+    out_dir : path
+        Output folder (created).
+    executor : concurrent.futures.Executor
+        Where the cases run (:func:`scenarios.core.pool.local_executor`,
+        :func:`scenarios.studies.sweep.executors.dask_executor` or any executor whose workers run
+        one case per process at a time).
+    resume : bool
+        Skip cases with a matching case file (default). False runs every case again.
+    progress : bool
+        Show progress on stderr.
+    plot : bool
+        Write ``summary.png``.
+    on_record : callable, optional
+        ``on_record(case_id, record)`` after each case file is written (hooks, tests).
+    executor_label : str
+        Recorded in ``sweep.json``.
+
+    Returns
+    -------
+    SweepOutcome
+
+    Raises
+    ------
+    KeyboardInterrupt
+        After Ctrl-C, with the :class:`SweepOutcome` as its argument: every finished case is
+        kept and ``results.csv`` written first.
+    """
+    out = pathlib.Path(out_dir)
+    (out / CASES_DIR).mkdir(parents=True, exist_ok=True)
+    finished = read_case_files(grid, out) if resume else {}
+    finished = {cid: rec for cid, rec in finished.items() if not rec.get("retry")}
+    todo = [c for c in grid.cases if c.case_id not in finished]
+    bar = _Progress(len(grid.cases), len(grid.cases) - len(todo), progress)
+    settings = grid.settings.as_dict()
+    n_ok = n_failed = 0
+    interrupted = False
+    wall0 = time.perf_counter()
+    futures: dict[cf.Future, Case] = {}
+    try:
+        for case in todo:
+            fut = executor.submit(evaluate_payload, case.case_id, dict(case.doc),
+                                  str(case.source) if case.source else None, settings)
+            futures[fut] = case
+        for fut in cf.as_completed(futures):
+            case = futures[fut]
+            try:
+                record = fut.result()
+            except cf.CancelledError:
+                continue
+            except Exception as exc:  # noqa: BLE001 - a lost worker must not stop the sweep
+                record = _lost(case, exc)
+            write_case(out, case, record)
+            n_ok += record["status"] == "ok"
+            n_failed += record["status"] != "ok"
+            bar.update(case.case_id, record)
+            if on_record is not None:
+                on_record(case.case_id, record)
+    except KeyboardInterrupt:
+        interrupted = True
+        for fut in futures:
+            fut.cancel()
+    finally:
+        bar.close()
+        wall = time.perf_counter() - wall0
+        results = collect_results(grid, out)
+        records = write_meta(grid, out, ran=n_ok + n_failed, wall_time_s=wall, interrupted=interrupted,
+                             executor_label=executor_label)
+        if plot and records:
+            from scenarios.studies.sweep.plot import plot_summary
+
+            plot_summary(grid, records, out / SUMMARY_FILE)
+    outcome = SweepOutcome(total=len(grid.cases), skipped=len(grid.cases) - len(todo), ok=n_ok,
+                           failed=n_failed, interrupted=interrupted, wall_time_s=wall, results=results)
+    if interrupted:
+        raise KeyboardInterrupt(outcome)
+    return outcome
