@@ -29,9 +29,11 @@ ROW_KEYS = {
     "dlc_rig": "dlc_rig",
     "dlc_corrected_paper": "dlc_corrected_paper",
     "dlc_corrected": "dlc_corrected_best",
+    "dlc_road_settled": "dlc_road_settled_best",
     "dlc_road_lowpassed": "dlc_road_band_best",
     "nrmse_corrected": "nrmse_corrected_best",
     "dlc_road_lowpassed_paper": "dlc_road_band_paper",
+    "dlc_road_settled_paper": "dlc_road_settled_paper",
     "nrmse_corrected_paper": "nrmse_corrected_paper",
 }
 

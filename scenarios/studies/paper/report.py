@@ -103,9 +103,9 @@ def _report_md(rows, table: str, figures: list[str]) -> str:
     for r in rows:
         ref = r["paper"]
         lines.append(
-            f"| {r['case']} | {100 * (r['dlc_corrected'] / r['dlc_road'] - 1):+.1f} % | "
+            f"| {r['case']} | {100 * (r['dlc_corrected'] / r['dlc_road_settled'] - 1):+.1f} % | "
             f"{100 * (r['dlc_corrected'] / r['dlc_road_lowpassed'] - 1):+.1f} % | {r['nrmse_corrected']:.3f} | "
-            f"{100 * (r['dlc_corrected_paper'] / r['dlc_road'] - 1):+.1f} % | "
+            f"{100 * (r['dlc_corrected_paper'] / r['dlc_road_settled_paper'] - 1):+.1f} % | "
             f"{100 * (ref['corrected'] / ref['road'] - 1):+.1f} % |"
         )
     lines += [
