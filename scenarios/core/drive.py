@@ -16,7 +16,8 @@ import numpy as np
 
 from mjcf.names import CORNERS
 from scenarios.core import roads
-from scenarios.core.profiles import Profile, ProfileError, check_positive, envelope, highpass, read_profile_csv
+from scenarios.core.profiles import (Profile, ProfileError, check_positive, envelope, highpass, read_profile_csv,
+                                     readonly_copy)
 
 __all__ = ["Drive", "START_MARGIN_M", "PROFILE_DX_M", "sample_wheels", "road_drive", "identification_drive",
            "step_drive", "IDENT_RMS_M", "IDENT_CORNER_HZ", "IDENT_BAND_HZ", "IDENT_SEED", "IDENT_FADE_S"]
@@ -32,12 +33,6 @@ IDENT_CORNER_HZ = 1.0
 IDENT_BAND_HZ = (0.05, 60.0)
 IDENT_SEED = 20240604
 IDENT_FADE_S = 1.0
-
-
-def _readonly(a) -> np.ndarray:
-    out = np.array(a, dtype=float)  # always a private copy
-    out.flags.writeable = False
-    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,7 +61,7 @@ class Drive:
 
     def __post_init__(self) -> None:
         for name in ("t_s", "z_m", "v_mps"):
-            object.__setattr__(self, name, _readonly(getattr(self, name)))
+            object.__setattr__(self, name, readonly_copy(getattr(self, name)))
         n = self.t_s.shape[0] if self.t_s.ndim == 1 else -1
         if n < 1:
             raise ValueError(f"drive.t_s must be 1-D and non-empty, got shape {self.t_s.shape}.")

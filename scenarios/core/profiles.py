@@ -16,7 +16,7 @@ import numpy as np
 from scipy import signal
 
 __all__ = ["ProfileError", "Profile", "write_profile_csv", "read_profile_csv", "envelope", "highpass",
-           "check_positive"]
+           "check_positive", "readonly_copy"]
 
 _UNIFORM_RTOL = 1e-6
 
@@ -35,7 +35,8 @@ def check_positive(name: str, value: float) -> None:
         raise ValueError(f"{name} must be a positive finite number, got {value!r}.")
 
 
-def _readonly(a) -> np.ndarray:
+def readonly_copy(a) -> np.ndarray:
+    """A read-only float copy of ``a`` (the arrays of the frozen profile and drive objects)."""
     out = np.array(a, dtype=float)  # always a private copy
     out.flags.writeable = False
     return out
@@ -80,7 +81,7 @@ class Profile:
 
     def __post_init__(self) -> None:
         for name in ("x_m", "left_m", "right_m"):
-            object.__setattr__(self, name, _readonly(getattr(self, name)))
+            object.__setattr__(self, name, readonly_copy(getattr(self, name)))
         x = self.x_m
         if x.ndim != 1 or x.size < 2:
             raise ValueError(f"profile.x_m must be 1-D with >= 2 samples, got shape {x.shape}.")

@@ -14,7 +14,7 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-__all__ = ["SimulationError", "ProgressFn", "Watch", "mujoco_warnings_captured", "output_schedule",
+__all__ = ["SimulationError", "ProgressFn", "SayFn", "Watch", "mujoco_warnings_captured", "output_schedule",
            "CHECK_EVERY_S"]
 
 #: MuJoCo warnings are checked this often and reported with this resolution, s.
@@ -22,6 +22,9 @@ CHECK_EVERY_S = 0.01
 
 ProgressFn = Callable[[float, float], None]
 """progress(simulated_s, total_s), in s, called a few hundred times per run."""
+
+SayFn = Callable[[str], None]
+"""say(line): one line of progress text of a study (which step it is at), for the terminal."""
 
 
 class SimulationError(RuntimeError):

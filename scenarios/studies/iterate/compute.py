@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,6 +51,7 @@ from scenarios.core.drive import Drive, identification_drive
 from scenarios.core.results import RunResult
 from scenarios.core.rig import Rig
 from scenarios.core.run import run
+from scenarios.core.watch import SayFn
 from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, measured_force, score_pair
 
 __all__ = ["TARGETS", "IDENT_SKIP_S", "IDENT_MIN_S", "IDENT_NPERSEG", "ComparisonRow", "IterateResult",
@@ -258,7 +259,7 @@ def _row(force_N, road_N, s, road_dlc, rig_runs, wall_s=None, lowpassed=None) ->
 def iterate_scenario(scenario: Scenario, target: str, *, gain: float = 0.8, max_iterations: int = 6,
                      tolerance: float = 0.01, band_hz=(0.3, 30.0), coherence_min: float = 0.8,
                      noise_N: float | None = None, run_anyway: bool = False,
-                     say: Callable[[str], None] | None = None) -> IterateResult:
+                     say: SayFn | None = None) -> IterateResult:
     """Road run, rig run, identification and the iteration; the comparison with the output correction.
 
     Parameters

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
 
 import numpy as np
 
@@ -34,6 +33,7 @@ from mjcf.names import CORNERS
 from scenarios.core.config import ScenarioError
 from scenarios.core.pool import run_jobs, worker_count
 from scenarios.core.rig import Rig
+from scenarios.core.watch import SayFn
 from scenarios.studies.validate import runs, sections
 from scenarios.studies.validate.result import ValidateCurves, ValidateResult
 from scenarios.studies.validate.routes import route1_models, route3
@@ -46,10 +46,7 @@ __all__ = ["MAX_DURATION_S", "check_arguments", "validate"]
 #: Longest Table 1 or identification record accepted, s.
 MAX_DURATION_S = 3600.0
 
-ProgressFn = Callable[[str], None]
-
-
-def _say(progress: ProgressFn | None, text: str) -> None:
+def _say(progress: SayFn | None, text: str) -> None:
     if progress is not None:
         progress(text)
 
@@ -79,7 +76,7 @@ def check_arguments(duration_s: float | None, ident_duration_s: float | None, jo
 
 
 def validate(*, duration_s: float | None = None, ident_duration_s: float | None = None,
-             jobs: int | None = None, progress: ProgressFn | None = None,
+             jobs: int | None = None, progress: SayFn | None = None,
              pose_rate_hz: float | None = None) -> ValidateResult:
     """Compute the whole validation (routes 1-3, Figure 7 and Table 1 analogues).
 
