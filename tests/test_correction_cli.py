@@ -1,4 +1,4 @@
-"""``rigsim correct`` (scenarios/correct_cmd.py): round trips and refusals.
+"""``rigsim correct`` (scenarios/cli/correct.py): round trips and refusals.
 
 The command is driven through an argparse parser built with its own ``add_parser`` and
 ``ScenarioError`` is turned into exit code 2 as the CLI does. Expected values: the rig force is
