@@ -11,7 +11,10 @@ can build on it.
   not UTF-8, invalid TOML (with tomllib's line and column);
 * :func:`check_keys`: refuse an unknown key, naming the closest valid one
   (``difflib.get_close_matches``, cutoff 0.5) or else listing the valid keys;
-* :func:`number`: a TOML value as a finite float within optional bounds.
+* :func:`number`: a TOML value as a finite float within optional bounds;
+* :func:`toml_text` and :func:`write_toml`: a document of tables, numbers, strings, booleans and
+  arrays written as TOML (atomically: a temporary file in the same folder, then a rename), for
+  the files the project writes for itself to read back (actuator files).
 
 Each takes the exception class to raise (``error``, default ``ValueError``), so a reader raises
 its own (``ScenarioError``, ``ActuatorFileError``...). Messages are single lines; paths and
@@ -25,11 +28,14 @@ import math
 import os
 import pathlib
 import re
+import tempfile
 import tomllib
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-__all__ = ["read_toml", "check_keys", "number"]
+import numpy as np
+
+__all__ = ["read_toml", "check_keys", "number", "toml_text", "write_toml"]
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
@@ -172,3 +178,89 @@ def _show(value: Any) -> str:
 
 def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split())
+
+
+def _key(key) -> str:
+    key = str(key)
+    return key if _BARE_KEY.fullmatch(key) else _string(key)
+
+
+def _string(text: str) -> str:
+    out = []
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04X}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _value(value, where: str) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf") if math.isinf(v) else repr(v)
+    if isinstance(value, str):
+        return _string(value)
+    if isinstance(value, Mapping):
+        return "{ " + ", ".join(f"{_key(k)} = {_value(v, f'{where}.{k}')}" for k, v in value.items()) + " }"
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_value(v, where) for v in value) + "]"
+    raise TypeError(f"{where}: cannot write a {type(value).__name__} to TOML")
+
+
+def toml_text(doc: Mapping) -> str:
+    """A document as TOML text: mappings become tables (``[a]``, ``[a.b]``), the rest key = value.
+
+    Parameters
+    ----------
+    doc : Mapping
+        Nested mappings of str keys; values: bool, int, float (NaN and infinities as TOML's
+        ``nan``, ``inf``), str, sequences or numpy arrays of those, or mappings inside a
+        sequence (inline tables).
+
+    Returns
+    -------
+    str
+        UTF-8 TOML that :func:`read_toml` (``tomllib``) reads back to the same values.
+    """
+    lines: list[str] = []
+
+    def table(mapping: Mapping, prefix: tuple[str, ...]) -> None:
+        subs = [(k, v) for k, v in mapping.items() if isinstance(v, Mapping)]
+        plain = [(k, v) for k, v in mapping.items() if not isinstance(v, Mapping)]
+        if prefix and (plain or not subs):
+            lines.append(("\n" if lines else "") + "[" + ".".join(prefix) + "]")
+        for k, v in plain:
+            lines.append(f"{_key(k)} = {_value(v, '.'.join(prefix + (str(k),)))}")
+        for k, v in subs:
+            table(v, prefix + (_key(k),))
+
+    table(doc, ())
+    return "\n".join(lines) + "\n"
+
+
+def write_toml(path: str | os.PathLike, doc: Mapping) -> None:
+    """Write ``doc`` (see :func:`toml_text`) to ``path`` atomically: a temporary file, then a rename."""
+    text = toml_text(doc)
+    p = pathlib.Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, p)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise

@@ -24,7 +24,8 @@ from correction.transfer import apply_transfer_function
 from mjcf.build import TruckVariant
 from scenarios.core.config import parse_scenario
 from scenarios.core.rig import Rig, actuator_params
-from scenarios.studies.scoring import BEST, METHODS, PAPER, SETTLING_TOLERANCE, identify_wheel_actuator, score_pair
+from scenarios.studies.identify.compute import identify_rig
+from scenarios.studies.scoring import BEST, METHODS, PAPER, SETTLING_TOLERANCE, score_pair
 from scenarios.core.drive import Drive
 from scenarios.core.run import run
 
@@ -83,13 +84,19 @@ def road_rig():
     return s, run(s, "road"), run(s, "rig")
 
 
-def test_identified_actuator_matches_the_rig(road_rig):
-    """T_a identified from drive and pan displacement reproduces the pan motion from the drive
-    (reference: the recorded pan displacement of the nonlinear rig) to a few percent."""
+@pytest.fixture(scope="module")
+def identified(road_rig):
+    """T_a per corner as a lab identifies it before the test (independent random drives)."""
+    return identify_rig(road_rig[0])
+
+
+def test_identified_actuator_predicts_the_test_runs_pan_motion(road_rig, identified):
+    """T_a identified before the test from independent random drives reproduces the pan motion of
+    the test run from its drive (reference: the recorded pan displacement of the nonlinear rig)
+    to a few percent, on every corner."""
     _, _, rig = road_rig
     fs = rig.rate_hz
-    for i in (0, 2):
-        num, den = identify_wheel_actuator(rig.signals["profile_m"][:, i], rig.signals["pan_m"][:, i], fs)
+    for i, (num, den) in enumerate(identified.actuators()):
         assert num[-1] / den[-1] == pytest.approx(1.0, rel=1e-12)  # static gain exactly 1
         assert np.all(np.roots(den).real < 0) and np.all(np.roots(num).real < 0)
         pred = apply_transfer_function(control.tf(num, den), rig.signals["profile_m"][:, i], 1.0 / fs)
@@ -98,11 +105,11 @@ def test_identified_actuator_matches_the_rig(road_rig):
         assert np.sqrt(np.mean((pred[k:] - y[k:]) ** 2)) / y[k:].std() < 0.05
 
 
-def test_best_method_restores_road_dlc_and_noise_is_seeded(road_rig):
+def test_best_method_restores_road_dlc_and_noise_is_seeded(road_rig, identified):
     s, road, rig = road_rig
     rig_model = Rig(s)
-    a = score_pair(road, rig, rig_model, noise_N=100.0, seed=5)
-    b = score_pair(road, rig, rig_model, noise_N=100.0, seed=5)
+    a = score_pair(road, rig, rig_model, identified=identified.actuators(), noise_N=100.0, seed=5)
+    b = score_pair(road, rig, rig_model, identified=identified.actuators(), noise_N=100.0, seed=5)
     assert np.array_equal(a.rig_N, b.rig_N)
     # The noise is there, at the stated level (reference: its definition).
     noise = a.rig_N - rig.signals["tire_force_N"]
@@ -124,14 +131,15 @@ def test_best_method_restores_road_dlc_and_noise_is_seeded(road_rig):
     assert m["dlc_corrected_paper"] == pytest.approx(m["dlc_road_band_paper"], rel=0.06)
 
 
-def test_each_method_is_scored_on_exactly_its_own_settled_samples(road_rig):
+def test_each_method_is_scored_on_exactly_its_own_settled_samples(road_rig, identified):
     """The scored samples of a method are those outside every transient of its own filters (the
     four corrections and the band-limit reference) and nothing else: re-derived here from the
     filters themselves; a method's figures do not depend on which other methods are scored."""
     s, road, rig = road_rig
     rig_model = Rig(s)
-    both = score_pair(road, rig, rig_model, methods=METHODS, noise_N=100.0, seed=2)
-    alone = score_pair(road, rig, rig_model, methods=(BEST,), noise_N=100.0, seed=2)
+    ta = identified.actuators()
+    both = score_pair(road, rig, rig_model, methods=METHODS, identified=ta, noise_N=100.0, seed=2)
+    alone = score_pair(road, rig, rig_model, methods=(BEST,), identified=ta, noise_N=100.0, seed=2)
     fs, n = road.rate_hz, road.t_s.size
     for m in METHODS:
         ms = both.methods[m.name]

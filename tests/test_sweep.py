@@ -229,9 +229,11 @@ def test_interrupt_and_resume_with_an_instant_executor(tmp_path, monkeypatch):
 
 # ---------------------------------------------------------------------- real sweeps (MuJoCo)
 def test_a_sweep_case_scores_like_the_paper_study(tmp_path):
-    """The sweep's case (default settings) and score_pair as the paper study calls it agree."""
+    """The sweep's case (default settings) and the paper study's scoring (scenarios/studies/paper/
+    compute.py: identify_rig, then score_pair with both methods) agree on the same case and seed."""
     from scenarios.core.rig import Rig
     from scenarios.core.run import run
+    from scenarios.studies.identify.compute import identify_rig
 
     g = load_grid(_grid_file(tmp_path, BASE))
     (case,) = g.cases
@@ -242,9 +244,11 @@ def test_a_sweep_case_scores_like_the_paper_study(tmp_path):
 
     s = case.scenario
     road, rig, model = run(s, "road"), run(s, "rig"), Rig(s)
-    best = scoring.score_pair(road, rig, model, methods=(scoring.BEST,), noise_N=scoring.NOISE_N, seed=s.seed)
-    both = scoring.score_pair(road, rig, model, methods=(scoring.PAPER, scoring.BEST), noise_N=scoring.NOISE_N,
+    ta = identify_rig(s, rig=model).actuators()
+    best = scoring.score_pair(road, rig, model, methods=(scoring.BEST,), identified=ta, noise_N=scoring.NOISE_N,
                               seed=s.seed)
+    both = scoring.score_pair(road, rig, model, methods=(scoring.PAPER, scoring.BEST), identified=ta,
+                              noise_N=scoring.NOISE_N, seed=s.seed)
     # each method is scored on its own settled samples: BEST's figures do not depend on PAPER's
     for k, v in best.methods["best"].figures.items():
         np.testing.assert_array_equal(both.methods["best"].figures[k], v, err_msg=k)
@@ -258,7 +262,7 @@ def test_a_sweep_case_scores_like_the_paper_study(tmp_path):
     assert got["scored_s"] == best.methods["best"].scored_s
     # the comparison tells the methods and the noise apart
     assert abs(want["dlc_corrected_best"] - both.mean["dlc_corrected_paper"]) > 1e-3
-    quiet = scoring.score_pair(road, rig, model, methods=(scoring.BEST,), noise_N=0.0, seed=s.seed)
+    quiet = scoring.score_pair(road, rig, model, methods=(scoring.BEST,), identified=ta, noise_N=0.0, seed=s.seed)
     assert abs(got["dlc_rig"] - quiet.mean["dlc_rig"]) > 1e-6
 
 

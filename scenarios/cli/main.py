@@ -102,6 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=_cmd_run)
 
     from scenarios.cli import correct as correct_cmd
+    from scenarios.studies.identify import command as identify_cmd
     from scenarios.studies.iterate import command as iterate_cmd
     from scenarios.studies.paper import command as paper
     from scenarios.studies.sweep import command as sweep
@@ -112,6 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
     correct_cmd.add_parser(sub)
     sweep.add_parser(sub)
     iterate_cmd.add_parser(sub)
+    identify_cmd.add_parser(sub)
 
     m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
     m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg (default 3640)")

@@ -13,9 +13,14 @@ rig force corrected by each :class:`Method`:
   force plus the pan's weight, :func:`hydraulics.linearization.eq4_parameters`), the station's
   tire stiffness and the rig's pan mass; inverted times the paper's low-pass T_F (16 and 24 Hz,
   damping 1), applied as a causal filter.
-- ``best``: this project's method. T_a identified per wheel from the rig run's own drive and
-  LVDT pan displacement (what any lab records, no hydraulic parameters needed), inverted under
-  the regularized low-pass (6th-order Butterworth at 30 Hz), applied offline zero-phase.
+- ``best``: this project's method. T_a identified per corner as a lab characterizes its rig
+  before a test (:func:`scenarios.studies.identify.compute.identify_rig`: independent random
+  drives on the four posts at the test drive's rms, the one fitting policy of
+  :mod:`correction.actuator_fit`; no hydraulic parameters needed), inverted under the
+  regularized low-pass (6th-order Butterworth at 30 Hz), applied offline zero-phase.
+
+Both are applied by the one correction function, :func:`correction.pipeline.correct_forces`,
+which ``rigsim correct`` also uses: the same data give the same numbers.
 
 Each corrected force is compared with the road force through the same band limit (a correction
 cannot restore what its low-pass removes): DLC and NRMSE (:mod:`correction.dlc`) on the samples
@@ -32,17 +37,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.actuator_id import identify_actuator
-from correction.apply import band_limit, correct
+from correction.apply import band_limit
 from correction.dlc import dlc, nrmse
 from correction.eq4 import eq4_coefficients_from
-from correction.filters import design_correction, reference_filter
+from correction.pipeline import correct_forces
 from hydraulics.linearization import eq4_parameters
 from hydraulics.params import GRAVITY_M_S2
 from scenarios.core.config import ScenarioError
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
-           "PairScore", "score_pair", "SETTLING_TOLERANCE", "identify_wheel_actuator", "measured_force"]
+           "PairScore", "score_pair", "SETTLING_TOLERANCE", "measured_force"]
 
 #: Default rms of the white measurement noise added to the rig's wheel forces, N. A strain-gauge
 #: load cell rated for the 156 kN actuator force resolves ~0.05 % of its range (~80 N);
@@ -55,11 +59,6 @@ MIN_SCORED_S = 0.25
 #: Relative tolerance of the filters' transients: samples where a filter's start-up (and, zero-phase,
 #: end) transient still exceeds this fraction of a step are not scored (the correction's default).
 SETTLING_TOLERANCE = 1e-3
-
-#: Orders (numerator, denominator) of the rational fit of the identified T_a(s): eq. 4 has one
-#: zero and four poles; the spool dynamics (2nd order) and the truck's loading need more.
-ID_ORDERS = (3, 6)
-
 
 @dataclass(frozen=True)
 class Method:
@@ -95,7 +94,8 @@ class Method:
 PAPER = Method("paper", "eq4", "paper", "causal",
                "eq. 4 from the actuator parameters at each wheel's static load, paper's low-pass (16/24 Hz), causal")
 BEST = Method("best", "identified", "regularized", "zerophase",
-              "T_a identified per wheel from drive and LVDT (orders 3/6), 30 Hz 6th-order Butterworth, zero-phase")
+              "T_a identified per corner from independent random drives at the test drive's rms (rigsim identify), "
+              "30 Hz 6th-order Butterworth, zero-phase")
 METHODS = (PAPER, BEST)
 
 
@@ -105,49 +105,6 @@ def method_named(actuator: str, lowpass: str, mode: str) -> Method:
         if (m.actuator, m.lowpass, m.mode) == (actuator, lowpass, mode):
             return m
     return Method("custom", actuator, lowpass, mode, f"T_a {actuator}, low-pass {lowpass}, {mode}")
-
-
-def identify_wheel_actuator(drive_m, pan_m, fs: float, *, orders=ID_ORDERS, f_max_hz: float = 60.0):
-    """T_a(s) = (num, den) of one wheel from the rig run's drive (m) and pan displacement (m).
-
-    ``fs`` in Hz. The fit of :func:`correction.actuator_id.identify_actuator` (H1 estimate
-    weighted by coherence, anchors at T_a = 1 below the first bin, stable rational fit up to
-    ``f_max_hz``, Hz), with the larger orders a truck-loaded actuator needs, then made usable as
-    an inverse: right-half-plane zeros reflected, slow near-cancelling pole-zero pairs removed,
-    T_a(0) = 1.
-    """
-    nperseg = int(min(8192, max(256, np.asarray(drive_m).size // 8)))
-    fit = identify_actuator(drive_m, pan_m, fs, f_max_hz=f_max_hz, nperseg=nperseg, orders=orders)
-    num = np.asarray(fit.num[0][0], dtype=float)
-    den = np.asarray(fit.den[0][0], dtype=float)
-    # A free fit may place a zero in the right half-plane where the data do not constrain it
-    # (seen: 0.04 rad/s, far below the first bin). Reflect it: the magnitude is unchanged, the
-    # inverse stays stable, and a position loop with PI control is minimum phase anyway.
-    zeros = np.roots(num)
-    if np.any(zeros.real > 0):
-        zeros = np.where(zeros.real > 0, -zeros.conj(), zeros)
-        num = np.real(np.poly(zeros)) * num[0]
-    # Below the estimate's resolution (fs / nperseg ~ 0.12 Hz) the fit is free to add a slow
-    # pole-zero pair that nearly cancels (seen: -0.29 and -0.288 rad/s). It changes the gain by
-    # well under 1 % and only below ~0.1 Hz, where the high-passed drive has no content, but its
-    # inverse rings for tens of seconds. Cancel such pairs.
-    poles = np.roots(den)
-    zeros = np.roots(num)
-    slow = 2 * np.pi * 2.0 * fs / nperseg  # rad/s: twice the estimate's frequency resolution
-    keep_p = np.ones(poles.size, dtype=bool)
-    keep_z = np.ones(zeros.size, dtype=bool)
-    for iz, z in enumerate(zeros):
-        if abs(z) > slow:
-            continue
-        gap = np.where(keep_p, np.abs(poles - z), np.inf)
-        ip = int(np.argmin(gap))
-        if gap[ip] < 0.1 * max(abs(z), 1e-3) + 1e-3:
-            keep_p[ip] = keep_z[iz] = False
-    if not (keep_p.all() and keep_z.all()):
-        num = np.atleast_1d(np.real(np.poly(zeros[keep_z]))) * num[0]
-        den = np.atleast_1d(np.real(np.poly(poles[keep_p]))) * den[0]
-    # The anchors pin the static gain near 1; make it exactly 1 (the PI loop's integral action).
-    return num * (den[-1] / num[-1]), den
 
 
 @dataclass(frozen=True)
@@ -258,16 +215,22 @@ def measured_force(rig, noise_N: float, seed: int) -> np.ndarray:
     return clean + noise_N * np.random.default_rng((int(seed), 8)).standard_normal(clean.shape)
 
 
-def _actuator(method: Method, rig_model, rig, force_N: np.ndarray, i: int, fs: float):
+def _actuators(method: Method, rig_model, force_N: np.ndarray, identified) -> list:
     if method.actuator == "identified":
-        return identify_wheel_actuator(rig.signals["profile_m"][:, i], rig.signals["pan_m"][:, i], fs)
-    load = float(np.mean(force_N[:, i])) + rig_model.pan_mass_kg * GRAVITY_M_S2  # static actuator load
-    kt = float(rig_model.tire_stiffness_N_per_m[i])
-    return eq4_coefficients_from(**eq4_parameters(rig_model.params, kt, load, mass_kg=rig_model.pan_mass_kg))
+        if identified is None:
+            raise ValueError(f"the {method.name} method corrects with identified T_a: pass identified= "
+                             "(scenarios.studies.identify.compute.identify_rig(...).actuators())")
+        return [tuple(np.asarray(x, float) for x in ta) for ta in identified]
+    out = []
+    for i in range(force_N.shape[1]):
+        load = float(np.mean(force_N[:, i])) + rig_model.pan_mass_kg * GRAVITY_M_S2  # static actuator load
+        kt = float(rig_model.tire_stiffness_N_per_m[i])
+        out.append(eq4_coefficients_from(**eq4_parameters(rig_model.params, kt, load, mass_kg=rig_model.pan_mass_kg)))
+    return out
 
 
-def score_pair(road, rig, rig_model, *, methods=METHODS, noise_N: float = NOISE_N, seed: int = 0,
-               settling_tolerance: float = SETTLING_TOLERANCE) -> PairScore:
+def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_N: float = NOISE_N,
+               seed: int = 0, settling_tolerance: float = SETTLING_TOLERANCE) -> PairScore:
     """Correct ``rig``'s wheel forces by each method and compare them with ``road``'s.
 
     Parameters
@@ -277,6 +240,8 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, noise_N: float = NOISE_
     rig_model : scenarios.core.rig.Rig
         The rig of the scenario (actuator parameters, pan mass, tire stiffness for eq. 4).
     methods : sequence of Method
+    identified : sequence of 4 (num, den), optional
+        T_a per corner for the methods whose ``actuator`` is "identified" (:func:`identify_rig`).
     noise_N : float, N
         rms of the white measurement noise added to the rig force (0 turns it off).
     seed : int
@@ -301,16 +266,9 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, noise_N: float = NOISE_
     n = road_f.shape[0]
     scores = {}
     for m in methods:
-        out = np.empty_like(rig_f)
-        settled = np.ones(n, dtype=bool)
-        tas = []
-        for i in range(rig_f.shape[1]):
-            ta = _actuator(m, rig_model, rig, rig_f, i, fs)
-            filt = design_correction(ta, fs, m.lowpass, settling_tolerance=settling_tolerance)
-            out[:, i] = correct(rig_f[:, i], filt, m.mode)
-            settled &= filt.transient_mask(n, m.mode)
-            tas.append((np.asarray(ta[0], float), np.asarray(ta[1], float)))
-        settled &= reference_filter(fs, m.lowpass, settling_tolerance=settling_tolerance).transient_mask(n, m.mode)
+        tas = _actuators(m, rig_model, rig_f, identified)
+        cf = correct_forces(rig_f, tas, fs, lowpass=m.lowpass, mode=m.mode, settling_tolerance=settling_tolerance)
+        out, settled = cf.corrected_N, cf.settled
         scored_s = float(np.count_nonzero(settled)) / fs
         if scored_s < MIN_SCORED_S:
             lost = (n - np.count_nonzero(settled)) / fs
@@ -323,7 +281,8 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, noise_N: float = NOISE_
         figures = {"dlc_corrected": dlc(out[s]), "dlc_road_settled": dlc(road_f[s]),
                    "dlc_road_band": dlc(road_b[s]), "dlc_rig_band": dlc(rig_b[s]),
                    "nrmse_corrected": nrmse(out[s], road_b[s]), "nrmse_rig": nrmse(rig_b[s], road_b[s])}
-        scores[m.name] = MethodScore(method=m, corrected_N=out, road_band_N=road_b, rig_band_N=rig_b,
-                                     settled=settled, actuators=tuple(tas), figures=figures, scored_s=scored_s)
+        actuators = tuple((np.asarray(num, float), np.asarray(den, float)) for num, den in tas)
+        scores[m.name] = MethodScore(method=m, corrected_N=out, road_band_N=road_b, rig_band_N=rig_b, settled=settled,
+                                     actuators=actuators, figures=figures, scored_s=scored_s)
     return PairScore(t_s=road.t_s, road_N=road_f, rig_N=rig_f, noise_N=float(noise_N), dlc_road=dlc(road_f),
                      dlc_rig=dlc(rig_f), methods=scores, corners=tuple(road.corners))

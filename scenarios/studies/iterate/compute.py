@@ -19,12 +19,10 @@ Sequence of :func:`iterate_scenario` (every rig run is :meth:`scenarios.core.rig
    correction, both methods), and the comparison table.
 
 Compared samples: every row of the comparison (road, rig with the original drive, rig with the
-iterated drive, output-corrected) is scored on the same samples, those where the ``best``
-method's correction filters and its band-limit filter have settled on the original rig run
-(``score.methods["best"].settled``, one contiguous stretch: it starts after the iteration's
-0.5 s start taper but may reach into its 0.5 s end taper, where the iterated drive fades back to
-the original one; for the 12 s high-roughness 72 km/h case t = 0.99 to 11.87 s, which costs the
-iterated drive an NRMSE of 0.162 instead of 0.156 without the end taper). DLC
+iterated drive, output-corrected) is scored on the same samples: outside the iteration's 0.5 s
+tapers at both ends (where the iterated drive fades back to the original one) and where the
+``best`` method's correction filters and its band-limit filter have settled on the original rig
+run (``score.methods["best"].settled``). DLC
 (std / mean, :func:`correction.dlc.dlc`) and NRMSE against the unfiltered road force
 (:func:`correction.dlc.nrmse`) are per wheel, then averaged over the four wheels. Rig forces are
 the measured ones (:func:`scenarios.studies.scoring.measured_force`: plus the load-cell noise of
@@ -52,10 +50,11 @@ from scenarios.core.results import RunResult
 from scenarios.core.rig import Rig
 from scenarios.core.run import run
 from scenarios.core.watch import SayFn
+from scenarios.studies.identify.compute import identify_rig
 from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, measured_force, score_pair
 
 __all__ = ["TARGETS", "IDENT_SKIP_S", "IDENT_MIN_S", "IDENT_NPERSEG", "ComparisonRow", "IterateResult",
-           "check_options", "splice_drive", "identify_rig", "iterate_scenario"]
+           "check_options", "splice_drive", "identify_frf_matrix", "iterate_scenario"]
 
 TARGETS = ("displacement", "force")
 IDENT_NPERSEG = 4096  # samples: at 1 kHz 0.24 Hz resolution, ~30 averages per 60 s
@@ -240,7 +239,7 @@ def splice_drive(base: Drive, t_out_s, drive_out_m) -> Drive:
     return Drive.from_positions(t, z)
 
 
-def identify_rig(rig: Rig, target: str, duration_s: float, rate_hz: float) -> FRF:
+def identify_frf_matrix(rig: Rig, target: str, duration_s: float, rate_hz: float) -> FRF:
     """Identification run of ``duration_s`` (s) analysed plus :data:`IDENT_SKIP_S` and its H1 FRF
     matrix at ``rate_hz`` (Hz): drive -> pan displacement (m/m) or drive -> tire force (N/m)."""
     rec = rig.run(identification_drive(duration_s + IDENT_SKIP_S, rig.dt_s), rate_hz=rate_hz)
@@ -309,7 +308,7 @@ def iterate_scenario(scenario: Scenario, target: str, *, gain: float = 0.8, max_
     say(f"rig run with the original drive: {walls['rig_original_s']:.1f} s")
 
     w0 = time.perf_counter()
-    frf = identify_rig(rig, target, max(IDENT_MIN_S, scenario.duration_s), fs)
+    frf = identify_frf_matrix(rig, target, max(IDENT_MIN_S, scenario.duration_s), fs)
     walls["identification_s"] = time.perf_counter() - w0
     say(f"identification run: {walls['identification_s']:.1f} s")
 
@@ -340,17 +339,21 @@ def iterate_scenario(scenario: Scenario, target: str, *, gain: float = 0.8, max_
     rig_it = records[res.best_index]
 
     try:
-        score, error = score_pair(road, rig0, rig, methods=METHODS, noise_N=noise, seed=scenario.seed), None
+        identified = identify_rig(scenario, rig=rig).actuators()  # T_a of the output correction
+        score = score_pair(road, rig0, rig, methods=METHODS, identified=identified, noise_N=noise, seed=scenario.seed)
+        error = None
     except (ValueError, IndexError, np.linalg.LinAlgError) as exc:
         # The per-wheel identification of the output correction can fail on a strongly nonlinear
         # rig; the drive iteration's result stands on its own, so report it without that row.
         score, error = None, f"output correction failed: {type(exc).__name__}: {exc}"
     road_N = np.asarray(road.signals["tire_force_N"], dtype=float)
+    # Outside the iteration's tapers at both ends (where the iterated drive fades to the original)
+    # and, when the output correction was made, where its filters have settled.
+    s = np.zeros(road_N.shape[0], dtype=bool)
+    edge = int(round(TAPER_S * fs)) if score is not None else int(round((TAPER_S + 0.5) * fs))
+    s[edge:road_N.shape[0] - edge] = True
     if score is not None:
-        s = np.array(score.methods["best"].settled)
-    else:
-        s = np.zeros(road_N.shape[0], dtype=bool)
-        s[int(round((TAPER_S + 0.5) * fs)):-int(round((TAPER_S + 0.5) * fs))] = True
+        s &= np.array(score.methods["best"].settled)
     road_dlc = float(np.mean(dlc(road_N[s])))
     rig_wall = walls["rig_original_s"]
     comparison = {

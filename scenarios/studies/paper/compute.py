@@ -18,6 +18,7 @@ from scenarios.core.pool import run_jobs
 from scenarios.core.results import RunResult
 from scenarios.core.rig import Rig
 from scenarios.core.run import run
+from scenarios.studies.identify.compute import RigIdentification, identify_rig
 from scenarios.studies.paper.table import PAPER_TABLE2
 from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, score_pair
 
@@ -46,6 +47,8 @@ class PaperCase:
     ----------
     scenario : Scenario
     road, rig : RunResult
+    identification : RigIdentification
+        T_a per corner from independent random drives before the test (the "best" method's).
     score : PairScore
         The rig force measured (with noise) and corrected by both methods.
     """
@@ -53,6 +56,7 @@ class PaperCase:
     scenario: Scenario
     road: RunResult
     rig: RunResult
+    identification: RigIdentification
     score: PairScore
 
     @property
@@ -69,6 +73,9 @@ class PaperCase:
         row["paper"] = dict(PAPER_TABLE2.get(self.name, {}))
         row["noise_N"] = self.score.noise_N
         row["analysed_s"] = {k: round(ms.scored_s, 3) for k, ms in self.score.methods.items()}
+        row["identification"] = {c: {"orders": list(f.orders), "bandwidth_hz": round(f.bandwidth_hz, 3),
+                                     "held_out_error": round(f.held_out_error, 5)}
+                                 for c, f in self.identification.fits.items()}
         return row
 
 
@@ -112,7 +119,7 @@ class PaperResult:
                 f"{r['dlc_corrected_paper']:7.4f} ({ref['corrected']:.4f}) {r['dlc_corrected']:10.4f} "
                 f"{r['dlc_road_lowpassed']:8.4f} {r['nrmse_corrected']:6.3f}")
         lines.append("DLC = std/mean of the wheel force, mean of the four wheels; (paper's Table 2). corr. paper: eq. 4 and")
-        lines.append("the paper's 16/24 Hz low-pass; corrected: T_a identified per wheel, 30 Hz low-pass; road LP: the road")
+        lines.append("the paper's 16/24 Hz low-pass; corrected: T_a identified per corner (rigsim identify), 30 Hz low-pass; road LP: the road")
         lines.append("force through the same low-pass; NRMSE = rms(corrected - road LP) / std(road LP).")
         return "\n".join(lines)
 
@@ -123,6 +130,14 @@ def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz
     if duration_s is not None:
         scenario = dataclasses.replace(scenario, duration_s=duration_s)
     return run(scenario, mode, pose_rate_hz=pose_rate_hz)
+
+
+def _identify_job(path: str, duration_s: float | None = None) -> RigIdentification:
+    """Worker: identify the rig of one scenario (its test drive sets the rms), in its own process."""
+    scenario = load_scenario(path)
+    if duration_s is not None:
+        scenario = dataclasses.replace(scenario, duration_s=duration_s)
+    return identify_rig(scenario)
 
 
 def run_cases(jobs: Sequence[tuple[str, str]], *, workers: int | None = None, duration_s: float | None = None,
@@ -158,10 +173,15 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
     scenarios = [load_scenario(p) for p in paths]
     if duration_s is not None:
         scenarios = [dataclasses.replace(s, duration_s=duration_s) for s in scenarios]
-    results = run_cases([(str(p), mode) for p in paths for mode in ("road", "rig")], workers=workers,
-                        duration_s=duration_s, pose_rate_hz=pose_rate_hz, on_done=on_done)
+    calls = []
+    for p in paths:
+        calls += [(_identify_job, (str(p), duration_s))]
+        calls += [(_run_job, (str(p), mode, duration_s, pose_rate_hz)) for mode in ("road", "rig")]
+    done = None if on_done is None else (lambda i, r: on_done(r) if isinstance(r, RunResult) else None)
+    results = run_jobs(calls, workers=workers, on_done=done)
     cases = []
-    for scenario, road, rig in zip(scenarios, results[0::2], results[1::2]):
-        score = score_pair(road, rig, Rig(scenario), methods=METHODS, noise_N=noise_N, seed=scenario.seed)
-        cases.append(PaperCase(scenario=scenario, road=road, rig=rig, score=score))
+    for scenario, ident, road, rig in zip(scenarios, results[0::3], results[1::3], results[2::3]):
+        score = score_pair(road, rig, Rig(scenario), methods=METHODS, identified=ident.actuators(),
+                           noise_N=noise_N, seed=scenario.seed)
+        cases.append(PaperCase(scenario=scenario, road=road, rig=rig, identification=ident, score=score))
     return PaperResult(cases=tuple(cases), noise_N=float(noise_N))

@@ -140,7 +140,13 @@ def evaluate_case(scenario, settings: EvalSettings = EvalSettings()) -> CaseResu
     wall0 = time.perf_counter()
     road = run(scenario, "road")
     rig = run(scenario, "rig")
-    pair = score_pair(road, rig, Rig(scenario, hydraulic=True), methods=(settings.method,),
+    model = Rig(scenario, hydraulic=True)
+    identified = None
+    if settings.method.actuator == "identified":  # characterize the rig as a lab does before the test
+        from scenarios.studies.identify.compute import identify_rig
+
+        identified = identify_rig(scenario, rig=model).actuators()
+    pair = score_pair(road, rig, model, methods=(settings.method,), identified=identified,
                       noise_N=settings.noise_N, seed=scenario.seed, settling_tolerance=settings.settling_tolerance)
     return CaseResult.from_score(pair, rig.events, time.perf_counter() - wall0)
 

@@ -1,0 +1,87 @@
+"""``rigsim identify``: characterize the rig's actuators before a test (the command-line adapter).
+
+On the simulated rig (``rigsim identify SCENARIO.toml --out DIR``) or from a recorded file of
+drive and LVDT channels of a real rig (``rigsim identify --from-file REC.csv --pairs
+fl=DRIVE:LVDT,... --out DIR``). Writes ``DIR/actuators.toml`` (one T_a per corner, the file
+``rigsim correct --actuators`` reads), ``DIR/identification.json`` (fit diagnostics) and
+``DIR/bode.png`` (data against fit).
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+
+__all__ = ["add_parser", "cmd_identify"]
+
+
+def add_parser(subparsers) -> None:
+    """Register ``rigsim identify``."""
+    p = subparsers.add_parser(
+        "identify", help="identify T_a per corner: random drives on the simulated rig, or a recorded file")
+    p.add_argument("scenario", nargs="?", help="scenario TOML file (the truck on the simulated rig)")
+    p.add_argument("--out", required=True, help="output folder (actuators.toml, identification.json, bode.png)")
+    p.add_argument("--duration-s", type=float, default=None,
+                   help="identification record in s (default: the scenario's duration, at least 60 s)")
+    p.add_argument("--seed", type=int, default=None, help="seed of the random drives (default: the project's)")
+    p.add_argument("--from-file", default=None, metavar="REC.csv",
+                   help="identify from a recorded file of a real rig instead (needs --pairs)")
+    p.add_argument("--pairs", default=None, metavar="fl=DRIVE:LVDT,...",
+                   help="with --from-file: per corner the drive and the pan displacement (LVDT) columns, in m")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_identify)
+
+
+def _check(args):
+    from scenarios.core.config import ScenarioError
+
+    if (args.scenario is None) == (args.from_file is None):
+        raise ScenarioError("give either a SCENARIO.toml (the simulated rig) or --from-file REC.csv, exactly one")
+    if args.from_file is not None and not args.pairs:
+        raise ScenarioError("--from-file needs --pairs fl=DRIVE:LVDT,... naming each corner's drive and LVDT columns")
+    if args.pairs and args.from_file is None:
+        raise ScenarioError("--pairs goes with --from-file; a simulated identification knows its channels")
+    d = args.duration_s
+    if d is not None and not (math.isfinite(d) and 10.0 <= d <= 3600.0):
+        raise ScenarioError(f"--duration-s must lie in [10, 3600] s, got {d:g}")
+    out = pathlib.Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ScenarioError(f"--out {out} exists and is not a folder")
+
+
+def cmd_identify(args) -> int:
+    from correction.actuator_file import write_actuators_file
+    from scenarios.core.config import ScenarioError, load_scenario
+    from scenarios.core.drive import IDENT_SEED
+    from scenarios.core.files import atomic_write_bytes, to_json
+    from scenarios.studies.identify.report import bode_png
+
+    _check(args)
+    seed = IDENT_SEED if args.seed is None else int(args.seed)
+    if args.from_file is not None:
+        from scenarios.studies.identify.recorded import identify_recorded
+
+        ident = identify_recorded(args.from_file, args.pairs)
+        title = pathlib.Path(args.from_file).name
+    else:
+        from correction.actuator_fit import ActuatorFitError
+        from scenarios.studies.identify.compute import identify_rig
+
+        scenario = load_scenario(args.scenario)
+        if not args.quiet:
+            print(f"identifying {scenario.name}: independent random drives on the four posts", flush=True)
+        try:
+            ident = identify_rig(scenario, duration_s=args.duration_s, seed=seed)
+        except ActuatorFitError as exc:
+            raise ScenarioError(str(exc)) from None
+        title = scenario.name
+    out = pathlib.Path(args.out)
+    files = {"identification.json": to_json(ident).encode("utf-8"), "bode.png": bode_png(ident.fits, title)}
+    write_actuators_file(out / "actuators.toml", ident.fits, meta=ident.meta())
+    for name, data in files.items():
+        atomic_write_bytes(out / name, data)
+    print(f"{'corner':>6} {'orders':>7} {'bandwidth Hz':>13} {'held-out err':>13}")
+    for c, fit in ident.fits.items():
+        print(f"{c:>6} {fit.orders[0]:>3}/{fit.orders[1]:<3} {fit.bandwidth_hz:13.2f} {fit.held_out_error:13.4f}")
+    print(f"wrote {out / 'actuators.toml'}, {out / 'identification.json'} and {out / 'bode.png'}")
+    return 0
