@@ -14,10 +14,48 @@ import sys
 __all__ = ["main"]
 
 
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """Help with each option's default shown (unless its help already states it) and the
+    description and example lines kept as written."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if ("default" not in text and action.default not in (None, False, argparse.SUPPRESS)
+                and action.option_strings and action.nargs != 0):
+            text += " (default: %(default)s)"
+        return text
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message):  # argparse's own errors: exit 2 with one sentence, like ours
         self.print_usage(sys.stderr)
         self.exit(2, f"rigsim: error: {message}\n")
+
+
+#: One example line per subcommand, shown at the end of its --help.
+EXAMPLES = {
+    "run": "rigsim run scenarios/data/paper/high_72kmh_3640kg.toml --mode rig --out out/run --duration-s 10",
+    "paper": "rigsim paper --out out/paper",
+    "validate": "rigsim validate --out out/validate --duration-s 20",
+    "identify": "rigsim identify scenarios/data/paper/high_72kmh_3640kg.toml --out out/ident",
+    "correct": "rigsim correct measured.csv --actuators out/ident/actuators.toml -o corrected.csv",
+    "sweep": "rigsim sweep scenarios/data/sweeps/example.toml --out out/sweep --jobs 2",
+    "iterate": "rigsim iterate scenarios/data/paper/high_72kmh_3640kg.toml --target displacement --out out/iterate",
+    "model": "rigsim model --payload-kg 6360",
+}
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rigsim")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree not installed
+        return "unknown (not installed)"
 
 
 @contextlib.contextmanager
@@ -46,6 +84,15 @@ def _cmd_run(args) -> int:
     from scenarios.core.run import run
 
     scenario = load_scenario(args.scenario)
+    if args.duration_s is not None:
+        import dataclasses
+        import math
+
+        from scenarios.core.config import ScenarioError
+
+        if not (math.isfinite(args.duration_s) and 0 < args.duration_s <= 3600):
+            raise ScenarioError(f"--duration-s must lie in (0, 3600] s, got {args.duration_s:g}")
+        scenario = dataclasses.replace(scenario, duration_s=float(args.duration_s))
     pose_rate = None
     if args.rrd:
         from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
@@ -88,14 +135,17 @@ def _cmd_model(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="rigsim", description="Four-post road simulator (DYNTRAC) with a heavy truck, in MuJoCo.")
+    p = _Parser(prog="rigsim", description="Four-post road simulator (DYNTRAC) with a heavy truck, in MuJoCo.",
+                epilog="example: " + EXAMPLES["paper"])
+    p.add_argument("--version", action="version", version=f"rigsim {_version()}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     r = sub.add_parser("run", help="run one scenario file in road or rig mode")
     r.add_argument("scenario", help="scenario TOML file")
     r.add_argument("--mode", choices=("road", "rig"), default="road",
                    help="road: pans follow the profile exactly; rig: hydraulic actuators drive the pans")
-    r.add_argument("--out", required=True, help="output folder (result.json, timeseries.csv)")
+    r.add_argument("--out", "-o", required=True, help="output folder (result.json, timeseries.csv)")
+    r.add_argument("--duration-s", type=float, default=None, help="override the scenario's duration, s")
     r.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd) of the run")
     r.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -116,8 +166,10 @@ def build_parser() -> argparse.ArgumentParser:
     identify_cmd.add_parser(sub)
 
     m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
-    m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg (default 3640)")
+    m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg")
     m.set_defaults(func=_cmd_model)
+    for name, parser in sub.choices.items():
+        parser.epilog = f"example: {EXAMPLES[name]}"
     return p
 
 

@@ -20,7 +20,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "identify", help="identify T_a per corner: random drives on the simulated rig, or a recorded file")
     p.add_argument("scenario", nargs="?", help="scenario TOML file (the truck on the simulated rig)")
-    p.add_argument("--out", required=True, help="output folder (actuators.toml, identification.json, bode.png)")
+    p.add_argument("--out", "-o", required=True, help="output folder (actuators.toml, identification.json, bode.png)")
     p.add_argument("--duration-s", type=float, default=None,
                    help="identification record in s (default: the scenario's duration, at least 60 s)")
     p.add_argument("--seed", type=int, default=None, help="seed of the random drives (default: the project's)")

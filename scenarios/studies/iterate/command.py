@@ -33,7 +33,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c.add_argument("--target", choices=TARGETS, required=True,
                    help="displacement: pan displacement = road profile (Moran); force: tire force = the road "
                         "run's tire force (RPC-style remote target)")
-    c.add_argument("--out", required=True, help="output folder (drive.csv, iteration.json, iteration.png)")
+    c.add_argument("--out", "-o", required=True, help="output folder (drive.csv, iteration.json, iteration.png)")
     c.add_argument("--gain", type=float, default=0.8, help="relaxation gain g (default 0.8; stable below ~2)")
     c.add_argument("--max-iterations", type=int, default=6, help="most drive updates (default 6)")
     c.add_argument("--tolerance", type=float, default=0.01, help="stop at this mean NRMSE (default 0.01)")

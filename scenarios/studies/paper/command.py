@@ -14,7 +14,7 @@ def add_parser(subparsers) -> None:
     from scenarios.studies.scoring import NOISE_N
 
     pp = subparsers.add_parser("paper", help="the paper's three cases: road and rig runs, output correction, Table 2")
-    pp.add_argument("--out", required=True, help="output folder")
+    pp.add_argument("--out", "-o", required=True, help="output folder")
     pp.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     pp.add_argument("--duration-s", type=float, default=None,
                     help="override every case's duration in s (a quick look; the paper's cases run 60 s)")

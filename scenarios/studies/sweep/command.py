@@ -42,7 +42,7 @@ def cmd_sweep(args) -> int:
     try:
         worker_count(args.workers)
     except ValueError:
-        raise ScenarioError(f"--workers must be a whole number >= 1, got {args.workers}") from None
+        raise ScenarioError(f"--jobs must be a whole number >= 1, got {args.workers}") from None
     grid = load_grid(args.grid)  # every case validated before anything starts
     out = pathlib.Path(args.out)
     quiet = getattr(args, "quiet", False)
@@ -78,10 +78,11 @@ def add_parser(subparsers) -> None:
         description="Run every case of a grid file in road and rig mode, correct the rig forces, and "
                     "collect one row per case in OUT/results.csv (resumable; one file per case in OUT/cases).")
     sp.add_argument("grid", metavar="GRID.toml", help="grid file: a base scenario plus axes and/or [[cases]]")
-    sp.add_argument("--out", required=True, help="output folder")
+    sp.add_argument("--out", "-o", required=True, help="output folder")
     sp.add_argument("--scheduler", metavar="tcp://HOST:PORT", default=None,
                     help="run on an existing Dask distributed cluster (workers started with --nthreads 1)")
-    sp.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    sp.add_argument("--jobs", "--workers", dest="workers", type=int, default=None, metavar="N",
+                    help="local worker processes (default: all cores; --workers is the old name)")
     sp.add_argument("--no-resume", action="store_true", help="run every case again, even those already finished")
     sp.add_argument("--quiet", action="store_true", help="no progress output")
     sp.set_defaults(func=cmd_sweep)

@@ -22,7 +22,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``validate`` on an ``argparse`` sub-parser collection; sets ``func=cmd_validate``."""
     p = subparsers.add_parser(
         "validate", help="validate the linearized actuator model (eq. 4) against the multibody plant")
-    p.add_argument("--out", required=True, help="output folder (validate.json, report.md, PNGs)")
+    p.add_argument("--out", "-o", required=True, help="output folder (validate.json, report.md, PNGs)")
     p.add_argument("--duration-s", type=float, default=None,
                    help="analysed duration of the Table 1 runs in s (default: the scenario's 60 s)")
     p.add_argument("--ident-duration-s", type=float, default=None,
