@@ -1,114 +1,251 @@
-"""Reading measured channels of a rig test: time histories in a CSV file, their sampling rate.
+"""Measured channels of a rig test: one reader, and writers, for the files test labs keep.
 
-The reader of measured data lives with the correction, which runs on real rig data without a
-simulator: ``rigsim correct`` and ``rigsim identify --from-file`` read through it. Every problem
-is one sentence naming the file, the column or the line, and the fix.
+``rigsim correct`` and ``rigsim identify --from-file`` read real rig data through this module,
+without a simulator. The format follows the file's extension:
+
+=====================  =========  ===================================================
+extension              format     how
+=====================  =========  ===================================================
+.csv .txt .dat         ``csv``    :mod:`correction.measured_csv` (delimiter, decimal mark,
+                                  preamble, units row, units in headers: sniffed)
+.rsp .drv .tim .rpc    ``rpc3``   :mod:`correction.rpc3` (MTS RPC III, own code)
+.mf4 .mdf              ``mdf4``   ``asammdf`` (the ``lab`` extra), :mod:`correction.measured_lab`
+.tdms                  ``tdms``   ``nptdms`` (the ``lab`` extra), :mod:`correction.measured_lab`
+=====================  =========  ===================================================
+
+Every channel comes back in SI (:mod:`correction.measured_units`: kN -> N, mm -> m, bar -> Pa,
+ms -> s, % -> fraction...), with the unit as written kept in ``source_units``; a channel without
+unit is taken as SI (a name suffix ``_N``, ``_m``, ``_Pa``, ``_s``, ``_ms`` gives its unit; with
+none, its SI unit and ``source_units`` entry are ``""``). The time axis must be uniform (1 % of a
+step); ``fs_hz`` is its rate. Every refusal is one :class:`MeasuredDataError` sentence naming the
+file, the column or channel, the line or unit, and the fix.
+
+Metadata: the CSV ``# key: value`` preamble; the RPC III header keys other than those that lay
+out the data (:data:`correction.rpc3.STRUCTURAL_KEYS`, ``*.CHAN_n``); the MDF4 header comment and
+properties; the TDMS file and group properties. The writers put metadata back in the same places.
+
+``read_force_csv`` and ``sampling_rate`` keep their old signatures (built on the new reader) for
+the callers that still use them.
 """
 
 from __future__ import annotations
 
-import csv
-import math
+import pathlib
+from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["MeasuredDataError", "TIME_NAMES", "read_force_csv", "sampling_rate"]
+from correction.measured_core import (TIME_KEYS, MeasuredChannels, MeasuredDataError, atomic_output, check_output,
+                                      make_channels, to_si, uniform_rate)
 
-#: Accepted names of the time column (seconds).
+__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "TIME_NAMES", "READ_FORMATS", "WRITE_FORMATS",
+           "read_channels", "write_channels", "format_of", "read_force_csv", "sampling_rate"]
+
+#: Time column names of the old ``read_force_csv`` (exact, case-sensitive): "time", "time_s".
 TIME_NAMES = ("time", "time_s")
 
+#: Extension -> format read.
+READ_FORMATS = {".csv": "csv", ".txt": "csv", ".dat": "csv", ".rsp": "rpc3", ".drv": "rpc3", ".tim": "rpc3",
+                ".rpc": "rpc3", ".mf4": "mdf4", ".mdf": "mdf4", ".tdms": "tdms"}
+#: Extension -> format written.
+WRITE_FORMATS = READ_FORMATS
 
-class MeasuredDataError(ValueError):
-    """A measured-data file that cannot be used as written; the message is one sentence."""
+
+def format_of(path, formats: Mapping = READ_FORMATS) -> str:
+    """``"csv"``, ``"rpc3"``, ``"mdf4"`` or ``"tdms"`` from the extension; one sentence otherwise."""
+    ext = pathlib.Path(path).suffix.lower()
+    if ext not in formats:
+        raise MeasuredDataError(f"{str(path)!r} has extension {ext or '(none)'!r}; give a .csv/.txt/.dat (text), "
+                                ".rsp/.drv/.tim/.rpc (RPC III), .mf4/.mdf (MDF4) or .tdms file")
+    return formats[ext]
 
 
-def read_force_csv(path) -> tuple[list[str], list[str], np.ndarray]:
-    """Read a CSV of columns of numbers with a header line; check every field.
+def read_channels(path, *, time_col: str | None = None, channels=None) -> MeasuredChannels:
+    """Read the channels of a measured file, in SI, on its uniform time axis.
 
     Parameters
     ----------
     path : str or os.PathLike
+        .csv/.txt/.dat, .rsp/.drv/.tim/.rpc, .mf4/.mdf or .tdms.
+    time_col : str, optional
+        The time column or channel (CSV, TDMS; MDF4: its master channel); default: the one column
+        with a time name (``time``, ``Time [s]``, ``t``, ``zeit``, ``time_ms``...; see
+        :data:`TIME_KEYS`). RPC III files have no time column (DELTA_T gives the time).
+    channels : sequence of str, optional
+        Channels to read, in this order (names without unit decoration; a CSV header as written
+        is accepted too). Default: every numeric channel (CSV: every column with a number in it;
+        text columns are ignored).
 
     Returns
     -------
-    names : list of str
-        Column names (stripped).
-    time_text : list of str
-        The time column's fields as written (``names`` must contain "time" or "time_s").
-    data : numpy.ndarray, shape (rows, columns)
-        All columns as floats, in the units of the file.
+    MeasuredChannels
 
     Raises
     ------
     MeasuredDataError
-        Missing file, no header or data, duplicate or missing time column, a row with the wrong
-        number of fields, a field that is not a number, NaN or infinity (naming column and line).
+        One sentence naming the file and the column, line, unit, key or extra at fault.
     """
+    fmt = format_of(path)
+    if isinstance(channels, str):
+        channels = [channels]
+    channels = None if channels is None else list(channels)
+    if fmt == "csv":
+        from correction.measured_csv import channels_from_table, read_table
+
+        return channels_from_table(read_table(path), path, time_col=time_col, channels=channels)[0]
+    if fmt == "rpc3":
+        return _read_rpc(path, time_col, channels)
+    from correction import measured_lab
+
+    reader = measured_lab.read_mdf if fmt == "mdf4" else measured_lab.read_tdms
+    return reader(path, time_col=time_col, channels=channels)
+
+
+def _read_rpc(path, time_col, channels) -> MeasuredChannels:
+    from correction.rpc3 import is_structural, read_rpc3
+
+    if time_col is not None:
+        raise MeasuredDataError(f"RPC III file {str(path)!r} has no time column (DELTA_T gives the time); leave "
+                                "time_col out")
+    r = read_rpc3(path)
+    dup = sorted({n for n in r.names if r.names.count(n) > 1})
+    if dup:
+        raise MeasuredDataError(f"channel {dup[0]!r} appears more than once in {str(path)!r} (DESC.CHAN_n); "
+                                "rename one in RPC")
+    chosen = list(r.names) if channels is None else channels
+    missing = [c for c in chosen if c not in r.names]
+    if missing:
+        raise MeasuredDataError(f"channel {missing[0]!r} is not in {str(path)!r}; its channels are {', '.join(r.names)}")
+    if len(set(chosen)) != len(chosen):
+        raise MeasuredDataError(f"channels {chosen!r} name a channel twice; name each once")
+    n = r.data.shape[1]
+    if n < 2:
+        raise MeasuredDataError(f"RPC III file {str(path)!r} has {n} samples; at least two are needed")
+    data, units, src = {}, {}, {}
+    for c in chosen:
+        k = r.names.index(c)
+        data[c], units[c], src[c] = to_si(c, r.data[k], r.units[k], path, what="channel")
+    meta = {k: v for k, v in r.header.items() if not is_structural(k)}
+    return make_channels(time_s=r.start_s + np.arange(n) * r.dt_s, data=data, units=units, source_units=src,
+                         fs_hz=1.0 / r.dt_s, metadata=meta, path=path, fmt="rpc3")
+
+
+def _validated(channels):
+    """(time (n,), {name: (n,)}, {name: unit}) from a MeasuredChannels-like object; checks only."""
     try:
-        fh = open(path, newline="", encoding="utf-8")
-    except FileNotFoundError:
-        raise MeasuredDataError(f"input file {str(path)!r} does not exist") from None
-    except OSError as exc:
-        raise MeasuredDataError(f"cannot read input file {str(path)!r}: {exc.strerror}") from None
-    with fh:
-        reader = csv.reader(fh)
-        try:
-            header = next(reader, None)
-            if header is None:
-                raise MeasuredDataError(f"input file {str(path)!r} is empty; it needs a header line and data rows")
-            names = [h.strip() for h in header]
-            dup = sorted({n for n in names if names.count(n) > 1})
-            if dup:
-                raise MeasuredDataError(f"column {dup[0]!r} appears more than once in the header of {str(path)!r}")
-            time_names = [n for n in TIME_NAMES if n in names]
-            if not time_names:
-                raise MeasuredDataError(f"input file {str(path)!r} has no 'time' column (seconds); add one")
-            t_col = names.index(time_names[0])
-            rows, time_text = [], []
-            for row in reader:
-                line = reader.line_num
-                if not row or all(not f.strip() for f in row):
-                    continue  # blank line
-                if len(row) != len(names):
-                    raise MeasuredDataError(f"line {line} of {str(path)!r} has {len(row)} fields but the header has "
-                                 f"{len(names)}; fix the row")
-                values = []
-                for name, field in zip(names, row):
-                    try:
-                        v = float(field)
-                    except ValueError:
-                        raise MeasuredDataError(f"column {name!r} is not numeric at line {line} ({field.strip()!r}); "
-                                     "fix: give numbers only (force in N, time in s)") from None
-                    if not math.isfinite(v):
-                        raise MeasuredDataError(f"column {name!r} has {field.strip()!r} at line {line}; fix: remove or "
-                                     "interpolate the missing samples") from None
-                    values.append(v)
-                rows.append(values)
-                time_text.append(row[t_col].strip())
-        except UnicodeDecodeError:
-            raise MeasuredDataError(f"input file {str(path)!r} is not UTF-8 text (a CSV file is needed)") from None
-        except csv.Error as exc:
-            raise MeasuredDataError(f"input file {str(path)!r} is not valid CSV at line {reader.line_num}: {exc}") from None
-    if len(rows) < 2:
-        raise MeasuredDataError(f"input file {str(path)!r} has {len(rows)} data rows; at least two are needed")
-    return names, time_text, np.array(rows, dtype=float)
+        t = np.asarray(channels.time_s, dtype=float)
+        data = {str(k): np.asarray(v, dtype=float) for k, v in channels.data.items()}
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise MeasuredDataError(f"channels to write need time_s and data (name -> numbers): {exc}") from None
+    units = dict(getattr(channels, "units", None) or {})
+    if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise MeasuredDataError("time_s to write must be at least two finite, increasing times in s")
+    if not data:
+        raise MeasuredDataError("there is no channel to write; give at least one")
+    for name, v in data.items():
+        if v.shape != t.shape:
+            raise MeasuredDataError(f"channel {name!r} has shape {v.shape} but time_s has {t.shape}; give one value "
+                                    "per time")
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:
+            raise MeasuredDataError(f"channel {name!r} is {v[bad[0]]} at sample {int(bad[0])}; the file would not "
+                                    "read back: remove or interpolate it")
+    return t, data, {n: str(units.get(n, "") or "") for n in data}
+
+
+def write_channels(path, channels, *, metadata: Mapping | None = None, overwrite: bool = False,
+                   inputs=()) -> pathlib.Path:
+    """Write channels to a file whose format follows its extension, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        .csv/.txt/.dat (comma-separated, ``time [s]`` then ``name [unit]``), .rsp/.drv/.tim/.rpc
+        (RPC III int16; .drv is TIME_TYPE DRIVE), .mf4/.mdf (MDF 4.10), .tdms.
+    channels : MeasuredChannels or any object with ``time_s`` (n,) s, ``data`` Mapping[name ->
+        (n,)] and optionally ``units`` Mapping[name -> unit]: values are written as they are,
+        labelled with these units (SI for a MeasuredChannels).
+    metadata : Mapping[str, str], optional
+        Written as a ``#`` preamble (CSV), header keys (RPC III), the header comment (MDF4), file
+        properties (TDMS). Default: ``channels.metadata`` when it has one.
+    overwrite : bool
+        Replace an existing file (the CLI's ``--force``); refused otherwise.
+    inputs : sequence of paths
+        Files read for this output: writing onto one of them is refused.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    fmt = format_of(path, WRITE_FORMATS)
+    out = check_output(path, overwrite=overwrite, inputs=inputs)
+    t, data, units = _validated(channels)
+    meta = dict(getattr(channels, "metadata", None) or {}) if metadata is None else dict(metadata)
+    meta = {str(k): str(v) for k, v in meta.items()}
+    if fmt == "csv":
+        from correction.measured_csv import check_names, write_csv
+
+        check_names(list(data), "time", "CSV")
+        atomic_output(out, lambda tmp: write_csv(tmp, t, data, units, meta))
+    elif fmt == "rpc3":
+        from correction.rpc3 import write_rpc3
+
+        fs = uniform_rate(t, "time_s", lambda i: f"sample {i}")
+        ext = out.suffix.lower()
+        kind = {".drv": "DRIVE", ".rsp": "RESPONSE"}.get(ext, meta.get("TIME_TYPE", "RESPONSE"))
+        extra = {k: v for k, v in meta.items() if k != "TIME_TYPE"}
+        atomic_output(out, lambda tmp: write_rpc3(out, list(data), [units[n] for n in data], np.array(list(
+            data.values())), 1.0 / fs, start_s=float(t[0]), time_type=kind, extra=extra, dest=tmp))
+    else:
+        from correction import measured_lab
+
+        if fmt == "mdf4":
+            measured_lab.need("asammdf", ".mf4", "writing")
+            atomic_output(out, lambda tmp: measured_lab.write_mdf(tmp, t, data, units, meta))
+        else:
+            measured_lab.need("nptdms", ".tdms", "writing")
+            atomic_output(out, lambda tmp: measured_lab.write_tdms(tmp, t, data, units, meta))
+    return out
+
+
+# ---------------------------------------------------------------- the old API, on the new reader
+
+def read_force_csv(path) -> tuple[list[str], list[str], np.ndarray]:
+    """Read a delimited text file with a ``time`` (or ``time_s``) column; every numeric column.
+
+    Kept for the callers of the old API: the time column must be named exactly "time" or
+    "time_s" (a unit decoration such as ``time [ms]`` is allowed and converted). Text columns are
+    left out; every other column is checked (numbers, finite) and converted to SI.
+
+    Returns
+    -------
+    names : list of str
+        Column names (without unit decoration), the time column among them, in file order.
+    time_text : list of str
+        The time column's fields as written when they are seconds with a decimal point, else the
+        times in s written exactly.
+    data : numpy.ndarray, shape (rows, columns)
+        The columns of ``names``, in SI.
+    """
+    from correction.measured_csv import read_table, channels_from_table
+
+    table = read_table(path)
+    found = [n for n in TIME_NAMES if n in table.names]
+    if not found:
+        raise MeasuredDataError(f"input file {str(path)!r} has no 'time' column (seconds); add one")
+    mc, jt = channels_from_table(table, path, time_col=found[0])
+    names = [n for j, n in enumerate(table.names) if j == jt or n in mc.data]
+    cols = [mc.time_s if n == mc.time_name else mc.data[n] for n in names]
+    raw = table.columns[jt]
+    try:
+        same = table.decimal == "." and np.array_equal(raw.astype(float), mc.time_s)
+    except ValueError:
+        same = False
+    time_text = [str(x) for x in raw] if same else [repr(x) for x in mc.time_s.tolist()]
+    return names, time_text, np.column_stack(cols)
 
 
 def sampling_rate(t: np.ndarray, time_name: str) -> float:
-    """Sampling rate (Hz) of a uniform time column; errors name the first off-grid line."""
-    n = t.size
-    steps = np.diff(t)
-    bad = np.flatnonzero(steps <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise MeasuredDataError(f"column {time_name!r} does not increase at line {i + 2} (t = {t[i]:.9g} s after "
-                     f"{t[i - 1]:.9g} s); fix: sort the rows and remove duplicates")
-    dt = float(np.median(steps))
-    off = np.flatnonzero(np.abs(steps - dt) > 0.01 * dt)  # 1 % of a step: rounding passes, gaps do not
-    if off.size:
-        i = int(off[0]) + 1
-        raise MeasuredDataError(f"column {time_name!r} is not uniform at line {i + 2} (step {steps[i - 1]:.6g} s from "
-                     f"t = {t[i - 1]:.9g} s, the file's step is {dt:.6g} s); fix: resample the file to a "
-                     "uniform grid")
-    dt = (t[-1] - t[0]) / (n - 1)
-    return 1.0 / dt
+    """Sampling rate (Hz) of a uniform time column whose row i is on line i + 2 (old API)."""
+    return uniform_rate(np.asarray(t, dtype=float), time_name, lambda i: f"line {i + 2}")

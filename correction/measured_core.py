@@ -1,0 +1,209 @@
+"""What every reader and writer of measured channels shares: the result, the error, SI
+conversion of one channel, the uniform time axis, and the safe writing of an output file.
+
+Used by :mod:`correction.measured` (the public API) and the format modules
+(:mod:`correction.measured_csv`, :mod:`correction.rpc3`, :mod:`correction.measured_lab`); it
+imports none of them.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from correction.measured_units import lookup_unit, suffix_unit
+
+__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "is_time_name", "to_si", "uniform_rate",
+           "make_channels", "check_output", "atomic_output"]
+
+#: Names (case-insensitive, unit decoration removed) that make a column the time column.
+TIME_KEYS = frozenset({"time", "t", "zeit", "time_s", "time_ms", "time_us", "t_s", "t_ms", "zeit_s", "zeit_ms",
+                       "times", "sec", "seconds", "time_sec", "timestamp_s", "x_value"})
+
+
+class MeasuredDataError(ValueError):
+    """A measured-data file that cannot be used as written; the message is one sentence."""
+
+
+def is_time_name(name: str) -> bool:
+    """True for a column name that marks the time axis (``time``, ``Time``, ``t``, ``zeit``, ``time_ms``...).
+
+    Case-insensitive, except a lone ``T`` (a temperature or a torque more often than a time)."""
+    n = name.strip()
+    return n.lower() in TIME_KEYS and n != "T"
+
+
+@dataclass(frozen=True)
+class MeasuredChannels:
+    """Channels of one measured file on one uniform time axis, in SI units.
+
+    Attributes
+    ----------
+    time_s : numpy.ndarray, shape (n,), s
+        The time of each sample as the file gives it (not shifted to 0); read-only.
+    data : Mapping[str, numpy.ndarray]
+        Channel name (without unit decoration) -> values, shape (n,), in ``units[name]``; read-only.
+    units : Mapping[str, str]
+        Channel name -> its SI unit (``"N"``, ``"m"``, ``"Pa"``, ``"1"`` dimensionless, ``""`` when the
+        file gives none: the values are then taken as they stand).
+    source_units : Mapping[str, str]
+        Channel name -> the unit as the file wrote it (``"kN"``, ``"mm"``; ``""`` when none).
+    fs_hz : float, Hz
+        Sampling rate of the uniform time axis.
+    metadata : Mapping[str, str]
+        What the file carries besides the data: the CSV ``# key: value`` preamble, the RPC III header,
+        the MDF4 comment and properties, the TDMS properties.
+    path : str
+        The file read.
+    format : str
+        ``"csv"``, ``"rpc3"``, ``"mdf4"`` or ``"tdms"``.
+    time_name : str
+        The time column as named in the file (``"time"`` when the format has none).
+    """
+
+    time_s: np.ndarray
+    data: Mapping
+    units: Mapping
+    source_units: Mapping
+    fs_hz: float
+    metadata: Mapping
+    path: str
+    format: str
+    time_name: str = "time"
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Channel names in file order."""
+        return tuple(self.data)
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.time_s.size)
+
+    def array(self, names=None) -> np.ndarray:
+        """Channels ``names`` (default: all) as columns of one array, shape (n, k), SI."""
+        names = self.names if names is None else list(names)
+        return np.column_stack([self.data[n] for n in names]) if names else np.empty((self.n_samples, 0))
+
+    def to_dict(self) -> dict:
+        """A summary for JSON (no sample values): path, format, rate, channels and units, metadata."""
+        return {"path": self.path, "format": self.format, "fs_hz": self.fs_hz, "n_samples": self.n_samples,
+                "time_name": self.time_name, "start_s": float(self.time_s[0]) if self.n_samples else None,
+                "units": dict(self.units), "source_units": dict(self.source_units), "metadata": dict(self.metadata)}
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+def make_channels(*, time_s, data: Mapping, units: Mapping, source_units: Mapping, fs_hz: float,
+                  metadata: Mapping, path, fmt: str, time_name: str = "time") -> MeasuredChannels:
+    """Build a :class:`MeasuredChannels` with read-only arrays and mappings."""
+    return MeasuredChannels(
+        time_s=_frozen(time_s), data=MappingProxyType({k: _frozen(v) for k, v in data.items()}),
+        units=MappingProxyType(dict(units)), source_units=MappingProxyType(dict(source_units)),
+        fs_hz=float(fs_hz), metadata=MappingProxyType({str(k): str(v) for k, v in metadata.items()}),
+        path=str(path), format=fmt, time_name=time_name)
+
+
+def to_si(name: str, values: np.ndarray, unit: str | None, path, what: str = "column"):
+    """Convert one channel to SI: ``(values in SI, SI unit, unit as written)``.
+
+    ``unit`` is the unit written for the channel (None or ``""``: none; then a name suffix such as
+    ``_N``, ``_mm`` or ``_ms`` gives it, or the values are taken as SI with SI unit ``""``).
+
+    Raises
+    ------
+    MeasuredDataError
+        The unit is not in :data:`correction.measured_units.UNITS` (naming the channel and the unit).
+    """
+    written = "" if unit is None else unit.strip()
+    if written in ("", "NONE", "none", "None"):
+        written = suffix_unit(name)
+    found = lookup_unit(written)
+    if found is None:
+        raise MeasuredDataError(f"{what} {name!r} of {str(path)!r} is in {written!r}, a unit this reader does not "
+                                "know; fix: convert it to SI (N, m, Pa, s...) or leave the channel out")
+    si_unit, factor, offset = found
+    v = np.asarray(values, dtype=float)
+    if factor != 1.0:
+        v = v * factor
+    if offset != 0.0:
+        v = v + offset
+    return v, si_unit, written
+
+
+def uniform_rate(t: np.ndarray, name: str, where: Callable[[int], str]) -> float:
+    """Sampling rate (Hz) of a uniform time axis ``t`` (s); errors name the first bad place.
+
+    ``where(i)`` names sample ``i`` (``"line 12"``, ``"sample 12"``). A step may differ from the
+    median by 1 % (rounding of the written times), not more (a gap or a jitter).
+    """
+    n = t.size
+    if n < 2:
+        raise MeasuredDataError(f"time {name!r} has {n} samples; at least two are needed")
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise MeasuredDataError(f"column {name!r} does not increase at {where(i)} (t = {t[i]:.9g} s after "
+                                f"{t[i - 1]:.9g} s); fix: sort the rows and remove duplicates")
+    dt = float(np.median(steps))
+    off = np.flatnonzero(np.abs(steps - dt) > 0.01 * dt)
+    if off.size:
+        i = int(off[0]) + 1
+        raise MeasuredDataError(f"column {name!r} is not uniform at {where(i)} (step {steps[i - 1]:.6g} s from "
+                                f"t = {t[i - 1]:.9g} s, the file's step is {dt:.6g} s); fix: resample the file to "
+                                "a uniform grid")
+    return float((n - 1) / (t[-1] - t[0]))
+
+
+def check_output(path, *, overwrite: bool, inputs=()) -> pathlib.Path:
+    """Refuse writing onto an input file, or onto an existing file without ``overwrite``."""
+    out = pathlib.Path(path)
+    for inp in inputs:
+        if inp is None:
+            continue
+        p = pathlib.Path(inp)
+        try:
+            same = out.exists() and p.exists() and os.path.samefile(out, p)
+        except OSError:
+            same = False
+        if same or out.resolve() == p.resolve():
+            raise MeasuredDataError(f"output {str(path)!r} is the input file {str(inp)!r}; write to a new file")
+    if out.exists() and not overwrite:
+        raise MeasuredDataError(f"output {str(path)!r} exists; pass --force (overwrite=True) to replace it")
+    if out.exists() and out.is_dir():
+        raise MeasuredDataError(f"output {str(path)!r} is a folder; name a file")
+    return out
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def atomic_output(path: pathlib.Path, write: Callable[[str], None]) -> None:
+    """Call ``write(temp_path)`` on a temporary file beside ``path`` (same suffix), then rename it
+    over ``path``; the temporary file is removed if ``write`` fails."""
+    folder = path.parent if str(path.parent) else pathlib.Path(".")
+    folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual mode
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
