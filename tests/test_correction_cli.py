@@ -294,7 +294,10 @@ def test_actuators_file_corrects_each_corner_with_its_own_t_a_and_prints_the_dlc
         raw = d["rig"][mask, i]
         cor = got[f"{col}_corrected"]
         line = next(ln for ln in text.splitlines() if ln.startswith(col + " "))
-        before, after, change = line.split()[1:]
+        before, after, change, sf_before, sf_after = line.split()[1:6]
+        # stress factor E[(F/F_static)^4] with F_static the mean (correction.damage), worked here directly
+        assert float(sf_before) == pytest.approx(np.mean((np.maximum(raw, 0) / raw.mean()) ** 4), abs=6e-5)
+        assert float(sf_after) == pytest.approx(np.mean((np.maximum(cor, 0) / cor.mean()) ** 4), abs=6e-5)
         assert float(before) == pytest.approx(raw.std() / raw.mean(), abs=6e-5)
         assert float(after) == pytest.approx(cor.std() / cor.mean(), abs=6e-5)
         assert float(change.rstrip("%")) == pytest.approx(100 * (cor.std() / cor.mean() / (raw.std() / raw.mean()) - 1),

@@ -37,8 +37,6 @@ import os
 import pathlib
 import re
 
-import numpy as np
-
 __all__ = ["add_parser", "cmd_correct"]
 
 
@@ -214,23 +212,31 @@ def _read_actuators(args):
     return None
 
 
-def _dlc_table(cols, before_N, after_N) -> str:
-    """Per column: DLC of the measured and of the corrected force (the settled rows), change in %."""
+def _dlc_table(cols, before_N, after_N, fs: float) -> str:
+    """Per column, before and after correction (the settled rows): DLC (1) with its change in %,
+    the stress factor E[(F/F_static)^4] (1) and the damage-equivalent load for m = 5 at 1 Hz (kN)."""
+    from correction.damage import damage_equivalent_load, stress_factor
     from correction.dlc import dlc
 
-    lines = [f"{'column':<24} {'DLC before':>10} {'DLC after':>10} {'change':>8}"]
+    lines = [f"{'column':<24} {'DLC before':>10} {'DLC after':>10} {'change':>8}   "
+             f"{'SF4 before':>10} {'SF4 after':>10}   {'DEL5 before':>11} {'DEL5 after':>11}"]
     for j, col in enumerate(cols):
         try:
             b, a = float(dlc(before_N[:, j])), float(dlc(after_N[:, j]))
         except ValueError:  # not a compressive load (mean <= 0): no DLC
             lines.append(f"{col:<24} {'-':>10} {'-':>10} {'-':>8}")
             continue
-        lines.append(f"{col:<24} {b:>10.4f} {a:>10.4f} {100.0 * (a / b - 1.0) if b > 0 else math.nan:>7.1f}%")
+        sf = [float(stress_factor(x[:, j])) for x in (before_N, after_N)]
+        dl = [float(damage_equivalent_load(x[:, j], 5, duration_s=x.shape[0] / fs)) / 1e3 for x in (before_N, after_N)]
+        lines.append(f"{col:<24} {b:>10.4f} {a:>10.4f} {100.0 * (a / b - 1.0) if b > 0 else math.nan:>7.1f}%   "
+                     f"{sf[0]:>10.4f} {sf[1]:>10.4f}   {dl[0]:>8.2f} kN {dl[1]:>8.2f} kN")
     return "\n".join(lines)
 
 
 def cmd_correct(args) -> int:
     """Run ``rigsim correct``; returns 0, raises ScenarioError (one sentence) for bad input."""
+    import numpy as np
+
     from correction.actuator_fit import fit_actuator
     from correction.measured import TIME_NAMES, MeasuredDataError, read_force_csv, sampling_rate
     from correction.pipeline import CorrectionError, correct_forces
@@ -288,7 +294,7 @@ def cmd_correct(args) -> int:
         lines.append(",".join(fields))
     atomic_write_text(args.out, "\n".join(lines) + "\n")
     if settled.any():
-        print(_dlc_table(force_cols, forces[settled], corrected[settled]))
+        print(_dlc_table(force_cols, forces[settled], corrected[settled], fs))
     print(f"corrected {len(force_cols)} column(s) of {str(args.input)!r} at {fs:.6g} Hz (T_a {source}, low-pass "
           f"{res.filters[0].lowpass.description}, {args.mode}); {forces.shape[0] - int(settled.sum())} transient "
           f"rows {'dropped' if args.transient == 'drop' else 'kept'}; wrote {args.out}")

@@ -175,10 +175,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``rigsim`` console command; returns the exit code."""
+    args = build_parser().parse_args(argv)  # --help and bad options end here, before the imports below
     from scenarios.core.config import ScenarioError
     from scenarios.core.watch import SimulationError
 
-    args = build_parser().parse_args(argv)
     try:
         return args.func(args)
     except (ScenarioError, SimulationError) as exc:

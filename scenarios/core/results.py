@@ -90,11 +90,21 @@ class RunResult:
         }
 
     def table(self) -> str:
-        """The per-wheel DLC table as text for the terminal."""
-        lines = [f"{self.scenario_name} ({self.mode} mode)", f"{'wheel':>6} {'mean N':>10} {'std N':>9} {'DLC':>7}"]
-        for c, s in self.statistics().items():
-            lines.append(f"{c:>6} {s['mean_force_N']:10.0f} {s['std_force_N']:9.0f} {s['dlc']:7.4f}")
-        lines.append(f"{'mean':>6} {'':>10} {'':>9} {self.summary()['dlc_mean']:7.4f}")
+        """The per-wheel table for the terminal and the recording: mean, std and DLC of the tire
+        force, its stress factor E[(F/F_static)^4] (pavements) and damage-equivalent load (m = 5,
+        1 Hz; components), from :mod:`correction.damage`."""
+        from correction.damage import damage_equivalent_load, stress_factor
+
+        f = np.asarray(self.signals["tire_force_N"], dtype=float)
+        sf = np.atleast_1d(stress_factor(f))
+        del5 = np.atleast_1d(damage_equivalent_load(f, 5, duration_s=f.shape[0] / self.rate_hz))
+        lines = [f"{self.scenario_name} ({self.mode} mode)",
+                 f"{'wheel':>6} {'mean N':>10} {'std N':>9} {'DLC':>7} {'SF4':>7} {'DEL5 kN':>8}"]
+        for i, (c, s) in enumerate(self.statistics().items()):
+            lines.append(f"{c:>6} {s['mean_force_N']:10.0f} {s['std_force_N']:9.0f} {s['dlc']:7.4f} "
+                         f"{sf[i]:7.4f} {del5[i] / 1e3:8.2f}")
+        lines.append(f"{'mean':>6} {'':>10} {'':>9} {self.summary()['dlc_mean']:7.4f} {np.mean(sf):7.4f} "
+                     f"{np.mean(del5) / 1e3:8.2f}")
         return "\n".join(lines)
 
     def columns(self) -> tuple[list[str], np.ndarray]:

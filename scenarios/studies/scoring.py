@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from correction.apply import band_limit
+from correction.damage import damage_equivalent_load, stress_factor
 from correction.dlc import dlc, nrmse
 from correction.eq4 import eq4_coefficients_from
 from correction.pipeline import correct_forces
@@ -126,7 +127,9 @@ class MethodScore:
     figures : Mapping[str, numpy.ndarray]
         Per wheel: ``dlc_corrected``, ``dlc_road_settled`` (the unfiltered road force on the same
         samples: what the corrected DLC is compared with), ``dlc_road_band``, ``dlc_rig_band`` (1),
-        ``nrmse_corrected``, ``nrmse_rig`` (1, against the band-limited road force).
+        ``nrmse_corrected``, ``nrmse_rig`` (1, against the band-limited road force), and the damage
+        figures of the road, measured rig and corrected force on the same samples:
+        ``stress_factor_<road|rig|corrected>`` (1, n = 4) and ``del_<road|rig|corrected>_N`` (N, m = 5).
     scored_s : float, s
     """
 
@@ -215,6 +218,21 @@ def measured_force(rig, noise_N: float, seed: int) -> np.ndarray:
     return clean + noise_N * np.random.default_rng((int(seed), 8)).standard_normal(clean.shape)
 
 
+#: The damage figures every score carries (:mod:`correction.damage`): the dynamic load stress
+#: factor E[(F/F_static)^4] (pavements: the fourth-power law) and the damage-equivalent load for
+#: a Woehler exponent of 5 at one equivalent cycle per second (components), of the road, the
+#: measured rig and the corrected force on the same settled samples.
+DAMAGE_EXPONENT_STRESS, DAMAGE_EXPONENT_DEL = 4, 5
+
+
+def _damage(road_N: np.ndarray, rig_N: np.ndarray, corrected_N: np.ndarray, fs: float) -> dict:
+    out = {}
+    for name, f in (("road", road_N), ("rig", rig_N), ("corrected", corrected_N)):
+        out[f"stress_factor_{name}"] = np.atleast_1d(stress_factor(f, n=DAMAGE_EXPONENT_STRESS))
+        out[f"del_{name}_N"] = np.atleast_1d(damage_equivalent_load(f, DAMAGE_EXPONENT_DEL, duration_s=f.shape[0] / fs))
+    return out
+
+
 def _actuators(method: Method, rig_model, force_N: np.ndarray, identified) -> list:
     if method.actuator == "identified":
         if identified is None:
@@ -281,6 +299,7 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
         figures = {"dlc_corrected": dlc(out[s]), "dlc_road_settled": dlc(road_f[s]),
                    "dlc_road_band": dlc(road_b[s]), "dlc_rig_band": dlc(rig_b[s]),
                    "nrmse_corrected": nrmse(out[s], road_b[s]), "nrmse_rig": nrmse(rig_b[s], road_b[s])}
+        figures.update(_damage(road_f[s], rig_f[s], out[s], fs))
         actuators = tuple((np.asarray(num, float), np.asarray(den, float)) for num, den in tas)
         scores[m.name] = MethodScore(method=m, corrected_N=out, road_band_N=road_b, rig_band_N=rig_b, settled=settled,
                                      actuators=actuators, figures=figures, scored_s=scored_s)

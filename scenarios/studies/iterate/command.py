@@ -22,15 +22,15 @@ __all__ = ["add_parser", "cmd_iterate"]
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``iterate`` on an ``argparse`` sub-parsers object; sets ``func=cmd_iterate``."""
-    from scenarios.studies.iterate.compute import TARGETS
-    from scenarios.studies.scoring import NOISE_N
-
+    # The targets are scenarios.studies.iterate.compute.TARGETS and the noise default
+    # scenarios.studies.scoring.NOISE_N: importing those here would load the whole simulator for
+    # ``rigsim --help`` (tests/test_startup.py pins both).
     c = subparsers.add_parser(
         "iterate", help="iterate the rig's drive file until the pans (or tire forces) match the road test",
         description="Input correction on the simulated rig: identify the rig's FRF matrix, then iterate "
                     "d_{k+1} = d_k + g H^-1 (target - response_k); compare with the output correction.")
     c.add_argument("scenario", help="scenario TOML file")
-    c.add_argument("--target", choices=TARGETS, required=True,
+    c.add_argument("--target", choices=("displacement", "force"), required=True,
                    help="displacement: pan displacement = road profile (Moran); force: tire force = the road "
                         "run's tire force (RPC-style remote target)")
     c.add_argument("--out", "-o", required=True, help="output folder (drive.csv, iteration.json, iteration.png)")
@@ -43,7 +43,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="no update where the identification's coherence is below this (default 0.8)")
     c.add_argument("--duration-s", type=float, default=None, help="override the scenario's duration, s")
     c.add_argument("--noise-N", type=float, default=None,
-                   help=f"rms load-cell noise added to rig forces, N (default {NOISE_N:g}; 0: off)")
+                   help="rms load-cell noise added to rig forces, N (default 100; 0: off)")
     c.add_argument("--run-anyway", action="store_true",
                    help="run even if the gain's predicted spectral radius is >= 1 (divergence still stops it)")
     c.add_argument("--quiet", action="store_true", help="no progress lines")

@@ -11,15 +11,15 @@ __all__ = ["add_parser", "cmd_paper"]
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim paper``."""
-    from scenarios.studies.scoring import NOISE_N
-
     pp = subparsers.add_parser("paper", help="the paper's three cases: road and rig runs, output correction, Table 2")
     pp.add_argument("--out", "-o", required=True, help="output folder")
     pp.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     pp.add_argument("--duration-s", type=float, default=None,
                     help="override every case's duration in s (a quick look; the paper's cases run 60 s)")
-    pp.add_argument("--noise-N", type=float, default=NOISE_N,
-                    help=f"rms of the white noise added to the measured rig force, N (default {NOISE_N:g}; 0: off)")
+    # The default is scenarios.studies.scoring.NOISE_N, applied in cmd_paper: importing scoring here
+    # would load the whole simulator for ``rigsim --help`` (tests/test_startup.py pins the number).
+    pp.add_argument("--noise-N", type=float, default=None,
+                    help="rms of the white noise added to the measured rig force, N (default 100; 0: off)")
     pp.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd), one recording per case")
     pp.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
@@ -40,7 +40,7 @@ def _check(args) -> None:
         worker_count(args.jobs)
     except ValueError:
         raise ScenarioError(f"--jobs must be at least 1, got {args.jobs}") from None
-    if not (math.isfinite(args.noise_N) and args.noise_N >= 0):
+    if args.noise_N is not None and not (math.isfinite(args.noise_N) and args.noise_N >= 0):
         raise ScenarioError(f"--noise-N must be >= 0 N, got {args.noise_N:g}")
 
 
@@ -50,6 +50,7 @@ def cmd_paper(args) -> int:
     from scenarios.studies.paper.compute import run_paper
     from scenarios.studies.paper.report import render_report, write_files
     from scenarios.core.results import write_run
+    from scenarios.studies.scoring import NOISE_N
 
     paths = paper_scenarios()
     for p in paths:  # validate everything before anything runs
@@ -68,7 +69,8 @@ def cmd_paper(args) -> int:
             print(f"[{done[0]}/{n_jobs}] {r.scenario_name} {r.mode}: DLC {r.summary()['dlc_mean']:.4f} "
                   f"({r.info['wall_time_s']:.1f} s)", file=sys.stderr)
 
-    result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=args.noise_N,
+    noise_N = NOISE_N if args.noise_N is None else args.noise_N
+    result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,
                        pose_rate_hz=pose_rate, on_done=progress)
     files = render_report(result)
     files["paper.json"] = to_json(result).encode("utf-8")
@@ -83,9 +85,11 @@ def cmd_paper(args) -> int:
 
         runs = [r for c in result.cases for r in (c.road, c.rig)]
         write_recording(args.rrd, runs, corrected={c.name: c.score.corrected_N["best"] for c in result.cases},
-                        dlc_table=table, spawn=args.view)
+                        dlc_table=table + "\n\n" + result.damage_table(), spawn=args.view)
         print(f"wrote recording {args.rrd} (one recording per case)")
     print(table)
+    print()
+    print(result.damage_table())
     n_fig = sum(1 for f in report_files if f.suffix == ".png")
     print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {n_fig} figures and one folder per case and mode")
     return 0

@@ -35,6 +35,12 @@ ROW_KEYS = {
     "nrmse_corrected": "nrmse_corrected_best",
     "dlc_road_lowpassed_paper": "dlc_road_band_paper",
     "dlc_road_settled_paper": "dlc_road_settled_paper",
+    "stress_factor_road": "stress_factor_road_best",
+    "stress_factor_rig": "stress_factor_rig_best",
+    "stress_factor_corrected": "stress_factor_corrected_best",
+    "del_road_N": "del_road_N_best",
+    "del_rig_N": "del_rig_N_best",
+    "del_corrected_N": "del_corrected_N_best",
     "nrmse_corrected_paper": "nrmse_corrected_paper",
 }
 
@@ -106,6 +112,22 @@ class PaperResult:
                      "over the whole record, every corrected figure over the samples where that method's "
                      "filters have settled ('analysed_s' per method); 'paper': Table 2 of the reference paper"),
         }
+
+    def damage_table(self) -> str:
+        """Damage figures (issue 13's goals): stress factor E[(F/F_static)^4] and the damage-equivalent
+        load (m = 5, 1 Hz), road / rig / corrected, means over the wheels, errors against the road."""
+        head = (f"{'case':28s} {'stress factor n=4: road':>24s} {'rig':>15s} {'corrected':>15s}   "
+                f"{'DEL m=5 (kN): road':>19s} {'rig':>15s} {'corrected':>15s}")
+        lines = [head, "-" * len(head)]
+        for r in self.rows():
+            sr, dr = r["stress_factor_road"], r["del_road_N"]
+            lines.append(
+                f"{r['case']:28s} {sr:24.4f} {r['stress_factor_rig']:7.4f} ({100 * (r['stress_factor_rig'] / sr - 1):+5.1f}%) "
+                f"{r['stress_factor_corrected']:7.4f} ({100 * (r['stress_factor_corrected'] / sr - 1):+5.1f}%)   "
+                f"{dr / 1e3:19.2f} {r['del_rig_N'] / 1e3:7.2f} ({100 * (r['del_rig_N'] / dr - 1):+5.1f}%) "
+                f"{r['del_corrected_N'] / 1e3:7.2f} ({100 * (r['del_corrected_N'] / dr - 1):+5.1f}%)")
+        lines.append("On the samples where the correction has settled; the rig force is the measured one (with noise).")
+        return "\n".join(lines)
 
     def table(self) -> str:
         """Table 2 analogue for the terminal: means over the four wheels, the paper's values in brackets."""

@@ -81,7 +81,49 @@ def _bars(rows) -> bytes:
     return data
 
 
-def _report_md(rows, table: str, figures: list[str]) -> str:
+def _damage_figure(name: str, case) -> bytes:
+    """Per wheel: exceedance of F / F_static (road, rig, corrected) and the rainflow range histogram."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from correction.damage import rainflow_cycles
+
+    best = case.score.methods["best"]
+    s = best.settled
+    forces = {"road": case.score.road_N[s], "rig, measured": case.score.rig_N[s], "corrected": best.corrected_N[s]}
+    colors = {"road": "k", "rig, measured": "tab:red", "corrected": "tab:blue"}
+    fig, axes = plt.subplots(2, 4, figsize=(13, 6.2))
+    for i, corner in enumerate(case.score.corners):
+        static = float(np.mean(forces["road"][:, i]))
+        bins = None
+        for label, f in forces.items():
+            x = np.sort(f[:, i] / static)[::-1]
+            p = np.arange(1, x.size + 1) / x.size
+            axes[0, i].semilogy(x, p, color=colors[label], lw=1.2, label=label)
+            ranges, _, counts = rainflow_cycles(f[:, i])
+            if bins is None:
+                bins = np.linspace(0.0, float(np.max(ranges)) * 1.05 / 1e3, 30)
+            h, _ = np.histogram(np.asarray(ranges) / 1e3, bins=bins, weights=counts)
+            axes[1, i].step(bins[:-1], np.maximum(h, 0.5), where="post", color=colors[label], lw=1.1)
+        axes[0, i].set_title(corner, loc="left", fontsize=10)
+        axes[0, i].set_xlabel("F / F_static")
+        axes[1, i].set_yscale("log")
+        axes[1, i].set_xlabel("rainflow range, kN")
+        for ax in axes[:, i]:
+            ax.grid(alpha=0.3, which="both")
+    axes[0, 0].set_ylabel("exceedance probability")
+    axes[1, 0].set_ylabel("cycles per bin")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(f"{name}: load exceedance and rainflow cycles (ASTM E1049-85)", fontsize=11)
+    fig.tight_layout()
+    data = _png(fig)
+    plt.close(fig)
+    return data
+
+
+def _report_md(rows, table: str, figures: list[str], damage_table: str = "") -> str:
     lines = [
         "# rigsim paper: Table 2 reproduced and corrected",
         "",
@@ -128,10 +170,25 @@ def _report_md(rows, table: str, figures: list[str]) -> str:
         "(front tires 0.9 MN/m, rear duals 1.8 MN/m) and the chassis couples them, and (3) the",
         "leaf springs' dry friction, which makes the truck nonlinear.",
         "",
+        "## Damage: pavements (fourth-power law) and components (rainflow)",
+        "",
+        "Two forces with the same DLC can do different damage: the peaks weigh more. The stress",
+        "factor E[(F/F_static)^4] is the fourth-power law's measure of pavement wear; the",
+        "damage-equivalent load (Woehler exponent 5, one cycle per second) is the constant load range",
+        "that does the rainflow-counted fatigue damage of the record (correction/damage.py).",
+        "",
+        "```",
+        damage_table,
+        "```",
+        "",
+    ]
+    lines += [f"![{f}]({f})" for f in figures if f.startswith("damage_")]
+    lines += [
+        "",
         "## Figure 8 analogue",
         "",
     ]
-    lines += [f"![{f}]({f})" for f in figures]
+    lines += [f"![{f}]({f})" for f in figures if f.startswith("figure8_")]
     lines.append("")
     return "\n".join(lines)
 
@@ -141,9 +198,10 @@ def render_report(result) -> dict[str, bytes]:
     :class:`scenarios.studies.paper.compute.PaperResult`, rendered in memory: ``{file name: bytes}``."""
     rows = result.rows()
     files = {f"figure8_{c.name}.png": _figure8(c.name, c.road, c.score) for c in result.cases}
+    files.update({f"damage_{c.name}.png": _damage_figure(c.name, c) for c in result.cases})
     files["table2.png"] = _bars(rows)
-    figures = [f for f in files if f.startswith("figure8_")]
-    files["report.md"] = _report_md(rows, result.table(), figures).encode("utf-8")
+    figures = [f for f in files if f.startswith(("figure8_", "damage_"))]
+    files["report.md"] = _report_md(rows, result.table(), figures, result.damage_table()).encode("utf-8")
     return files
 
 

@@ -26,12 +26,15 @@ __all__ = ["CaseResult", "evaluate_case", "evaluate_payload", "METRIC_COLUMNS", 
 EVENT_NAMES = ("spool_saturation", "cavitation", "overpressure")
 
 #: The figures of one method (:attr:`scenarios.studies.scoring.MethodScore.figures`), by name.
-_FIGURES = ("dlc_corrected", "dlc_road_band", "dlc_rig_band", "nrmse_rig", "nrmse_corrected")
+_FIGURES = ("dlc_corrected", "dlc_road_band", "dlc_rig_band", "nrmse_rig", "nrmse_corrected",
+            "stress_factor_road", "stress_factor_rig", "stress_factor_corrected", "del_road_N", "del_rig_N",
+            "del_corrected_N")
 
 #: The scores of one case, in the order of ``results.csv``.
 METRIC_COLUMNS = (
     "dlc_road", "dlc_rig", "dlc_corrected", "dlc_road_band", "dlc_rig_band",
-    "nrmse_rig", "nrmse_corrected", "scored_s",
+    "nrmse_rig", "nrmse_corrected", "stress_factor_road", "stress_factor_rig", "stress_factor_corrected",
+    "del_road_N", "del_rig_N", "del_corrected_N", "scored_s",
     *(f"{e}_samples" for e in EVENT_NAMES),
 )
 
@@ -52,6 +55,11 @@ class CaseResult:
     nrmse_rig, nrmse_corrected : float, 1
         NRMSE of the band-limited rig force and of the corrected force against the
         band-limited road force, on the settled samples.
+    stress_factor_road, stress_factor_rig, stress_factor_corrected : float, 1
+        Dynamic load stress factor E[(F/F_static)^4] of the road, measured rig and corrected
+        forces on the settled samples (pavement damage, fourth-power law; correction.damage).
+    del_road_N, del_rig_N, del_corrected_N : float, N
+        Damage-equivalent load range (Woehler exponent 5, one cycle per second) of the same.
     scored_s : float, s
         Settled (scored) time.
     events : Mapping[str, int]
@@ -78,6 +86,12 @@ class CaseResult:
     dlc_rig_band: float
     nrmse_rig: float
     nrmse_corrected: float
+    stress_factor_road: float
+    stress_factor_rig: float
+    stress_factor_corrected: float
+    del_road_N: float
+    del_rig_N: float
+    del_corrected_N: float
     scored_s: float
     events: Mapping[str, int]
     wheels: Mapping[str, Mapping[str, float]]

@@ -24,18 +24,18 @@ from __future__ import annotations
 import pathlib
 import sys
 
-from scenarios.core.config import ScenarioError
-from scenarios.core.pool import local_executor, worker_count
-from scenarios.studies.sweep.executors import dask_executor
-from scenarios.studies.sweep.grid import load_grid
-from scenarios.studies.sweep.run import SUMMARY_FILE, SweepOutcome, run_sweep
-from scenarios.studies.sweep.store import CASES_DIR
-
 __all__ = ["add_parser", "cmd_sweep"]
 
 
 def cmd_sweep(args) -> int:
     """``rigsim sweep``: validate the options and the grid, run it, print where the results are."""
+    from scenarios.core.config import ScenarioError
+    from scenarios.core.pool import local_executor, worker_count
+    from scenarios.studies.sweep.executors import dask_executor
+    from scenarios.studies.sweep.grid import load_grid
+    from scenarios.studies.sweep.run import SUMMARY_FILE, SweepOutcome, run_sweep
+    from scenarios.studies.sweep.store import CASES_DIR
+
     if args.scheduler is not None and args.workers is not None:
         raise ScenarioError("--workers sets the local process pool; a Dask cluster's size is set where its "
                             "workers are started, so give one of --workers and --scheduler")

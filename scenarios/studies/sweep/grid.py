@@ -61,7 +61,7 @@ __all__ = ["Case", "SweepGrid", "EvalSettings", "axis_keys", "load_grid", "parse
 
 #: Version of the case-file format and of the fingerprint recipe (part of every fingerprint).
 #: 2: cases scored by scenarios.studies.scoring.score_pair (settings gained actuator, noise_N).
-GRID_FORMAT = 2
+GRID_FORMAT = 3
 
 _SWEEP_KEYS = {"name", "base", *SETTING_KEYS}
 _GRID_KEYS = {"sweep", "base", "axes", "cases"}
