@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control
 import numpy as np
 from scipy import signal
 
@@ -60,6 +59,8 @@ class PlantLinearization:
     def siso_zeros(self, corner: int) -> np.ndarray:
         """Continuous-time equivalents (rad/s) of the transmission zeros of one wheel's own path
         that do not (nearly, within 1 %) cancel a pole."""
+        import control  # python-control costs ~0.3 s to import: only here, not in every run
+
         sys_d = control.ss(self.a, self.b[:, [corner]], self.c[[corner]], 0.0, self.dt_s)
         z = np.asarray(sys_d.zeros(), dtype=complex)
         z = z[np.abs(z) > 1e-12]
