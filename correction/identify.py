@@ -14,10 +14,12 @@ Works on data of a real rig as on simulated data: numpy, scipy and python-contro
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
-from scipy import signal
+
+if TYPE_CHECKING:  # python-control and scipy.signal are imported where they are used
+    import control
 
 __all__ = ["h1_estimate", "fit_rational"]
 
@@ -71,6 +73,8 @@ def h1_estimate(u, y, fs: float, nperseg: int, *, noverlap: int | None = None,
     ``H^T = G_uu^-1 G_uy``. The multiple coherence is ``Re(g^H G_uu^-1 g) / G_yy`` with
     ``g = G_uy[:, i]``. H1 is unbiased by output noise and biased low by input noise.
     """
+    from scipy import signal
+
     uc, u1 = _as_columns(u, "u")
     yc, y1 = _as_columns(y, "y")
     if uc.shape[0] != yc.shape[0]:
@@ -213,4 +217,6 @@ def fit_rational(f_hz, h, num_order: int, den_order: int, weight=None, f_max: fl
     # Back to s: x = s / w0. Multiply through by w0^na so that D stays monic in s.
     num = np.array([n_asc[i] * w0 ** (den_order - i) for i in range(num_order + 1)])[::-1]
     den = np.array([d[i] * w0 ** (den_order - i) for i in range(den_order + 1)])[::-1]
+    import control
+
     return control.tf(num, den)

@@ -23,9 +23,6 @@ file, the column or channel, the line or unit, and the fix.
 Metadata: the CSV ``# key: value`` preamble; the RPC III header keys other than those that lay
 out the data (:data:`correction.rpc3.STRUCTURAL_KEYS`, ``*.CHAN_n``); the MDF4 header comment and
 properties; the TDMS file and group properties. The writers put metadata back in the same places.
-
-``read_force_csv`` and ``sampling_rate`` keep their old signatures (built on the new reader) for
-the callers that still use them.
 """
 
 from __future__ import annotations
@@ -38,11 +35,8 @@ import numpy as np
 from correction.measured_core import (TIME_KEYS, MeasuredChannels, MeasuredDataError, atomic_output, check_output,
                                       make_channels, to_si, uniform_rate)
 
-__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "TIME_NAMES", "READ_FORMATS", "WRITE_FORMATS",
-           "read_channels", "write_channels", "format_of", "read_force_csv", "sampling_rate"]
-
-#: Time column names of the old ``read_force_csv`` (exact, case-sensitive): "time", "time_s".
-TIME_NAMES = ("time", "time_s")
+__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "READ_FORMATS", "WRITE_FORMATS",
+           "read_channels", "write_channels", "format_of"]
 
 #: Extension -> format read.
 READ_FORMATS = {".csv": "csv", ".txt": "csv", ".dat": "csv", ".rsp": "rpc3", ".drv": "rpc3", ".tim": "rpc3",
@@ -207,45 +201,3 @@ def write_channels(path, channels, *, metadata: Mapping | None = None, overwrite
             measured_lab.need("nptdms", ".tdms", "writing")
             atomic_output(out, lambda tmp: measured_lab.write_tdms(tmp, t, data, units, meta))
     return out
-
-
-# ---------------------------------------------------------------- the old API, on the new reader
-
-def read_force_csv(path) -> tuple[list[str], list[str], np.ndarray]:
-    """Read a delimited text file with a ``time`` (or ``time_s``) column; every numeric column.
-
-    Kept for the callers of the old API: the time column must be named exactly "time" or
-    "time_s" (a unit decoration such as ``time [ms]`` is allowed and converted). Text columns are
-    left out; every other column is checked (numbers, finite) and converted to SI.
-
-    Returns
-    -------
-    names : list of str
-        Column names (without unit decoration), the time column among them, in file order.
-    time_text : list of str
-        The time column's fields as written when they are seconds with a decimal point, else the
-        times in s written exactly.
-    data : numpy.ndarray, shape (rows, columns)
-        The columns of ``names``, in SI.
-    """
-    from correction.measured_csv import read_table, channels_from_table
-
-    table = read_table(path)
-    found = [n for n in TIME_NAMES if n in table.names]
-    if not found:
-        raise MeasuredDataError(f"input file {str(path)!r} has no 'time' column (seconds); add one")
-    mc, jt = channels_from_table(table, path, time_col=found[0])
-    names = [n for j, n in enumerate(table.names) if j == jt or n in mc.data]
-    cols = [mc.time_s if n == mc.time_name else mc.data[n] for n in names]
-    raw = table.columns[jt]
-    try:
-        same = table.decimal == "." and np.array_equal(raw.astype(float), mc.time_s)
-    except ValueError:
-        same = False
-    time_text = [str(x) for x in raw] if same else [repr(x) for x in mc.time_s.tolist()]
-    return names, time_text, np.column_stack(cols)
-
-
-def sampling_rate(t: np.ndarray, time_name: str) -> float:
-    """Sampling rate (Hz) of a uniform time column whose row i is on line i + 2 (old API)."""
-    return uniform_rate(np.asarray(t, dtype=float), time_name, lambda i: f"line {i + 2}")

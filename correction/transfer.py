@@ -15,12 +15,14 @@ wheel forces needs). Frequencies are in Hz at the interfaces, rad/s inside Lapla
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
-from scipy import optimize, signal
 
 from .eq4 import eq4_coefficients_from
+
+if TYPE_CHECKING:  # python-control is imported where it is used (it loads matplotlib)
+    import control
 
 __all__ = [
     "eq4_transfer_function",
@@ -84,6 +86,8 @@ def eq4_transfer_function(**parameters: float) -> control.TransferFunction:
     * **PI position loop with Ti = 1 s** plus differential-pressure feedback, without
       saturation: this makes ``b0 = b1 = a0`` as printed.
     """
+    import control
+
     num, den = eq4_coefficients_from(**parameters)
     if num[-1] == 0.0 and den[-1] == 0.0:  # P only (ti_s = inf): cancel the common root at s = 0
         num, den = num[:-1], den[:-1]
@@ -219,6 +223,8 @@ def transfer_bandwidth_hz(system, *, drop_db: float = 3.0, f_min_hz: float = 1e-
     float, Hz
         ``nan`` if the gain never falls ``drop_db`` below the static gain in the range.
     """
+    from scipy import optimize
+
     dc = abs(complex(np.squeeze(system.dcgain())))
     if not (math.isfinite(dc) and dc > 0):
         raise ValueError("the system needs a finite, non-zero static gain")
@@ -306,6 +312,9 @@ def apply_transfer_function(system, u, dt_s: float, *, derivative: bool = False)
     ValueError
         For a discrete, MIMO or improper system, repeated poles, or a bad ``dt_s``.
     """
+    import control
+    from scipy import signal
+
     if system.isdtime(strict=True):
         raise ValueError("apply_transfer_function needs a continuous-time system")
     if system.ninputs != 1 or system.noutputs != 1:

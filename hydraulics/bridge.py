@@ -8,7 +8,9 @@
 * :func:`hydraulic_callbacks` installs the dyn/gain/bias callbacks for a ``with`` block (after
   compiling) and removes them afterwards, also on error. ``fast=True`` installs numba ``cfunc``
   callbacks reading raw mjModel/mjData pointers (byte offsets found with
-  ``mujoco.introspect.structs`` and verified against known arrays of the given model);
+  ``mujoco.introspect.structs`` and verified against known arrays of the given model;
+  compiled once per process or loaded from the on-disk cache of :mod:`hydraulics.kernels`,
+  and checked against the reference equations on the model before use);
   ``fast=False`` installs the plain-Python reference callbacks (same equations, ~9x slower
   on the single-pan rig). Do not compile models inside a ``fast=False`` block: compiling calls
   installed callbacks and MuJoCo then fails with "Python exception raised" (the compiled
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import math
 from collections.abc import Mapping
 
 import mujoco
@@ -30,9 +33,9 @@ from mujoco.introspect import structs as _structs
 
 from mjcf.names import CORNERS, hydraulic_actuator, pan_body, pan_joint
 
-from .kernels import RawOffsets, make_raw_callbacks
-from .model import derivatives_core, force_core
-from .packing import LAYOUT_TAG, NPACK, NSTATE, P_NPACK, P_NSTATE, P_TAG, pack, unpack
+from .kernels import RawCallbacks, RawOffsets, make_raw_callbacks
+from .model import MPA, derivatives_core, force_core
+from .packing import LAYOUT_TAG, NPACK, NSTATE, P_NPACK, P_NSTATE, P_SUPPLY, P_TAG, pack, unpack
 from .params import GRAVITY_M_S2, ActuatorParams
 
 __all__ = ["add_hydraulic_actuators", "single_pan_spec", "hydraulic_callbacks", "actuator_id",
@@ -293,6 +296,34 @@ def _verify_offsets(off: RawOffsets, m_off: dict, d_off: dict, model: mujoco.MjM
                           "mujoco.introspect, so use hydraulic_callbacks(model, fast=False)")
 
 
+def _agrees_with_reference(model: mujoco.MjModel, callbacks: RawCallbacks) -> bool:
+    """Call the compiled dyn and bias callbacks once per hydraulic actuator of ``model`` on a
+    scratch MjData at a state away from rest and compare with the plain-Python equations
+    (they agree to ~1e-13 relative; a wrong or stale machine code does not)."""
+    data = mujoco.MjData(model)
+    dyn, gain, bias = callbacks.functions()
+    for i in _hydraulic_ids(model):
+        row = model.actuator_user[i].tolist()
+        adr = int(model.actuator_actadr[i])
+        supply_MPa = row[P_SUPPLY] / MPA
+        a = [0.3, 20.0, 0.55 * supply_MPa, 0.35 * supply_MPa, 2e-4]
+        data.act[adr:adr + NSTATE] = a
+        data.ctrl[i], data.actuator_length[i], data.actuator_velocity[i] = 3e-3, 1e-3, 0.05
+        data.act_dot[adr:adr + NSTATE] = np.nan
+        ref = [0.0] * NSTATE
+        derivatives_core(*a, 3e-3, 1e-3, 0.05, row, ref)
+        dyn(model._address, data._address, i)
+        got = data.act_dot[adr:adr + NSTATE]
+        ref_force = force_core(a[2], a[3], 0.05, row)
+        if not (all(map(math.isfinite, ref)) and math.isfinite(ref_force)):
+            continue  # parameters odd enough to overflow here: nothing to compare with
+        if not (np.allclose(got, ref, rtol=1e-10, atol=1e-12 * max(map(abs, ref)))
+                and math.isclose(bias(model._address, data._address, i), ref_force, rel_tol=1e-10)
+                and gain(model._address, data._address, i) == 0.0):
+            return False
+    return True
+
+
 def _fast_callbacks(model: mujoco.MjModel):
     data = mujoco.MjData(model)
     try:
@@ -302,7 +333,10 @@ def _fast_callbacks(model: mujoco.MjModel):
     except Exception as exc:  # pragma: no cover - defensive: anything odd is a layout problem
         raise LayoutError(f"could not locate mjModel/mjData fields ({exc}); use "
                           "hydraulic_callbacks(model, fast=False)") from exc
-    return tuple(cb.ctypes for cb in make_raw_callbacks(offsets))
+    # Compiled once per process (or loaded from the on-disk cache, see hydraulics.kernels) and
+    # checked against the reference equations on this model before use.
+    callbacks = make_raw_callbacks(offsets, verify=lambda cbs: _agrees_with_reference(model, cbs))
+    return callbacks.functions()
 
 
 # ---------------------------------------------------------------------------------------------

@@ -20,6 +20,7 @@ __all__ = [
     "MODEL_FILE",
     "SCENE_FILE",
     "TruckVariant",
+    "BOUNDS",
     "resource_path",
     "load_spec",
     "build_spec",
@@ -67,6 +68,24 @@ def _positive(name: str, value: float | None, allow_zero: bool = False) -> None:
         raise ValueError(f"vehicle.{name} must be {bound}, got {value!r}")
 
 
+#: Physical bounds of the :class:`TruckVariant` fields: ``{field: (low, high, unit, why)}``,
+#: inclusive, in SI (the reasons are in the field docstrings).
+BOUNDS: dict[str, tuple[float, float, str, str]] = {
+    "payload_kg": (0.0, 40_000.0, "kg", "heavier loads push the leaf springs through their 0.3 m travel"),
+    "tire_stiffness_front_N_per_m": (1e5, 1e8, "N/m", "a truck tire is 0.8-1.2 MN/m; softer is a flat tire, "
+                                     "stiffer a rigid wheel beyond the time step's stability limit"),
+    "tire_stiffness_rear_N_per_m": (1e5, 1e8, "N/m", "a dual pair is 1.6-2.4 MN/m; softer is a flat tire, "
+                                    "stiffer a rigid wheel beyond the time step's stability limit"),
+    "tire_damping_front_Ns_per_m": (0.0, 5e4, "N s/m", "a tire's is ~1.5 kN s/m; more is beyond critical "
+                                    "damping and the time step's stability limit"),
+    "tire_damping_rear_Ns_per_m": (0.0, 5e4, "N s/m", "a tire's is ~1.5 kN s/m; more is beyond critical "
+                                   "damping and the time step's stability limit"),
+    "pan_mass_kg": (50.0, 5000.0, "kg", "a wheelpan with piston and rod weighs hundreds of kg (DYNTRAC: ~500 kg)"),
+    "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
+                   "only cost time and memory; 1e-4 s is the default"),
+}
+
+
 @dataclass(frozen=True)
 class TruckVariant:
     """Changes to the nominal truck and rig of ``truck_rig.xml``.
@@ -78,7 +97,10 @@ class TruckVariant:
     ----------
     payload_kg : float, kg, optional
         Payload mass (the paper's cases: 3640 and 6360 kg). The payload's inertia follows
-        from its box geometry.
+        from its box geometry. 0 to 40 000 kg: at 40 t (at the XML's position) the leaf springs,
+        linear in the model, keep 0.16 m (front) and 0.11 m (rear) of their 0.3 m hanger-to-seat
+        gap; beyond it they run towards passing through the frame (a two-axle truck's legal
+        payload is below ~15 t).
     payload_x_m : float, m, optional
         Payload centre of mass along x in the chassis frame (mid-wheelbase = 0, forward
         positive; front axle at +2.5, rear at -2.5). The XML places it at -1.3 m (3.8 m
@@ -87,16 +109,31 @@ class TruckVariant:
         Vertical stiffness of each front wheel station (one tire).
     tire_stiffness_rear_N_per_m : float, N/m, optional
         Vertical stiffness of each rear wheel station (a dual pair, both tires together).
+        Both 1e5 to 1e8 N/m: a truck tire is 0.8-1.2 MN/m; below 1e5 N/m the static deflection
+        under a ~25 kN wheel load passes 0.25 m of the 0.527 m radius (a flat tire; near 3e4 N/m
+        the truck finds no rest at all); 1e8 N/m (~50 times a dual pair) is a rigid wheel, and
+        with it the lightest pan on its tire, sqrt(1e8 / 50) = 1.4e3 rad/s, stays inside the
+        explicit-integration limit 2 / dt = 2e3 rad/s of the coarsest step (1e-3 s).
     tire_damping_front_Ns_per_m, tire_damping_rear_Ns_per_m : float, N s/m, optional
-        Vertical damping of each front / rear wheel station.
+        Vertical damping of each front / rear wheel station. 0 to 5e4 N s/m: a tire's is
+        ~1.5 kN s/m (a few % of critical); 5e4 N s/m is above the critical damping of a wheel
+        station (2 sqrt(k m) = 35 kN s/m for a steer tire under half the steer axle) and keeps
+        c dt / m <= 1 for the lightest pan (50 kg) at the coarsest step (the tire's damping is
+        integrated explicitly, stable below 2).
     tire_free_radius_m : float, m, optional
         Unloaded tire radius R0 (all wheel stations).
     spring_friction_front_N, spring_friction_rear_N : float, N, optional
         Interleaf Coulomb friction force of each front / rear leaf spring (0 disables it).
     pan_mass_kg : float, kg, optional
-        Mass of each wheelpan with its actuator piston and rod.
+        Mass of each wheelpan with its actuator piston and rod. 50 to 5000 kg: a steel pan that
+        carries a dual pair, with piston and rod, weighs hundreds of kg (DYNTRAC estimate 500 kg);
+        the lower bound keeps the pan-on-tire mode of the stiffest tire inside the coarsest
+        step's explicit limit (see the tire stiffness), the upper one is ten times the estimate,
+        heavier than the wheel station the pan carries.
     timestep_s : float, s, optional
-        Integration time step.
+        Integration time step, 1e-6 to 1e-3 s: coarser steps do not resolve the tire and
+        hydraulic modes; below 1e-6 s a 60 s run is 6e7 steps (hours, gigabytes of drive) for
+        no gain: the model's fastest modes are resolved by 1e-4 s (the default).
     """
 
     payload_kg: float | None = None
@@ -124,11 +161,10 @@ class TruckVariant:
                 continue
             zero_ok = f.name.startswith(("spring_friction", "tire_damping", "payload_kg"))
             _positive(f.name, value, allow_zero=zero_ok)
-        if self.timestep_s is not None and self.timestep_s > 1e-3:
-            raise ValueError(
-                f"vehicle.timestep_s = {self.timestep_s} s is too coarse for the tire and hydraulic modes; "
-                "use 1e-3 s or less (1e-4 s is the default)"
-            )
+            if value is not None and f.name in BOUNDS:
+                lo, hi, unit, why = BOUNDS[f.name]
+                if not lo <= value <= hi:
+                    raise ValueError(f"vehicle.{f.name} = {value:g} {unit} is outside {lo:g} to {hi:g} {unit}: {why}")
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:

@@ -18,6 +18,8 @@ __all__ = [
     "TRUCK_JOINTS",
     "MODE_NAMES",
     "RigIndex",
+    "EquilibriumError",
+    "NO_REST",
     "friction_disabled",
     "static_equilibrium",
     "tire_forces",
@@ -47,6 +49,15 @@ MODE_NAMES: dict[str, str] = {
     "rear_axle_z": "rear axle hop",
     "rear_axle_roll": "rear axle roll",
 }
+
+
+#: The physical situation behind a failed static equilibrium, and what to check.
+NO_REST = ("the truck finds no rest on its tires: a tire is off its pan or the springs bottom out; check "
+           "vehicle.payload_kg, vehicle.payload_x_m and the tire stiffness and free radius")
+
+
+class EquilibriumError(ValueError):
+    """The truck has no static rest position on the pans (one sentence: why, and what to check)."""
 
 
 @dataclass(frozen=True)
@@ -159,6 +170,12 @@ def static_equilibrium(
     numpy.ndarray
         The equilibrium ``qpos`` (also left in ``data.qpos``, with ``qvel`` zero and
         ``mj_forward`` evaluated; ``data.act`` is left as the caller set it).
+
+    Raises
+    ------
+    EquilibriumError
+        No rest position (a singular Newton step, a diverging or non-converging iteration),
+        in one sentence naming the physical situation and the parameters to check.
     """
     idx = RigIndex.of(model)
     data.qvel[:] = 0.0
@@ -183,12 +200,18 @@ def static_equilibrium(
                 dq = np.zeros_like(q)
                 dq[j] = h
                 jac[:, j] = (residual(q + dq) - residual(q - dq)) / (2 * h)
-            q = q - np.linalg.solve(jac, r)
+            try:
+                q = q - np.linalg.solve(jac, r)
+            except np.linalg.LinAlgError:
+                # A singular Jacobian: some truck joint feels no restoring force (a tire off its
+                # pan leaves its axle, or the whole truck, hanging in the air).
+                raise EquilibriumError(f"{NO_REST}; no Newton step exists (singular stiffness)") from None
             r = residual(q)
+            if not np.all(np.isfinite(r)):
+                raise EquilibriumError(f"{NO_REST}; the Newton iteration diverged") from None
         else:
-            raise RuntimeError(
-                f"static equilibrium not found in {max_iter} Newton steps (largest residual "
-                f"acceleration {np.max(np.abs(r)):.3g} m/s^2): check that every tire touches its pan"
+            raise EquilibriumError(
+                f"{NO_REST}; {max_iter} Newton steps left a residual acceleration of {np.max(np.abs(r)):.3g} m/s^2"
             )
     # Final evaluation with the model as the caller has it (friction on at rest adds nothing).
     data.qpos[q_adr] = q

@@ -8,12 +8,20 @@ against scipy in test_correction.py) and with the library called directly.
 
 Deliberate change (one correction, issue of the four corners): corrected columns are written as
 ``<name>_corrected`` (``fl_N_corrected``), so they cannot be mistaken for raw ones.
+
+Deliberate change (one reader): the input is read by ``correction.measured.read_channels`` (any
+CSV dialect, RPC III, MDF4; units to SI) and the output written by ``write_channels`` in the
+format of its extension (CSV: a ``# key: value`` preamble, ``time [s]``, ``name [N]`` headers);
+``read_csv`` below parses that CSV by hand, independently of the reader.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import math
+import re
+from importlib.metadata import version
 
 import numpy as np
 import pytest
@@ -56,7 +64,19 @@ def write_csv(path, names, columns, time_fmt="{:.6f}"):
 
 
 def read_csv(path):
-    return np.genfromtxt(path, delimiter=",", names=True)
+    """The output CSV parsed by hand: '#' preamble skipped, '[unit]' taken off the header names."""
+    lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
+    names = [re.sub(r"\s*\[[^\]]*\]$", "", h) for h in lines[0].split(",")]
+    return np.rec.fromarrays(np.loadtxt(lines[1:], delimiter=",", ndmin=2).T, names=names)
+
+
+def read_metadata(path):
+    """The output CSV's '# key: value' preamble, parsed by hand."""
+    return dict(ln[2:].split(": ", 1) for ln in path.read_text().splitlines() if ln.startswith("# "))
+
+
+def header(path):
+    return next(ln for ln in path.read_text().splitlines() if not ln.startswith("#"))
 
 
 @pytest.fixture(scope="module")
@@ -136,6 +156,7 @@ def test_identify_from_drive_and_pan_columns(tmp_path, rig_data):
     assert run([csv, "--identify", "drive_m,pan_m", "-o", out, "--transient", "mark"]) == 0
     got = read_csv(out)
     assert got.dtype.names == ("time", "fl_N_corrected", "settled")
+    assert read_metadata(out)["ta_source"] == "identified from drive_m,pan_m"
     filt = design_correction((d["num"], d["den"]), FS, "regularized")
     both = filt.transient_mask(d["t"].size, "zerophase") & got["settled"].astype(bool)
     assert both.sum() > 0.5 * both.size
@@ -167,7 +188,7 @@ def _bad_csv(tmp, rig_data, kind):
     elif kind == "short_row":
         text[9] = text[9].split(",")[0]
     elif kind == "no_time":
-        text[0] = "t,fl_N"
+        text[0] = "tick,fl_N"
     elif kind == "short_record":
         text = text[:1500]
     p.write_text("\n".join(text) + "\n")
@@ -180,11 +201,13 @@ def _bad_csv(tmp, rig_data, kind):
     ("nan", [], r"column 'fl_N' has 'nan' at line 1202"),
     ("text", [], r"column 'fl_N' is not numeric at line 8 \('12kN'\)"),
     ("short_row", [], r"line 10 .* has 1 fields but the header has 2"),
-    ("no_time", [], r"has no 'time' column"),
+    ("no_time", [], r"has no time column \(named time, t, zeit"),
     ("lowrate", [], r"sampling rate 50 Hz is too low"),
     ("short_record", [], r"not longer than the correction's transients"),
-    ("good", ["--columns", "fl_N,rl_N"], r"column 'rl_N' is not in"),
-    ("good", ["--columns", "time"], r"column 'time' is the time column"),
+    ("good", ["--columns", "fl_N,rl_N"], r"channel 'rl_N' is not a column of .*; its columns are time, fl_N, fr_N"),
+    ("good", ["--columns", "time"], r"channel 'time' is the time column"),
+    ("good", ["--time-col", "fl_N", "--columns", "fr_N"], r"time column 'fl_N' .* is in 'N', not a unit of time"),
+    ("good", ["--time-col", "zeit"], r"time column 'zeit' is not a column of"),
 ])
 def test_bad_input_exits_2_and_writes_nothing(files, rig_data, kind, extra, message):
     csv, act, tmp = files
@@ -274,8 +297,8 @@ def test_actuators_file_corrects_each_corner_with_its_own_t_a_and_prints_the_dlc
     csv, acts = _four_files(tmp_path, d)
     out = tmp_path / "o.csv"
     assert run([csv, "--actuators", acts, "-o", out]) == 0
-    assert out.read_text().splitlines()[0] == ",".join(("time",) + tuple(f"{c}_corrected" for c in FOUR[1:]))
-    got = dict(zip(("time",) + tuple(f"{c}_corrected" for c in FOUR[1:]), np.loadtxt(out, delimiter=",", skiprows=1).T))
+    assert header(out) == ",".join(("time [s]",) + tuple(f"{c}_corrected [N]" for c in FOUR[1:]))
+    got = read_csv(out)
     n = d["t"].size
     filts = [design_correction(ta, FS, "regularized") for ta in d["tas"]]
     from correction.filters import reference_filter
@@ -311,14 +334,14 @@ def test_map_and_columns_choose_what_is_corrected(tmp_path, four_wheels):
     out = tmp_path / "o.csv"
     # explicit map: only the mapped columns, each with its corner's T_a
     assert run([csv, "--actuators", acts, "--map", "front_left=Fz_FR,d=rl-load", "-o", out, "--transient", "keep"]) == 0
-    assert out.read_text().splitlines()[0] == "time,Fz_FR_corrected,rl-load_corrected"
+    assert header(out) == "time [s],Fz_FR_corrected [N],rl-load_corrected [N]"
     got = read_csv(out)
     np.testing.assert_allclose(got["Fz_FR_corrected"],
                                correct(d["rig"][:, 1], design_correction(d["tas"][0], FS, "regularized"), "zerophase"),
                                rtol=1e-9)
     # --columns restricts the automatic mapping
     csv, acts = _four_files(tmp_path, d)
-    assert run([csv, "--actuators", acts, "--columns", "force_RR_N", "-o", out, "--transient", "keep"]) == 0
+    assert run([csv, "--actuators", acts, "--columns", "force_RR_N", "-o", out, "--transient", "keep", "--force"]) == 0
     got = read_csv(out)
     assert got.dtype.names == ("time", "force_RR_N_corrected")
     np.testing.assert_allclose(got["force_RR_N_corrected"],
@@ -330,11 +353,11 @@ def test_map_and_columns_choose_what_is_corrected(tmp_path, four_wheels):
     (("fl", "fr", "rl", "xx"), [], r"corner 'xx' of the actuator file matches no column of the input; fix: --map xx=COLUMN"),
     (("fl", "fr", "rl", "force"), [], r"corner 'force' .* matches several columns \(tire_force_fl_N, force_RR_N\)"),
     (("fl", "fr", "rl", "rr"), ["--columns", "time"], "is the time column"),
-    (("fl", "fr", "rl", "rr"), ["--map", "fl=nope"], "--map names column 'nope', which is not in the input"),
+    (("fl", "fr", "rl", "rr"), ["--map", "fl=nope"], "channel 'nope' is not a column of"),
     (("fl", "fr", "rl", "rr"), ["--map", "xx=Fz_FR"], "--map names corner 'xx', which is not in the actuator file"),
     (("fl", "fr", "rl", "rr"), ["--map", "fl=Fz_FR,fr=Fz_FR"], "column 'Fz_FR' is mapped to several corners"),
     (("fl", "fr", "rl", "rr"), ["--map", "fl"], "must be CORNER=COLUMN"),
-    (("fl", "fr", "rl", "rr"), ["--map", "fl=Fz_FR", "--columns", "RR"], "column 'RR' is not in"),
+    (("fl", "fr", "rl", "rr"), ["--map", "fl=Fz_FR", "--columns", "RR"], "channel 'RR' is not a column of"),
     (("fl", "fr", "rl", "rr"), ["--map", "fl=Fz_FR", "--columns", "Fz_FR,force_RR_N"],
      "column 'force_RR_N' is not mapped to a corner; fix: add CORNER=force_RR_N to --map"),
     (("fl", "fr", "rl", "x"), ["--columns", "Fz_FR,rl-load,force_RR_N"], r"column 'force_RR_N' names no corner"),
@@ -364,16 +387,17 @@ def test_output_equal_to_an_input_is_refused_before_any_work(files, tmp_path):
     import os
 
     csv, act, tmp = files
-    before = csv.read_bytes()
+    digest = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (csv, act)}
     for out in (csv, tmp / "." / csv.name, act):
-        assert run([csv, "--actuator", act, "-o", out]) == 2
-        assert "is the input file" in run.last_error, run.last_error
+        for force in ([], ["--force"]):  # --force never makes an input writable
+            assert run([csv, "--actuator", act, "-o", out, *force]) == 2
+            assert "is the input file" in run.last_error, run.last_error
     link = tmp / "link.csv"
     os.link(csv, link)  # the same file under another name
-    assert run([csv, "--actuator", act, "-o", link]) == 2
+    assert run([csv, "--actuator", act, "-o", link, "--force"]) == 2
     assert run([tmp / "missing.csv", "--actuator", act, "-o", tmp / "missing.csv"]) == 2
     assert "is the input file" in run.last_error  # before the input is even read
-    assert csv.read_bytes() == before and act.exists()
+    assert {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (csv, act)} == digest
 
 
 def test_identify_accepts_an_actuator_whose_data_are_not_minimum_phase(tmp_path, rig_data):
@@ -398,3 +422,148 @@ def test_identify_accepts_an_actuator_whose_data_are_not_minimum_phase(tmp_path,
     sel = np.isin(t_out, both)
     dyn = known[both] - known[both].mean()
     assert np.sqrt(np.mean((got["fl_N_corrected"][sel] - known[both]) ** 2)) / dyn.std() < 0.02
+
+
+# ---------------------------------------------------------------- real rig files: any format in, any format out, SI
+
+
+def _daq_csv(path, t, forces_N, disp_m):
+    """A German DAQ export: '#' preamble, ';' and decimal comma, 'Zeit [s]', forces in kN, the LVDT
+    in mm, a status text column."""
+    lines = ["# Prüfstand: DYNTRAC", "# Messung: 2024-05-02 10:15", "",
+             "Zeit [s];Fz_FL [kN];Fz_FR [kN];Weg_FL [mm];Status"]
+    for i in range(t.size):
+        values = (forces_N[i, 0] / 1e3, forces_N[i, 1] / 1e3, disp_m[i] * 1e3)
+        row = [f"{t[i]:.4f}"] + [repr(float(v)) for v in values]
+        lines.append(";".join(x.replace(".", ",") for x in row) + ";OK")
+    path.write_text("\r\n".join(lines) + "\r\n", encoding="utf-8")
+    return path
+
+
+def test_a_kn_file_and_an_n_file_give_the_same_corrected_forces_in_n(files, rig_data):
+    """The reader converts kN to N: the German kN file and the plain N file of the same forces give
+    the same corrected forces (in N); the mm channel and the text column are not taken as forces."""
+    csv, act, tmp = files
+    daq = _daq_csv(tmp / "daq.csv", rig_data["t"], rig_data["rig"], rig_data["pan"])
+    assert run([csv, "--actuator", act, "-o", tmp / "n.csv"]) == 0
+    assert run([daq, "--actuator", act, "-o", tmp / "kn.csv"]) == 0
+    n, kn = read_csv(tmp / "n.csv"), read_csv(tmp / "kn.csv")
+    assert header(tmp / "kn.csv") == "time [s],Fz_FL_corrected [N],Fz_FR_corrected [N]"
+    np.testing.assert_allclose(kn["time"], n["time"], atol=1e-12)
+    for a, b in (("Fz_FL", "fl_N"), ("Fz_FR", "fr_N")):
+        np.testing.assert_allclose(kn[f"{a}_corrected"], n[f"{b}_corrected"], rtol=1e-12, atol=1e-7)
+        assert 25e3 < kn[f"{a}_corrected"].mean() < 35e3  # N, not kN
+    # a length named as a force is refused, before anything is written
+    assert run([daq, "--actuator", act, "--columns", "Fz_FL,Weg_FL", "-o", tmp / "x.csv"]) == 2
+    assert "channel 'Weg_FL' is in mm, not a force" in run.last_error, run.last_error
+    assert not (tmp / "x.csv").exists()
+
+
+def test_actuators_map_the_corners_of_a_daq_file_and_the_output_records_how_it_was_made(files, rig_data):
+    from correction.actuator_file import write_actuators_file
+    from correction.measured import read_channels
+
+    csv, act, tmp = files
+    daq = _daq_csv(tmp / "daq.csv", rig_data["t"], rig_data["rig"], rig_data["pan"])
+    acts = tmp / "acts.toml"
+    write_actuators_file(acts, {"fl": (rig_data["num"], rig_data["den"]), "fr": (rig_data["num"], rig_data["den"])})
+    # automatic: only force channels are candidates, so Weg_FL does not compete with Fz_FL for corner fl
+    assert run([daq, "--actuators", acts, "-o", tmp / "auto.csv"]) == 0
+    assert run([daq, "--actuators", acts, "--map", "fl=Fz_FL,fr=Fz_FR", "-o", tmp / "c.rsp"]) == 0
+    auto = read_csv(tmp / "auto.csv")
+    back = read_channels(tmp / "c.rsp")
+    assert back.names == ("Fz_FL_corrected", "Fz_FR_corrected") and set(back.units.values()) == {"N"}
+    np.testing.assert_allclose(back.time_s, auto["time"], atol=1e-9)
+    for name in back.names:  # int16 RPC III: within half a step of the exact values
+        step = np.abs(auto[name]).max() / 32752
+        assert np.abs(back.data[name] - auto[name]).max() <= 0.5 * step * (1 + 1e-9)
+    meta = back.metadata
+    assert meta["made_by"] == "rigsim correct" and meta["TIME_TYPE"] == "RESPONSE"
+    assert meta["rigsim_version"] == version("rigsim")
+    assert meta["input"].endswith("daq.csv") and meta["ta_source"].endswith("acts.toml")
+    assert meta["corners"] == "fl=Fz_FL,fr=Fz_FR"
+    assert meta["lowpass"] == "regularized: Butterworth order 6, 30 Hz"
+    assert meta["mode"] == "zerophase" and meta["settling_tolerance"] == "0.001" and meta["transient"] == "drop"
+    assert read_metadata(tmp / "auto.csv")["input"] == str(daq)  # the CSV keeps the whole path
+
+
+def test_mdf4_output_reads_back_exactly(files):
+    pytest.importorskip("asammdf")
+    from correction.measured import read_channels
+
+    csv, act, tmp = files
+    assert run([csv, "--actuator", act, "-o", tmp / "o.csv", "--lowpass", "paper", "--transient", "mark"]) == 0
+    assert run([csv, "--actuator", act, "-o", tmp / "o.mf4", "--lowpass", "paper", "--transient", "mark"]) == 0
+    ref, back = read_csv(tmp / "o.csv"), read_channels(tmp / "o.mf4")
+    assert back.names == ("fl_N_corrected", "fr_N_corrected", "settled")
+    for name in back.names:
+        np.testing.assert_array_equal(back.data[name], ref[name])
+    assert back.metadata["lowpass"].startswith("paper: 2 x 2nd order, 16/24 Hz")
+    assert back.metadata["ta_source"] == str(act)
+
+
+def test_an_rpc3_input_corrects_like_the_same_numbers_in_a_csv(files, rig_data):
+    """RPC III in (forces in kN, int16): the command reads what read_channels reads and corrects it
+    exactly as the same numbers (in N) from a CSV file."""
+    from types import SimpleNamespace
+
+    from correction.measured import read_channels, write_channels
+
+    csv, act, tmp = files
+    rsp = tmp / "rig.rsp"
+    write_channels(rsp, SimpleNamespace(time_s=rig_data["t"], data={"Fz_FL": rig_data["rig"][:, 0] / 1e3},
+                                        units={"Fz_FL": "kN"}))
+    mc = read_channels(rsp)
+    assert mc.units["Fz_FL"] == "N"
+    write_csv(tmp / "same.csv", ["time", "Fz_FL"], [mc.time_s, mc.data["Fz_FL"]])
+    assert run([rsp, "--actuator", act, "-o", tmp / "a.csv"]) == 0
+    assert run([tmp / "same.csv", "--actuator", act, "-o", tmp / "b.csv"]) == 0
+    a, b = read_csv(tmp / "a.csv"), read_csv(tmp / "b.csv")
+    np.testing.assert_allclose(a["time"], b["time"], atol=1e-9)
+    np.testing.assert_allclose(a["Fz_FL_corrected"], b["Fz_FL_corrected"], rtol=1e-12)
+    assert run([rsp, "--actuator", act, "--time-col", "t", "-o", tmp / "c.csv"]) == 2
+    assert "has no time column" in run.last_error
+
+
+def test_time_col_names_a_time_column_without_a_time_name(files, rig_data):
+    csv, act, tmp = files
+    p = tmp / "stamp.csv"
+    write_csv(p, ["Stamp [ms]", "fl_N"], [rig_data["t"] * 1e3, rig_data["rig"][:, 0]], time_fmt="{:.3f}")
+    assert run([p, "--actuator", act, "-o", tmp / "o.csv"]) == 2
+    assert "has no time column" in run.last_error and "(time_col)" in run.last_error
+    assert run([p, "--actuator", act, "--time-col", "Stamp", "-o", tmp / "o.csv"]) == 0
+    assert run([csv, "--actuator", act, "--columns", "fl_N", "-o", tmp / "ref.csv"]) == 0
+    got, ref = read_csv(tmp / "o.csv"), read_csv(tmp / "ref.csv")
+    np.testing.assert_allclose(got["time"], ref["time"], atol=1e-9)  # ms read as s
+    np.testing.assert_allclose(got["fl_N_corrected"], ref["fl_N_corrected"], rtol=1e-12)
+
+
+def test_an_existing_output_needs_force(files):
+    csv, act, tmp = files
+    out = tmp / "out.csv"
+    out.write_text("previous\n")
+    assert run([csv, "--actuator", act, "-o", out]) == 2
+    assert re.fullmatch(r"output '.*out\.csv' exists; pass --force to replace it", run.last_error), run.last_error
+    assert out.read_text() == "previous\n" and not [p for p in tmp.iterdir() if p.name.startswith(".")]
+    assert run([csv, "--actuator", act, "-o", out, "--force"]) == 0
+    assert read_csv(out).dtype.names == ("time", "fl_N_corrected", "fr_N_corrected")
+
+
+@pytest.mark.parametrize("out, message", [
+    ("o.csv", r"cannot be written: channel name 'Fz\[1\]_corrected' cannot be written to CSV"),
+    ("o.xlsx", r"has extension '\.xlsx'"),
+])
+def test_an_output_the_writer_would_refuse_is_refused_before_the_correction(files, rig_data, monkeypatch, out,
+                                                                             message):
+    from types import SimpleNamespace
+
+    import correction.pipeline
+    from correction.measured import write_channels
+
+    csv, act, tmp = files
+    rsp = tmp / "odd.rsp"  # RPC III allows brackets in a channel name; a CSV header does not
+    write_channels(rsp, SimpleNamespace(time_s=rig_data["t"], data={"Fz[1]": rig_data["rig"][:, 0]}, units={}))
+    monkeypatch.setattr(correction.pipeline, "correct_forces", lambda *a, **k: pytest.fail("corrected"))
+    assert run([rsp, "--actuator", act, "-o", tmp / out]) == 2
+    assert re.search(message, run.last_error), run.last_error
+    assert not (tmp / out).exists()

@@ -284,6 +284,19 @@ def test_rigsim_iterate_end_to_end_on_the_simulated_rig(tmp_path, capsys):
     drive = np.loadtxt(out / "drive.csv", delimiter=",", skiprows=1)
     assert drive.shape == (12001, 5) and np.allclose(np.diff(drive[:, 0]), 1e-3)
     assert np.abs(drive[:, 1:]).max() <= 0.076  # within DYNTRAC's half stroke
+    # the same drive as an RPC III drive file: int16, so within half a step (max|x| / 32752 / 2) of
+    # the CSV's numbers (themselves written to 10 significant digits)
+    from correction.measured import read_channels
+
+    drv = read_channels(out / "drive.drv")
+    assert drv.names == ("drive_fl", "drive_fr", "drive_rl", "drive_rr") and set(drv.units.values()) == {"m"}
+    np.testing.assert_allclose(drv.time_s, drive[:, 0], rtol=0, atol=1e-9)
+    for i, name in enumerate(drv.names):
+        half_step = 0.5 * np.abs(drive[:, 1 + i]).max() / 32752
+        assert 0 < np.abs(drv.data[name] - drive[:, 1 + i]).max() <= half_step * (1 + 1e-6) + 1e-12
+    assert drv.metadata["TIME_TYPE"] == "DRIVE"
+    assert (drv.metadata["scenario"], drv.metadata["target"]) == ("it", "displacement")
+    assert drv.metadata["iterations"] == str(doc["iteration"]["best_index"])
     assert (out / "iteration.png").stat().st_size > 0
     printed = capsys.readouterr().out
     assert "rig_iterated_drive" in printed and "output_corrected" in printed

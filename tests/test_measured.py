@@ -8,8 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from correction.measured import (MeasuredDataError, read_channels, read_force_csv, sampling_rate,
-                                 write_channels)
+from correction.measured import MeasuredDataError, read_channels, write_channels
 
 T = [0.0, 0.001, 0.002, 0.003]
 FZ_N = [12500.0, 12750.0, 13000.0, 12250.0]  # 12.5, 12.75, 13.0, 12.25 kN
@@ -247,17 +246,16 @@ def test_write_refuses_what_would_not_read_back(tmp_path, data, message):
     assert not (tmp_path / "o.csv").exists()
 
 
-# ---------------------------------------------------------------- the old API on the new reader
+# ---------------------------------------------------------------- what the old read_force_csv checked, on read_channels
 
-def test_read_force_csv_keeps_its_contract(tmp_path):
+def test_ms_time_text_column_and_uniform_rate(tmp_path):
+    """Formerly read_force_csv / sampling_rate (removed; rigsim correct and identify use read_channels)."""
     p = _write(tmp_path, "old.csv", "time [ms];Fz_FL [kN];status\n0;12,5;OK\n1;12,75;OK\n2;13;OK\n3;12,25;OK\n")
-    names, time_text, data = read_force_csv(p)
-    assert names == ["time", "Fz_FL"]
-    assert time_text == ["0.0", "0.001", "0.002", "0.003"]
-    np.testing.assert_allclose(data, np.column_stack([T, FZ_N]), rtol=1e-14)
-    assert read_force_csv(_write(tmp_path, "s.csv", "time_s,F\n0.000,1\n0.0010,2\n"))[1] == ["0.000", "0.0010"]
-    with pytest.raises(MeasuredDataError, match=r"has no 'time' column \(seconds\)"):
-        read_force_csv(_write(tmp_path, "t.csv", "t,F\n0,1\n1,2\n"))
-    with pytest.raises(MeasuredDataError, match=r"'time' is not uniform at line 5"):  # row i on line i + 2
-        sampling_rate(np.array([0.0, 0.001, 0.002, 0.0035, 0.0045]), "time")
-    assert sampling_rate(np.array(T), "time") == pytest.approx(1000.0)
+    mc = read_channels(p)
+    assert mc.names == ("Fz_FL",) and mc.time_name == "time"  # the status text is left out
+    np.testing.assert_allclose(mc.time_s, T, rtol=1e-14)
+    np.testing.assert_allclose(mc.data["Fz_FL"], FZ_N, rtol=1e-14)
+    assert mc.fs_hz == pytest.approx(1000.0)
+    assert read_channels(_write(tmp_path, "t.csv", "t,F\n0,1\n1,2\n")).fs_hz == pytest.approx(1.0)
+    with pytest.raises(MeasuredDataError, match=r"'time' is not uniform at line 5 "):  # row i on line i + 2
+        read_channels(_write(tmp_path, "u.csv", "time,F\n0,1\n0.001,2\n0.002,3\n0.0035,4\n0.0045,5\n"))

@@ -50,9 +50,10 @@ def case(tmp_path_factory):
 
 
 def _read(path):
+    """Header names (without their ' [unit]') and values of the command's CSV, '#' metadata skipped."""
     with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
-    return rows[0], np.array(rows[1:], dtype=float)
+        rows = [r for r in csv.reader(fh) if not r[0].startswith("#")]
+    return [h.split(" [")[0] for h in rows[0]], np.array(rows[1:], dtype=float)
 
 
 def test_identify_then_correct_gives_the_studys_corrected_forces(case, capsys):
@@ -70,7 +71,7 @@ def test_identify_then_correct_gives_the_studys_corrected_forces(case, capsys):
                  "--columns", cols, "-o", str(out), "--lowpass", "regularized", "--mode", "zerophase",
                  "--transient", "mark"]) == 0
     header, data = _read(out)
-    assert header == ["time_s"] + [f"tire_force_{c}_N_corrected" for c in CORNERS] + ["settled"]
+    assert header == ["time"] + [f"tire_force_{c}_N_corrected" for c in CORNERS] + ["settled"]
 
     study = score_pair(road, rig, Rig(s), methods=(BEST,), identified=ident.actuators(), noise_N=0.0, seed=s.seed)
     best = study.methods["best"]

@@ -173,12 +173,38 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+class _SigtermAsInterrupt:
+    """While installed, SIGTERM raises KeyboardInterrupt in the main thread, so a terminated run
+    stops as after Ctrl-C (pool workers terminated, a sweep's finished cases kept); ``received``
+    tells the two apart. Outside the main thread nothing is installed."""
+
+    def __init__(self) -> None:
+        import signal
+
+        self.received, self._signal, self._previous = False, signal, None
+        try:
+            self._previous = (signal.signal(signal.SIGTERM, self._handle),)
+        except ValueError:  # not the main thread
+            pass
+
+    def _handle(self, signum, frame) -> None:
+        self.received = True
+        raise KeyboardInterrupt("terminated (SIGTERM)")
+
+    def restore(self) -> None:
+        if self._previous is not None:
+            self._signal.signal(self._signal.SIGTERM, self._previous[0] or self._signal.SIG_DFL)
+            self._previous = None
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``rigsim`` console command; returns the exit code."""
+    """Entry point of the ``rigsim`` console command; returns the exit code (SIGTERM: the run
+    stops as for Ctrl-C, "rigsim: terminated" on stderr, 143)."""
     args = build_parser().parse_args(argv)  # --help and bad options end here, before the imports below
     from scenarios.core.config import ScenarioError
     from scenarios.core.watch import SimulationError
 
+    sigterm = _SigtermAsInterrupt()
     try:
         return args.func(args)
     except (ScenarioError, SimulationError) as exc:
@@ -191,8 +217,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"rigsim: error: cannot write output: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        if sigterm.received:
+            print("rigsim: terminated", file=sys.stderr)
+            return 143
         print("rigsim: interrupted", file=sys.stderr)
         return 130
+    finally:
+        sigterm.restore()
 
 
 if __name__ == "__main__":  # pragma: no cover

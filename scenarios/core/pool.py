@@ -2,7 +2,8 @@
 
 MuJoCo's actuator callbacks are process-global, so two runs never share a process at the same
 time; each worker ignores Ctrl-C (the parent handles it and terminates the workers, so nothing
-is left running); jobs are plain picklable calls. :func:`local_executor` is the executor the
+is left running) and, on Linux, dies with its parent (a parent killed outright leaves no worker
+blocked on a pipe); jobs are plain picklable calls. :func:`local_executor` is the executor the
 studies and ``rigsim sweep`` use (a Dask cluster's executor can stand in for it);
 :func:`run_jobs` runs a list of calls on it and returns their results in order.
 """
@@ -13,6 +14,7 @@ import concurrent.futures as cf
 import contextlib
 import os
 import signal
+import sys
 from collections.abc import Callable, Iterator, Sequence
 
 __all__ = ["worker_count", "local_executor", "stop_process_pool", "run_jobs"]
@@ -32,9 +34,35 @@ def worker_count(requested: int | None, jobs: int | None = None) -> int:
     return max(1, min(n, jobs) if jobs else n)
 
 
-def _ignore_sigint() -> None:
-    """Pool-worker initializer: Ctrl-C is handled by the parent, which stops the workers."""
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Linux: ask the kernel to send SIGTERM to this process when its parent dies
+    (``prctl(PR_SET_PDEATHSIG)``), so a worker never outlives a killed parent holding its pipes;
+    exit at once if the parent is already gone. The kernel's "parent" is the thread that started
+    the worker: a pool is started and used from one thread that outlives it (the main thread in
+    every command). Elsewhere nothing is done."""
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+    except (OSError, AttributeError):  # no prctl (an unusual libc): the parent's terminate() still works
+        return
+    if os.getppid() != parent_pid:  # the parent died before the request was in place
+        os._exit(1)
+
+
+def _init_worker(parent_pid: int) -> None:
+    """Pool-worker initializer: Ctrl-C is handled by the parent, which stops the workers; SIGTERM
+    ends the worker (the default, also when the parent set its own handler before forking); the
+    worker dies with its parent (:func:`_die_with_parent`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _die_with_parent(parent_pid)
 
 
 def stop_process_pool(pool: cf.ProcessPoolExecutor) -> None:
@@ -58,7 +86,8 @@ def local_executor(workers: int | None = None) -> Iterator[cf.Executor]:
 
     On an exception (Ctrl-C included) the workers are terminated before it propagates.
     """
-    pool = cf.ProcessPoolExecutor(max_workers=worker_count(workers), initializer=_ignore_sigint)
+    pool = cf.ProcessPoolExecutor(max_workers=worker_count(workers), initializer=_init_worker,
+                                  initargs=(os.getpid(),))
     try:
         yield pool
     except BaseException:

@@ -17,7 +17,7 @@ from correction.dlc import force_statistics
 from scenarios.core.files import atomic_write_bytes, atomic_write_text, to_json
 from mjcf.names import CORNERS
 
-__all__ = ["RunResult", "write_run", "SIGNALS"]
+__all__ = ["RunResult", "write_run", "SIGNALS", "TIMING_KEYS"]
 
 #: Units and descriptions of the per-wheel signals a run may carry.
 SIGNALS: dict[str, tuple[str, str]] = {
@@ -128,20 +128,33 @@ def _csv_bytes(names: list[str], matrix: np.ndarray) -> bytes:
     return buf.getvalue().encode("ascii")
 
 
-def write_run(result: RunResult, out_dir) -> dict[str, pathlib.Path]:
-    """Write ``result.json`` and ``timeseries.csv`` into ``out_dir``, each atomically.
+#: Run facts of :attr:`RunResult.info` that differ from run to run of the same scenario and seed:
+#: written to ``timings.json``, never to ``result.json``.
+TIMING_KEYS = ("wall_time_s",)
 
-    Both files are fully formed in memory before either is written, so a failure leaves no
-    partial file. ``timeseries.csv`` reads in one line: ``numpy.genfromtxt(p, delimiter=",",
-    names=True)`` or ``pandas.read_csv(p)``.
+
+def write_run(result: RunResult, out_dir) -> dict[str, pathlib.Path]:
+    """Write ``result.json``, ``timeseries.csv`` and ``timings.json`` into ``out_dir``, each atomically.
+
+    ``result.json`` and ``timeseries.csv`` depend only on the scenario and its seed: two runs give
+    byte-identical files. The wall time (s) goes to ``timings.json`` beside them. All files are
+    fully formed in memory before any is written, so a failure leaves no partial file.
+    ``timeseries.csv`` reads in one line: ``numpy.genfromtxt(p, delimiter=",", names=True)`` or
+    ``pandas.read_csv(p)``.
     """
     out = pathlib.Path(out_dir)
     names, matrix = result.columns()
     summary = result.summary()
+    info = dict(summary["info"])
+    timings = {k: info.pop(k) for k in TIMING_KEYS if k in info}
+    summary["info"] = info
     summary["timeseries"] = {"file": "timeseries.csv", "columns": names, "rate_hz": summary["rate_hz"]}
+    summary["timings"] = {"file": "timings.json"}
     csv = _csv_bytes(names, matrix)
     js = to_json(summary)
-    paths = {"timeseries": out / "timeseries.csv", "result": out / "result.json"}
+    tj = to_json(timings)
+    paths = {"timeseries": out / "timeseries.csv", "result": out / "result.json", "timings": out / "timings.json"}
     atomic_write_bytes(paths["timeseries"], csv)
     atomic_write_text(paths["result"], js)
+    atomic_write_text(paths["timings"], tj)
     return paths

@@ -36,6 +36,7 @@ from mjcf.build import build_spec
 from mjcf.physics import RigIndex, friction_disabled, static_equilibrium, tire_stiffness
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive, road_drive
+from scenarios.core.memory import check_memory
 from scenarios.core.plant import PlantLinearization
 from scenarios.core.watch import SimulationError, Watch, mujoco_warnings_captured, output_schedule
 
@@ -285,6 +286,9 @@ class Rig:
         if abs(decim - round(decim)) > 1e-9:
             raise ScenarioError(f"output_rate_hz = {rate_hz:g} Hz must divide the simulation rate "
                                 f"{1.0 / self.dt_s:g} Hz")
+        n_out = output_schedule(drive.t_s, self.dt_s, rate_hz)[2]
+        check_memory(0, n_out, f"a drive of {drive.t_s[-1] - drive.t_s[0]:g} s recorded at {rate_hz:g} Hz is "
+                     f"{n_out:.3g} output samples", "shorten duration_s or lower output_rate_hz")
         with mujoco_warnings_captured():
             if self.hydraulic:
                 return self._run_hydraulic(drive, rate_hz, progress, pose_rate_hz)

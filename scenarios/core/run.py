@@ -14,6 +14,7 @@ import numpy as np
 from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive
+from scenarios.core.memory import check_memory
 from scenarios.core.results import RunResult
 from scenarios.core.rig import Rig
 from scenarios.core.watch import ProgressFn, output_schedule
@@ -62,6 +63,13 @@ def run(
         raise ScenarioError("pan_drive replaces the pan motion of a road-mode run only")
     wall0 = time.perf_counter()
     rig = Rig(scenario, hydraulic=(mode == "rig"))
+    steps = (scenario.lead_in_s + scenario.duration_s) / rig.dt_s
+    check_memory(steps, scenario.duration_s * scenario.output_rate_hz,
+                 f"duration_s = {scenario.duration_s:g} s plus the {scenario.lead_in_s:g} s lead-in at "
+                 f"vehicle.timestep_s = {rig.dt_s:g} s is {steps:.3g} steps",
+                 "shorten duration_s or raise vehicle.timestep_s")
+    if mode == "road":  # a truck with no rest on its tires is refused before the drive is made
+        rig.rest_state()  # (the rig mode's Rig did so in its stability check)
     fs = 1.0 / rig.dt_s
     decim = fs / scenario.output_rate_hz
     if abs(decim - round(decim)) > 1e-9:

@@ -1,10 +1,11 @@
 """``rigsim identify``: characterize the rig's actuators before a test (the command-line adapter).
 
 On the simulated rig (``rigsim identify SCENARIO.toml --out DIR``) or from a recorded file of
-drive and LVDT channels of a real rig (``rigsim identify --from-file REC.csv --pairs
-fl=DRIVE:LVDT,... --out DIR``). Writes ``DIR/actuators.toml`` (one T_a per corner, the file
-``rigsim correct --actuators`` reads), ``DIR/identification.json`` (fit diagnostics) and
-``DIR/bode.png`` (data against fit).
+drive and LVDT channels of a real rig (``rigsim identify --from-file REC --pairs
+fl=DRIVE:LVDT,... [--time-col NAME] --out DIR``; REC in any format that
+:func:`correction.measured.read_channels` reads, lengths converted to m). Writes
+``DIR/actuators.toml`` (one T_a per corner, the file ``rigsim correct --actuators`` reads),
+``DIR/identification.json`` (fit diagnostics) and ``DIR/bode.png`` (data against fit).
 """
 
 from __future__ import annotations
@@ -24,10 +25,14 @@ def add_parser(subparsers) -> None:
     p.add_argument("--duration-s", type=float, default=None,
                    help="identification record in s (default: the scenario's duration, at least 60 s)")
     p.add_argument("--seed", type=int, default=None, help="seed of the random drives (default: the project's)")
-    p.add_argument("--from-file", default=None, metavar="REC.csv",
-                   help="identify from a recorded file of a real rig instead (needs --pairs)")
+    p.add_argument("--from-file", default=None, metavar="REC",
+                   help="identify from a recorded file of a real rig instead (.csv in any dialect, .rsp, .mf4, "
+                        ".tdms; needs --pairs)")
     p.add_argument("--pairs", default=None, metavar="fl=DRIVE:LVDT,...",
-                   help="with --from-file: per corner the drive and the pan displacement (LVDT) columns, in m")
+                   help="with --from-file: per corner the drive and the pan displacement (LVDT) channels, named "
+                        "without their [unit]; lengths in m, mm... (converted to m)")
+    p.add_argument("--time-col", default=None, metavar="NAME",
+                   help="with --from-file: the time column (default: the one named time, t, zeit...)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_identify)
 
@@ -41,6 +46,8 @@ def _check(args):
         raise ScenarioError("--from-file needs --pairs fl=DRIVE:LVDT,... naming each corner's drive and LVDT columns")
     if args.pairs and args.from_file is None:
         raise ScenarioError("--pairs goes with --from-file; a simulated identification knows its channels")
+    if args.time_col is not None and args.from_file is None:
+        raise ScenarioError("--time-col goes with --from-file; a simulated identification knows its time")
     d = args.duration_s
     if d is not None and not (math.isfinite(d) and 10.0 <= d <= 3600.0):
         raise ScenarioError(f"--duration-s must lie in [10, 3600] s, got {d:g}")
@@ -61,7 +68,7 @@ def cmd_identify(args) -> int:
     if args.from_file is not None:
         from scenarios.studies.identify.recorded import identify_recorded
 
-        ident = identify_recorded(args.from_file, args.pairs)
+        ident = identify_recorded(args.from_file, args.pairs, time_col=args.time_col)
         title = pathlib.Path(args.from_file).name
     else:
         from correction.actuator_fit import ActuatorFitError

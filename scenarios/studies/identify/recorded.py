@@ -1,9 +1,11 @@
 """T_a per corner from a recorded file of a real rig: the drive and the LVDT channel of each post.
 
-No simulator: the file is read by :mod:`correction.measured` and each pair is fitted by
-:func:`correction.actuator_fit.fit_actuator` (single-input H1, the project's one fitting policy).
-For a clean identification the posts should be driven by independent random drives; a test drive
-(front and rear the same profile delayed) lets each estimate absorb what the other posts do.
+No simulator: the file is read by :func:`correction.measured.read_channels` (any CSV dialect, RPC
+III, MDF4, TDMS; only the channels the pairs name), each channel converted to SI (an LVDT in mm
+is fitted in m), and each pair is fitted by :func:`correction.actuator_fit.fit_actuator`
+(single-input H1, the project's one fitting policy). For a clean identification the posts should
+be driven by independent random drives; a test drive (front and rear the same profile delayed)
+lets each estimate absorb what the other posts do.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from correction.actuator_fit import ActuatorFitError, fit_actuator
-from correction.measured import TIME_NAMES, MeasuredDataError, read_force_csv, sampling_rate
+from correction.measured import MeasuredDataError, read_channels
 from scenarios.core.config import ScenarioError
 
 __all__ = ["RecordedIdentification", "parse_pairs", "identify_recorded"]
@@ -68,34 +70,45 @@ def parse_pairs(text: str) -> dict[str, tuple[str, str]]:
     return out
 
 
-def identify_recorded(path, pairs_text: str) -> RecordedIdentification:
-    """Fit T_a for each ``corner=DRIVE:LVDT`` pair of the recorded CSV file ``path`` (columns in m).
+def identify_recorded(path, pairs_text: str, time_col: str | None = None) -> RecordedIdentification:
+    """Fit T_a for each ``corner=DRIVE:LVDT`` pair of the recorded file ``path``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Any file :func:`correction.measured.read_channels` reads; drive and LVDT channels are
+        lengths (m, mm...; converted to m) or carry no unit (taken as m).
+    pairs_text : str
+        ``"fl=DRIVE:LVDT,fr=..."``, channel names as the reader returns them (``Weg_FL`` for a
+        header ``Weg_FL [mm]``).
+    time_col : str, optional
+        The time column (default: the one with a time name).
 
     Raises
     ------
     ScenarioError
-        A file, column or pair problem, or a record that cannot support a fit (one sentence).
+        A file, channel, unit or pair problem, or a record that cannot support a fit (one sentence).
     """
     pairs = parse_pairs(pairs_text)
+    wanted = list(dict.fromkeys(c for cols in pairs.values() for c in cols))
     try:
-        names, _, data = read_force_csv(path)
-        time_name = next(n for n in TIME_NAMES if n in names)
-        fs = sampling_rate(data[:, names.index(time_name)], time_name)
+        mc = read_channels(path, time_col=time_col, channels=wanted)
     except MeasuredDataError as exc:
         raise ScenarioError(str(exc)) from None
-    for corner, cols in pairs.items():
-        for col in cols:
-            if col not in names:
-                raise ScenarioError(f"--pairs {corner}: column {col!r} is not in {str(path)!r}; "
-                                    f"its columns are {', '.join(names)}")
+    name = dict(zip(wanted, mc.names))  # as asked -> as read (a CSV header may match by case)
+    pairs = {corner: (name[d], name[x]) for corner, (d, x) in pairs.items()}
     fits = {}
     for corner, (d, x) in pairs.items():
-        drive, lvdt = data[:, names.index(d)], data[:, names.index(x)]
+        for col in (d, x):
+            if mc.units[col] not in ("m", ""):
+                raise ScenarioError(f"--pairs {corner}: channel {col!r} is in {mc.source_units[col]}, not a length; "
+                                    "give the drive and the LVDT (pan displacement) channels, in m or mm")
+        drive, lvdt = mc.data[d], mc.data[x]
         if np.std(drive) == 0 or np.std(lvdt) == 0:
             raise ScenarioError(f"--pairs {corner}: columns {d!r} and {x!r} must vary to identify T_a")
         try:
-            fits[corner] = fit_actuator(drive, lvdt, fs)
+            fits[corner] = fit_actuator(drive, lvdt, mc.fs_hz)
         except ActuatorFitError as exc:
             raise ScenarioError(f"--pairs {corner}: {exc}") from None
-    return RecordedIdentification(source=str(pathlib.Path(path)), pairs=pairs, fits=fits, fs_hz=float(fs),
-                                  record_s=float(data.shape[0] / fs))
+    return RecordedIdentification(source=str(pathlib.Path(path)), pairs=pairs, fits=fits, fs_hz=float(mc.fs_hz),
+                                  record_s=float(mc.n_samples / mc.fs_hz))

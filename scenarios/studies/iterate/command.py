@@ -6,7 +6,8 @@
                    [--max-iterations K] [--tolerance TOL] [--band-hz LO HI] [--duration-s S]
 
 The computation is :func:`scenarios.studies.iterate.compute.iterate_scenario`, the files
-(``DIR/drive.csv``, ``DIR/iteration.json``, ``DIR/iteration.png``) and the table
+(``DIR/drive.csv``, the same drive as the RPC III drive file ``DIR/drive.drv`` a lab can play on
+a real rig, ``DIR/iteration.json``, ``DIR/iteration.png``) and the table
 :mod:`scenarios.studies.iterate.report`. Bad options and a bad scenario raise
 :class:`scenarios.core.config.ScenarioError` before any run.
 """
@@ -33,7 +34,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c.add_argument("--target", choices=("displacement", "force"), required=True,
                    help="displacement: pan displacement = road profile (Moran); force: tire force = the road "
                         "run's tire force (RPC-style remote target)")
-    c.add_argument("--out", "-o", required=True, help="output folder (drive.csv, iteration.json, iteration.png)")
+    c.add_argument("--out", "-o", required=True,
+                   help="output folder (drive.csv, drive.drv: RPC III drive file, iteration.json, iteration.png)")
     c.add_argument("--gain", type=float, default=0.8, help="relaxation gain g (default 0.8; stable below ~2)")
     c.add_argument("--max-iterations", type=int, default=6, help="most drive updates (default 6)")
     c.add_argument("--tolerance", type=float, default=0.01, help="stop at this mean NRMSE (default 0.01)")

@@ -1,24 +1,31 @@
-"""Files and terminal table of ``rigsim iterate``: the drive CSV, the error plot, ``iteration.json``.
+"""Files and terminal table of ``rigsim iterate``: the drive files, the error plot, ``iteration.json``.
 
 ``DIR/drive.csv``: the best iterated drive (m) per corner at the output rate, t >= 0 (s);
+``DIR/drive.drv``: the same drive as an MTS RPC III drive file (TIME_TYPE DRIVE, int16, channels
+``drive_<corner>`` in m; header keys ``scenario``, ``target``, ``iterations``...), written by
+:func:`correction.measured.write_channels`, for a lab to play on a real rig;
 ``DIR/iteration.json``: :meth:`scenarios.studies.iterate.compute.IterateResult.to_dict`;
-``DIR/iteration.png``: the NRMSE against the target per iteration. All written atomically,
-after all three are made in memory.
+``DIR/iteration.png``: the NRMSE against the target per iteration. Each file is written
+atomically, after all of them are made in memory (the RPC III file is written first, so a
+refusal of its writer leaves the folder as it was).
 """
 
 from __future__ import annotations
 
 import io
 import pathlib
+from types import SimpleNamespace
 
 import numpy as np
 
+from correction.measured import write_channels
 from mjcf.names import CORNERS
 from scenarios.core.files import atomic_write_bytes, to_json
 
-__all__ = ["drive_csv_bytes", "plot_png", "comparison_table", "write_files", "FILES"]
+__all__ = ["drive_csv_bytes", "drive_channels", "drive_metadata", "plot_png", "comparison_table", "write_files",
+           "FILES"]
 
-FILES = ("drive.csv", "iteration.json", "iteration.png")
+FILES = ("drive.csv", "drive.drv", "iteration.json", "iteration.png")
 
 
 def drive_csv_bytes(result) -> bytes:
@@ -28,6 +35,39 @@ def drive_csv_bytes(result) -> bytes:
     np.savetxt(buf, np.column_stack([result.t_s, result.iteration.drive]), delimiter=",", fmt="%.10g",
                header=header, comments="")
     return buf.getvalue().encode("ascii")
+
+
+def drive_channels(result) -> SimpleNamespace:
+    """The iterated drive for :func:`correction.measured.write_channels`: ``time_s`` (s) and
+    ``drive_<corner>`` (m) per corner."""
+    drive = np.asarray(result.iteration.drive, dtype=float)
+    names = [f"drive_{c}" for c in CORNERS]
+    return SimpleNamespace(time_s=np.asarray(result.t_s, dtype=float),
+                           data={n: drive[:, i] for i, n in enumerate(names)}, units={n: "m" for n in names})
+
+
+def _header_value(text) -> str:
+    """One line of at most 96 latin-1 bytes (an RPC III header value)."""
+    text = " ".join(str(text).split()).encode("latin-1", errors="replace").decode("latin-1")
+    return text if len(text) <= 96 else text[:93] + "..."
+
+
+def drive_metadata(result) -> dict[str, str]:
+    """Header keys of the RPC III drive: what made it, for which scenario and target, after how
+    many drive updates (``iterations``: the updates behind the drive written, ``rig_runs``: rig
+    runs the iteration made), its status and gain."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        rigsim = version("rigsim")
+    except PackageNotFoundError:  # pragma: no cover - a source tree that is not installed
+        rigsim = "unknown (not installed)"
+    it = result.iteration
+    meta = {"made_by": "rigsim iterate", "rigsim_version": rigsim, "scenario": result.scenario_name,
+            "target": result.target, "iterations": str(it.best_index), "rig_runs": str(it.runs),
+            "status": it.status, "gain": f"{it.gain:g}", "band_hz": "{:g} {:g}".format(*result.band_hz),
+            "drive_unit": "m"}
+    return {k: _header_value(v) for k, v in meta.items()}
 
 
 def plot_png(result) -> bytes:
@@ -75,10 +115,11 @@ def comparison_table(result) -> str:
 
 
 def write_files(result, out_dir) -> dict[str, pathlib.Path]:
-    """Write :data:`FILES` into ``out_dir``; returns their paths by name."""
+    """Write :data:`FILES` into ``out_dir`` (replacing earlier ones); returns their paths by name."""
     d = pathlib.Path(out_dir)
     content = {"drive.csv": drive_csv_bytes(result), "iteration.json": to_json(result).encode("utf-8"),
                "iteration.png": plot_png(result)}
+    write_channels(d / "drive.drv", drive_channels(result), metadata=drive_metadata(result), overwrite=True)
     for name, data in content.items():
         atomic_write_bytes(d / name, data)
     return {name: d / name for name in FILES}

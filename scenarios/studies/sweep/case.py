@@ -75,8 +75,9 @@ class CaseResult:
         The method in one line.
     noise_N : float, N
         rms of the measurement noise.
-    wall_time_s : float, s
-        Wall time of the two runs and the scoring.
+
+    No wall time: the same case and seed give the same result, byte for byte (the worker's
+    wall time travels beside it, :func:`evaluate_payload`).
     """
 
     dlc_road: float
@@ -99,10 +100,9 @@ class CaseResult:
     method: str
     correction: str
     noise_N: float
-    wall_time_s: float
 
     @classmethod
-    def from_score(cls, pair, events: Mapping, wall_time_s: float) -> CaseResult:
+    def from_score(cls, pair, events: Mapping) -> CaseResult:
         """The result from a one-method :class:`~scenarios.studies.scoring.PairScore` and the
         rig run's ``events``."""
         (ms,) = pair.methods.values()
@@ -112,14 +112,13 @@ class CaseResult:
         return cls(**{k: float(np.mean(v)) for k, v in per.items()}, scored_s=float(ms.scored_s), events=counts,
                    wheels={c: {k: float(v[i]) for k, v in per.items()} for i, c in enumerate(pair.corners)},
                    event_detail=dict(events), method=ms.method.name, correction=ms.method.description,
-                   noise_N=float(pair.noise_N), wall_time_s=round(float(wall_time_s), 3))
+                   noise_N=float(pair.noise_N))
 
     def to_dict(self) -> dict[str, Any]:
         """The case file's ``result``: :data:`METRIC_COLUMNS` flat, then the details."""
         row: dict[str, Any] = {k: self.events[k] if k in self.events else getattr(self, k) for k in METRIC_COLUMNS}
         row.update(wheels={c: dict(v) for c, v in self.wheels.items()}, events=dict(self.event_detail),
-                   method=self.method, correction=self.correction, noise_N=self.noise_N,
-                   wall_time_s=self.wall_time_s)
+                   method=self.method, correction=self.correction, noise_N=self.noise_N)
         return row
 
 
@@ -151,7 +150,6 @@ def evaluate_case(scenario, settings: EvalSettings = EvalSettings()) -> CaseResu
     from scenarios.core.run import run
     from scenarios.studies.scoring import score_pair
 
-    wall0 = time.perf_counter()
     road = run(scenario, "road")
     rig = run(scenario, "rig")
     model = Rig(scenario, hydraulic=True)
@@ -162,12 +160,34 @@ def evaluate_case(scenario, settings: EvalSettings = EvalSettings()) -> CaseResu
         identified = identify_rig(scenario, rig=model).actuators()
     pair = score_pair(road, rig, model, methods=(settings.method,), identified=identified,
                       noise_N=settings.noise_N, seed=scenario.seed, settling_tolerance=settings.settling_tolerance)
-    return CaseResult.from_score(pair, rig.events, time.perf_counter() - wall0)
+    return CaseResult.from_score(pair, rig.events)
 
 
 def _one_sentence(exc: BaseException) -> str:
-    text = " ".join(str(exc).split()) or type(exc).__name__
+    try:
+        text = " ".join(str(exc).split())
+    except Exception:  # noqa: BLE001 - an exception whose str() fails still has a name
+        text = ""
+    text = text or type(exc).__name__
     return text if len(text) <= 400 else text[:397] + "..."
+
+
+def _plain(value: Any) -> Any:
+    """``value`` as plain str, float, int, bool, None, list and dict (what any pickle or JSON reader
+    takes back without this package's classes); raises TypeError for anything else."""
+    if value is None or isinstance(value, (str, bool)):
+        return value
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value)
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in value]
+    raise TypeError(f"a case result holds a {type(value).__name__}")
 
 
 def evaluate_payload(case_id: str, doc: dict, source: str | None, settings: dict) -> dict[str, Any]:
@@ -187,9 +207,12 @@ def evaluate_payload(case_id: str, doc: dict, source: str | None, settings: dict
     -------
     dict
         ``{"case_id", "status": "ok" | "failed", "error": str | None, "retry": bool,
-        "result": dict | None (CaseResult.to_dict()), "wall_time_s": float (s)}``. ``retry`` is
-        True for errors that are not a property of the case (an unexpected exception), so a
-        resumed sweep runs it again.
+        "result": dict | None (CaseResult.to_dict()), "wall_time_s": float (s)}``, plain types
+        only (str, float, int, bool, None, dict, list), so the record always travels back to the
+        client (an exception object, which may refuse to be pickled, never does). ``retry`` is
+        True for errors that are not a property of the case (an unexpected exception, also a
+        BaseException other than KeyboardInterrupt and SystemExit), so a resumed sweep runs it
+        again. ``wall_time_s`` is the worker's wall time; it is kept out of the case file.
     """
     from scenarios.core.config import ScenarioError, parse_scenario
     from scenarios.core.watch import SimulationError
@@ -201,9 +224,15 @@ def evaluate_payload(case_id: str, doc: dict, source: str | None, settings: dict
         record["result"] = evaluate_case(scenario, EvalSettings(**settings)).to_dict()
     except (ScenarioError, SimulationError, ValueError, ArithmeticError) as exc:
         record.update(status="failed", error=_one_sentence(exc))
-    except Exception as exc:  # noqa: BLE001 - any other error of one case must not stop the sweep
+    except (KeyboardInterrupt, SystemExit):
+        raise
+    except BaseException as exc:  # noqa: BLE001 - any other error of one case must not stop the sweep
         record.update(status="failed", error=f"{type(exc).__name__}: {_one_sentence(exc)}", retry=True)
     record["wall_time_s"] = round(time.perf_counter() - wall0, 3)
+    try:
+        record["result"] = _plain(record["result"])
+    except TypeError as exc:
+        record.update(status="failed", error=_one_sentence(exc), retry=True, result=None)
     if record["result"] is not None and not all(math.isfinite(record["result"][k]) for k in METRIC_COLUMNS):
         record.update(status="failed", error="a score is not finite (NaN or infinity)")
     return record

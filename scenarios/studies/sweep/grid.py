@@ -45,6 +45,7 @@ import dataclasses
 import hashlib
 import itertools
 import json
+import math
 import pathlib
 import re
 from collections.abc import Mapping
@@ -57,7 +58,7 @@ from scenarios.core.config import RoadConfig, Scenario, ScenarioError, parse_sce
 from scenarios.studies.sweep.settings import SETTING_KEYS, EvalSettings, parse_settings
 
 __all__ = ["Case", "SweepGrid", "EvalSettings", "axis_keys", "load_grid", "parse_grid", "format_value",
-           "GRID_FORMAT"]
+           "GRID_FORMAT", "MAX_CASES"]
 
 #: Version of the case-file format and of the fingerprint recipe (part of every fingerprint).
 #: 2: cases scored by scenarios.studies.scoring.score_pair (settings gained actuator, noise_N).
@@ -67,6 +68,11 @@ _SWEEP_KEYS = {"name", "base", *SETTING_KEYS}
 _GRID_KEYS = {"sweep", "base", "axes", "cases"}
 _ROAD_CHOICE = ("roughness", "gd_n0_m3", "profile_csv")
 _MAX_ID = 180  # characters; longer ids end in a hash (file names stay below common limits)
+
+#: Most cases a grid may have. Each case is two runs (tens of core-seconds for a 60 s case) and
+#: a validated scenario in memory (~2 kB); 10 000 cases are days of a cluster's time, more is
+#: almost surely an axis given too many values (a million cases took 1.9 GB just to validate).
+MAX_CASES = 10_000
 
 
 @dataclass(frozen=True)
@@ -352,6 +358,13 @@ def parse_grid(doc: Mapping, *, source: pathlib.Path | None = None) -> SweepGrid
     all_axes = tuple(axes) + tuple(
         (k, tuple({format_value(f[k]): f[k] for f in explicit if k in f}.values())) for k in extra_keys)
 
+    sizes = [len(vals) for _, vals in axes] + ([len(explicit)] if explicit else [])
+    n_cases = math.prod(sizes)
+    if n_cases > MAX_CASES:
+        product = " x ".join([*(f"{len(vals)} {k}" for k, vals in axes),
+                              *([f"{len(explicit)} [[cases]]"] if cases_list is not None else [])])
+        raise ScenarioError(f"{where}the grid has {n_cases} cases ({product}), more than the cap of {MAX_CASES}; "
+                            "split it into several grids or give the axes fewer values")
     cases: list[Case] = []
     ids: dict[str, dict] = {}
     for point in itertools.product(*[[(k, v) for v in vals] for k, vals in axes]):

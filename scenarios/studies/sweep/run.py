@@ -5,7 +5,8 @@ evaluation settings) is not run again, unless it failed for a reason that is not
 the case (``retry`` in its file: a worker lost, an unexpected exception). A failing case (a
 MuJoCo warning, a divergence, a drive beyond the stroke, an unstable rig) is recorded with its
 error in one sentence and does not stop the others. Ctrl-C stops the run, keeps every finished
-case and writes ``results.csv`` of them; running again resumes.
+case and writes ``results.csv`` of them; running again resumes. Wall times go to ``timings.csv``
+only, so two sweeps of the same grid write byte-identical case files and ``results.csv``.
 """
 
 from __future__ import annotations
@@ -19,11 +20,22 @@ from dataclasses import dataclass
 
 from scenarios.studies.sweep.case import evaluate_payload
 from scenarios.studies.sweep.grid import Case, SweepGrid
-from scenarios.studies.sweep.store import CASES_DIR, collect_results, read_case_files, write_case, write_meta
+from scenarios.studies.sweep.store import (CASES_DIR, collect_results, read_case_files, write_case, write_meta,
+                                           write_timings)
 
-__all__ = ["SweepOutcome", "run_sweep", "SUMMARY_FILE"]
+__all__ = ["SweepOutcome", "run_sweep", "SUMMARY_FILE", "format_eta"]
 
 SUMMARY_FILE = "summary.png"
+
+
+def format_eta(seconds: float) -> str:
+    """A duration (s) as ``HH:MM:SS``, with days in front from 24 h on (``3d 04:05:06``)."""
+    if not seconds >= 0 or seconds == float("inf"):
+        return "--:--:--"
+    s = int(round(seconds))
+    days, s = divmod(s, 86400)
+    clock = f"{s // 3600:02d}:{s % 3600 // 60:02d}:{s % 60:02d}"
+    return f"{days}d {clock}" if days else clock
 
 
 @dataclass(frozen=True)
@@ -101,7 +113,7 @@ class _Progress:
         left = self.total - self.done
         eta = elapsed / self.started * left
         print(f"[{self.done}/{self.total} finished, {self.failed} failed, {left} remaining, ETA "
-              f"{time.strftime('%H:%M:%S', time.gmtime(eta))}] {note}", file=self.stream, flush=True)
+              f"{format_eta(eta)}] {note}", file=self.stream, flush=True)
 
     def close(self) -> None:
         if self.bar is not None:
@@ -160,6 +172,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
     n_ok = n_failed = 0
     interrupted = False
     wall0 = time.perf_counter()
+    timings: dict[str, float | None] = {}
     futures: dict[cf.Future, Case] = {}
     try:
         for case in todo:
@@ -175,6 +188,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
             except Exception as exc:  # noqa: BLE001 - a lost worker must not stop the sweep
                 record = _lost(case, exc)
             write_case(out, case, record)
+            timings[case.case_id] = record.get("wall_time_s")
             n_ok += record["status"] == "ok"
             n_failed += record["status"] != "ok"
             bar.update(case.case_id, record)
@@ -188,6 +202,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
         bar.close()
         wall = time.perf_counter() - wall0
         results = collect_results(grid, out)
+        write_timings(grid, out, timings)
         records = write_meta(grid, out, ran=n_ok + n_failed, wall_time_s=wall, interrupted=interrupted,
                              executor_label=executor_label)
         if plot and records:

@@ -7,6 +7,8 @@
 * ``results.csv``: one row per case of the grid that has a case file, sorted by case id,
   collected from the case files (so an interrupted and resumed sweep gives the same file as an
   uninterrupted one).
+* ``timings.csv``: each case's wall time (s) in the worker, sorted by case id, kept apart so
+  that the case files and ``results.csv`` of two sweeps of the same grid are byte-identical.
 * ``sweep.json``: the grid, the settings, counts and the executor of the last run.
 """
 
@@ -23,10 +25,11 @@ from scenarios.core.files import atomic_write_text, write_json
 from scenarios.studies.sweep.case import METRIC_COLUMNS
 from scenarios.studies.sweep.grid import GRID_FORMAT, Case, SweepGrid, format_value
 
-__all__ = ["CASES_DIR", "RESULTS_FILE", "META_FILE", "case_path", "read_case_files", "results_columns",
-           "collect_results", "write_case", "write_meta"]
+__all__ = ["CASES_DIR", "RESULTS_FILE", "META_FILE", "TIMINGS_FILE", "case_path", "read_case_files",
+           "results_columns", "collect_results", "write_case", "write_meta", "write_timings"]
 
 RESULTS_FILE = "results.csv"
+TIMINGS_FILE = "timings.csv"
 CASES_DIR = "cases"
 META_FILE = "sweep.json"
 
@@ -50,16 +53,19 @@ def read_case_files(grid: SweepGrid, out_dir) -> dict[str, dict]:
 
 
 def write_case(out_dir, case: Case, record: Mapping) -> pathlib.Path:
-    """Write the case file of ``case`` from a worker's ``record`` (atomically)."""
+    """Write the case file of ``case`` from a worker's ``record`` (atomically; its wall time is
+    left out: it goes to :data:`TIMINGS_FILE`)."""
     doc = {"format": GRID_FORMAT, "case_id": case.case_id, "fingerprint": case.fingerprint,
-           "values": dict(case.values), **{k: v for k, v in record.items() if k != "case_id"},
+           "values": dict(case.values),
+           **{k: v for k, v in record.items() if k not in ("case_id", "wall_time_s")},
            "scenario": case.doc, "source": case.source}
     return write_json(case_path(out_dir, case.case_id), doc)
 
 
 def results_columns(grid: SweepGrid) -> list[str]:
-    """Header of ``results.csv``: case id, the swept keys, status, the scores, wall time, error."""
-    return ["case_id", *grid.keys, "status", *METRIC_COLUMNS, "wall_time_s", "error"]
+    """Header of ``results.csv``: case id, the swept keys, status, the scores, error (no wall time:
+    see :data:`TIMINGS_FILE`)."""
+    return ["case_id", *grid.keys, "status", *METRIC_COLUMNS, "error"]
 
 
 def _lookup(doc: Mapping, key: str) -> Any:
@@ -94,8 +100,30 @@ def collect_results(grid: SweepGrid, out_dir) -> pathlib.Path:
         ok = rec["status"] == "ok"
         writer.writerow([cid, *(_cell(_lookup(cases[cid].doc, k)) for k in grid.keys), rec["status"],
                          *(_cell(result.get(k)) if ok else "" for k in METRIC_COLUMNS),
-                         _cell(rec.get("wall_time_s")), rec.get("error") or ""])
+                         rec.get("error") or ""])
     path = pathlib.Path(out_dir) / RESULTS_FILE
+    atomic_write_text(path, buf.getvalue())
+    return path
+
+
+def write_timings(grid: SweepGrid, out_dir, timings: Mapping[str, float | None]) -> pathlib.Path:
+    """Write ``DIR/timings.csv`` (``case_id,wall_time_s``, s, sorted by case id; atomically): the
+    rows already there for cases of ``grid``, updated with ``timings`` (this run's cases)."""
+    path = pathlib.Path(out_dir) / TIMINGS_FILE
+    ids = {c.case_id for c in grid.cases}
+    rows: dict[str, str] = {}
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            for row in csv.DictReader(fh):
+                if row.get("case_id") in ids:
+                    rows[row["case_id"]] = row.get("wall_time_s") or ""
+    except (FileNotFoundError, csv.Error, UnicodeDecodeError):
+        pass
+    rows.update({cid: _cell(None if t is None else round(float(t), 3)) for cid, t in timings.items() if cid in ids})
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["case_id", "wall_time_s"])
+    writer.writerows([cid, rows[cid]] for cid in sorted(rows))
     atomic_write_text(path, buf.getvalue())
     return path
 

@@ -1,0 +1,70 @@
+"""Memory before a run: refuse a run whose drive and records would not fit.
+
+A run holds its whole drive (one sample per simulation step) and its records (one sample per
+output instant) in memory. :func:`check_memory` estimates both from the measured bytes per step
+and per output sample and refuses, in one sentence naming the fields to change, a run that would
+take more than half of the machine's available memory, before anything is allocated.
+"""
+
+from __future__ import annotations
+
+import os
+
+from scenarios.core.config import ScenarioError
+
+__all__ = ["BYTES_PER_STEP", "BYTES_PER_OUTPUT", "available_memory_bytes", "check_memory"]
+
+#: Peak memory of a run per simulation step, bytes: the drive (time, 4 positions, 4 velocities) with
+#: its temporaries while the road is sampled and faded in. Measured (tracemalloc peak of
+#: scenarios.core.run.run, road and rig mode, 1e-4 and 5e-5 s steps): 246-251 B per step.
+BYTES_PER_STEP = 256
+#: Memory per output sample, bytes: the records and the result's signals (~170 B measured in rig
+#: mode) and the text of ``timeseries.csv`` while it is written (~1240 B in rig mode).
+BYTES_PER_OUTPUT = 1536
+
+
+def available_memory_bytes() -> int | None:
+    """int, bytes: the machine's available memory (psutil if installed, else the free pages of
+    ``os.sysconf``); None where neither can tell."""
+    try:
+        import psutil
+    except ImportError:
+        psutil = None
+    if psutil is not None:
+        return int(psutil.virtual_memory().available)
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def _size(n_bytes: float) -> str:
+    return f"{n_bytes / 2**30:.3g} GiB" if n_bytes >= 2**30 else f"{n_bytes / 2**20:.3g} MiB"
+
+
+def check_memory(steps: float, outputs: float, what: str, fix: str) -> None:
+    """Refuse a run whose drive and records would take more than half the available memory.
+
+    Parameters
+    ----------
+    steps : float
+        Simulation steps whose drive is still to be made (0 when the drive exists).
+    outputs : float
+        Output samples to record.
+    what : str
+        The run in words (``"duration_s = 60 s ... is 6.2e+05 steps"``), the start of the sentence.
+    fix : str
+        What to change, naming the fields.
+
+    Raises
+    ------
+    ScenarioError
+        One sentence: the run, its estimated memory (:data:`BYTES_PER_STEP`,
+        :data:`BYTES_PER_OUTPUT`), the limit and the fix.
+    """
+    need = float(steps) * BYTES_PER_STEP + float(outputs) * BYTES_PER_OUTPUT
+    avail = available_memory_bytes()
+    if avail is None or need <= 0.5 * avail:
+        return
+    raise ScenarioError(f"{what}, about {_size(need)} of memory for the drive and records, above the limit of "
+                        f"{_size(0.5 * avail)} (half of the {_size(avail)} available); {fix}")
