@@ -28,7 +28,6 @@ import math
 import os
 import pathlib
 import re
-import tempfile
 import tomllib
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -247,20 +246,6 @@ def toml_text(doc: Mapping) -> str:
 
 def write_toml(path: str | os.PathLike, doc: Mapping) -> None:
     """Write ``doc`` (see :func:`toml_text`) to ``path`` atomically: a temporary file, then a rename."""
-    text = toml_text(doc)
-    p = pathlib.Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, p)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    from .atomic import atomic_write_text
+
+    atomic_write_text(path, toml_text(doc))

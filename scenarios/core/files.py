@@ -1,105 +1,27 @@
 """Writing results: atomic files, and JSON from result objects in one place.
 
-Every file a command writes goes through :func:`atomic_write_bytes` (a temporary file in
-the same folder, then a rename), so a reader never sees half a file. Every JSON document
+Every file a command writes goes through :func:`atomic_write_bytes`
+(:mod:`correction.atomic`: a temporary file in the same folder, then a rename), so a reader never
+sees half a file. Every JSON document
 is made by :func:`to_json` from a result object (frozen dataclasses, mappings, sequences,
 numpy arrays and scalars), so units and rounding live in the objects, not in the writers.
 """
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import json
 import math
-import os
 import pathlib
-import re
-import socket
-import tempfile
 from collections.abc import Mapping
 
 import numpy as np
 
+# The atomic writer's one home is correction.atomic (correction may not import scenarios); these
+# names are re-exported here for the result writers of scenarios.
+from correction.atomic import atomic_write_bytes, atomic_write_text, remove_stale_temp_files  # noqa: E402
+
 __all__ = ["atomic_write_bytes", "atomic_write_text", "remove_stale_temp_files", "to_plain", "to_json", "write_json"]
-
-
-def _host() -> str:
-    """This machine's name as it appears in temporary file names (letters, digits, '-'; 16 at most)."""
-    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname().split(".")[0])[:16] or "host"
-
-
-def _running(pid: int) -> bool:
-    """Whether process ``pid`` of this machine still runs (a process of another user counts)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def remove_stale_temp_files(path) -> list[pathlib.Path]:
-    """Remove the temporary files :func:`atomic_write_bytes` left beside ``path`` when their writer
-    was killed: ``.{name}.{host}.{pid}.{random}.tmp`` of this host whose pid no longer runs.
-
-    Files of other hosts (a shared folder) and of running processes are kept; POSIX only (elsewhere
-    nothing is removed). Returns the files removed.
-    """
-    path = pathlib.Path(path)
-    if os.name != "posix":
-        return []
-    prefix, host, removed = f".{path.name}.", _host(), []
-    try:
-        entries = list(os.scandir(path.parent))
-    except OSError:
-        return []
-    for entry in entries:
-        name = entry.name
-        if not (name.startswith(prefix) and name.endswith(".tmp")):
-            continue
-        parts = name[len(prefix):-len(".tmp")].split(".")
-        if len(parts) != 3 or parts[0] != host or not parts[1].isdigit():
-            continue  # another target's temporary file, another host's, or an older naming
-        pid = int(parts[1])
-        if pid == os.getpid() or _running(pid):
-            continue
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(entry.path)
-            removed.append(pathlib.Path(entry.path))
-    return removed
-
-
-def atomic_write_bytes(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename).
-
-    The temporary file is ``.{name}.{host}.{pid}.{random}.tmp``; one left by a writer that was
-    killed (its pid no longer runs on this host) is removed before writing
-    (:func:`remove_stale_temp_files`).
-    """
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temp_files(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{_host()}.{os.getpid()}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600; results are meant to be shared
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
-def atomic_write_text(path, text: str) -> None:
-    """Write UTF-8 ``text`` to ``path`` atomically."""
-    atomic_write_bytes(path, text.encode("utf-8"))
 
 
 def to_plain(obj):
