@@ -319,7 +319,11 @@ def test_killed_sweep_resumes_to_the_same_results(grid_path, reference, pool, tm
     # One worker: when the first case file appears, at least two cases of seconds each are left,
     # so Ctrl-C (sent within ~10 ms) always arrives before the sweep could finish.
     out = tmp_path / "out"
-    code = ("import argparse, sys\nfrom scenarios.studies.sweep import command as sweep\np = argparse.ArgumentParser()\n"
+    # SIGINT's default handler restored first: a process started in the background by a
+    # non-interactive shell (nohup, CI runners) inherits SIGINT ignored, and Python then never
+    # raises KeyboardInterrupt.
+    code = ("import argparse, signal, sys\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            "from scenarios.studies.sweep import command as sweep\np = argparse.ArgumentParser()\n"
             "sweep.add_parser(p.add_subparsers())\na = p.parse_args(sys.argv[1:])\n"
             "try:\n    sys.exit(a.func(a))\nexcept KeyboardInterrupt:\n    sys.exit(130)\n")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
