@@ -13,6 +13,8 @@ import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from scenarios.core.config import Scenario, load_scenario
 from scenarios.core.pool import run_jobs
 from scenarios.core.results import RunResult
@@ -69,6 +71,24 @@ class PaperCase:
     def name(self) -> str:
         return self.scenario.name
 
+    def spatial_correlation(self, dx_m: float = 0.5) -> dict:
+        """Spatial repeatability for pavements (Cole & Cebon): the correlation coefficient of the
+        road's spatial load profile (force on a ``dx_m`` grid along the road, the speed known) with
+        the measured rig's and the corrected one's, per wheel, on the best method's settled samples."""
+        from correction.damage import spatial_correlation, spatial_profile
+
+        best = self.score.methods["best"]
+        s = best.settled
+        fs = 1.0 / float(self.score.t_s[1] - self.score.t_s[0])
+        v = self.scenario.speed_mps
+        road = spatial_profile(self.score.road_N[s], v, fs, dx_m)[1]
+        out = {}
+        for name, f in (("rig", self.score.rig_N[s]), ("corrected", best.corrected_N[s])):
+            prof = spatial_profile(f, v, fs, dx_m)[1]
+            out[name] = {c: round(float(spatial_correlation(road[:, i], prof[:, i])), 4)
+                         for i, c in enumerate(self.score.corners)}
+        return out
+
     def row(self) -> dict:
         """paper.json's entry: DLC (1) and NRMSE (1) means over the wheels, per wheel, the
         paper's values, the noise (N) and the seconds each method scored (s)."""
@@ -79,6 +99,7 @@ class PaperCase:
         row["paper"] = dict(PAPER_TABLE2.get(self.name, {}))
         row["noise_N"] = self.score.noise_N
         row["analysed_s"] = {k: round(ms.scored_s, 3) for k, ms in self.score.methods.items()}
+        row["spatial_correlation"] = self.spatial_correlation()
         row["identification"] = {c: {"orders": list(f.orders), "bandwidth_hz": round(f.bandwidth_hz, 3),
                                      "held_out_error": round(f.held_out_error, 5)}
                                  for c, f in self.identification.fits.items()}
@@ -117,7 +138,7 @@ class PaperResult:
         """Damage figures (issue 13's goals): stress factor E[(F/F_static)^4] and the damage-equivalent
         load (m = 5, 1 Hz), road / rig / corrected, means over the wheels, errors against the road."""
         head = (f"{'case':28s} {'stress factor n=4: road':>24s} {'rig':>15s} {'corrected':>15s}   "
-                f"{'DEL m=5 (kN): road':>19s} {'rig':>15s} {'corrected':>15s}")
+                f"{'DEL m=5 (kN): road':>19s} {'rig':>15s} {'corrected':>15s}   {'spatial r: rig':>14s} {'corr.':>6s}")
         lines = [head, "-" * len(head)]
         for r in self.rows():
             sr, dr = r["stress_factor_road"], r["del_road_N"]
@@ -125,8 +146,11 @@ class PaperResult:
                 f"{r['case']:28s} {sr:24.4f} {r['stress_factor_rig']:7.4f} ({100 * (r['stress_factor_rig'] / sr - 1):+5.1f}%) "
                 f"{r['stress_factor_corrected']:7.4f} ({100 * (r['stress_factor_corrected'] / sr - 1):+5.1f}%)   "
                 f"{dr / 1e3:19.2f} {r['del_rig_N'] / 1e3:7.2f} ({100 * (r['del_rig_N'] / dr - 1):+5.1f}%) "
-                f"{r['del_corrected_N'] / 1e3:7.2f} ({100 * (r['del_corrected_N'] / dr - 1):+5.1f}%)")
-        lines.append("On the samples where the correction has settled; the rig force is the measured one (with noise).")
+                f"{r['del_corrected_N'] / 1e3:7.2f} ({100 * (r['del_corrected_N'] / dr - 1):+5.1f}%)   "
+                f"{np.mean(list(r['spatial_correlation']['rig'].values())):14.4f} "
+                f"{np.mean(list(r['spatial_correlation']['corrected'].values())):6.4f}")
+        lines.append("On the samples where the correction has settled; the rig force is the measured one (with noise);")
+        lines.append("spatial r: correlation of the load profile along the road with the road's (0.5 m grid), mean of the wheels.")
         return "\n".join(lines)
 
     def table(self) -> str:
