@@ -35,7 +35,6 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from correction.apply import band_limit  # noqa: E402
 from correction.floor import linear_floor  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.config import parse_scenario  # noqa: E402
@@ -81,8 +80,7 @@ def evaluate(doc: dict) -> dict:
     # The share of the error that is the road's content above the band limit, which no band-limited
     # correction restores: the road force through the same low-pass against the road force.
     band_loss = 100.0 * (best.figures["dlc_road_band"] / best.figures["dlc_road_settled"] - 1.0)
-    road_band = band_limit(score.road_N, road.rate_hz, BEST.lowpass, BEST.mode)
-    floor = linear_floor(score.rig_N, road_band, FLOOR_TAPS, FLOOR_TAPS, rows=best.settled)
+    floor = linear_floor(score.rig_N, best.road_band_N, FLOOR_TAPS, FLOOR_TAPS, rows=best.settled)
     rig_f = np.asarray(rig.signals["tire_force_N"])
     lift = np.mean(rig_f < 0.01 * rig_f.mean(axis=0), axis=0)
     return {"case": s.name, "dlc_road": float(np.mean(best.figures["dlc_road_settled"])),

@@ -19,7 +19,7 @@ import numpy as np
 
 from correction.measured_units import lookup_unit, suffix_unit
 
-__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "is_time_name", "to_si", "uniform_rate",
+__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "read_bytes", "is_time_name", "to_si", "uniform_rate",
            "make_channels", "check_output", "atomic_output"]
 
 #: Names (case-insensitive, unit decoration removed) that make a column the time column.
@@ -207,3 +207,14 @@ def atomic_output(path: pathlib.Path, write: Callable[[str], None]) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def read_bytes(path) -> bytes:
+    """The bytes of a measured-data file; a missing or unreadable file is one sentence."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except FileNotFoundError:
+        raise MeasuredDataError(f"input file {str(path)!r} does not exist") from None
+    except OSError as exc:
+        raise MeasuredDataError(f"cannot read input file {str(path)!r}: {exc.strerror}") from None

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from correction.measured_core import MeasuredDataError, is_time_name, make_channels, to_si, uniform_rate
+from correction.measured_core import MeasuredDataError, is_time_name, make_channels, read_bytes, to_si, uniform_rate
 from correction.measured_units import split_name_unit, strip_unit_field
 
 __all__ = ["COMMENT_PREFIXES", "TextTable", "read_table", "column_values", "channels_from_table", "write_csv"]
@@ -91,12 +91,7 @@ class TextTable:
 
 
 def _decode(path) -> str:
-    try:
-        raw = open(path, "rb").read()
-    except FileNotFoundError:
-        raise MeasuredDataError(f"input file {str(path)!r} does not exist") from None
-    except OSError as exc:
-        raise MeasuredDataError(f"cannot read input file {str(path)!r}: {exc.strerror}") from None
+    raw = read_bytes(path)
     if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
         return raw.decode("utf-16")
     if raw.startswith(codecs.BOM_UTF8):

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.measured_core import MeasuredDataError
+from correction.measured_core import MeasuredDataError, read_bytes
 
 __all__ = ["INT_FULL_SCALE", "Rpc3Data", "read_rpc3", "write_rpc3", "STRUCTURAL_KEYS"]
 
@@ -132,12 +132,7 @@ def _float(head, key, path) -> float:
 
 def read_rpc3(path) -> Rpc3Data:
     """Read an RPC III time-history file; one sentence naming the key that is wrong otherwise."""
-    try:
-        raw = open(path, "rb").read()
-    except FileNotFoundError:
-        raise MeasuredDataError(f"input file {str(path)!r} does not exist") from None
-    except OSError as exc:
-        raise MeasuredDataError(f"cannot read input file {str(path)!r}: {exc.strerror}") from None
+    raw = read_bytes(path)
     head = _header(raw, path)
     fmt = head["FORMAT"].upper()
     order = {"BINARY": "<", "BINARY_IEEE_LITTLE_END": "<", "BINARY_IEEE_BIG_END": ">"}.get(fmt)

@@ -24,7 +24,7 @@ from scenarios.studies.identify.compute import RigIdentification, identify_rig
 from scenarios.studies.paper.table import PAPER_TABLE2
 from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, score_pair
 
-__all__ = ["PaperCase", "PaperResult", "run_cases", "run_paper", "ROW_KEYS"]
+__all__ = ["PaperCase", "PaperResult", "run_paper", "ROW_KEYS"]
 
 #: paper.json's figures of a case (means over the wheels and per wheel) -> PairScore keys.
 ROW_KEYS = {
@@ -184,16 +184,6 @@ def _identify_job(path: str, duration_s: float | None = None) -> RigIdentificati
     if duration_s is not None:
         scenario = dataclasses.replace(scenario, duration_s=duration_s)
     return identify_rig(scenario)
-
-
-def run_cases(jobs: Sequence[tuple[str, str]], *, workers: int | None = None, duration_s: float | None = None,
-              pose_rate_hz: float | None = None, on_done: Callable[[RunResult], None] | None = None) -> list:
-    """Run ``(scenario_path, mode)`` jobs in worker processes; results in the order of ``jobs``.
-
-    ``duration_s`` (s) overrides every scenario's duration; ``on_done(result)`` as each finishes.
-    """
-    calls = [(_run_job, (str(p), m, duration_s, pose_rate_hz)) for p, m in jobs]
-    return run_jobs(calls, workers=workers, on_done=None if on_done is None else (lambda i, r: on_done(r)))
 
 
 def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float | None = None,
