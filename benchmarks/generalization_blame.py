@@ -1,0 +1,206 @@
+"""Which physical effect each generalization case's DLC error comes from: a per-case decomposition.
+
+::
+
+    python benchmarks/generalization_blame.py [--cases 24] [--duration-s 30] [--jobs N] [--only gen01 gen02 ...]
+
+For each case of :mod:`generalization`'s suite the corrected DLC error (corrected against road, per
+wheel, %) is taken apart along one chain, each step removing one cause with the rest kept:
+
+1. ``identified``: the project's correction, as :mod:`generalization` scores it (T_a identified
+   before the test from independent random drives, ``rigsim identify``; nonlinear DYNTRAC rig;
+   leaf-spring friction on; 100 N load-cell noise).
+2. ``linearized``: the same rig run corrected with each wheel's own path of the linearized plant
+   (its exact frequency response, zero-phase, under the same 30 Hz low-pass:
+   :class:`nrmse_decomposition.ExactLinearCorrection`). Step 1 - 2: **identification** (what the
+   fitted T_a gets wrong about the small-signal actuator).
+3. ``linear pans``: a road-mode run whose pans follow the profile through that linear T_a per
+   wheel, corrected by it exactly. Step 2 - 3: **actuators** (the rig's own nonlinearity, flow
+   gain differing between extending and retracting under load, and the posts' coupling through
+   the truck).
+4. ``no friction``: step 3 with the leaf springs' dry friction off in both the road and the
+   linear-pans run. Step 3 - 4: **friction** (the truck's stick-slip leaf springs respond to the
+   attenuated pan motion otherwise than to the road: no linear correction restores that).
+5. What step 4 leaves: **band limit** (the road's content above the 30 Hz corner, which no
+   band-limited correction restores: the friction-free road force through the same low-pass
+   against the road force) and the **rest** (rear-tire lift-off, large angles, noise).
+
+All DLCs of a case are taken on the same samples, where every correction of the chain has
+settled; so step 1 here differs from :mod:`generalization`'s figure (each method on its own
+settled samples) by a few hundredths of a percent. The shares are differences along this order
+and not unique (the effects interact): read them as "what removing this cause, given the causes
+before it are gone, changes". Per failing wheel (outside 1 %), the table names the largest share
+of the error's sign ("blame").
+
+Prints a markdown table (one row per case, means over the wheels that fail, or over all four
+when none does) and one JSON line with every share per wheel. A diagnostic: nothing here
+corrects anything in the project.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import pathlib
+import sys
+import time
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+
+from generalization import GOAL_MOST_PCT, case_documents  # noqa: E402
+from nrmse_decomposition import LOWPASS, MODE, ExactLinearCorrection  # noqa: E402
+
+from correction.apply import band_limit, correct_zero_phase  # noqa: E402
+from correction.dlc import dlc  # noqa: E402
+from correction.filters import reference_filter  # noqa: E402
+from correction.pipeline import correct_forces  # noqa: E402
+from mjcf.names import CORNERS  # noqa: E402
+from scenarios.core.config import parse_scenario  # noqa: E402
+from scenarios.core.drive import Drive  # noqa: E402
+from scenarios.core.pool import run_jobs  # noqa: E402
+from scenarios.core.rig import Rig  # noqa: E402
+from scenarios.core.run import run  # noqa: E402
+from scenarios.studies import scoring  # noqa: E402
+from scenarios.studies.identify.compute import identify_rig  # noqa: E402
+
+#: The chain's causes, in the order they are removed.
+CAUSES = ("identification", "actuators", "friction", "band_limit", "rest")
+#: Kernel tail (sum |taps|) the exact linear corrections leave outside their margins, 1: their
+#: kernels carry T_a^-1's slow tail (the small-signal T_a's ~1 rad/s zero) for seconds; at the scoring's
+#: 1e-3 a 30 s run would keep ~10 s.
+EXACT_TOLERANCE = 1e-2
+
+
+def scenario(doc: dict, friction: bool):
+    """The case's scenario, leaf-spring friction on or off."""
+    sc = parse_scenario(doc)
+    if not friction:
+        sc = dataclasses.replace(sc, vehicle=dataclasses.replace(
+            sc.vehicle, spring_friction_front_N=0.0, spring_friction_rear_N=0.0))
+    return sc
+
+
+def run_job(doc: dict, kind: str, friction: bool):
+    """One MuJoCo run of the chain: "road", "rig", "identify" or "linear" (road mode, the pans
+    following the profile through the linearized plant's own path of each wheel)."""
+    sc = scenario(doc, friction)
+    if kind == "identify":
+        return identify_rig(sc)
+    if kind != "linear":
+        return run(sc, kind)
+    plant = Rig(sc).linearize()
+
+    def through_linear_ta(drive: Drive) -> Drive:
+        y = plant.simulate(drive.z_m, diagonal=True)
+        return Drive(t_s=drive.t_s, z_m=y[:, :4], v_mps=y[:, 4:])
+
+    return run(sc, "road", pan_drive=through_linear_ta)
+
+
+def analyse_job(doc: dict, runs: dict) -> dict:
+    """The chain's DLC errors (%) and shares per wheel for one case (``runs`` keyed (kind, friction))."""
+    sc = scenario(doc, True)
+    fs = runs[("road", True)].rate_hz
+    tol = scoring.SETTLING_TOLERANCE
+    plant = Rig(sc).linearize()  # friction never enters the linearization
+    cache: dict = {}
+    exact = [ExactLinearCorrection(plant, i, fs, EXACT_TOLERANCE, cache) for i in range(4)]
+
+    def measured(r):
+        return scoring.measured_force(r, scoring.NOISE_N, sc.seed)
+
+    def exactly(force):
+        return np.column_stack([correct_zero_phase(force[:, i], e) for i, e in enumerate(exact)])
+
+    ident = correct_forces(measured(runs[("rig", True)]), runs[("identify", True)].actuators(), fs,
+                           lowpass=LOWPASS, mode=MODE, settling_tolerance=tol)
+    n = ident.corrected_N.shape[0]
+    rows = ident.settled & reference_filter(fs, LOWPASS, settling_tolerance=tol).transient_mask(n, MODE)
+    for e in exact:
+        rows &= e.transient_mask(n)
+    road_on = np.asarray(runs[("road", True)].signals["tire_force_N"], dtype=float)
+    road_off = np.asarray(runs[("road", False)].signals["tire_force_N"], dtype=float)
+
+    def err(force, road):
+        return 100.0 * (dlc(force[rows]) / dlc(road[rows]) - 1.0)
+
+    steps = {
+        "identified": err(ident.corrected_N, road_on),
+        "linearized": err(exactly(measured(runs[("rig", True)])), road_on),
+        "linear_pans": err(exactly(measured(runs[("linear", True)])), road_on),
+        "no_friction": err(exactly(measured(runs[("linear", False)])), road_off),
+        "band_limit": err(band_limit(road_off, fs, LOWPASS, MODE), road_off),
+    }
+    shares = {"identification": steps["identified"] - steps["linearized"],
+              "actuators": steps["linearized"] - steps["linear_pans"],
+              "friction": steps["linear_pans"] - steps["no_friction"],
+              "band_limit": steps["band_limit"],
+              "rest": steps["no_friction"] - steps["band_limit"]}
+    blame = {}
+    for i, c in enumerate(CORNERS):
+        e = steps["identified"][i]
+        if abs(e) > GOAL_MOST_PCT:
+            same_sign = {k: v[i] * np.sign(e) for k, v in shares.items()}
+            blame[c] = max(same_sign, key=same_sign.get)
+    return {"case": sc.name, "scored_s": float(np.count_nonzero(rows)) / fs,
+            "steps_pct": {k: {c: float(v[i]) for i, c in enumerate(CORNERS)} for k, v in steps.items()},
+            "shares_pct": {k: {c: float(v[i]) for i, c in enumerate(CORNERS)} for k, v in shares.items()},
+            "blame": blame}
+
+
+def table(rows: list[dict]) -> str:
+    """Markdown: per case the error and the shares (means over the failing wheels, or all four)."""
+    head = ["case", "corrected vs road (fl fr rl rr)", "identification", "actuators", "friction",
+            "band limit", "rest", "blame (wheels outside 1 %)"]
+    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for r in rows:
+        failing = list(r["blame"]) or list(CORNERS)
+        err = " ".join(f"{r['steps_pct']['identified'][c]:+.1f}" for c in CORNERS)
+        shares = [f"{np.mean([r['shares_pct'][k][c] for c in failing]):+.2f}" for k in CAUSES]
+        blame = ", ".join(f"{c} {k}" for c, k in r["blame"].items()) or "-"
+        lines.append(f"| {r['case']} | {err} % | " + " | ".join(shares) + f" | {blame} |")
+    lines.append("\nShares in percentage points of the corrected DLC error, along the chain identification -> "
+                 "actuators -> friction -> band limit + rest (module notes); means over the wheels outside "
+                 f"{GOAL_MOST_PCT:g} % (all four where none is).")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", type=int, default=24, help="size of the generalization suite (default 24)")
+    ap.add_argument("--duration-s", type=float, default=30.0, help="seconds per run (default 30)")
+    ap.add_argument("--only", nargs="+", help="parts of case names to analyse (default: every case)")
+    ap.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    args = ap.parse_args(argv)
+    docs = case_documents(args.cases, args.duration_s)
+    if args.only:
+        docs = [d for d in docs if any(k in d["name"] for k in args.only)]
+        if not docs:
+            raise SystemExit(f"--only {' '.join(args.only)} matches no case of the suite")
+    t0 = time.perf_counter()
+    kinds = (("road", True), ("rig", True), ("identify", True), ("linear", True), ("road", False), ("linear", False))
+    jobs = [(run_job, (d, k, f)) for d in docs for k, f in kinds]
+    runs = run_jobs(jobs, workers=args.jobs, on_done=lambda i, _r: print(
+        f"[{time.perf_counter() - t0:5.0f} s] {jobs[i][1][0]['name']} {jobs[i][1][1]} friction "
+        f"{'on' if jobs[i][1][2] else 'off'}", file=sys.stderr, flush=True))
+    by_case = {}
+    for (_, (d, k, f)), r in zip(jobs, runs):
+        by_case.setdefault(d["name"], {})[(k, f)] = r
+    rows = run_jobs([(analyse_job, (d, by_case[d["name"]])) for d in docs], workers=args.jobs)
+    print(table(rows))
+    counts = {k: sum(1 for r in rows for b in r["blame"].values() if b == k) for k in CAUSES}
+    print(json.dumps({"cases": len(rows), "duration_s": args.duration_s, "failing_wheels": sum(counts.values()),
+                      "blamed": counts, "wall_s": round(time.perf_counter() - t0, 1), "rows": rows}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
