@@ -36,6 +36,7 @@ import rainflow
 
 __all__ = [
     "WOHLER_PRESETS",
+    "turning_points",
     "damage_equivalent_load",
     "force_columns",
     "level_crossings",
@@ -85,8 +86,35 @@ def _exponent(m) -> float:
     return m
 
 
+def turning_points(f: np.ndarray) -> np.ndarray:
+    """The reversals of a 1-D history as ``rainflow.reversals`` finds them, found with numpy.
+
+    The first sample, every sample where the slope changes sign (a run of equal samples counts
+    once) and the last sample. ``rainflow`` walks every sample in Python (~1 us each); counting
+    the cycles of these points instead gives the same cycles (tested against the library) in a
+    fraction of the time: a 60 s record at 1 kHz has ~10 % of its samples as reversals.
+
+    Parameters
+    ----------
+    f : numpy.ndarray, (n,), n >= 3
+
+    Returns
+    -------
+    numpy.ndarray
+        The reversal values, then the last one repeated (so that ``rainflow`` sees the last
+        point as a reversal also when there are only two).
+    """
+    g = f[np.concatenate(([True], f[1:] != f[:-1]))]  # runs of equal samples once
+    if g.size < 2:
+        return np.array([f[0], f[0], f[0]])
+    d = np.diff(g)
+    interior = np.flatnonzero(d[:-1] * d[1:] < 0) + 1
+    return np.concatenate((g[:1], g[interior], g[-1:], g[-1:]))
+
+
 def _cycles_1d(f: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    rows = [(r, mean, c) for r, mean, c, _i, _j in rainflow.extract_cycles(f) if r > 0]
+    points = turning_points(f) if f.size >= 3 else f
+    rows = [(r, mean, c) for r, mean, c, _i, _j in rainflow.extract_cycles(points) if r > 0]
     if not rows:
         return np.zeros(0), np.zeros(0), np.zeros(0)
     ranges, means, counts = (np.asarray(v, dtype=float) for v in zip(*rows))

@@ -43,6 +43,9 @@ from scenarios.core.watch import SimulationError, Watch, mujoco_warnings_capture
 __all__ = ["actuator_params", "Rig", "RigRecord"]
 
 MPA = 1e6  # Pa per MPa: the pressure states are in MPa (see hydraulics.params.STATE_NAMES)
+#: Warning windows (scenarios.core.watch.CHECK_EVERY_S) per rollout call of a hydraulic run:
+#: 0.1 s at the 1e-4 s step, so the calls' Python overhead is ~1 % of the stepping.
+ROLLOUT_CHECKS = 10
 
 
 def actuator_params(scenario: Scenario) -> ActuatorParams:
@@ -310,20 +313,24 @@ class Rig:
         poses = self._poses(drive, decim, pose_rate_hz)
         qa, da, tires = idx.pan_qpos, idx.pan_dof, idx.tire_actuator
         z, vz = drive.z_m, drive.v_mps
-        j = 0
+        # The step loop in Python (MuJoCo cannot prescribe joint motion inside a rollout): views
+        # and the warning window hoisted out of it, the cost of a step is mj_step's plus ~2 us.
+        qpos, qvel, act_force, step = data.qpos, data.qvel, data.actuator_force, mujoco.mj_step
+        check, j = watch.check, 0
         for k in range(drive.t_s.size):
-            data.qpos[qa] = z[k]
-            data.qvel[da] = vz[k]
-            record = k >= k0 and (k - k0) % decim == 0
-            if record:
-                pan[j] = data.qpos[qa]
-            mujoco.mj_step(model, data)
-            if record:
-                force[j] = data.actuator_force[tires]
+            qpos[qa] = z[k]
+            qvel[da] = vz[k]
+            if k >= k0 and (k - k0) % decim == 0:
+                pan[j] = z[k]
+                step(model, data)
+                force[j] = act_force[tires]
                 j += 1
                 if poses is not None:
                     poses(data, k)
-            watch.tick(data, k)
+            else:
+                step(model, data)
+            if k % check == check - 1:
+                watch.checked(data, k - check + 1, k)
         watch.finish(data)
         if not np.all(np.isfinite(force)):
             raise SimulationError("the simulation produced non-finite tire forces")
@@ -351,14 +358,18 @@ class Rig:
         poses = self._poses(drive, decim, pose_rate_hz)
         scratch = mujoco.MjData(model) if poses is not None else None
         frames = set(int(k) for k in poses.steps) if poses is not None else set()
-        n, chunk = drive.t_s.size, watch.check
+        # Rollouts of ROLLOUT_CHECKS warning windows each; a rollout that warned or diverged is
+        # replayed window by window from its first state to name the window (deterministic).
+        n, chunk = drive.t_s.size, watch.check * ROLLOUT_CHECKS
         ctrl = np.zeros((chunk, model.nu))
         with hydraulic_callbacks(model):
             for k in range(0, n, chunk):
                 kk = min(chunk, n - k)
                 ctrl[:kk, hyd] = drive.z_m[k:k + kk]
-                out_state, out_sensor = rollout.rollout(model, data, state, ctrl[:kk],
-                                                        initial_warmstart=data.qacc_warmstart.copy())
+                warm = data.qacc_warmstart.copy()
+                out_state, out_sensor = rollout.rollout(model, data, state, ctrl[:kk], initial_warmstart=warm)
+                if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):
+                    self._replay_windows(watch, data, state, warm, ctrl[:kk], k)
                 # Output samples in this chunk: the pre-step state of step k+i is the chunk's
                 # initial state (i = 0) or the state after step k+i-1; forces are step k+i's.
                 steps = np.arange(k, k + kk)
@@ -377,12 +388,22 @@ class Rig:
                                 mujoco.mj_kinematics(model, scratch)
                                 poses(scratch, int(k_row))
                 state = out_state[0, -1].copy()
-                watch.tick(data, k + kk - 1)
+                watch.checked(data, k, k + kk - 1)
             watch.finish(data)
         t_out = drive.t_s[k0::decim].copy()
         return RigRecord(t_s=t_out, x_ref_m=drive.z_m[k0::decim].copy(), pan_m=pan, tire_force_N=force,
                          states=states, events=self._events(states, t_out),
                          poses=None if poses is None else poses.track())
+
+    def _replay_windows(self, watch: Watch, data, state, warm, ctrl, k0: int) -> None:
+        """Replay a rollout that warned or diverged, one warning window at a time from its first
+        ``state``, so that :class:`Watch` names the window where it went wrong (raises)."""
+        data.warning.number[:] = 0
+        w = watch.check
+        for j in range(0, ctrl.shape[0], w):
+            out_state, _ = rollout.rollout(self.model, data, state, ctrl[j:j + w], initial_warmstart=warm)
+            watch.checked(data, k0 + j, k0 + j + ctrl[j:j + w].shape[0] - 1)
+            state, warm = out_state[0, -1].copy(), data.qacc_warmstart.copy()
 
     def _events(self, states: np.ndarray, t_s: np.ndarray) -> dict:
         out = {}

@@ -32,12 +32,12 @@ class SimulationError(RuntimeError):
 
 
 def _check_warnings(data: mujoco.MjData, t0: float, t1: float) -> None:
-    for kind, stat in enumerate(data.warning):
-        if stat.number:
-            text = mujoco.mju_warningText(kind, stat.lastinfo)
-            raise SimulationError(
-                f"MuJoCo warning between t = {t0:.4f} s and t = {t1:.4f} s of simulated time: {text}"
-            )
+    # One read of the counters as an array (0.2 us); iterating the structs costs ~70 us a check.
+    number = data.warning.number
+    if number.any():
+        kind = int(np.flatnonzero(number)[0])
+        text = mujoco.mju_warningText(kind, int(data.warning.lastinfo[kind]))
+        raise SimulationError(f"MuJoCo warning between t = {t0:.4f} s and t = {t1:.4f} s of simulated time: {text}")
 
 
 @contextlib.contextmanager
@@ -100,13 +100,25 @@ class Watch:
         self.total = float(self.t[-1] - self.t[0])
 
     def tick(self, data: mujoco.MjData, k: int) -> None:
+        """After step ``k`` of a step-by-step loop: checks every :data:`CHECK_EVERY_S`."""
         if k % self.check == self.check - 1:
-            t = float(self.t[k])
-            _check_warnings(data, t - (self.check - 1) * self.dt, t + self.dt)
-            if self.extra is not None:
-                self.extra(data, t)
-            if self.progress is not None and k % self.report == self.report - 1:
-                self.progress(t - float(self.t[0]), self.total)
+            self.checked(data, k - self.check + 1, k)
+
+    def checked(self, data: mujoco.MjData, k_first: int, k_last: int) -> None:
+        """After steps ``k_first`` .. ``k_last`` (one window, e.g. a rollout): raise
+        :class:`SimulationError` naming the window's simulated time if MuJoCo warned in it or the
+        ``extra`` check fails; report progress when a report step was passed."""
+        t_last = float(self.t[k_last])
+        _check_warnings(data, float(self.t[k_first]), t_last + self.dt)
+        if self.extra is not None:
+            self.extra(data, t_last)
+        if self.progress is not None and k_last // self.report > (k_first - 1) // self.report:
+            self.progress(t_last - float(self.t[0]), self.total)
+
+    @staticmethod
+    def warned(data: mujoco.MjData) -> bool:
+        """Whether MuJoCo counted a warning in ``data`` since its counters were last cleared."""
+        return bool(data.warning.number.any())
 
     def finish(self, data: mujoco.MjData) -> None:
         t = float(self.t[-1])

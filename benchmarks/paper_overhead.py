@@ -1,0 +1,152 @@
+"""``rigsim paper`` against the physics' own cost: its wall time over bare MuJoCo's for the same steps.
+
+::
+
+    python benchmarks/paper_overhead.py [--jobs 2] [--duration-s 60] [--repeats 1]
+
+1. Counts the MuJoCo steps ``rigsim paper`` takes: per case the road run, the rig run (both the
+   lead-in plus the duration at the scenario's time step) and the rig's identification
+   (:func:`scenarios.studies.identify.compute.identify_rig`'s drive).
+2. Times ``rigsim paper --out TMP --jobs J --quiet`` end to end (a subprocess: imports, compiling
+   or loading the hydraulic callbacks, the runs, the scoring, the report and its figures).
+3. Times bare MuJoCo stepping the same number of steps on the same J cores: J worker processes,
+   each stepping its share of the steps with ``mujoco.rollout`` on the truck on the pans with a
+   plain ``motor`` per pan instead of the hydraulics, replaying actuator forces recorded from the
+   hydraulic rig (:mod:`step_rate`'s "bare" model), after a warm-up; the bare wall time is the
+   slowest worker's. This is the cost of the multibody physics alone, with no callback, no I/O,
+   no Python between steps.
+
+Prints one JSON line: steps, paper wall and CPU time (s), the bare wall time (s), their ratio
+(goal of issue 11: at most 1.2) and the paper's CPU seconds per bare CPU second. With
+``--repeats R`` the two are timed alternately R times and the smallest of each is used (the
+least disturbed by other processes on a shared machine).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+#: Steps each bare rollout call takes (the forces of one recorded chunk, replayed), 1.
+CHUNK_STEPS = 20_000
+
+
+def paper_steps(duration_s: float | None) -> int:
+    """MuJoCo steps of ``rigsim paper`` (road, rig and identification runs of the three cases)."""
+    import dataclasses
+
+    from scenarios.core.config import load_scenario, paper_scenarios
+    from scenarios.core.rig import Rig
+    from scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S
+
+    total = 0
+    for p in paper_scenarios():
+        sc = load_scenario(p)
+        if duration_s is not None:
+            sc = dataclasses.replace(sc, duration_s=float(duration_s))
+        rig = Rig(sc, hydraulic=False)
+        n = rig.road_drive().t_s.size
+        record_s = max(sc.duration_s, IDENT_MIN_S) + IDENT_SKIP_S
+        total += 2 * n + int(round(record_s / rig.dt_s)) + 1
+    return total
+
+
+def bare_worker(steps: int) -> dict:
+    """Step the bare truck ``steps`` times (rollouts of :data:`CHUNK_STEPS`); wall and CPU time, s."""
+    import mujoco
+    from mujoco import rollout
+
+    import step_rate as sr
+    from hydraulics.bridge import hydraulic_callbacks
+
+    rig, bare, corners = sr.build_models(argparse.Namespace(model="truck", spec=None))
+    loads = sr.static_loads(bare, corners)
+    hyd = [mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_ACTUATOR, f"hyd_{c}") for c in corners]
+    sens = [int(rig.sensor_adr[mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_SENSOR, f"force_{c}")]) for c in corners]
+    n = min(CHUNK_STEPS, steps)
+    x_ref = np.zeros((n, rig.nu))
+    x_ref[:, hyd] = sr.drive_signal(n, rig.opt.timestep, corners)
+    with hydraulic_callbacks(rig, fast=True):
+        _, sensordata = rollout.rollout(rig, mujoco.MjData(rig), sr.initial_state(rig, corners, loads, True), x_ref)
+    forces = np.zeros((n, bare.nu))
+    forces[:, hyd] = sensordata[0][:, sens]
+    data, s0 = mujoco.MjData(bare), sr.initial_state(bare, corners, loads, False)
+    rollout.rollout(bare, data, s0, forces[:10])  # warm-up
+    left = steps
+    c0, t0 = time.process_time(), time.perf_counter()
+    while left > 0:
+        k = min(n, left)
+        rollout.rollout(bare, data, s0, forces[:k])
+        left -= k
+    return {"wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
+
+
+def time_bare(steps: int, jobs: int) -> dict:
+    from scenarios.core.pool import run_jobs
+
+    shares = [steps // jobs + (1 if i < steps % jobs else 0) for i in range(jobs)]
+    res = run_jobs([(bare_worker, (s,)) for s in shares], workers=jobs)
+    return {"wall_s": max(r["wall_s"] for r in res), "cpu_s": sum(r["cpu_s"] for r in res)}
+
+
+def time_paper(jobs: int, duration_s: float | None) -> dict:
+    out = pathlib.Path(tempfile.mkdtemp(prefix="paper_overhead_")) / "paper"
+    argv = [sys.executable, "-m", "scenarios.cli.main", "paper", "--out", str(out), "--jobs", str(jobs), "--quiet"]
+    if duration_s is not None:
+        argv += ["--duration-s", f"{duration_s:g}"]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run(argv, env=env, cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    shutil.rmtree(out.parent, ignore_errors=True)
+    if proc.returncode != 0:
+        raise SystemExit(f"rigsim paper failed ({proc.returncode}): {proc.stderr.strip()[-500:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"wall_s": wall, "cpu_s": cpu}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes for both (default 2)")
+    ap.add_argument("--duration-s", type=float, default=None, help="the paper's --duration-s (default: its 60 s)")
+    ap.add_argument("--repeats", type=int, default=1, help="alternate the two timings R times, keep the smallest")
+    args = ap.parse_args(argv)
+    if args.jobs < 1 or args.repeats < 1:
+        raise SystemExit("--jobs and --repeats must be at least 1")
+    steps = paper_steps(args.duration_s)
+    papers, bares = [], []
+    for _ in range(args.repeats):
+        papers.append(time_paper(args.jobs, args.duration_s))
+        bares.append(time_bare(steps, args.jobs))
+    paper = min(papers, key=lambda r: r["wall_s"])
+    bare = min(bares, key=lambda r: r["wall_s"])
+    print(json.dumps({
+        "steps": steps, "jobs": args.jobs, "cpu_count": os.cpu_count(), "duration_s": args.duration_s or 60.0,
+        "paper_wall_s": round(paper["wall_s"], 2), "paper_cpu_s": round(paper["cpu_s"], 2),
+        "bare_wall_s": round(bare["wall_s"], 2), "bare_cpu_s": round(bare["cpu_s"], 2),
+        "bare_steps_per_s_per_worker": round(steps / bare["cpu_s"], 0),
+        "ratio_wall": round(paper["wall_s"] / bare["wall_s"], 3),
+        "ratio_cpu": round(paper["cpu_s"] / bare["cpu_s"], 3),
+        "goal_ratio_wall": 1.2,
+    }))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
