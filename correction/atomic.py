@@ -16,15 +16,16 @@ import re
 import socket
 import tempfile
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "remove_stale_temp_files"]
+__all__ = ["atomic_write_bytes", "atomic_write_text", "host_tag", "pid_running", "remove_stale_temp_files"]
 
 
-def _host() -> str:
-    """This machine's name as it appears in temporary file names (letters, digits, '-'; 16 at most)."""
+def host_tag() -> str:
+    """This machine's name as it appears in temporary file and folder names (letters, digits, '-';
+    16 at most): :mod:`scenarios.core.outputs` names its staging folders with it too."""
     return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname().split(".")[0])[:16] or "host"
 
 
-def _running(pid: int) -> bool:
+def pid_running(pid: int) -> bool:
     """Whether process ``pid`` of this machine still runs (a process of another user counts)."""
     try:
         os.kill(pid, 0)
@@ -33,6 +34,9 @@ def _running(pid: int) -> bool:
     except PermissionError:
         return True
     return True
+
+
+_host, _running = host_tag, pid_running  # the former private names (tests of killed writers use _host)
 
 
 def remove_stale_temp_files(path) -> list[pathlib.Path]:
@@ -45,7 +49,7 @@ def remove_stale_temp_files(path) -> list[pathlib.Path]:
     path = pathlib.Path(path)
     if os.name != "posix":
         return []
-    prefix, host, removed = f".{path.name}.", _host(), []
+    prefix, host, removed = f".{path.name}.", host_tag(), []
     try:
         entries = list(os.scandir(path.parent))
     except OSError:
@@ -58,7 +62,7 @@ def remove_stale_temp_files(path) -> list[pathlib.Path]:
         if len(parts) != 3 or parts[0] != host or not parts[1].isdigit():
             continue  # another target's temporary file, another host's, or an older naming
         pid = int(parts[1])
-        if pid == os.getpid() or _running(pid):
+        if pid == os.getpid() or pid_running(pid):
             continue
         with contextlib.suppress(FileNotFoundError):
             os.unlink(entry.path)
@@ -69,6 +73,9 @@ def remove_stale_temp_files(path) -> list[pathlib.Path]:
 def atomic_write_bytes(path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename).
 
+    ``data`` is bytes, or an iterable of bytes written one after the other (a large file
+    streamed without being held whole in memory).
+
     The temporary file is ``.{name}.{host}.{pid}.{random}.tmp``; one left by a writer that was
     killed (its pid no longer runs on this host) is removed before writing
     (:func:`remove_stale_temp_files`).
@@ -76,10 +83,11 @@ def atomic_write_bytes(path, data: bytes) -> None:
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_temp_files(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{_host()}.{os.getpid()}.", suffix=".tmp")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{host_tag()}.{os.getpid()}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
+            for part in ((data,) if isinstance(data, (bytes, bytearray, memoryview)) else data):
+                fh.write(part)
             fh.flush()
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o644)  # mkstemp creates 0600; results are meant to be shared

@@ -96,11 +96,13 @@ def _split_columns(text: str, option: str) -> list[str]:
 
 
 def _check_output(out, inputs, force: bool) -> None:
-    """Refuse an output that names an input file, an existing file without ``--force``, a folder or
-    an extension no writer knows (before any work)."""
+    """Refuse an empty output path, one that names an input file, an existing file without
+    ``--force``, a folder, an unwritable folder or an extension no writer knows (before any work)."""
     from correction.measured import WRITE_FORMATS, MeasuredDataError, format_of
     from correction.measured_core import check_output
+    from scenarios.core.outputs import check_output_file
 
+    check_output_file(out, "-o", force=True)  # empty, a folder, no permission; an existing file: below
     try:
         check_output(out, overwrite=force, inputs=inputs)
         format_of(out, WRITE_FORMATS)

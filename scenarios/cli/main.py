@@ -1,7 +1,8 @@
 """The ``rigsim`` command line.
 
 Exit codes: 0 success; 2 bad input or a run that cannot go on (one sentence on stderr,
-nothing written); 130 interrupted.
+nothing written); 130 interrupted, 143 terminated (nothing written: every command that writes a
+folder builds it beside the target and renames it at the end, :mod:`scenarios.core.outputs`).
 """
 
 from __future__ import annotations
@@ -79,7 +80,8 @@ def _progress_bar(label: str, quiet: bool):
 
 
 def _cmd_run(args) -> int:
-    from scenarios.core.config import load_scenario
+    from scenarios.core.config import ScenarioError, load_scenario
+    from scenarios.core.outputs import check_output_file, staged_output
     from scenarios.core.results import write_run
     from scenarios.core.run import run
 
@@ -88,24 +90,36 @@ def _cmd_run(args) -> int:
         import dataclasses
         import math
 
-        from scenarios.core.config import ScenarioError
-
         if not (math.isfinite(args.duration_s) and 0 < args.duration_s <= 3600):
             raise ScenarioError(f"--duration-s must lie in (0, 3600] s, got {args.duration_s:g}")
         scenario = dataclasses.replace(scenario, duration_s=float(args.duration_s))
+    rate = scenario.output_rate_hz
+    if scenario.duration_s * rate < 1.0 - 1e-9:  # the DLC, the table's first column, needs two samples
+        raise ScenarioError(f"duration_s (--duration-s) = {scenario.duration_s:g} s is shorter than one output "
+                            f"sample at output_rate_hz = {rate:g} Hz; a DLC needs two, so give at least "
+                            f"{1.0 / rate:g} s")
     pose_rate = None
-    if args.rrd:
+    if args.view and args.rrd is None:
+        raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
+    if args.rrd is not None:  # checked with --out before the run: both are written, or neither
         from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
 
+        check_output_file(args.rrd, "--rrd", force=args.force, folder=args.out)
         pose_rate = DEFAULT_POSE_RATE_HZ
-    with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
-        result = run(scenario, args.mode, progress=progress, pose_rate_hz=pose_rate)
-    paths = write_run(result, args.out)
-    if args.rrd:
-        from scenarios.review.recording import write_recording
+    with staged_output(args.out, force=args.force) as stage:
+        with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
+            result = run(scenario, args.mode, progress=progress, pose_rate_hz=pose_rate)
+        paths = {k: stage.final(p) for k, p in write_run(result, stage.path).items()}
+        if args.rrd is not None:
+            from scenarios.review.recording import write_recording
 
-        write_recording(args.rrd, [result], dlc_table=result.table(), spawn=args.view)
+            write_recording(stage.place(args.rrd), [result], dlc_table=result.table())
+    if args.rrd is not None:
         print(f"wrote recording {args.rrd}" + (" and opened the viewer" if args.view else ""))
+        if args.view:
+            from scenarios.review.recording import open_viewer
+
+            open_viewer(args.rrd)
     print(result.table())
     if result.events:
         print("events: " + json.dumps(result.events))
@@ -148,6 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--duration-s", type=float, default=None, help="override the scenario's duration, s")
     r.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd) of the run")
     r.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
+    r.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 

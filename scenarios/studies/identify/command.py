@@ -33,6 +33,7 @@ def add_parser(subparsers) -> None:
                         "without their [unit]; lengths in m, mm... (converted to m)")
     p.add_argument("--time-col", default=None, metavar="NAME",
                    help="with --from-file: the time column (default: the one named time, t, zeit...)")
+    p.add_argument("--force", action="store_true", help="replace a previous result in --out")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_identify)
 
@@ -48,12 +49,11 @@ def _check(args):
         raise ScenarioError("--pairs goes with --from-file; a simulated identification knows its channels")
     if args.time_col is not None and args.from_file is None:
         raise ScenarioError("--time-col goes with --from-file; a simulated identification knows its time")
+    if args.seed is not None and args.seed < 0:  # numpy's generators take seeds >= 0 only
+        raise ScenarioError(f"--seed must be a whole number >= 0, got {args.seed}")
     d = args.duration_s
     if d is not None and not (math.isfinite(d) and 10.0 <= d <= 3600.0):
         raise ScenarioError(f"--duration-s must lie in [10, 3600] s, got {d:g}")
-    out = pathlib.Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ScenarioError(f"--out {out} exists and is not a folder")
 
 
 def cmd_identify(args) -> int:
@@ -61,32 +61,38 @@ def cmd_identify(args) -> int:
     from scenarios.core.config import ScenarioError, load_scenario
     from scenarios.core.drive import IDENT_SEED
     from scenarios.core.files import atomic_write_bytes, to_json
+    from scenarios.core.outputs import staged_output
     from scenarios.studies.identify.report import bode_png
 
     _check(args)
     seed = IDENT_SEED if args.seed is None else int(args.seed)
+    scenario = load_scenario(args.scenario) if args.scenario is not None else None
     if args.from_file is not None:
-        from scenarios.studies.identify.recorded import identify_recorded
+        from scenarios.studies.identify.recorded import parse_pairs
 
-        ident = identify_recorded(args.from_file, args.pairs, time_col=args.time_col)
-        title = pathlib.Path(args.from_file).name
-    else:
-        from correction.actuator_fit import ActuatorFitError
-        from scenarios.studies.identify.compute import identify_rig
+        parse_pairs(args.pairs)  # the syntax of --pairs before anything is written
+    with staged_output(args.out, force=getattr(args, "force", False)) as stage:
+        if args.from_file is not None:
+            from scenarios.studies.identify.recorded import identify_recorded
 
-        scenario = load_scenario(args.scenario)
-        if not args.quiet:
-            print(f"identifying {scenario.name}: independent random drives on the four posts", flush=True)
-        try:
-            ident = identify_rig(scenario, duration_s=args.duration_s, seed=seed)
-        except ActuatorFitError as exc:
-            raise ScenarioError(str(exc)) from None
-        title = scenario.name
+            ident = identify_recorded(args.from_file, args.pairs, time_col=args.time_col)
+            title = pathlib.Path(args.from_file).name
+        else:
+            from correction.actuator_fit import ActuatorFitError
+            from scenarios.studies.identify.compute import identify_rig
+
+            if not args.quiet:
+                print(f"identifying {scenario.name}: independent random drives on the four posts", flush=True)
+            try:
+                ident = identify_rig(scenario, duration_s=args.duration_s, seed=seed)
+            except ActuatorFitError as exc:
+                raise ScenarioError(str(exc)) from None
+            title = scenario.name
+        files = {"identification.json": to_json(ident).encode("utf-8"), "bode.png": bode_png(ident.fits, title)}
+        write_actuators_file(stage.path / "actuators.toml", ident.fits, meta=ident.meta())
+        for name, data in files.items():
+            atomic_write_bytes(stage.path / name, data)
     out = pathlib.Path(args.out)
-    files = {"identification.json": to_json(ident).encode("utf-8"), "bode.png": bode_png(ident.fits, title)}
-    write_actuators_file(out / "actuators.toml", ident.fits, meta=ident.meta())
-    for name, data in files.items():
-        atomic_write_bytes(out / name, data)
     print(f"{'corner':>6} {'orders':>7} {'bandwidth Hz':>13} {'held-out err':>13}")
     for c, fit in ident.fits.items():
         print(f"{c:>6} {fit.orders[0]:>3}/{fit.orders[1]:<3} {fit.bandwidth_hz:13.2f} {fit.held_out_error:13.4f}")

@@ -7,8 +7,9 @@
 
 The computation is :func:`scenarios.studies.iterate.compute.iterate_scenario`, the files
 (``DIR/drive.csv``, the same drive as the RPC III drive file ``DIR/drive.drv`` a lab can play on
-a real rig, ``DIR/iteration.json``, ``DIR/iteration.png``) and the table
-:mod:`scenarios.studies.iterate.report`. Bad options and a bad scenario raise
+a real rig, ``DIR/iteration.json``, ``DIR/iteration.png``, appearing together:
+:func:`scenarios.core.outputs.staged_output`) and the table :mod:`scenarios.studies.iterate.report`.
+Bad options, a bad scenario and an ``--out`` holding a previous result (without ``--force``) raise
 :class:`scenarios.core.config.ScenarioError` before any run.
 """
 
@@ -48,6 +49,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="rms load-cell noise added to rig forces, N (default 100; 0: off)")
     c.add_argument("--run-anyway", action="store_true",
                    help="run even if the gain's predicted spectral radius is >= 1 (divergence still stops it)")
+    c.add_argument("--force", action="store_true", help="replace a previous result in --out")
     c.add_argument("--quiet", action="store_true", help="no progress lines")
     c.set_defaults(func=cmd_iterate)
     return c
@@ -62,6 +64,7 @@ def _options(args) -> dict:
 def cmd_iterate(args) -> int:
     """Run ``rigsim iterate``: check everything, run, write the files, print the comparison."""
     from scenarios.core.config import load_scenario
+    from scenarios.core.outputs import staged_output
     from scenarios.studies.iterate.compute import check_options, iterate_scenario
     from scenarios.studies.iterate.report import comparison_table, write_files
 
@@ -69,9 +72,11 @@ def cmd_iterate(args) -> int:
     scenario = load_scenario(args.scenario)
     if args.duration_s is not None:
         scenario = dataclasses.replace(scenario, duration_s=float(args.duration_s))
+    check_options(args.target, duration_s=scenario.duration_s, **_options(args))  # the file's duration too
     say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
-    result = iterate_scenario(scenario, args.target, say=say, **_options(args))
-    paths = write_files(result, args.out)
+    with staged_output(args.out, force=getattr(args, "force", False)) as stage:
+        result = iterate_scenario(scenario, args.target, say=say, **_options(args))
+        paths = {k: stage.final(p) for k, p in write_files(result, stage.path).items()}
     print(comparison_table(result))
     print(f"wrote {', '.join(str(p) for p in paths.values())}")
     return 0

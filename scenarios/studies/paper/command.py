@@ -22,6 +22,7 @@ def add_parser(subparsers) -> None:
                     help="rms of the white noise added to the measured rig force, N (default 100; 0: off)")
     pp.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd), one recording per case")
     pp.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
+    pp.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
     pp.set_defaults(func=cmd_paper)
 
@@ -42,11 +43,18 @@ def _check(args) -> None:
         raise ScenarioError(f"--jobs must be at least 1, got {args.jobs}") from None
     if args.noise_N is not None and not (math.isfinite(args.noise_N) and args.noise_N >= 0):
         raise ScenarioError(f"--noise-N must be >= 0 N, got {args.noise_N:g}")
+    if getattr(args, "view", False) and getattr(args, "rrd", None) is None:
+        raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
+    if getattr(args, "rrd", None) is not None:
+        from scenarios.core.outputs import check_output_file
+
+        check_output_file(args.rrd, "--rrd", force=getattr(args, "force", False), folder=args.out)
 
 
 def cmd_paper(args) -> int:
     from scenarios.core.config import load_scenario, paper_scenarios
     from scenarios.core.files import to_json
+    from scenarios.core.outputs import staged_output
     from scenarios.studies.paper.compute import run_paper
     from scenarios.studies.paper.report import render_report, write_files
     from scenarios.core.results import write_run
@@ -70,23 +78,30 @@ def cmd_paper(args) -> int:
                   f"({r.info['wall_time_s']:.1f} s)", file=sys.stderr)
 
     noise_N = NOISE_N if args.noise_N is None else args.noise_N
-    result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,
-                       pose_rate_hz=pose_rate, on_done=progress)
-    files = render_report(result)
-    files["paper.json"] = to_json(result).encode("utf-8")
-    out = pathlib.Path(args.out)
-    for case in result.cases:
-        for r in (case.road, case.rig):
-            write_run(r, out / r.scenario_name / r.mode)
-    report_files = write_files(out, files)
-    table = result.table()
-    if args.rrd:
-        from scenarios.review.recording import write_recording
+    with staged_output(args.out, force=getattr(args, "force", False)) as stage:
+        result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,
+                           pose_rate_hz=pose_rate, on_done=progress)
+        files = render_report(result)
+        files["paper.json"] = to_json(result).encode("utf-8")
+        for case in result.cases:
+            for r in (case.road, case.rig):
+                write_run(r, stage.path / r.scenario_name / r.mode)
+        report_files = write_files(stage.path, files)
+        table = result.table()
+        if args.rrd:
+            from scenarios.review.recording import write_recording
 
-        runs = [r for c in result.cases for r in (c.road, c.rig)]
-        write_recording(args.rrd, runs, corrected={c.name: c.score.corrected_N["best"] for c in result.cases},
-                        dlc_table=table + "\n\n" + result.damage_table(), spawn=args.view)
-        print(f"wrote recording {args.rrd} (one recording per case)")
+            runs = [r for c in result.cases for r in (c.road, c.rig)]
+            write_recording(stage.place(args.rrd), runs,
+                            corrected={c.name: c.score.corrected_N["best"] for c in result.cases},
+                            dlc_table=table + "\n\n" + result.damage_table())
+    out = pathlib.Path(args.out)
+    if args.rrd:
+        print(f"wrote recording {args.rrd} (one recording per case)" + (" and opened the viewer" if args.view else ""))
+        if args.view:
+            from scenarios.review.recording import open_viewer
+
+            open_viewer(args.rrd)
     print(table)
     print()
     print(result.damage_table())

@@ -1,17 +1,27 @@
 """``rigsim validate`` on the command line: the argparse adapter of :func:`compute.validate`.
 
-Arguments are checked before any work (a bad duration, ``--jobs`` below 1 or an ``--out`` that
-is a file: one sentence, nothing written); then the validation runs, the folder is written
-(:func:`scenarios.studies.validate.report.write_report`) and the key numbers are printed.
+Arguments are checked before any work (a bad duration, ``--jobs`` below 1, an ``--out`` that
+is a file or holds a previous result without ``--force``, an ``--rrd`` that cannot be written: one
+sentence, nothing written); then the validation runs, the folder is built beside ``--out`` and
+renamed onto it (:func:`scenarios.core.outputs.staged_output`;
+:func:`scenarios.studies.validate.report.write_report` writes its files) and the key numbers are
+printed.
 """
 
 from __future__ import annotations
 
 import argparse
-import pathlib
 import sys
 
-__all__ = ["add_parser", "cmd_validate"]
+__all__ = ["add_parser", "cmd_validate", "MIN_DURATION_S", "MIN_IDENT_DURATION_S"]
+
+#: Shortest Table 1 record, s: two output samples at the scenario's 1 kHz (a DLC needs two;
+#: ``--duration-s 1e-6`` ran all eleven jobs, then failed on the DLC).
+MIN_DURATION_S = 1e-3
+#: Shortest identification record, s: route 3's Welch segments are a quarter of the record, so
+#: d s resolve 4/d Hz and give ~12.5 d points below 50 Hz for a fit of 10 coefficients (0.1 s ran
+#: every job, then failed with "1 usable frequency points cannot determine 10 coefficients").
+MIN_IDENT_DURATION_S = 1.0
 
 
 def __getattr__(name: str):
@@ -36,6 +46,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores, at most 8)")
     p.add_argument("--rrd", default=None, help="also write a rerun recording of the Table 1 road and rig runs")
     p.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
+    p.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=cmd_validate)
     return p
@@ -50,6 +61,7 @@ def cmd_validate(args) -> int:
         Bad arguments, before any work.
     """
     from scenarios.core.config import ScenarioError
+    from scenarios.core.outputs import check_output_file, staged_output
     from scenarios.studies.validate.report import summary_lines, write_report
 
     this = sys.modules[__name__]  # check_arguments and validate through __getattr__ (or a test's wrapper)
@@ -57,27 +69,39 @@ def cmd_validate(args) -> int:
     ident_s = getattr(args, "ident_duration_s", None)
     jobs = getattr(args, "jobs", None)
     this.check_arguments(duration_s, ident_s, jobs)
-    out = pathlib.Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ScenarioError(f"--out {out} exists and is not a folder; give a folder (new or existing)")
+    for option, value, least in (("--duration-s", duration_s, MIN_DURATION_S),
+                                 ("--ident-duration-s", ident_s, MIN_IDENT_DURATION_S)):
+        if value is not None and value < least:
+            raise ScenarioError(f"{option} {value:g} s is too short for the validation's analysis; give at least "
+                                f"{least:g} s")
+    force, rrd, view = getattr(args, "force", False), getattr(args, "rrd", None), getattr(args, "view", False)
+    if view and rrd is None:
+        raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
+    if rrd is not None:  # checked with --out before any work: both are written, or neither
+        check_output_file(rrd, "--rrd", force=force, folder=args.out)
     quiet = getattr(args, "quiet", False)
     progress = None if quiet else (lambda line: print(line, file=sys.stderr, flush=True))
-    rrd = getattr(args, "rrd", None)
     pose_rate = None
-    if rrd:
+    if rrd is not None:
         from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
 
         pose_rate = DEFAULT_POSE_RATE_HZ
-    result = this.validate(duration_s=duration_s, ident_duration_s=ident_s, jobs=jobs, progress=progress,
-                      pose_rate_hz=pose_rate)
-    paths = write_report(result, out)
-    lines = summary_lines(result)
-    if rrd:
-        from scenarios.review.recording import write_recording
+    with staged_output(args.out, force=force) as stage:
+        result = this.validate(duration_s=duration_s, ident_duration_s=ident_s, jobs=jobs, progress=progress,
+                               pose_rate_hz=pose_rate)
+        paths = {k: stage.final(p) for k, p in write_report(result, stage.path).items()}
+        lines = summary_lines(result)
+        if rrd is not None:
+            from scenarios.review.recording import write_recording
 
-        runs = [result.runs[k] for k in ("road", "rig") if k in result.runs]
-        write_recording(rrd, runs, dlc_table="\n".join(lines), spawn=getattr(args, "view", False))
-        print(f"wrote recording {rrd} (Table 1 road and rig runs)")
+            runs = [result.runs[k] for k in ("road", "rig") if k in result.runs]
+            write_recording(stage.place(rrd), runs, dlc_table="\n".join(lines))
+    if rrd is not None:
+        print(f"wrote recording {rrd} (Table 1 road and rig runs)" + (" and opened the viewer" if view else ""))
+        if view:
+            from scenarios.review.recording import open_viewer
+
+            open_viewer(rrd)
     for line in lines:
         print(line)
     print(f"wrote {paths['validate.json']}, {paths['report.md']} and {len(paths) - 2} PNGs")

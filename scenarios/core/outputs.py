@@ -1,0 +1,287 @@
+"""Outputs whole or absent: a command's folder appears at once, complete, or not at all.
+
+:func:`staged_output` checks an output folder before any work (an empty path, a file in its
+place, a previous result without ``--force``, a parent that cannot be written: one sentence
+each), yields a staging folder ``.{name}.{host}.{pid}.partial`` beside the target into which the
+command writes everything, and renames it onto the target when the work succeeds; on any error or
+interrupt the staging folder is removed and the target is as before. Staging folders left by
+killed runs of this host are removed by the next command writing the same target (or named in a
+warning). :func:`check_output_file` checks a single output file (``--rrd``, ``rigsim correct
+-o``) before any work. Files inside the staging folder are still written by
+:func:`correction.atomic.atomic_write_bytes`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+import pathlib
+import shutil
+import sys
+
+from correction.atomic import host_tag, pid_running
+from scenarios.core.config import ScenarioError
+
+__all__ = ["Staging", "check_output_file", "remove_stale_staging", "staged_output"]
+
+_KINDS = ("partial", "old")  # staging folders, and previous results moved aside by --force
+
+
+@dataclasses.dataclass(frozen=True)
+class Staging:
+    """The staging folder of :func:`staged_output`.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The staging folder (absolute): write everything here.
+    target : pathlib.Path
+        The output folder as the user named it: where ``path`` is renamed on success.
+    """
+
+    path: pathlib.Path
+    target: pathlib.Path
+
+    def final(self, p) -> pathlib.Path:
+        """Where ``p`` (a path inside :attr:`path`) will be once the staging folder is renamed."""
+        return self.target / pathlib.Path(p).relative_to(self.path)
+
+    def place(self, p) -> pathlib.Path:
+        """Where to write a file meant for ``p``: inside the staging folder when ``p`` lies inside
+        the target (it then appears with the rest), else ``p`` itself."""
+        rel = _inside(p, self.target)
+        return pathlib.Path(p) if rel is None else self.path / rel
+
+
+def _inside(p, folder) -> pathlib.Path | None:
+    """``p`` relative to ``folder`` when it lies inside it (both made absolute), else None."""
+    try:
+        return pathlib.Path(os.path.abspath(p)).relative_to(os.path.abspath(folder))
+    except ValueError:
+        return None
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def _warn(text: str) -> None:
+    print(f"rigsim: warning: {text}", file=sys.stderr, flush=True)
+
+
+def _remove(path: pathlib.Path) -> None:
+    if path.is_symlink() or not path.is_dir():
+        path.unlink()
+    else:
+        shutil.rmtree(path)
+
+
+def remove_stale_staging(target) -> list[pathlib.Path]:
+    """Remove the staging folders ``.{name}.{host}.{pid}.partial`` that runs of this host left
+    beside ``target`` when they were killed (their pid no longer runs); a previous result a killed
+    ``--force`` had moved aside (``.old``) is put back when the target is missing, else removed.
+
+    Folders of other hosts and of running processes are kept; one that cannot be removed is named
+    in a warning line on stderr. POSIX only (elsewhere nothing is removed). Returns those removed.
+    """
+    target = pathlib.Path(os.path.abspath(target))
+    if os.name != "posix":
+        return []
+    prefix, host, removed = f".{target.name}.", host_tag(), []
+    try:
+        entries = sorted(os.scandir(target.parent), key=lambda e: e.name)
+    except OSError:
+        return []
+    for entry in entries:
+        parts = entry.name[len(prefix):].split(".") if entry.name.startswith(prefix) else []
+        if len(parts) != 3 or parts[0] != host or not parts[1].isdigit() or parts[2] not in _KINDS:
+            continue  # another target's, another host's, or no staging folder at all
+        pid, path = int(parts[1]), pathlib.Path(entry.path)
+        if pid == os.getpid() or pid_running(pid):
+            continue
+        try:
+            if parts[2] == "old" and not os.path.lexists(target):
+                os.rename(path, target)
+                _warn(f"put back the previous result {target} that a killed run (pid {pid}) had moved aside")
+                continue
+            _remove(path)
+            removed.append(path)
+        except OSError as exc:
+            _warn(f"cannot remove {path}, left by a killed run (pid {pid}): {exc.strerror or exc}; remove it by hand")
+    return removed
+
+
+def _count_files(folder: pathlib.Path) -> int:
+    n = sum(len(files) for _, _, files in os.walk(folder))
+    return n or sum(1 for _ in folder.iterdir())
+
+
+def _writable_ancestor(path: pathlib.Path, option: str, text: str) -> pathlib.Path:
+    """The nearest existing folder above ``path`` (where it will be created); refused if a file."""
+    above = path.parent
+    while not os.path.lexists(above) and above.parent != above:
+        above = above.parent
+    if not above.is_dir():
+        raise ScenarioError(f"{option} {text} cannot be written: {above} is not a folder")
+    return above
+
+
+def _check_target(target, force: bool, option: str) -> pathlib.Path:
+    text = os.fspath(target)
+    if not text.strip():
+        raise ScenarioError(f"{option} is empty; name the output folder")
+    path = pathlib.Path(os.path.abspath(text))
+    if path.parent == path:
+        raise ScenarioError(f"{option} {text} is the root folder; name an output folder")
+    if path.exists() and not path.is_dir():
+        raise ScenarioError(f"{option} {text} exists and is not a folder; name a new folder")
+    above = _writable_ancestor(path, option, text)
+    if path.is_dir() and not force:
+        try:
+            n = _count_files(path)
+        except OSError as exc:
+            raise ScenarioError(f"{option} {text} cannot be read ({exc.strerror}); name another folder") from None
+        if n:
+            raise ScenarioError(f"{option} {text} already holds a previous result ({_plural(n, 'file')}); choose "
+                                "another folder or give --force to replace it")
+    return path
+
+
+def _make_parents(folder: pathlib.Path) -> list[pathlib.Path]:
+    """Create ``folder`` and its missing parents; returns those created (deepest last)."""
+    missing = []
+    p = folder
+    while not os.path.lexists(p) and p.parent != p:
+        missing.append(p)
+        p = p.parent
+    folder.mkdir(parents=True, exist_ok=True)
+    return missing[::-1]
+
+
+def _remove_empty(folders: list[pathlib.Path]) -> None:
+    for p in reversed(folders):
+        with contextlib.suppress(OSError):
+            p.rmdir()
+
+
+def _holds_anything(path: pathlib.Path) -> bool:
+    return path.is_dir() and any(path.iterdir())
+
+
+def _publish(staging: pathlib.Path, target: pathlib.Path, shown: str, option: str, force: bool) -> None:
+    """Rename ``staging`` onto ``target``; with ``force`` a previous result is moved aside first,
+    removed after, and put back if the rename fails (the target is never left missing)."""
+    if not _holds_anything(target):
+        os.replace(staging, target)  # a missing target, or an empty folder (POSIX replaces it)
+        return
+    if not force:
+        raise ScenarioError(f"{option} {shown} was filled by another program while this command ran; nothing "
+                            "was written, run it again with another folder")
+    aside = target.parent / f".{target.name}.{host_tag()}.{os.getpid()}.old"
+    os.rename(target, aside)
+    try:
+        os.rename(staging, target)
+    except BaseException:
+        os.rename(aside, target)
+        raise
+    try:
+        _remove(aside)
+    except OSError as exc:
+        _warn(f"cannot remove the previous result moved aside to {aside}: {exc.strerror or exc}; remove it by hand")
+
+
+@contextlib.contextmanager
+def staged_output(target, *, force: bool = False, option: str = "--out"):
+    """Build an output folder in a staging folder beside it; rename it onto ``target`` on success.
+
+    Parameters
+    ----------
+    target : str or os.PathLike
+        The output folder. Refused (:class:`ScenarioError`, one sentence, before any work): an empty
+        or blank path, the root folder, a path that exists and is not a folder, a folder that
+        already holds anything unless ``force``, a parent that cannot be created or written.
+    force : bool
+        Replace a previous result: on success the old folder is moved aside, the new one renamed in
+        and the old one removed; if the work fails, the old result stays as it was.
+    option : str
+        The command-line option named in the messages (``--out``).
+
+    Yields
+    ------
+    Staging
+        ``.path`` the staging folder ``.{name}.{host}.{pid}.partial`` (write everything into it),
+        ``.final(p)`` where a path inside it ends up, ``.place(p)`` where to write a file meant for
+        ``p`` (inside the staging folder when ``p`` lies inside the target).
+
+    Notes
+    -----
+    On any exception, KeyboardInterrupt or SystemExit inside the block the staging folder (and the
+    parent folders this call created) are removed and the exception goes on. Leftovers of killed runs
+    are cleaned first (:func:`remove_stale_staging`).
+    """
+    shown = os.fspath(target)
+    path = _check_target(target, force, option)
+    remove_stale_staging(path)
+    staging = path.parent / f".{path.name}.{host_tag()}.{os.getpid()}.partial"
+    created: list[pathlib.Path] = []
+    try:
+        created = _make_parents(path.parent)
+        if os.path.lexists(staging):  # only this process can have left it (its pid is ours)
+            _remove(staging)
+        os.mkdir(staging)
+    except OSError as exc:
+        _remove_empty(created)
+        where = pathlib.Path(exc.filename).parent if exc.filename else path.parent
+        raise ScenarioError(f"{option} {shown} cannot be written: cannot create a folder in {where} "
+                            f"({exc.strerror or exc}); choose a folder you can write to") from None
+    try:
+        yield Staging(path=staging, target=pathlib.Path(shown))
+        _publish(staging, path, shown, option, force)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            if os.path.lexists(staging):
+                _remove(staging)
+        _remove_empty(created)
+        raise
+
+
+def check_output_file(path, option: str, *, force: bool = False, folder=None) -> pathlib.Path:
+    """Refuse, before any work, an output file that cannot be written.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output file (``--rrd``, ``-o``).
+    option : str
+        The option named in the messages.
+    force : bool
+        Allow replacing an existing file.
+    folder : str or os.PathLike, optional
+        The command's output folder (``--out``): the file may lie inside it, not be it.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ScenarioError
+        An empty or blank path, a folder, the ``--out`` folder itself, an existing file without
+        ``force``, or a parent folder that cannot be created or written (one sentence).
+    """
+    text = os.fspath(path)
+    if not text.strip():
+        raise ScenarioError(f"{option} is empty; name the output file")
+    p = pathlib.Path(os.path.abspath(text))
+    if folder is not None and _inside(p, folder) == pathlib.Path("."):
+        raise ScenarioError(f"{option} {text} is the --out folder; name a file (inside it or elsewhere)")
+    if p.is_dir():
+        raise ScenarioError(f"{option} {text} is a folder; name a file")
+    if os.path.lexists(p) and not force:
+        raise ScenarioError(f"{option} {text} already exists; choose another file or give --force to replace it")
+    parent = _writable_ancestor(p, option, text)
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ScenarioError(f"{option} {text} cannot be written: no permission to write in {parent}")
+    return pathlib.Path(text)
