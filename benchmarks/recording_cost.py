@@ -54,7 +54,7 @@ def road_poses(scenario, rate_hz: float = DEFAULT_POSE_RATE_HZ):
     rig = Rig(scenario, hydraulic=False)
     drive = rig.road_drive()
     rec = rig.run(drive, rate_hz=scenario.output_rate_hz, pose_rate_hz=rate_hz)
-    k0, decim, _ = output_schedule(drive.t_s, rig.dt_s, scenario.output_rate_hz)
+    k0, decim, _ = output_schedule(drive, rig.dt_s, scenario.output_rate_hz)
     return rec.poses, rig.model, drive, (k0, decim)
 
 

@@ -160,10 +160,10 @@ def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, tmp_
     step (warnings are checked every 10 ms); no callbacks remain."""
     from scenarios.core.drive import Drive
 
-    real = Rig.road_drive
+    real = Rig.road_source
 
     def poisoned(self):
-        d = real(self)
+        d = real(self).drive()  # a Drive reads like the RoadDrive a run gets (chunk, times, ...)
         z = d.z_m.copy()
         z[np.searchsorted(d.t_s, 1.5), 0] = np.nan
         out = object.__new__(Drive)  # Drive refuses NaN; bypass its check to poison the run
@@ -171,7 +171,7 @@ def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, tmp_
             object.__setattr__(out, name, value)
         return out
 
-    monkeypatch.setattr(Rig, "road_drive", poisoned)
+    monkeypatch.setattr(Rig, "road_source", poisoned)
     monkeypatch.chdir(tmp_path)
     with pytest.raises(SimulationError, match=r"between t = 1\.5000 s and t = 1\.5100 s"):
         run(parse_scenario(SHORT), mode)

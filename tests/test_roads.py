@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from scenarios.core.drive import Drive, sample_wheels
+from scenarios.core.drive import Drive
+from scenarios.core.road_drive import sample_wheels
 from scenarios.core.profiles import Profile, ProfileError, highpass, read_profile_csv, write_profile_csv
 from scenarios.core.roads import ISO_CLASSES, ROUGHNESS_WORDS, RoadSpec, generate_profile, iso8608_psd, welch_psd_spatial
 

@@ -19,7 +19,6 @@ import subprocess
 import sys
 import textwrap
 import time
-import tracemalloc
 
 import numpy as np
 import pytest
@@ -69,8 +68,8 @@ def test_a_run_too_big_for_memory_is_refused_before_the_drive_is_made(monkeypatc
     def no_drive(self):
         raise AssertionError("the drive was made before the memory check")
 
-    monkeypatch.setattr(Rig, "road_drive", no_drive)
-    s = _scenario(duration_s=3600.0, vehicle={"timestep_s": 1e-6})  # 3.6e9 steps: ~0.9 TB
+    monkeypatch.setattr(Rig, "road_source", no_drive)
+    s = _scenario(duration_s=3600.0, vehicle={"timestep_s": 1e-6})  # 3.6e9 steps: ~86 GB of road profile
     t0 = time.perf_counter()
     with pytest.raises(ScenarioError) as err:
         run(s, "road")
@@ -84,7 +83,7 @@ def test_a_run_too_big_for_memory_is_refused_before_the_drive_is_made(monkeypatc
 
 
 def test_the_memory_limit_is_half_the_available_memory(monkeypatch):
-    need = 1000 * memory.BYTES_PER_STEP + 10 * memory.BYTES_PER_OUTPUT
+    need = memory.BASE_BYTES + 1000 * memory.BYTES_PER_STEP + 10 * memory.BYTES_PER_OUTPUT
     monkeypatch.setattr(memory, "available_memory_bytes", lambda: 2 * need)
     memory.check_memory(1000, 10, "x", "y")  # exactly at the limit: accepted
     monkeypatch.setattr(memory, "available_memory_bytes", lambda: 2 * need - 2)
@@ -102,36 +101,16 @@ def test_rig_run_checks_the_records_of_any_drive(monkeypatch):
 
     rig = Rig(_scenario(), hydraulic=False)
     drive = identification_drive(1.0, rig.dt_s)
-    monkeypatch.setattr(memory, "available_memory_bytes", lambda: 1000 * memory.BYTES_PER_OUTPUT)
+    monkeypatch.setattr(memory, "available_memory_bytes", lambda: 2 * memory.BASE_BYTES + 1000 * memory.BYTES_PER_OUTPUT)
     with pytest.raises(ScenarioError) as err:
-        rig.run(drive, rate_hz=1000.0)  # 1001 output samples > half of 1000
+        rig.run(drive, rate_hz=1000.0)  # 1001 output samples > half of 1000 (beside the base)
     _one_sentence(str(err.value))
     assert "1e+03 output samples" in str(err.value) and "duration_s" in str(err.value)
     rec = rig.run(drive, rate_hz=1000.0 / 4)  # 251 samples fit
     assert rec.t_s.size == 251
 
 
-def _peak_bytes(scenario) -> int:
-    from scenarios.core.run import run
-
-    tracemalloc.start()
-    try:
-        run(scenario, "road")
-        return tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-
-
-def test_bytes_per_step_is_measured():
-    """The estimate's bytes per step: the slope of a run's measured peak memory (tracemalloc)
-    against its step count, between the default step and half of it."""
-    coarse, fine = (_scenario(duration_s=3.0, vehicle={"timestep_s": dt}) for dt in (1e-4, 5e-5))
-    steps = [(s.lead_in_s + s.duration_s) / s.vehicle.timestep_s for s in (coarse, fine)]
-    peaks = [_peak_bytes(s) for s in (coarse, fine)]
-    slope = (peaks[1] - peaks[0]) / (steps[1] - steps[0])
-    assert 0.8 * memory.BYTES_PER_STEP < slope <= memory.BYTES_PER_STEP, slope
-    outputs = coarse.duration_s * coarse.output_rate_hz
-    assert peaks[1] < steps[1] * memory.BYTES_PER_STEP + outputs * memory.BYTES_PER_OUTPUT
+# The memory per step and per output sample: tests/test_memory.py (measured peaks).
 
 
 # ------------------------------------------------------------------------- the truck's bounds

@@ -1,7 +1,7 @@
 """Memory before a run: refuse a run whose drive and records would not fit.
 
-A run holds its whole drive (one sample per simulation step) and its records (one sample per
-output instant) in memory. :func:`check_memory` estimates both from the measured bytes per step
+A run holds its records (one sample per output instant) and the road profile in memory; the drive
+itself is made chunk by chunk. :func:`check_memory` estimates both from the measured bytes per step
 and per output sample and refuses, in one sentence naming the fields to change, a run that would
 take more than half of the machine's available memory, before anything is allocated.
 """
@@ -12,15 +12,19 @@ import os
 
 from scenarios.core.config import ScenarioError
 
-__all__ = ["BYTES_PER_STEP", "BYTES_PER_OUTPUT", "available_memory_bytes", "check_memory"]
+__all__ = ["BASE_BYTES", "BYTES_PER_STEP", "BYTES_PER_OUTPUT", "available_memory_bytes", "check_memory"]
 
-#: Peak memory of a run per simulation step, bytes: the drive (time, 4 positions, 4 velocities) with
-#: its temporaries while the road is sampled and faded in. Measured (tracemalloc peak of
-#: scenarios.core.run.run, road and rig mode, 1e-4 and 5e-5 s steps): 246-251 B per step.
-BYTES_PER_STEP = 256
-#: Memory per output sample, bytes: the records and the result's signals (~170 B measured in rig
-#: mode) and the text of ``timeseries.csv`` while it is written (~1240 B in rig mode).
-BYTES_PER_OUTPUT = 1536
+#: Peak memory of a road or rig run per simulation step, bytes. The drive is made chunk by chunk
+#: (:class:`scenarios.core.road_drive.RoadDrive`) and not held; what grows with the run's length
+#: is the road profile (0.02 m spacing) and its filtering: measured (tracemalloc peak of
+#: scenarios.core.run.run, 120 km/h, 1e-4 s) ~17 B per step; 24 with a margin.
+BYTES_PER_STEP = 24
+#: Memory per output sample, bytes: the records and the result's signals (~280 B measured in rig
+#: mode); ``timeseries.csv`` is streamed in blocks (scenarios.core.results.csv_parts).
+BYTES_PER_OUTPUT = 512
+#: What a run takes whatever its length, bytes: the rest state, the stability linearization and
+#: the rollout's chunk buffers (~2.5 MB measured in rig mode), rounded up.
+BASE_BYTES = 3 * 2**20
 
 
 def available_memory_bytes() -> int | None:
@@ -62,7 +66,7 @@ def check_memory(steps: float, outputs: float, what: str, fix: str) -> None:
         One sentence: the run, its estimated memory (:data:`BYTES_PER_STEP`,
         :data:`BYTES_PER_OUTPUT`), the limit and the fix.
     """
-    need = float(steps) * BYTES_PER_STEP + float(outputs) * BYTES_PER_OUTPUT
+    need = BASE_BYTES + float(steps) * BYTES_PER_STEP + float(outputs) * BYTES_PER_OUTPUT
     avail = available_memory_bytes()
     if avail is None or need <= 0.5 * avail:
         return

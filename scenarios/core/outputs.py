@@ -136,7 +136,7 @@ def _check_target(target, force: bool, option: str) -> pathlib.Path:
         raise ScenarioError(f"{option} {text} is the root folder; name an output folder")
     if path.exists() and not path.is_dir():
         raise ScenarioError(f"{option} {text} exists and is not a folder; name a new folder")
-    above = _writable_ancestor(path, option, text)
+    _writable_ancestor(path, option, text)
     if path.is_dir() and not force:
         try:
             n = _count_files(path)

@@ -17,7 +17,7 @@ from correction.dlc import force_statistics
 from scenarios.core.files import atomic_write_bytes, atomic_write_text, to_json
 from mjcf.names import CORNERS
 
-__all__ = ["RunResult", "write_run", "SIGNALS", "TIMING_KEYS"]
+__all__ = ["RunResult", "write_run", "csv_parts", "CSV_BLOCK_ROWS", "SIGNALS", "TIMING_KEYS"]
 
 #: Units and descriptions of the per-wheel signals a run may carry.
 SIGNALS: dict[str, tuple[str, str]] = {
@@ -107,25 +107,40 @@ class RunResult:
                      f"{np.mean(del5) / 1e3:8.2f}")
         return "\n".join(lines)
 
-    def columns(self) -> tuple[list[str], np.ndarray]:
-        """Header and (N, 1 + 4 k) matrix of the time series file."""
+    def column_names(self) -> list[str]:
+        """Header of the time series file: ``time_s``, then ``<signal>_<corner>[_<unit>]``."""
         names = ["time_s"]
-        blocks = [self.t_s[:, None]]
-        for key, arr in self.signals.items():
+        for key in self.signals:
             unit = key.rsplit("_", 1)[-1] if "_" in key else ""
             stem = key[: -len(unit) - 1] if unit in ("m", "N", "Pa") else key
-            for c in self.corners:
-                names.append(f"{stem}_{c}" + (f"_{unit}" if unit in ("m", "N", "Pa") else ""))
-            blocks.append(arr)
-        return names, np.hstack(blocks)
+            names += [f"{stem}_{c}" + (f"_{unit}" if unit in ("m", "N", "Pa") else "") for c in self.corners]
+        return names
+
+    def rows(self, i0: int, i1: int) -> np.ndarray:
+        """Rows ``i0`` .. ``i1 - 1`` of the time series file's (N, 1 + 4 k) matrix."""
+        return np.hstack([self.t_s[i0:i1, None]] + [arr[i0:i1] for arr in self.signals.values()])
+
+    def columns(self) -> tuple[list[str], np.ndarray]:
+        """Header and the whole (N, 1 + 4 k) matrix of the time series file."""
+        return self.column_names(), self.rows(0, self.t_s.shape[0])
 
 
-def _csv_bytes(names: list[str], matrix: np.ndarray) -> bytes:
+#: Rows of ``timeseries.csv`` formatted at a time: the file is streamed to disk in blocks of this
+#: many rows (~3 MB of text each), never held whole in memory.
+CSV_BLOCK_ROWS = 10_000
+
+
+def csv_parts(result: RunResult):
+    """``timeseries.csv`` as a sequence of byte blocks: the header line, then rows (``%.10g``,
+    comma-separated) :data:`CSV_BLOCK_ROWS` at a time."""
     import io
 
-    buf = io.StringIO()
-    np.savetxt(buf, matrix, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
-    return buf.getvalue().encode("ascii")
+    yield (",".join(result.column_names()) + "\n").encode("ascii")
+    n = result.t_s.shape[0]
+    for i in range(0, n, CSV_BLOCK_ROWS):
+        buf = io.StringIO()
+        np.savetxt(buf, result.rows(i, min(n, i + CSV_BLOCK_ROWS)), delimiter=",", fmt="%.10g")
+        yield buf.getvalue().encode("ascii")
 
 
 #: Run facts of :attr:`RunResult.info` that differ from run to run of the same scenario and seed:
@@ -138,23 +153,23 @@ def write_run(result: RunResult, out_dir) -> dict[str, pathlib.Path]:
 
     ``result.json`` and ``timeseries.csv`` depend only on the scenario and its seed: two runs give
     byte-identical files. The wall time (s) goes to ``timings.json`` beside them. All files are
-    fully formed in memory before any is written, so a failure leaves no partial file.
+    written to a temporary file and renamed, so a failure leaves no partial file; the time series is
+    streamed in blocks (:func:`csv_parts`): memory does not grow with the file.
     ``timeseries.csv`` reads in one line: ``numpy.genfromtxt(p, delimiter=",", names=True)`` or
     ``pandas.read_csv(p)``.
     """
     out = pathlib.Path(out_dir)
-    names, matrix = result.columns()
+    names = result.column_names()
     summary = result.summary()
     info = dict(summary["info"])
     timings = {k: info.pop(k) for k in TIMING_KEYS if k in info}
     summary["info"] = info
     summary["timeseries"] = {"file": "timeseries.csv", "columns": names, "rate_hz": summary["rate_hz"]}
     summary["timings"] = {"file": "timings.json"}
-    csv = _csv_bytes(names, matrix)
     js = to_json(summary)
     tj = to_json(timings)
     paths = {"timeseries": out / "timeseries.csv", "result": out / "result.json", "timings": out / "timings.json"}
-    atomic_write_bytes(paths["timeseries"], csv)
+    atomic_write_bytes(paths["timeseries"], csv_parts(result))
     atomic_write_text(paths["result"], js)
     atomic_write_text(paths["timings"], tj)
     return paths

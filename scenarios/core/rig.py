@@ -9,43 +9,37 @@ Two kinds of rig:
 
 * ``Rig(scenario, hydraulic=True)``, the rig test: the drive is the actuators' reference
   x_ref in ``ctrl``; the actuator states live in MuJoCo's activation vector and are advanced
-  by the callbacks of :mod:`hydraulics.bridge`, installed for a run only. It steps in C with
-  ``mujoco.rollout`` in 10 ms chunks (the constraint warm start carried from chunk to chunk;
-  bit-identical to a loop of ``mj_step``).
+  by the callbacks of :mod:`hydraulics.bridge`, installed for a run only.
 * ``Rig(scenario, hydraulic=False)``, the road test: the pans follow the drive exactly
   (positions and velocities set before every step).
+
+:meth:`Rig.run` hands the stepping to :mod:`scenarios.core.stepping` (the loops themselves).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
-from mujoco import rollout
 
 from hydraulics.bridge import add_hydraulic_actuators, hydraulic_callbacks
 from hydraulics.equilibrium import equilibrium_activation
-from hydraulics.events import events as hydraulic_events
 from hydraulics.loop import check_design_station
-from hydraulics.params import STATE_NAMES, ActuatorParams
+from hydraulics.params import ActuatorParams
 from mjcf import names
 from mjcf.build import build_spec
 from mjcf.physics import RigIndex, friction_disabled, static_equilibrium, tire_stiffness
 from scenarios.core.config import Scenario, ScenarioError
-from scenarios.core.drive import Drive, road_drive
+from scenarios.core.drive import Drive
 from scenarios.core.memory import check_memory
 from scenarios.core.plant import PlantLinearization
-from scenarios.core.watch import SimulationError, Watch, mujoco_warnings_captured, output_schedule
+from scenarios.core.road_drive import RoadDrive, road_source
+from scenarios.core.stepping import RigRecord, run_hydraulic, run_kinematic
+from scenarios.core.watch import mujoco_warnings_captured, output_schedule
 
-__all__ = ["actuator_params", "Rig", "RigRecord"]
+__all__ = ["actuator_params", "Rig"]
 
-MPA = 1e6  # Pa per MPa: the pressure states are in MPa (see hydraulics.params.STATE_NAMES)
-#: Warning windows (scenarios.core.watch.CHECK_EVERY_S) per rollout call of a hydraulic run:
-#: 0.1 s at the 1e-4 s step, so the calls' Python overhead is ~1 % of the stepping.
-ROLLOUT_CHECKS = 10
 
 
 def actuator_params(scenario: Scenario) -> ActuatorParams:
@@ -54,44 +48,6 @@ def actuator_params(scenario: Scenario) -> ActuatorParams:
         return ActuatorParams(**dict(scenario.actuator))
     except (TypeError, ValueError) as exc:
         raise ScenarioError(str(exc)) from None
-
-
-@dataclass(frozen=True)
-class RigRecord:
-    """What a run of the rig records at the output rate, from the first step at t >= 0.
-
-    Attributes
-    ----------
-    t_s : numpy.ndarray, s, (n,)
-    x_ref_m : numpy.ndarray, m, (n, 4)
-        The drive at the recorded instants (road mode: the pan motion itself).
-    pan_m : numpy.ndarray, m, (n, 4)
-        Pan displacement x_a (the state before the step that applies ``x_ref_m``).
-    tire_force_N : numpy.ndarray, N, (n, 4)
-        Tire force on each pan, compression positive.
-    states : numpy.ndarray or None, (n, 4, 5)
-        Hydraulic activation states in :data:`hydraulics.params.STATE_NAMES` order (rig only).
-    events : Mapping
-        ``{event: {corner: {"samples": int, "first_time_s": float (s)}}}`` for the events that
-        occurred (spool saturation, cavitation, over-pressure; rig only).
-    poses : scenarios.core.poses.PoseTrack or None
-        Body poses at video rate when asked for.
-    """
-
-    t_s: np.ndarray
-    x_ref_m: np.ndarray
-    pan_m: np.ndarray
-    tire_force_N: np.ndarray
-    states: np.ndarray | None = None
-    events: Mapping = field(default_factory=dict)
-    poses: object = None
-
-    def state(self, name: str) -> np.ndarray:
-        """One hydraulic state per corner, (n, 4), in SI (pressures in Pa, spool normalised)."""
-        if self.states is None:
-            raise ValueError("a road-mode record has no hydraulic states")
-        x = self.states[:, :, list(STATE_NAMES).index(name)]
-        return x * MPA if name.endswith("_MPa") else x
 
 
 class Rig:
@@ -193,10 +149,15 @@ class Rig:
         return np.array([0.5 * self.model.body_mass[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY,
                                                                       names.axle_body(c))] for c in names.CORNERS])
 
+    def road_source(self) -> RoadDrive:
+        """The scenario's road as the four pan drives on this rig's time step, stroke-checked,
+        made on demand (what a run reads chunk by chunk)."""
+        return road_source(self.scenario, dt_s=self.dt_s, wheelbase_m=self.wheelbase_m,
+                           half_stroke_m=self.half_stroke_m)
+
     def road_drive(self) -> Drive:
-        """The scenario's road as the four pan drives on this rig's time step, stroke-checked."""
-        return road_drive(self.scenario, dt_s=self.dt_s, wheelbase_m=self.wheelbase_m,
-                          half_stroke_m=self.half_stroke_m)
+        """:meth:`road_source` made whole: arrays at every time step."""
+        return self.road_source().drive()
 
     # ------------------------------------------------------------------------ rest, linear
     def rest_state(self, pan_z_m=None) -> mujoco.MjData:
@@ -264,13 +225,14 @@ class Rig:
                 "raise actuator.kdp_per_Pa, lower actuator.kp_per_m or raise actuator.spool_hz")
 
     # ------------------------------------------------------------------------ running
-    def run(self, drive: Drive, *, rate_hz: float, progress=None, pose_rate_hz: float | None = None) -> RigRecord:
+    def run(self, drive, *, rate_hz: float, progress=None, pose_rate_hz: float | None = None) -> RigRecord:
         """Run ``drive`` from rest and record at ``rate_hz`` from its first step at t >= 0.
 
         Parameters
         ----------
-        drive : Drive
-            One sample per time step of the model (its ``t_s`` may start below 0: a lead-in).
+        drive : Drive or RoadDrive
+            One sample per time step of the model (times may start below 0: a lead-in); read
+            chunk by chunk (:mod:`scenarios.core.stepping`).
         rate_hz : float, Hz
             Output rate; must divide the simulation rate.
         progress : callable, optional
@@ -283,137 +245,17 @@ class Rig:
         SimulationError
             A MuJoCo warning or diverging states, naming the simulated time.
         """
-        if drive.t_s.size > 1 and abs(drive.dt_s - self.dt_s) > 1e-9 * self.dt_s:
+        if drive.n_steps > 1 and abs(drive.dt_s - self.dt_s) > 1e-9 * self.dt_s:
             raise ValueError(f"the drive's step {drive.dt_s:g} s is not the model's {self.dt_s:g} s")
         decim = 1.0 / (rate_hz * self.dt_s)
         if abs(decim - round(decim)) > 1e-9:
             raise ScenarioError(f"output_rate_hz = {rate_hz:g} Hz must divide the simulation rate "
                                 f"{1.0 / self.dt_s:g} Hz")
-        n_out = output_schedule(drive.t_s, self.dt_s, rate_hz)[2]
-        check_memory(0, n_out, f"a drive of {drive.t_s[-1] - drive.t_s[0]:g} s recorded at {rate_hz:g} Hz is "
+        n_out = output_schedule(drive, self.dt_s, rate_hz)[2]
+        span = drive.time_at(drive.n_steps - 1) - drive.time_at(0)
+        check_memory(0, n_out, f"a drive of {span:g} s recorded at {rate_hz:g} Hz is "
                      f"{n_out:.3g} output samples", "shorten duration_s or lower output_rate_hz")
         with mujoco_warnings_captured():
             if self.hydraulic:
-                return self._run_hydraulic(drive, rate_hz, progress, pose_rate_hz)
-            return self._run_kinematic(drive, rate_hz, progress, pose_rate_hz)
-
-    def _poses(self, drive: Drive, decim: int, pose_rate_hz):
-        if pose_rate_hz is None:
-            return None
-        from scenarios.core.poses import PoseRecorder
-
-        return PoseRecorder(self.model, drive.t_s, pose_rate_hz, every=decim)
-
-    def _run_kinematic(self, drive: Drive, rate_hz, progress, pose_rate_hz) -> RigRecord:
-        model, idx = self.model, self.index
-        data = self.rest_state(pan_z_m=drive.z_m[0])
-        k0, decim, n_out = output_schedule(drive.t_s, self.dt_s, rate_hz)
-        pan, force = np.empty((n_out, 4)), np.empty((n_out, 4))
-        watch = Watch(drive.t_s, self.dt_s, progress)
-        poses = self._poses(drive, decim, pose_rate_hz)
-        qa, da, tires = idx.pan_qpos, idx.pan_dof, idx.tire_actuator
-        z, vz = drive.z_m, drive.v_mps
-        # The step loop in Python (MuJoCo cannot prescribe joint motion inside a rollout): views
-        # and the warning window hoisted out of it, the cost of a step is mj_step's plus ~2 us.
-        qpos, qvel, act_force, step = data.qpos, data.qvel, data.actuator_force, mujoco.mj_step
-        check, j = watch.check, 0
-        for k in range(drive.t_s.size):
-            qpos[qa] = z[k]
-            qvel[da] = vz[k]
-            if k >= k0 and (k - k0) % decim == 0:
-                pan[j] = z[k]
-                step(model, data)
-                force[j] = act_force[tires]
-                j += 1
-                if poses is not None:
-                    poses(data, k)
-            else:
-                step(model, data)
-            if k % check == check - 1:
-                watch.checked(data, k - check + 1, k)
-        watch.finish(data)
-        if not np.all(np.isfinite(force)):
-            raise SimulationError("the simulation produced non-finite tire forces")
-        return RigRecord(t_s=drive.t_s[k0::decim].copy(), x_ref_m=drive.z_m[k0::decim].copy(), pan_m=pan,
-                         tire_force_N=force, poses=None if poses is None else poses.track())
-
-    def _run_hydraulic(self, drive: Drive, rate_hz, progress, pose_rate_hz) -> RigRecord:
-        model = self.model
-        data = self.rest_state()
-        k0, decim, n_out = output_schedule(drive.t_s, self.dt_s, rate_hz)
-        dim = self.act_index.shape[1]
-        pan, force, states = np.empty((n_out, 4)), np.empty((n_out, 4)), np.empty((n_out, 4, dim))
-
-        def diverged(data_: mujoco.MjData, t: float) -> None:
-            if not np.all(np.isfinite(data_.act)):
-                raise SimulationError(f"the hydraulic states diverged by t = {t:.4f} s of simulated time; "
-                                      "the actuator parameters make the loop unstable")
-
-        watch = Watch(drive.t_s, self.dt_s, progress, extra=diverged)
-        kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
-        state = np.empty(mujoco.mj_stateSize(model, kind))
-        mujoco.mj_getState(model, data, state, kind)
-        q0, a0 = 1, 1 + model.nq + model.nv  # offsets of qpos and act in a FULLPHYSICS state
-        qa, hyd, sensors = self.index.pan_qpos, self.actuators, self.sensors
-        poses = self._poses(drive, decim, pose_rate_hz)
-        scratch = mujoco.MjData(model) if poses is not None else None
-        frames = set(int(k) for k in poses.steps) if poses is not None else set()
-        # Rollouts of ROLLOUT_CHECKS warning windows each; a rollout that warned or diverged is
-        # replayed window by window from its first state to name the window (deterministic).
-        n, chunk = drive.t_s.size, watch.check * ROLLOUT_CHECKS
-        ctrl = np.zeros((chunk, model.nu))
-        with hydraulic_callbacks(model):
-            for k in range(0, n, chunk):
-                kk = min(chunk, n - k)
-                ctrl[:kk, hyd] = drive.z_m[k:k + kk]
-                warm = data.qacc_warmstart.copy()
-                out_state, out_sensor = rollout.rollout(model, data, state, ctrl[:kk], initial_warmstart=warm)
-                if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):
-                    self._replay_windows(watch, data, state, warm, ctrl[:kk], k)
-                # Output samples in this chunk: the pre-step state of step k+i is the chunk's
-                # initial state (i = 0) or the state after step k+i-1; forces are step k+i's.
-                steps = np.arange(k, k + kk)
-                rows = steps[(steps >= k0) & ((steps - k0) % decim == 0)]
-                if rows.size:
-                    i = rows - k
-                    j = (rows - k0) // decim
-                    pre = np.where((i == 0)[:, None], state[None, :], out_state[0, np.maximum(i - 1, 0)])
-                    pan[j] = pre[:, q0 + qa]
-                    states[j] = pre[:, a0 + self.act_index]
-                    force[j] = out_sensor[0, i][:, sensors]
-                    if poses is not None:
-                        for row, k_row in zip(pre, rows):
-                            if int(k_row) in frames:
-                                scratch.qpos[:] = row[q0:q0 + model.nq]
-                                mujoco.mj_kinematics(model, scratch)
-                                poses(scratch, int(k_row))
-                state = out_state[0, -1].copy()
-                watch.checked(data, k, k + kk - 1)
-            watch.finish(data)
-        t_out = drive.t_s[k0::decim].copy()
-        return RigRecord(t_s=t_out, x_ref_m=drive.z_m[k0::decim].copy(), pan_m=pan, tire_force_N=force,
-                         states=states, events=self._events(states, t_out),
-                         poses=None if poses is None else poses.track())
-
-    def _replay_windows(self, watch: Watch, data, state, warm, ctrl, k0: int) -> None:
-        """Replay a rollout that warned or diverged, one warning window at a time from its first
-        ``state``, so that :class:`Watch` names the window where it went wrong (raises)."""
-        data.warning.number[:] = 0
-        w = watch.check
-        for j in range(0, ctrl.shape[0], w):
-            out_state, _ = rollout.rollout(self.model, data, state, ctrl[j:j + w], initial_warmstart=warm)
-            watch.checked(data, k0 + j, k0 + j + ctrl[j:j + w].shape[0] - 1)
-            state, warm = out_state[0, -1].copy(), data.qacc_warmstart.copy()
-
-    def _events(self, states: np.ndarray, t_s: np.ndarray) -> dict:
-        out = {}
-        for name, mask in hydraulic_events(states, self.params).items():
-            mask = np.asarray(mask)
-            per = {}
-            for i, c in enumerate(names.CORNERS):
-                m_c = mask[:, i] if mask.ndim == 2 else mask
-                if np.any(m_c):
-                    per[c] = {"samples": int(np.sum(m_c)), "first_time_s": float(t_s[np.argmax(m_c)])}
-            if per:
-                out[name] = per
-        return out
+                return run_hydraulic(self, drive, rate_hz, progress, pose_rate_hz)
+            return run_kinematic(self, drive, rate_hz, progress, pose_rate_hz)

@@ -76,9 +76,10 @@ def run(
         raise ScenarioError(
             f"output_rate_hz = {scenario.output_rate_hz:g} Hz must divide the simulation rate {fs:g} Hz"
         )
-    drive = rig.road_drive()
-    follow = drive
+    source = rig.road_source()  # made chunk by chunk as the run reads it: never held at the step rate
+    follow = source
     if pan_drive is not None:
+        drive = source.drive()
         follow = pan_drive(drive)
         if follow.t_s.shape != drive.t_s.shape or not np.array_equal(follow.t_s, drive.t_s):
             raise ValueError("pan_drive must return a Drive on the same time axis as its input")
@@ -87,8 +88,12 @@ def run(
         except ValueError as exc:
             raise ScenarioError(f"pan_drive: {exc}") from None
     rec = rig.run(follow, rate_hz=scenario.output_rate_hz, progress=progress, pose_rate_hz=pose_rate_hz)
-    k0, step, _ = output_schedule(drive.t_s, rig.dt_s, scenario.output_rate_hz)
-    signals = {"profile_m": drive.z_m[k0::step].copy(), "pan_m": rec.pan_m, "tire_force_N": rec.tire_force_N}
+    if follow is source:
+        profile = rec.x_ref_m  # the drive at the output samples is the profile
+    else:
+        k0, step, _ = output_schedule(drive, rig.dt_s, scenario.output_rate_hz)
+        profile = drive.z_m[k0::step].copy()
+    signals = {"profile_m": profile, "pan_m": rec.pan_m, "tire_force_N": rec.tire_force_N}
     if rec.states is not None:
         signals.update(spool=rec.state("spool"), p1_Pa=rec.state("p1_MPa"), p2_Pa=rec.state("p2_MPa"))
     info = {
@@ -98,7 +103,7 @@ def run(
         "lead_in_s": scenario.lead_in_s,
         "seed": scenario.seed,
         "wall_time_s": round(time.perf_counter() - wall0, 3),
-        "simulated_steps": int(drive.t_s.size),
+        "simulated_steps": int(source.n_steps),
     }
     for arr in signals.values():
         arr.setflags(write=False)

@@ -57,21 +57,21 @@ def mujoco_warnings_captured():
         mujoco.set_mju_user_warning(previous)
 
 
-def output_schedule(t_s: np.ndarray, dt_s: float, rate_hz: float) -> tuple[int, int, int]:
+def output_schedule(drive, dt_s: float, rate_hz: float) -> tuple[int, int, int]:
     """(k0, decim, n_out): the first step at t >= 0, the steps per output sample, the samples.
 
     Parameters
     ----------
-    t_s : numpy.ndarray, s
-        Times of the steps (a lead-in has t < 0).
+    drive : Drive or RoadDrive
+        Its ``n_steps`` and ``first_step(t)`` (a lead-in has t < 0).
     dt_s : float, s
         Time step.
     rate_hz : float, Hz
         Output rate; must divide ``1 / dt_s``.
     """
     decim = int(round(1.0 / (rate_hz * dt_s)))
-    k0 = int(np.searchsorted(t_s, -0.5 * dt_s))
-    return k0, decim, (t_s.size - 1 - k0) // decim + 1
+    k0 = drive.first_step(-0.5 * dt_s)
+    return k0, decim, (drive.n_steps - 1 - k0) // decim + 1
 
 
 class Watch:
@@ -82,22 +82,24 @@ class Watch:
 
     Parameters
     ----------
-    t_s : numpy.ndarray, s
-        Times of the steps.
+    drive : Drive or RoadDrive
+        The drive being run (its ``n_steps`` and ``time_at(k)``, s).
     dt_s : float, s
     progress : ProgressFn, optional
     extra : callable, optional
         ``extra(data, t_s)`` runs at every check and raises on a bad state.
     """
 
-    def __init__(self, t_s: np.ndarray, dt_s: float, progress: ProgressFn | None = None, extra=None):
-        self.t = t_s
+    def __init__(self, drive, dt_s: float, progress: ProgressFn | None = None, extra=None):
+        self.time_at = drive.time_at
+        self.n = drive.n_steps
         self.dt = dt_s
         self.progress = progress
         self.extra = extra
         self.check = max(1, int(round(CHECK_EVERY_S / dt_s)))
-        self.report = max(self.check, self.t.size // 200)
-        self.total = float(self.t[-1] - self.t[0])
+        self.report = max(self.check, self.n // 200)
+        self.t0 = self.time_at(0)
+        self.total = self.time_at(self.n - 1) - self.t0
 
     def tick(self, data: mujoco.MjData, k: int) -> None:
         """After step ``k`` of a step-by-step loop: checks every :data:`CHECK_EVERY_S`."""
@@ -108,12 +110,12 @@ class Watch:
         """After steps ``k_first`` .. ``k_last`` (one window, e.g. a rollout): raise
         :class:`SimulationError` naming the window's simulated time if MuJoCo warned in it or the
         ``extra`` check fails; report progress when a report step was passed."""
-        t_last = float(self.t[k_last])
-        _check_warnings(data, float(self.t[k_first]), t_last + self.dt)
+        t_last = self.time_at(k_last)
+        _check_warnings(data, self.time_at(k_first), t_last + self.dt)
         if self.extra is not None:
             self.extra(data, t_last)
         if self.progress is not None and k_last // self.report > (k_first - 1) // self.report:
-            self.progress(t_last - float(self.t[0]), self.total)
+            self.progress(t_last - self.t0, self.total)
 
     @staticmethod
     def warned(data: mujoco.MjData) -> bool:
@@ -121,7 +123,7 @@ class Watch:
         return bool(data.warning.number.any())
 
     def finish(self, data: mujoco.MjData) -> None:
-        t = float(self.t[-1])
+        t = self.time_at(self.n - 1)
         _check_warnings(data, t - self.check * self.dt, t + self.dt)
         if self.extra is not None:
             self.extra(data, t)

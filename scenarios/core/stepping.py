@@ -1,0 +1,215 @@
+"""Stepping a :class:`~scenarios.core.rig.Rig` through a drive: the only MuJoCo stepping loops.
+
+* :func:`run_hydraulic`, the rig test: the drive is the actuators' reference x_ref in ``ctrl``;
+  the actuator states live in MuJoCo's activation vector, advanced by the callbacks of
+  :mod:`hydraulics.bridge` (installed for the run only). Steps in C with ``mujoco.rollout``,
+  :data:`ROLLOUT_CHECKS` warning windows per call (the constraint warm start carried from call to
+  call: bit-identical to a loop of ``mj_step``); a call that warned or diverged is replayed window
+  by window from its first state so that the error names its 10 ms of simulated time.
+* :func:`run_kinematic`, the road test: the pans follow the drive exactly (positions and
+  velocities set before every step; MuJoCo cannot prescribe joint motion inside a rollout).
+
+Both read the drive :data:`~scenarios.core.drive.CHUNK_STEPS` steps at a time (``drive.chunk``),
+so a road drive made on demand (:class:`~scenarios.core.road_drive.RoadDrive`) is never held at
+the step rate: memory grows with the output samples only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from hydraulics.bridge import hydraulic_callbacks
+from hydraulics.events import events as hydraulic_events
+from hydraulics.params import STATE_NAMES
+from mjcf import names
+from scenarios.core.drive import CHUNK_STEPS
+from scenarios.core.watch import SimulationError, Watch, output_schedule
+
+__all__ = ["RigRecord", "run_hydraulic", "run_kinematic", "ROLLOUT_CHECKS"]
+
+MPA = 1e6  # Pa per MPa: the pressure states are in MPa (see hydraulics.params.STATE_NAMES)
+#: Warning windows (scenarios.core.watch.CHECK_EVERY_S) per rollout call of a hydraulic run:
+#: 0.1 s at the 1e-4 s step, so the calls' Python overhead is ~1 % of the stepping.
+ROLLOUT_CHECKS = 10
+
+
+@dataclass(frozen=True)
+class RigRecord:
+    """What a run of the rig records at the output rate, from the first step at t >= 0.
+
+    Attributes
+    ----------
+    t_s : numpy.ndarray, s, (n,)
+    x_ref_m : numpy.ndarray, m, (n, 4)
+        The drive at the recorded instants (road mode: the pan motion itself).
+    pan_m : numpy.ndarray, m, (n, 4)
+        Pan displacement x_a (the state before the step that applies ``x_ref_m``).
+    tire_force_N : numpy.ndarray, N, (n, 4)
+        Tire force on each pan, compression positive.
+    states : numpy.ndarray or None, (n, 4, 5)
+        Hydraulic activation states in :data:`hydraulics.params.STATE_NAMES` order (rig only).
+    events : Mapping
+        ``{event: {corner: {"samples": int, "first_time_s": float (s)}}}`` for the events that
+        occurred (spool saturation, cavitation, over-pressure; rig only).
+    poses : scenarios.core.poses.PoseTrack or None
+        Body poses at video rate when asked for.
+    """
+
+    t_s: np.ndarray
+    x_ref_m: np.ndarray
+    pan_m: np.ndarray
+    tire_force_N: np.ndarray
+    states: np.ndarray | None = None
+    events: Mapping = field(default_factory=dict)
+    poses: object = None
+
+    def state(self, name: str) -> np.ndarray:
+        """One hydraulic state per corner, (n, 4), in SI (pressures in Pa, spool normalised)."""
+        if self.states is None:
+            raise ValueError("a road-mode record has no hydraulic states")
+        x = self.states[:, :, list(STATE_NAMES).index(name)]
+        return x * MPA if name.endswith("_MPa") else x
+
+
+def _pose_recorder(model, drive, decim: int, pose_rate_hz):
+    if pose_rate_hz is None:
+        return None
+    from scenarios.core.poses import PoseRecorder
+
+    return PoseRecorder(model, drive.times(0, drive.n_steps), pose_rate_hz, every=decim)
+
+
+def _output_rows(k: int, kk: int, k0: int, decim: int) -> tuple[np.ndarray, np.ndarray]:
+    """(i, j): the steps k + i of a chunk of ``kk`` that are output samples, and their rows."""
+    steps = np.arange(k, k + kk)
+    rows = steps[(steps >= k0) & ((steps - k0) % decim == 0)]
+    return rows - k, (rows - k0) // decim
+
+
+def run_kinematic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigRecord:
+    """The road test of ``rig`` (``hydraulic=False``): the pans follow ``drive`` exactly."""
+    model, idx = rig.model, rig.index
+    data = rig.rest_state(pan_z_m=drive.chunk(0, 1)[0][0])
+    k0, decim, n_out = output_schedule(drive, rig.dt_s, rate_hz)
+    t_out, x_ref, pan, force = np.empty(n_out), np.empty((n_out, 4)), np.empty((n_out, 4)), np.empty((n_out, 4))
+    watch = Watch(drive, rig.dt_s, progress)
+    poses = _pose_recorder(model, drive, decim, pose_rate_hz)
+    qa, da, tires = idx.pan_qpos, idx.pan_dof, idx.tire_actuator
+    # Views and the warning window hoisted out of the loop: a step costs mj_step's plus ~2 us.
+    qpos, qvel, act_force, step = data.qpos, data.qvel, data.actuator_force, mujoco.mj_step
+    check, n = watch.check, drive.n_steps
+    for k in range(0, n, CHUNK_STEPS):
+        kk = min(CHUNK_STEPS, n - k)
+        z, vz = drive.chunk(k, k + kk)
+        out_i, out_j = _output_rows(k, kk, k0, decim)
+        if out_i.size:
+            t_out[out_j] = drive.times(k, k + kk)[out_i]
+            x_ref[out_j] = z[out_i]
+            pan[out_j] = z[out_i]
+        record = np.zeros(kk, dtype=bool)
+        record[out_i] = True
+        j = int(out_j[0]) if out_j.size else 0
+        for i in range(kk):
+            qpos[qa] = z[i]
+            qvel[da] = vz[i]
+            step(model, data)
+            if record[i]:
+                force[j] = act_force[tires]
+                j += 1
+                if poses is not None:
+                    poses(data, k + i)
+            if (k + i) % check == check - 1:
+                watch.checked(data, k + i - check + 1, k + i)
+    watch.finish(data)
+    if not np.all(np.isfinite(force)):
+        raise SimulationError("the simulation produced non-finite tire forces")
+    return RigRecord(t_s=t_out, x_ref_m=x_ref, pan_m=pan, tire_force_N=force,
+                     poses=None if poses is None else poses.track())
+
+
+def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigRecord:
+    """The rig test of ``rig`` (``hydraulic=True``): ``drive`` is the actuators' reference x_ref."""
+    model = rig.model
+    data = rig.rest_state()
+    k0, decim, n_out = output_schedule(drive, rig.dt_s, rate_hz)
+    dim = rig.act_index.shape[1]
+    t_out, x_ref = np.empty(n_out), np.empty((n_out, 4))
+    pan, force, states = np.empty((n_out, 4)), np.empty((n_out, 4)), np.empty((n_out, 4, dim))
+
+    def diverged(data_: mujoco.MjData, t: float) -> None:
+        if not np.all(np.isfinite(data_.act)):
+            raise SimulationError(f"the hydraulic states diverged by t = {t:.4f} s of simulated time; "
+                                  "the actuator parameters make the loop unstable")
+
+    watch = Watch(drive, rig.dt_s, progress, extra=diverged)
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    q0, a0 = 1, 1 + model.nq + model.nv  # offsets of qpos and act in a FULLPHYSICS state
+    qa, hyd, sensors = rig.index.pan_qpos, rig.actuators, rig.sensors
+    poses = _pose_recorder(model, drive, decim, pose_rate_hz)
+    scratch = mujoco.MjData(model) if poses is not None else None
+    frames = set(int(k) for k in poses.steps) if poses is not None else set()
+    n, chunk = drive.n_steps, watch.check * ROLLOUT_CHECKS
+    ctrl = np.zeros((chunk, model.nu))
+    with hydraulic_callbacks(model):
+        for k in range(0, n, chunk):
+            kk = min(chunk, n - k)
+            z = drive.chunk(k, k + kk)[0]  # x_ref; the velocity is not needed
+            ctrl[:kk, hyd] = z
+            warm = data.qacc_warmstart.copy()
+            out_state, out_sensor = rollout.rollout(model, data, state, ctrl[:kk], initial_warmstart=warm)
+            if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):
+                _replay_windows(model, watch, data, state, warm, ctrl[:kk], k)
+            # Output samples in this chunk: the pre-step state of step k+i is the chunk's
+            # initial state (i = 0) or the state after step k+i-1; forces are step k+i's.
+            i, j = _output_rows(k, kk, k0, decim)
+            if i.size:
+                pre = np.where((i == 0)[:, None], state[None, :], out_state[0, np.maximum(i - 1, 0)])
+                t_out[j] = drive.times(k, k + kk)[i]
+                x_ref[j] = z[i]
+                pan[j] = pre[:, q0 + qa]
+                states[j] = pre[:, a0 + rig.act_index]
+                force[j] = out_sensor[0, i][:, sensors]
+                if poses is not None:
+                    for row, k_row in zip(pre, i + k):
+                        if int(k_row) in frames:
+                            scratch.qpos[:] = row[q0:q0 + model.nq]
+                            mujoco.mj_kinematics(model, scratch)
+                            poses(scratch, int(k_row))
+            state = out_state[0, -1].copy()
+            watch.checked(data, k, k + kk - 1)
+        watch.finish(data)
+    return RigRecord(t_s=t_out, x_ref_m=x_ref, pan_m=pan, tire_force_N=force,
+                     states=states, events=_events(rig.params, states, t_out),
+                     poses=None if poses is None else poses.track())
+
+
+def _replay_windows(model, watch: Watch, data, state, warm, ctrl, k0: int) -> None:
+    """Replay a rollout that warned or diverged, one warning window at a time from its first
+    ``state``, so that :class:`Watch` names the window where it went wrong (raises)."""
+    data.warning.number[:] = 0
+    w = watch.check
+    for j in range(0, ctrl.shape[0], w):
+        out_state, _ = rollout.rollout(model, data, state, ctrl[j:j + w], initial_warmstart=warm)
+        watch.checked(data, k0 + j, k0 + j + ctrl[j:j + w].shape[0] - 1)
+        state, warm = out_state[0, -1].copy(), data.qacc_warmstart.copy()
+
+
+def _events(params, states: np.ndarray, t_s: np.ndarray) -> dict:
+    out = {}
+    for name, mask in hydraulic_events(states, params).items():
+        mask = np.asarray(mask)
+        per = {}
+        for i, c in enumerate(names.CORNERS):
+            m_c = mask[:, i] if mask.ndim == 2 else mask
+            if np.any(m_c):
+                per[c] = {"samples": int(np.sum(m_c)), "first_time_s": float(t_s[np.argmax(m_c)])}
+        if per:
+            out[name] = per
+    return out
