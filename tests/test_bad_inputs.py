@@ -120,6 +120,9 @@ GRIDS = {
     + "[axes]\nseed = [1, 2]\n",
     "sweep_unknown_key": GRID_HEAD.replace('name = "g"\n[base]', 'name = "g"\nworkers = 4\n[base]', 1)
     + "[axes]\nseed = [1, 2]\n",
+    # shorter than the band limit's own transients plus MIN_SCORED_S (scoring.shortest_scorable_s)
+    "duration_unscorable": GRID_HEAD.replace("duration_s = 5.0", "duration_s = 0.0001") + "[axes]\nseed = [1, 2]\n",
+    "axis_duration_unscorable": GRID_HEAD + "[axes]\nduration_s = [5.0, 0.3]\n",
 }
 
 #: Actuator files (``rigsim correct --actuator``), each bad in one way.
@@ -375,6 +378,9 @@ for _v in ("0", "-1", "x", "2.5"):
     _add("sweep", "bad number", f"jobs_{_v}", "sweep", f"{S}/grid.toml", "--out", O, "--jobs", _v)
 _add("sweep", "options", "workers_and_scheduler", "sweep", f"{S}/grid.toml", "--out", O, "--jobs", "2",
      "--scheduler", "tcp://127.0.0.1:1")
+_add("sweep", "bad path", "out_empty", "sweep", f"{S}/grid.toml", "--out", "")
+_add("sweep", "bad path", "out_is_a_file", "sweep", f"{S}/grid.toml", "--out", f"{S}/file.txt")
+_add("sweep", "bad path", "out_under_a_file", "sweep", f"{S}/grid.toml", "--out", f"{S}/file.txt/o")
 
 # top level
 _add("rigsim", "options", "no_command")

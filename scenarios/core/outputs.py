@@ -23,7 +23,7 @@ import sys
 from correction.atomic import host_tag, pid_running
 from scenarios.core.config import ScenarioError
 
-__all__ = ["Staging", "check_output_file", "remove_stale_staging", "staged_output"]
+__all__ = ["Staging", "check_output_file", "check_output_folder", "remove_stale_staging", "staged_output"]
 
 _KINDS = ("partial", "old")  # staging folders, and previous results moved aside by --force
 
@@ -127,7 +127,16 @@ def _writable_ancestor(path: pathlib.Path, option: str, text: str) -> pathlib.Pa
     return above
 
 
-def _check_target(target, force: bool, option: str) -> pathlib.Path:
+def check_output_folder(target, option: str = "--out") -> pathlib.Path:
+    """Refuse, before any work, an output folder that cannot be one: an empty path, the root, a
+    file in its place, a file among its parents, a parent folder without write permission. An
+    existing folder is accepted (``rigsim sweep`` resumes into it). Returns the absolute path.
+
+    Raises
+    ------
+    ScenarioError
+        One sentence naming ``option`` and the fix.
+    """
     text = os.fspath(target)
     if not text.strip():
         raise ScenarioError(f"{option} is empty; name the output folder")
@@ -136,7 +145,17 @@ def _check_target(target, force: bool, option: str) -> pathlib.Path:
         raise ScenarioError(f"{option} {text} is the root folder; name an output folder")
     if path.exists() and not path.is_dir():
         raise ScenarioError(f"{option} {text} exists and is not a folder; name a new folder")
-    _writable_ancestor(path, option, text)
+    above = _writable_ancestor(path, option, text)
+    if not path.is_dir() and not os.access(above, os.W_OK | os.X_OK):
+        raise ScenarioError(f"{option} {text} cannot be created: no permission to write in {above}")
+    if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):
+        raise ScenarioError(f"{option} {text} cannot be written: no permission to write in it")
+    return path
+
+
+def _check_target(target, force: bool, option: str) -> pathlib.Path:
+    path = check_output_folder(target, option)
+    text = os.fspath(target)
     if path.is_dir() and not force:
         try:
             n = _count_files(path)

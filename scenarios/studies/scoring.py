@@ -46,8 +46,8 @@ from hydraulics.linearization import eq4_parameters
 from hydraulics.params import GRAVITY_M_S2
 from scenarios.core.config import ScenarioError
 
-__all__ = ["NOISE_N", "MIN_SCORED_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
-           "PairScore", "score_pair", "SETTLING_TOLERANCE", "measured_force"]
+__all__ = ["NOISE_N", "MIN_SCORED_S", "MIN_DURATION_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
+           "PairScore", "score_pair", "SETTLING_TOLERANCE", "measured_force", "shortest_scorable_s"]
 
 #: Default rms of the white measurement noise added to the rig's wheel forces, N. A strain-gauge
 #: load cell rated for the 156 kN actuator force resolves ~0.05 % of its range (~80 N);
@@ -56,6 +56,10 @@ NOISE_N = 100.0
 
 #: Fewer settled seconds than this cannot give a meaningful DLC, s.
 MIN_SCORED_S = 0.25
+
+#: The shortest scenario a study scores (``rigsim paper --duration-s``, a sweep's cases), s: the
+#: correction's zero-phase start-up and end transients alone take ~4 s of the record.
+MIN_DURATION_S = 10.0
 
 #: Relative tolerance of the filters' transients: samples where a filter's start-up (and, zero-phase,
 #: end) transient still exceeds this fraction of a step are not scored (the correction's default).
@@ -207,6 +211,18 @@ class PairScore:
                 "methods": {k: {"description": ms.method.description, "scored_s": ms.scored_s,
                                 "actuators": [{"num": n.tolist(), "den": d.tolist()} for n, d in ms.actuators]}
                             for k, ms in self.methods.items()}}
+
+
+def shortest_scorable_s(rate_hz: float, method: Method) -> float:
+    """A record shorter than this cannot be scored by ``method`` whatever its T_a, s: the band
+    limit's own transients (:func:`correction.filters.reference_filter` at
+    :data:`SETTLING_TOLERANCE`, start and end) plus :data:`MIN_SCORED_S`. A necessary condition,
+    checked before any run (the correction's transients, known once T_a is, come on top)."""
+    from correction.filters import reference_filter
+
+    head, tail = reference_filter(rate_hz, method.lowpass,
+                                  settling_tolerance=SETTLING_TOLERANCE).transient_samples(method.mode)
+    return (head + tail) / float(rate_hz) + MIN_SCORED_S
 
 
 def measured_force(rig, noise_N: float, seed: int) -> np.ndarray:

@@ -34,9 +34,11 @@ def _check(args) -> None:
     d = args.duration_s
     if d is not None and not (math.isfinite(d) and 0 < d <= 3600):
         raise ScenarioError(f"--duration-s must be in (0, 3600] s, got {d:g}")
-    if d is not None and d < 10:
+    from scenarios.studies.scoring import MIN_DURATION_S
+
+    if d is not None and d < MIN_DURATION_S:
         raise ScenarioError(f"--duration-s {d:g} s is too short: the correction's start-up transient alone "
-                            "lasts ~4 s; use at least 10 s")
+                            f"lasts ~4 s; use at least {MIN_DURATION_S:g} s")
     try:
         worker_count(args.jobs)
     except ValueError:

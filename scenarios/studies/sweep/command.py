@@ -43,6 +43,9 @@ def cmd_sweep(args) -> int:
         worker_count(args.workers)
     except ValueError:
         raise ScenarioError(f"--jobs must be a whole number >= 1, got {args.workers}") from None
+    from scenarios.core.outputs import check_output_folder
+
+    check_output_folder(args.out)  # an existing folder is resumed into; anything else is refused now
     grid = load_grid(args.grid)  # every case validated before anything starts
     out = pathlib.Path(args.out)
     quiet = getattr(args, "quiet", False)

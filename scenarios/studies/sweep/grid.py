@@ -56,6 +56,7 @@ from typing import Any
 from correction.tomlfile import check_keys, read_toml
 from scenarios.core.config import RoadConfig, Scenario, ScenarioError, parse_scenario
 from scenarios.studies.sweep.settings import SETTING_KEYS, EvalSettings, parse_settings
+from scenarios.studies.scoring import MIN_SCORED_S, shortest_scorable_s
 
 __all__ = ["Case", "SweepGrid", "EvalSettings", "axis_keys", "load_grid", "parse_grid", "format_value",
            "GRID_FORMAT", "MAX_CASES"]
@@ -377,6 +378,11 @@ def parse_grid(doc: Mapping, *, source: pathlib.Path | None = None) -> SweepGrid
                                     "make their values differ")
             ids[cid] = values
             case_doc, scenario = _validate(base, values, base_source, cid, where)
+            shortest = shortest_scorable_s(scenario.output_rate_hz, settings.method)
+            if scenario.duration_s < shortest:
+                raise ScenarioError(f"{where}case {cid}: duration_s = {scenario.duration_s:g} s is too short to "
+                                    f"score (the band limit's transients alone take {shortest - MIN_SCORED_S:.2g} s); "
+                                    f"give well over {shortest:.2g} s")
             cases.append(Case(case_id=cid, values=MappingProxyType(values), doc=MappingProxyType(case_doc),
                               source=base_source, scenario=scenario,
                               fingerprint=_fingerprint(case_doc, base_source, settings)))
