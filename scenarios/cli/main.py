@@ -82,9 +82,10 @@ def _progress_bar(label: str, quiet: bool):
 def _cmd_run(args) -> int:
     from scenarios.core.config import ScenarioError, load_scenario
     from scenarios.core.outputs import check_output_file, staged_output
-    from scenarios.core.results import write_run
+    from scenarios.core.results import check_timeseries_format, write_run
     from scenarios.core.run import run
 
+    check_timeseries_format(args.format)
     scenario = load_scenario(args.scenario)
     if args.duration_s is not None:
         import dataclasses
@@ -109,7 +110,7 @@ def _cmd_run(args) -> int:
     with staged_output(args.out, force=args.force) as stage:
         with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
             result = run(scenario, args.mode, progress=progress, pose_rate_hz=pose_rate)
-        paths = {k: stage.final(p) for k, p in write_run(result, stage.path).items()}
+        paths = {k: stage.final(p) for k, p in write_run(result, stage.path, fmt=args.format).items()}
         if args.rrd is not None:
             from scenarios.review.recording import write_recording
 
@@ -158,8 +159,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("scenario", help="scenario TOML file")
     r.add_argument("--mode", choices=("road", "rig"), default="road",
                    help="road: pans follow the profile exactly; rig: hydraulic actuators drive the pans")
-    r.add_argument("--out", "-o", required=True, help="output folder (result.json, timeseries.csv)")
+    r.add_argument("--out", "-o", required=True, help="output folder (result.json, timeseries.csv or --format's)")
     r.add_argument("--duration-s", type=float, default=None, help="override the scenario's duration, s")
+    r.add_argument("--format", default="csv", choices=("csv", "mf4", "tdms", "rsp"),
+                   help="time series file: csv (default), mf4 (ASAM MDF4, float64), tdms (NI) or rsp (MTS RPC III, "
+                        "int16); mf4 and tdms need pip install -e \".[lab]\"")
     r.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd) of the run")
     r.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     r.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")

@@ -17,7 +17,8 @@ from correction.dlc import force_statistics
 from scenarios.core.files import atomic_write_bytes, atomic_write_text, to_json
 from mjcf.names import CORNERS
 
-__all__ = ["RunResult", "write_run", "csv_parts", "CSV_BLOCK_ROWS", "SIGNALS", "TIMING_KEYS"]
+__all__ = ["RunResult", "write_run", "csv_parts", "CSV_BLOCK_ROWS", "SIGNALS", "TIMING_KEYS", "TIMESERIES_FORMATS",
+           "check_timeseries_format"]
 
 #: Units and descriptions of the per-wheel signals a run may carry.
 SIGNALS: dict[str, tuple[str, str]] = {
@@ -143,13 +144,64 @@ def csv_parts(result: RunResult):
         yield buf.getvalue().encode("ascii")
 
 
+#: ``timeseries.<ext>`` formats of a run (``rigsim run --format``): name -> extension. CSV for
+#: people who open files in a spreadsheet; the binary ones are written by the toolkit's one writer
+#: of measured data (:func:`correction.measured.write_channels`), in the formats test labs already
+#: read: ASAM MDF4 (``mf4``: float64, the standard of vehicle DAQ, read by asammdf, MATLAB's
+#: mdfRead, CANape, DIAdem), NI TDMS (``tdms``) and MTS RPC III (``rsp``: int16 per channel, as
+#: the rig controllers store it: quantized to 1/32767 of each channel's range). MDF4 and TDMS
+#: need the ``lab`` extra.
+TIMESERIES_FORMATS = {"csv": ".csv", "mf4": ".mf4", "tdms": ".tdms", "rsp": ".rsp"}
+
+
+def check_timeseries_format(fmt: str) -> None:
+    """Refuse, before any run, a format that is not known or whose library is not installed."""
+    from scenarios.core.config import ScenarioError
+
+    if fmt not in TIMESERIES_FORMATS:
+        raise ScenarioError(f"--format must be one of {', '.join(TIMESERIES_FORMATS)}, got {fmt!r}")
+    if fmt in ("mf4", "tdms"):
+        from correction import measured_lab
+
+        try:
+            measured_lab.need("asammdf" if fmt == "mf4" else "nptdms", TIMESERIES_FORMATS[fmt], "writing")
+        except ValueError as exc:
+            raise ScenarioError(f"--format {fmt}: {exc}") from None
+
+
+@dataclass(frozen=True)
+class _Channels:
+    """A run's time series as the measured-data writer takes it (names as in the CSV header)."""
+
+    time_s: np.ndarray
+    data: dict
+    units: dict
+    metadata: dict
+
+
+def _channels(result: RunResult) -> _Channels:
+    names = result.column_names()[1:]
+    data, units = {}, {}
+    cols = iter(names)
+    for key, arr in result.signals.items():
+        unit = key.rsplit("_", 1)[-1] if "_" in key else ""
+        for i in range(len(result.corners)):
+            name = next(cols)
+            data[name] = np.ascontiguousarray(arr[:, i])
+            units[name] = unit if unit in ("m", "N", "Pa") else ""
+    meta = {"source": f"rigsim run {result.scenario_name} ({result.mode} mode)"}
+    return _Channels(time_s=np.asarray(result.t_s), data=data, units=units, metadata=meta)
+
+
 #: Run facts of :attr:`RunResult.info` that differ from run to run of the same scenario and seed:
 #: written to ``timings.json``, never to ``result.json``.
 TIMING_KEYS = ("wall_time_s",)
 
 
-def write_run(result: RunResult, out_dir) -> dict[str, pathlib.Path]:
-    """Write ``result.json``, ``timeseries.csv`` and ``timings.json`` into ``out_dir``, each atomically.
+def write_run(result: RunResult, out_dir, *, fmt: str = "csv") -> dict[str, pathlib.Path]:
+    """Write ``result.json``, ``timeseries.<ext>`` and ``timings.json`` into ``out_dir``, each atomically.
+
+    ``fmt`` is one of :data:`TIMESERIES_FORMATS` (default CSV).
 
     ``result.json`` and ``timeseries.csv`` depend only on the scenario and its seed: two runs give
     byte-identical files. The wall time (s) goes to ``timings.json`` beside them. All files are
@@ -164,12 +216,18 @@ def write_run(result: RunResult, out_dir) -> dict[str, pathlib.Path]:
     info = dict(summary["info"])
     timings = {k: info.pop(k) for k in TIMING_KEYS if k in info}
     summary["info"] = info
-    summary["timeseries"] = {"file": "timeseries.csv", "columns": names, "rate_hz": summary["rate_hz"]}
+    series = "timeseries" + TIMESERIES_FORMATS[fmt]
+    summary["timeseries"] = {"file": series, "format": fmt, "columns": names, "rate_hz": summary["rate_hz"]}
     summary["timings"] = {"file": "timings.json"}
     js = to_json(summary)
     tj = to_json(timings)
-    paths = {"timeseries": out / "timeseries.csv", "result": out / "result.json", "timings": out / "timings.json"}
-    atomic_write_bytes(paths["timeseries"], csv_parts(result))
+    paths = {"timeseries": out / series, "result": out / "result.json", "timings": out / "timings.json"}
+    if fmt == "csv":
+        atomic_write_bytes(paths["timeseries"], csv_parts(result))
+    else:
+        from correction.measured import write_channels
+
+        write_channels(paths["timeseries"], _channels(result), overwrite=True)
     atomic_write_text(paths["result"], js)
     atomic_write_text(paths["timings"], tj)
     return paths
