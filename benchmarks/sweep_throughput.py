@@ -25,8 +25,10 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from scenarios.studies.sweep import command as sweep  # noqa: E402
+from scenarios.core.pool import local_executor  # noqa: E402
+from scenarios.studies.sweep.executors import dask_executor  # noqa: E402
 from scenarios.studies.sweep.grid import parse_grid  # noqa: E402
+from scenarios.studies.sweep.run import run_sweep  # noqa: E402
 
 TARGET_SPEEDUP = 1.9
 
@@ -44,14 +46,14 @@ def _grid(cases: int, duration_s: float, source: pathlib.Path):
 @contextlib.contextmanager
 def _executor(kind: str, workers: int):
     if kind == "local":
-        with sweep.local_executor(workers) as ex:
+        with local_executor(workers) as ex:
             yield ex
         return
     import distributed
 
     with distributed.LocalCluster(n_workers=workers, processes=True, threads_per_worker=1,
                                   dashboard_address=None, silence_logs=50) as cluster:
-        with sweep.dask_executor(cluster.scheduler_address) as ex:
+        with dask_executor(cluster.scheduler_address) as ex:
             yield ex
 
 
@@ -85,14 +87,14 @@ def machine_speedup(n: int = 4_000_000) -> float:
 def measure(kind: str, workers: int, cases: int, duration_s: float, tmp: pathlib.Path) -> dict:
     """Warm ``workers`` workers, then run ``cases`` cases; returns wall time and cases per minute."""
     with _executor(kind, workers) as ex:
-        warm = _grid(workers, 0.5, tmp / "warm.toml")
+        warm = _grid(workers, 1.0, tmp / "warm.toml")
         warm = type(warm)(name=warm.name, source=warm.source, axes=warm.axes, cases=warm.cases,
                           settings=type(warm.settings)(actuator="eq4", lowpass="paper", correction_mode="causal",
                                                         settling_tolerance=0.2))  # warm-up: imports, compilation
-        sweep.run_sweep(warm, tmp / f"warm-{kind}-{workers}", ex, progress=False, plot=False)
+        run_sweep(warm, tmp / f"warm-{kind}-{workers}", ex, progress=False, plot=False)
         grid = _grid(cases, duration_s, tmp / "grid.toml")
         t0 = time.perf_counter()
-        outcome = sweep.run_sweep(grid, tmp / f"run-{kind}-{workers}", ex, progress=False, plot=False)
+        outcome = run_sweep(grid, tmp / f"run-{kind}-{workers}", ex, progress=False, plot=False)
         wall = time.perf_counter() - t0
     if outcome.failed:
         raise SystemExit(f"{outcome.failed} benchmark cases failed; see {tmp}")

@@ -17,7 +17,33 @@ import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
 
-__all__ = ["worker_count", "local_executor", "stop_process_pool", "run_jobs"]
+__all__ = ["worker_count", "local_executor", "stop_process_pool", "run_jobs", "keep_heap_memory"]
+
+#: glibc's mallopt parameters (malloc.h): M_TRIM_THRESHOLD, M_MMAP_THRESHOLD.
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+
+
+def keep_heap_memory(mmap_threshold_bytes: int = 64 * 2**20) -> bool:
+    """Let this process's C heap keep and reuse the memory of large arrays (glibc only).
+
+    A run allocates arrays of a few MB per chunk, thousands of times. glibc serves blocks above
+    its mmap threshold with fresh mmap'ed pages (page faults on every touch) and raises that
+    threshold by itself as large blocks are freed, unless a malloc parameter was set: Dask's
+    nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which freezes the threshold at
+    128 KiB, and a sweep case then ran 23 % slower (4.9 against 4.0 s, measured). Setting the
+    thresholds explicitly (``mallopt``) restores the reuse; the memory stays with the process
+    for its next case. Returns whether it was applied (False off glibc).
+    """
+    import ctypes
+    import ctypes.util
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        mallopt = libc.mallopt
+    except (OSError, AttributeError):
+        return False
+    ok = mallopt(_M_MMAP_THRESHOLD, int(mmap_threshold_bytes)) == 1
+    return bool(mallopt(_M_TRIM_THRESHOLD, 2 * int(mmap_threshold_bytes)) == 1 and ok)
 
 
 def worker_count(requested: int | None, jobs: int | None = None) -> int:
@@ -59,10 +85,12 @@ def _die_with_parent(parent_pid: int) -> None:
 def _init_worker(parent_pid: int) -> None:
     """Pool-worker initializer: Ctrl-C is handled by the parent, which stops the workers; SIGTERM
     ends the worker (the default, also when the parent set its own handler before forking); the
-    worker dies with its parent (:func:`_die_with_parent`)."""
+    worker dies with its parent (:func:`_die_with_parent`); its heap keeps large blocks for reuse
+    (:func:`keep_heap_memory`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _die_with_parent(parent_pid)
+    keep_heap_memory()
 
 
 def stop_process_pool(pool: cf.ProcessPoolExecutor) -> None:

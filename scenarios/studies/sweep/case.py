@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.core.pool import keep_heap_memory
 from scenarios.studies.sweep.settings import EvalSettings
 
 __all__ = ["CaseResult", "evaluate_case", "evaluate_payload", "METRIC_COLUMNS", "EVENT_NAMES"]
@@ -214,6 +215,7 @@ def evaluate_payload(case_id: str, doc: dict, source: str | None, settings: dict
         BaseException other than KeyboardInterrupt and SystemExit), so a resumed sweep runs it
         again. ``wall_time_s`` is the worker's wall time; it is kept out of the case file.
     """
+    keep_heap_memory()  # a Dask worker's MALLOC_TRIM_THRESHOLD_ would cost ~20 % (scenarios.core.pool)
     from scenarios.core.config import ScenarioError, parse_scenario
     from scenarios.core.watch import SimulationError
 
