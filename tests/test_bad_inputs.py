@@ -434,7 +434,7 @@ def no_work(workdir, monkeypatch):
         return fail
 
     monkeypatch.setattr(Rig, "run", work("a simulation (Rig.run)"))
-    monkeypatch.setattr(scenarios.studies.paper.compute, "run_jobs", work("the paper's job pool"))
+    monkeypatch.setattr(scenarios.studies.paper.compute, "local_executor", work("the paper's job pool"))
     monkeypatch.setattr(scenarios.studies.validate.compute, "validate", work("the validation"))
     monkeypatch.setattr(scenarios.core.pool, "local_executor", work("a process pool"))
     monkeypatch.setattr(scenarios.studies.sweep.run, "run_sweep", work("the sweep"))

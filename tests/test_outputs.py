@@ -387,7 +387,7 @@ def _fake_paper(monkeypatch, fail):
         return _FakePaper()
 
     monkeypatch.setattr(compute, "run_paper", run_paper)
-    monkeypatch.setattr(report, "render_report", lambda r: {"report.md": b"# report", "fig.png": b"png"})
+    monkeypatch.setattr(report, "render_report", lambda r, **kw: {"report.md": b"# report", "fig.png": b"png"})
     return [], ["paper.json", "report.md", "fig.png"]
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import pathlib
 import sys
@@ -58,8 +59,7 @@ def cmd_paper(args) -> int:
     from scenarios.core.files import to_json
     from scenarios.core.outputs import staged_output
     from scenarios.studies.paper.compute import run_paper
-    from scenarios.studies.paper.report import render_report, write_files
-    from scenarios.core.results import write_run
+    from scenarios.studies.paper.report import render_report, write_case, write_files
     from scenarios.studies.scoring import NOISE_N
 
     paths = paper_scenarios()
@@ -81,14 +81,14 @@ def cmd_paper(args) -> int:
 
     noise_N = NOISE_N if args.noise_N is None else args.noise_N
     with staged_output(args.out, force=getattr(args, "force", False)) as stage:
+        # Each case's figures and run files are written by the worker that scores it, while the
+        # other cases still run; the rest once every case is in.
         result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,
-                           pose_rate_hz=pose_rate, on_done=progress)
-        files = render_report(result)
+                           pose_rate_hz=pose_rate, on_done=progress, finish=functools.partial(write_case, out=stage.path))
+        files = render_report(result, case_files=False)
         files["paper.json"] = to_json(result).encode("utf-8")
-        for case in result.cases:
-            for r in (case.road, case.rig):
-                write_run(r, stage.path / r.scenario_name / r.mode)
-        report_files = write_files(stage.path, files)
+        write_files(stage.path, files)
+        n_fig = sum(1 for f in stage.path.glob("*.png"))
         table = result.table()
         if args.rrd:
             from scenarios.review.recording import write_recording
@@ -107,6 +107,5 @@ def cmd_paper(args) -> int:
     print(table)
     print()
     print(result.damage_table())
-    n_fig = sum(1 for f in report_files if f.suffix == ".png")
     print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {n_fig} figures and one folder per case and mode")
     return 0

@@ -9,6 +9,7 @@ and the recording need.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -16,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenarios.core.config import Scenario, load_scenario
-from scenarios.core.pool import run_jobs
+from scenarios.core.pool import local_executor, worker_count
 from scenarios.core.results import RunResult
 from scenarios.core.rig import Rig
 from scenarios.core.run import run
@@ -186,10 +187,27 @@ def _identify_job(path: str, duration_s: float | None = None) -> RigIdentificati
     return identify_rig(scenario)
 
 
+def _case_job(path: str, duration_s: float | None, noise_N: float, road: RunResult, rig: RunResult,
+              ident: RigIdentification, finish: Callable | None) -> PairScore:
+    """Worker: score one case (and ``finish(case)``, e.g. its files), as soon as its runs are in."""
+    scenario = load_scenario(path)
+    if duration_s is not None:
+        scenario = dataclasses.replace(scenario, duration_s=duration_s)
+    score = score_pair(road, rig, Rig(scenario), methods=METHODS, identified=ident.actuators(),
+                       noise_N=noise_N, seed=scenario.seed)
+    if finish is not None:
+        finish(PaperCase(scenario=scenario, road=road, rig=rig, identification=ident, score=score))
+    return score
+
+
 def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float | None = None,
               noise_N: float = NOISE_N, pose_rate_hz: float | None = None,
-              on_done: Callable[[RunResult], None] | None = None) -> PaperResult:
+              on_done: Callable[[RunResult], None] | None = None, finish: Callable | None = None) -> PaperResult:
     """Run the cases of ``paths`` on the road and on the rig, and score each pair.
+
+    The three runs of every case (identification, road, rig) are jobs of one process pool; a
+    case's scoring (and ``finish``) is a job of the same pool, started as soon as that case's
+    runs are in, so it overlaps the other cases' runs.
 
     Parameters
     ----------
@@ -205,6 +223,9 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
         Also record body poses for a recording.
     on_done : callable, optional
         ``on_done(run_result)`` as each run finishes (progress).
+    finish : callable, optional
+        ``finish(case)`` with each :class:`PaperCase`, in the worker that scored it (picklable: a
+        module-level function or a ``functools.partial`` of one; e.g. writing the case's files).
     """
     scenarios = [load_scenario(p) for p in paths]
     if duration_s is not None:
@@ -213,11 +234,27 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
     for p in paths:
         calls += [(_identify_job, (str(p), duration_s))]
         calls += [(_run_job, (str(p), mode, duration_s, pose_rate_hz)) for mode in ("road", "rig")]
-    done = None if on_done is None else (lambda i, r: on_done(r) if isinstance(r, RunResult) else None)
-    results = run_jobs(calls, workers=workers, on_done=done)
-    cases = []
-    for scenario, ident, road, rig in zip(scenarios, results[0::3], results[1::3], results[2::3]):
-        score = score_pair(road, rig, Rig(scenario), methods=METHODS, identified=ident.actuators(),
-                           noise_N=noise_N, seed=scenario.seed)
-        cases.append(PaperCase(scenario=scenario, road=road, rig=rig, identification=ident, score=score))
+    runs: list = [None] * len(calls)
+    scores: list = [None] * len(paths)
+    with local_executor(worker_count(workers, len(calls))) as ex:
+        jobs = {ex.submit(fn, *args): ("run", i) for i, (fn, args) in enumerate(calls)}
+        pending = set(jobs)
+        while pending:
+            done, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for fut in done:
+                kind, i = jobs[fut]
+                if kind == "case":
+                    scores[i] = fut.result()
+                    continue
+                runs[i] = fut.result()
+                if on_done is not None and isinstance(runs[i], RunResult):
+                    on_done(runs[i])
+                c = i // 3
+                if all(r is not None for r in runs[3 * c:3 * c + 3]):
+                    ident, road, rig = runs[3 * c:3 * c + 3]
+                    case = ex.submit(_case_job, str(paths[c]), duration_s, noise_N, road, rig, ident, finish)
+                    jobs[case] = ("case", c)
+                    pending.add(case)
+    cases = [PaperCase(scenario=sc, road=runs[3 * c + 1], rig=runs[3 * c + 2], identification=runs[3 * c],
+                       score=scores[c]) for c, sc in enumerate(scenarios)]
     return PaperResult(cases=tuple(cases), noise_N=float(noise_N))

@@ -9,7 +9,7 @@ import numpy as np
 
 from scenarios.core.files import atomic_write_bytes
 
-__all__ = ["render_report", "write_files"]
+__all__ = ["render_report", "case_figures", "write_case", "write_files"]
 
 _WINDOW_S = 3.0  # s of trace shown in the Figure 8 analogue
 _EXCEEDANCE_POINTS = 500  # points of each exceedance curve (log-spaced ranks), 1
@@ -199,14 +199,34 @@ def _report_md(rows, table: str, figures: list[str], damage_table: str = "") -> 
     return "\n".join(lines)
 
 
-def render_report(result) -> dict[str, bytes]:
-    """The Figure 8 analogues, the Table 2 bars and ``report.md`` of a
-    :class:`scenarios.studies.paper.compute.PaperResult`, rendered in memory: ``{file name: bytes}``."""
+def case_figures(case) -> dict[str, bytes]:
+    """One case's figures, rendered in memory: its Figure 8 analogue and its damage figure."""
+    return {f"figure8_{case.name}.png": _figure8(case.name, case.road, case.score),
+            f"damage_{case.name}.png": _damage_figure(case.name, case)}
+
+
+def write_case(case, out) -> list[pathlib.Path]:
+    """Write one case's figures and its road and rig runs (``out/<scenario>/<mode>/``) into
+    ``out``: what ``rigsim paper`` has each worker do as soon as it has scored the case."""
+    from scenarios.core.results import write_run
+
+    paths = write_files(out, case_figures(case))
+    for r in (case.road, case.rig):
+        paths += list(write_run(r, pathlib.Path(out) / r.scenario_name / r.mode).values())
+    return paths
+
+
+def render_report(result, *, case_files: bool = True) -> dict[str, bytes]:
+    """The Table 2 bars, ``report.md`` and (``case_files``) every case's figures of a
+    :class:`scenarios.studies.paper.compute.PaperResult`, rendered in memory: ``{file name: bytes}``
+    (``case_files=False`` when :func:`write_case` wrote them already)."""
     rows = result.rows()
-    files = {f"figure8_{c.name}.png": _figure8(c.name, c.road, c.score) for c in result.cases}
-    files.update({f"damage_{c.name}.png": _damage_figure(c.name, c) for c in result.cases})
+    files = {}
+    if case_files:
+        for c in result.cases:
+            files.update(case_figures(c))
     files["table2.png"] = _bars(rows)
-    figures = [f for f in files if f.startswith(("figure8_", "damage_"))]
+    figures = [f"{kind}_{c.name}.png" for c in result.cases for kind in ("figure8", "damage")]
     files["report.md"] = _report_md(rows, result.table(), figures, result.damage_table()).encode("utf-8")
     return files
 
