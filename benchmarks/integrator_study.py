@@ -188,7 +188,7 @@ def gen_job(i: int, docs: list, duration_s: float) -> list:
             rig = make_rig(sc, i)
             row["linear"] = linear_check(rig)
             rec = rig.run(drive_for(rig, i), rate_hz=sc.output_rate_hz)
-            finite = all(np.all(np.isfinite(a)) for a in (rec.tire_force_N, rec.pan_m, rec.states))
+            finite = all(np.all(np.isfinite(a)) for a in (rec.tire_force_N, rec.pan_m, *rec.hydraulic.values()))
             row["ok"] = bool(finite)
             row["error"] = None if finite else "non-finite output"
         except Exception as exc:  # SimulationError, or MuJoCo's own error

@@ -141,7 +141,9 @@ def csv_parts(result: RunResult):
     for i in range(0, n, CSV_BLOCK_ROWS):
         buf = io.StringIO()
         np.savetxt(buf, result.rows(i, min(n, i + CSV_BLOCK_ROWS)), delimiter=",", fmt="%.10g")
-        yield buf.getvalue().encode("ascii")
+        text = buf.getvalue()
+        buf.close()  # numpy's writer wraps buf in a reference cycle: free its text now, not at the next GC
+        yield text.encode("ascii")
 
 
 #: ``timeseries.<ext>`` formats of a run (``rigsim run --format``): name -> extension. CSV for

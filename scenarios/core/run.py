@@ -94,8 +94,8 @@ def run(
         k0, step, _ = output_schedule(drive, rig.dt_s, scenario.output_rate_hz)
         profile = drive.z_m[k0::step].copy()
     signals = {"profile_m": profile, "pan_m": rec.pan_m, "tire_force_N": rec.tire_force_N}
-    if rec.states is not None:
-        signals.update(spool=rec.state("spool"), p1_Pa=rec.state("p1_MPa"), p2_Pa=rec.state("p2_MPa"))
+    if rec.hydraulic is not None:
+        signals.update(rec.hydraulic)
     info = {
         "timestep_s": rig.dt_s,
         "speed_kmh": scenario.speed_kmh,

@@ -30,9 +30,12 @@ from mjcf import names
 from scenarios.core.drive import CHUNK_STEPS
 from scenarios.core.watch import SimulationError, Watch, output_schedule
 
-__all__ = ["RigRecord", "run_hydraulic", "run_kinematic", "ROLLOUT_CHECKS"]
+__all__ = ["RigRecord", "run_hydraulic", "run_kinematic", "ROLLOUT_CHECKS", "RECORDED_STATES"]
 
 MPA = 1e6  # Pa per MPa: the pressure states are in MPa (see hydraulics.params.STATE_NAMES)
+#: The actuator states a rig run records: name in the record -> (index in STATE_NAMES, scale to SI).
+RECORDED_STATES = {"spool": (STATE_NAMES.index("spool"), 1.0), "p1_Pa": (STATE_NAMES.index("p1_MPa"), MPA),
+                   "p2_Pa": (STATE_NAMES.index("p2_MPa"), MPA)}
 #: Warning windows (scenarios.core.watch.CHECK_EVERY_S) per rollout call of a hydraulic run:
 #: 0.1 s at the 1e-4 s step, so the calls' Python overhead is ~1 % of the stepping.
 ROLLOUT_CHECKS = 10
@@ -51,8 +54,10 @@ class RigRecord:
         Pan displacement x_a (the state before the step that applies ``x_ref_m``).
     tire_force_N : numpy.ndarray, N, (n, 4)
         Tire force on each pan, compression positive.
-    states : numpy.ndarray or None, (n, 4, 5)
-        Hydraulic activation states in :data:`hydraulics.params.STATE_NAMES` order (rig only).
+    hydraulic : Mapping or None
+        Rig only: the recorded actuator states in SI, each (n, 4): ``spool`` (1, normalised),
+        ``p1_Pa`` and ``p2_Pa`` (chamber pressures, Pa); the other activation states
+        (:data:`hydraulics.params.STATE_NAMES`) are not kept (memory grows with the record).
     events : Mapping
         ``{event: {corner: {"samples": int, "first_time_s": float (s)}}}`` for the events that
         occurred (spool saturation, cavitation, over-pressure; rig only).
@@ -64,16 +69,9 @@ class RigRecord:
     x_ref_m: np.ndarray
     pan_m: np.ndarray
     tire_force_N: np.ndarray
-    states: np.ndarray | None = None
+    hydraulic: Mapping | None = None
     events: Mapping = field(default_factory=dict)
     poses: object = None
-
-    def state(self, name: str) -> np.ndarray:
-        """One hydraulic state per corner, (n, 4), in SI (pressures in Pa, spool normalised)."""
-        if self.states is None:
-            raise ValueError("a road-mode record has no hydraulic states")
-        x = self.states[:, :, list(STATE_NAMES).index(name)]
-        return x * MPA if name.endswith("_MPa") else x
 
 
 def _pose_recorder(model, drive, decim: int, pose_rate_hz):
@@ -137,9 +135,10 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
     model = rig.model
     data = rig.rest_state()
     k0, decim, n_out = output_schedule(drive, rig.dt_s, rate_hz)
-    dim = rig.act_index.shape[1]
     t_out, x_ref = np.empty(n_out), np.empty((n_out, 4))
-    pan, force, states = np.empty((n_out, 4)), np.empty((n_out, 4)), np.empty((n_out, 4, dim))
+    pan, force = np.empty((n_out, 4)), np.empty((n_out, 4))
+    hydraulic = {name: np.empty((n_out, 4)) for name in RECORDED_STATES}
+    events = _EventLog(rig.params)
 
     def diverged(data_: mujoco.MjData, t: float) -> None:
         if not np.all(np.isfinite(data_.act)):
@@ -174,7 +173,10 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
                 t_out[j] = drive.times(k, k + kk)[i]
                 x_ref[j] = z[i]
                 pan[j] = pre[:, q0 + qa]
-                states[j] = pre[:, a0 + rig.act_index]
+                states = pre[:, a0 + rig.act_index]  # (rows, 4, 5) in STATE_NAMES order
+                for name, (col, scale) in RECORDED_STATES.items():
+                    hydraulic[name][j] = states[:, :, col] * scale
+                events.add(states, t_out[j])
                 force[j] = out_sensor[0, i][:, sensors]
                 if poses is not None:
                     for row, k_row in zip(pre, i + k):
@@ -186,7 +188,7 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
             watch.checked(data, k, k + kk - 1)
         watch.finish(data)
     return RigRecord(t_s=t_out, x_ref_m=x_ref, pan_m=pan, tire_force_N=force,
-                     states=states, events=_events(rig.params, states, t_out),
+                     hydraulic=hydraulic, events=events.summary(),
                      poses=None if poses is None else poses.track())
 
 
@@ -201,15 +203,27 @@ def _replay_windows(model, watch: Watch, data, state, warm, ctrl, k0: int) -> No
         state, warm = out_state[0, -1].copy(), data.qacc_warmstart.copy()
 
 
-def _events(params, states: np.ndarray, t_s: np.ndarray) -> dict:
-    out = {}
-    for name, mask in hydraulic_events(states, params).items():
-        mask = np.asarray(mask)
-        per = {}
-        for i, c in enumerate(names.CORNERS):
-            m_c = mask[:, i] if mask.ndim == 2 else mask
-            if np.any(m_c):
-                per[c] = {"samples": int(np.sum(m_c)), "first_time_s": float(t_s[np.argmax(m_c)])}
-        if per:
-            out[name] = per
-    return out
+class _EventLog:
+    """Hydraulic events (:func:`hydraulics.events.events`) counted chunk by chunk: per event and
+    corner the output samples it held on and the first time, s."""
+
+    def __init__(self, params) -> None:
+        self.params, self.log = params, {}
+
+    def add(self, states: np.ndarray, t_s: np.ndarray) -> None:
+        for name, mask in hydraulic_events(states, self.params).items():
+            mask = np.asarray(mask)
+            for i, c in enumerate(names.CORNERS):
+                m_c = mask[:, i] if mask.ndim == 2 else mask
+                if np.any(m_c):
+                    per = self.log.setdefault(name, {})
+                    if c not in per:
+                        per[c] = {"samples": 0, "first_time_s": float(t_s[np.argmax(m_c)])}
+                    per[c]["samples"] += int(np.sum(m_c))
+
+    def summary(self) -> dict:
+        """``{event: {corner: {"samples": int, "first_time_s": float (s)}}}`` in the event
+        function's order, corners in :data:`mjcf.names.CORNERS` order."""
+        order = list(hydraulic_events(np.zeros((1, 4, len(STATE_NAMES))), self.params))
+        return {name: {c: self.log[name][c] for c in names.CORNERS if c in self.log[name]}
+                for name in order if name in self.log}
