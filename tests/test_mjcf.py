@@ -70,7 +70,7 @@ def test_heavier_payload_loads_the_rear_more():
     assert f_heavy[2] - f_light[2] > f_heavy[0] - f_light[0] > 0
 
 
-@pytest.mark.parametrize("corner,k_nominal", [("fl", 0.9e6), ("rl", 1.8e6)])
+@pytest.mark.parametrize("corner,k_nominal", [("fl", 0.9e6), ("fr", 0.9e6), ("rl", 1.8e6), ("rr", 1.8e6)])
 def test_tire_force_linear_in_geometric_deflection_and_zero_after_liftoff(corner, k_nominal):
     """Force against deflection measured between the wheel-centre and pan sites.
 

@@ -218,3 +218,24 @@ def test_hydraulic_events_counted_chunk_by_chunk_are_those_of_the_whole_record()
         if per:
             expected[name] = per
     assert rec.events == expected
+
+
+@pytest.mark.parametrize("corner", CORNERS)
+def test_a_step_on_one_corners_drive_moves_that_pan_and_no_other(corner):
+    """A 5 mm step in one post's x_ref, the other three at zero: that pan follows (its position
+    loop settles within ~0.2 s, validate's Figure 7), the others stay put but for what the truck
+    passes between them (under 10 % of the step). A drive wired to the wrong post fails here by
+    name; the rms bounds of the road tests barely notice a swap of fl and fr."""
+    from scenarios.core.drive import Drive, step_drive
+
+    sc = parse_scenario({**SHORT, "duration_s": 0.6})
+    rig = Rig(sc)
+    step = step_drive(0.6, rig.dt_s, 5e-3, 0.1)
+    i = CORNERS.index(corner)
+    z = np.zeros_like(step.z_m)
+    z[:, i] = step.z_m[:, i]
+    rec = rig.run(Drive(step.t_s, z, np.zeros_like(z)), rate_hz=sc.output_rate_hz)
+    moved = rec.pan_m[-1] - rec.pan_m[0]
+    assert moved[i] == pytest.approx(5e-3, rel=0.2), moved
+    others = np.delete(moved, i)
+    assert np.max(np.abs(others)) < 0.1 * 5e-3, moved
