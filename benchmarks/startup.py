@@ -109,7 +109,7 @@ def main(argv=None) -> dict:
         cold_env = dict(base, RIGSIM_NO_CACHE="1")
         out = pathlib.Path(tmp) / "run"
         run = cli + ["run", str(SCENARIO), "--mode", "rig", "--out", str(out),
-                     "--duration-s", f"{args.duration_s:g}", "--quiet"]
+                     "--duration-s", f"{args.duration_s:g}", "--quiet", "--force"]
         result = {}
         for name, argv, env in (("python", [py, "-c", "pass"], base), ("help", cli + ["--help"], base),
                                 ("correct_help", cli + ["correct", "--help"], base)):
