@@ -235,7 +235,8 @@ def write_actuators_file(path, actuators: Mapping, meta: Mapping | None = None) 
     Raises
     ------
     ActuatorFileError
-        No corner, a corner name that is reserved or empty, coefficients that are not finite.
+        No corner, a corner name that is reserved or empty, coefficients that are not finite, a
+        zero denominator (nothing is written).
     """
     if not isinstance(actuators, Mapping) or not actuators:
         raise ActuatorFileError("actuators must map at least one corner name to its T_a")
@@ -250,6 +251,8 @@ def write_actuators_file(path, actuators: Mapping, meta: Mapping | None = None) 
         num, den = np.atleast_1d(np.asarray(num, float)), np.atleast_1d(np.asarray(den, float))
         if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den)) and num.size and den.size):
             raise ActuatorFileError(f"{corner}'s T_a must have finite coefficients (descending powers of s)")
+        if not np.any(den != 0):  # what parse_actuators refuses is never written
+            raise ActuatorFileError(f"{corner}'s T_a has a zero denominator; give it in descending powers of s")
         doc[corner] = {"num": num.tolist(), "den": den.tolist()}
         if isinstance(ta, ActuatorFit):
             fit = ta.to_dict()
