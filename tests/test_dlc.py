@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from correction.dlc import dlc, nrmse
+from correction.dlc import dlc, force_statistics, nrmse
 
 N = 400  # samples over exactly 4 periods
 
@@ -57,3 +57,34 @@ def test_nrmse_refuses_what_has_no_nrmse(x, ref, match):
 def test_dlc_of_a_sine_on_a_static_load():
     force = 30e3 + 3e3 * _sine()  # N
     assert float(dlc(force)) == pytest.approx((3e3 / math.sqrt(2)) / 30e3, rel=1e-12)
+
+
+def test_dlc_at_its_boundaries_and_its_default_axis():
+    """Each refusal exactly where it belongs (found by mutation testing: moving any of these
+    boundaries by one survived the suite). Hand values: [1, 3] has mean 2 and std 1 (DLC 0.5);
+    [0.25, 0.75] has mean 0.5 and std 0.25 (DLC 0.5)."""
+    assert dlc(np.array([1.0, 3.0])) == pytest.approx(0.5)  # two samples suffice
+    with pytest.raises(ValueError, match="two force samples"):
+        dlc(np.array([2.0]))
+    assert dlc(np.array([0.25, 0.75])) == pytest.approx(0.5)  # a mean below 1 N is still a load
+    for bad in ([-1.0, 1.0], [-3.0, -1.0]):  # mean zero, mean negative
+        with pytest.raises(ValueError, match="must be positive"):
+            dlc(np.array(bad))
+    f = np.column_stack([[1.0, 3.0, 2.0], [10.0, 10.0, 13.0]])  # (n, k): time along axis 0 by default
+    expected = [np.std(f[:, 0]) / 2.0, np.std(f[:, 1]) / 11.0]
+    np.testing.assert_allclose(dlc(f), expected, rtol=1e-15)
+    stats = force_statistics(f)
+    np.testing.assert_allclose(stats["mean_force_N"], [2.0, 11.0], rtol=1e-15)
+    np.testing.assert_allclose(stats["dlc"], expected, rtol=1e-15)
+
+
+def test_nrmse_at_its_boundaries():
+    r = np.array([1.0, 3.0])  # std 1
+    assert nrmse(np.array([2.0, 4.0]), r) == pytest.approx(1.0)  # two samples suffice; offset 1 -> 1
+    for x, ref in ((np.array([1.0, 2.0, 3.0]), r), (r, np.array([1.0, 2.0, 3.0]))):  # either longer
+        with pytest.raises(ValueError, match="same shape"):
+            nrmse(x, ref)
+    with pytest.raises(ValueError, match="two samples"):
+        nrmse(np.float64(1.0), np.float64(2.0))
+    with pytest.raises(ValueError, match="two samples"):
+        nrmse(np.array([1.0]), np.array([2.0]))
