@@ -48,10 +48,11 @@ def test_eq4_static_gain_one_and_zero_at_minus_one_for_any_valid_parameters():
         assert len(tf.poles()) == 4
 
 
-def test_eq4_zero_follows_the_integral_time():
+@pytest.mark.parametrize("ti_s", [0.25, 0.3, 2.0])  # 0.3 s: 1/Ti not a whole number (a 1 // Ti survived 0.25)
+def test_eq4_zero_follows_the_integral_time(ti_s):
     # The general PI loop Kp (1 + 1/(Ti s)) puts the zero at -1/Ti and keeps the static gain 1.
-    tf = eq4_transfer_function(**_eq4_args(), ti_s=0.25)
-    assert tf.zeros()[0] == pytest.approx(-4.0, rel=1e-12)
+    tf = eq4_transfer_function(**_eq4_args(), ti_s=ti_s)
+    assert tf.zeros()[0] == pytest.approx(-1.0 / ti_s, rel=1e-12)
     assert float(np.real(tf.dcgain())) == pytest.approx(1.0, rel=1e-12)
 
 
@@ -102,6 +103,7 @@ def test_eq4_coefficients_by_hand():
 
 @pytest.mark.parametrize("name, value", [("mass_kg", -1.0), ("tire_N_per_m", -1.0), ("kc_m3_s_Pa", -1e-12),
                                          ("bulk_modulus_Pa", math.nan), ("kq_m3_s", math.inf),
+                                         ("tire_N_per_m", math.inf),  # only ti_s may be infinite (P only)
                                          ("ksv", True)])
 def test_eq4_refuses_invalid_parameters(name, value):
     args = _eq4_args()
