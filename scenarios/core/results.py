@@ -108,14 +108,20 @@ class RunResult:
                      f"{np.mean(del5) / 1e3:8.2f}")
         return "\n".join(lines)
 
-    def column_names(self) -> list[str]:
-        """Header of the time series file: ``time_s``, then ``<signal>_<corner>[_<unit>]``."""
-        names = ["time_s"]
+    def series(self) -> list[tuple[str, str, str, int]]:
+        """The time series' columns after ``time_s``: ``(name, unit, signal, corner index)``, named
+        ``<signal stem>_<corner>[_<unit>]`` (unit "" for a dimensionless signal)."""
+        out = []
         for key in self.signals:
             unit = key.rsplit("_", 1)[-1] if "_" in key else ""
-            stem = key[: -len(unit) - 1] if unit in ("m", "N", "Pa") else key
-            names += [f"{stem}_{c}" + (f"_{unit}" if unit in ("m", "N", "Pa") else "") for c in self.corners]
-        return names
+            unit = unit if unit in ("m", "N", "Pa") else ""
+            stem = key[: -len(unit) - 1] if unit else key
+            out += [(f"{stem}_{c}" + (f"_{unit}" if unit else ""), unit, key, i) for i, c in enumerate(self.corners)]
+        return out
+
+    def column_names(self) -> list[str]:
+        """Header of the time series file: ``time_s``, then :meth:`series`' names."""
+        return ["time_s"] + [name for name, _unit, _key, _i in self.series()]
 
     def rows(self, i0: int, i1: int) -> np.ndarray:
         """Rows ``i0`` .. ``i1 - 1`` of the time series file's (N, 1 + 4 k) matrix."""
@@ -182,15 +188,10 @@ class _Channels:
 
 
 def _channels(result: RunResult) -> _Channels:
-    names = result.column_names()[1:]
     data, units = {}, {}
-    cols = iter(names)
-    for key, arr in result.signals.items():
-        unit = key.rsplit("_", 1)[-1] if "_" in key else ""
-        for i in range(len(result.corners)):
-            name = next(cols)
-            data[name] = np.ascontiguousarray(arr[:, i])
-            units[name] = unit if unit in ("m", "N", "Pa") else ""
+    for name, unit, key, i in result.series():
+        data[name] = np.ascontiguousarray(result.signals[key][:, i])
+        units[name] = unit
     meta = {"source": f"rigsim run {result.scenario_name} ({result.mode} mode)"}
     return _Channels(time_s=np.asarray(result.t_s), data=data, units=units, metadata=meta)
 
