@@ -16,7 +16,8 @@ import re
 import socket
 import tempfile
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "host_tag", "pid_running", "remove_stale_temp_files"]
+__all__ = ["atomic_write_bytes", "atomic_write_text", "dead_writers_leftovers", "host_tag", "pid_running",
+           "remove_stale_temp_files"]
 
 
 def host_tag() -> str:
@@ -36,7 +37,32 @@ def pid_running(pid: int) -> bool:
     return True
 
 
-_host, _running = host_tag, pid_running  # the former private names (tests of killed writers use _host)
+def dead_writers_leftovers(path, accept) -> list[tuple[pathlib.Path, int, str]]:
+    """What writers of this host that no longer run left beside ``path``: the entries named
+    ``.{name}.{host}.{pid}.{rest}`` whose ``rest`` is ``accept``-ed, as ``(entry, pid, rest)``.
+
+    Entries of other hosts (a shared folder), of running processes and of this one are left out;
+    POSIX only (elsewhere nothing is found). The one scan behind :func:`remove_stale_temp_files`
+    and the staging folders of :mod:`scenarios.core.outputs`.
+    """
+    path = pathlib.Path(path)
+    if os.name != "posix":
+        return []
+    prefix, host, found = f".{path.name}.", host_tag(), []
+    try:
+        entries = sorted(os.scandir(path.parent), key=lambda e: e.name)
+    except OSError:
+        return []
+    for entry in entries:
+        if not entry.name.startswith(prefix):
+            continue
+        parts = entry.name[len(prefix):].split(".", 2)
+        if len(parts) != 3 or parts[0] != host or not parts[1].isdigit() or not accept(parts[2]):
+            continue  # another target's, another host's, or not a leftover of this kind
+        pid = int(parts[1])
+        if pid != os.getpid() and not pid_running(pid):
+            found.append((pathlib.Path(entry.path), pid, parts[2]))
+    return found
 
 
 def remove_stale_temp_files(path) -> list[pathlib.Path]:
@@ -46,27 +72,11 @@ def remove_stale_temp_files(path) -> list[pathlib.Path]:
     Files of other hosts (a shared folder) and of running processes are kept; POSIX only (elsewhere
     nothing is removed). Returns the files removed.
     """
-    path = pathlib.Path(path)
-    if os.name != "posix":
-        return []
-    prefix, host, removed = f".{path.name}.", host_tag(), []
-    try:
-        entries = list(os.scandir(path.parent))
-    except OSError:
-        return []
-    for entry in entries:
-        name = entry.name
-        if not (name.startswith(prefix) and name.endswith(".tmp")):
-            continue
-        parts = name[len(prefix):-len(".tmp")].split(".")
-        if len(parts) != 3 or parts[0] != host or not parts[1].isdigit():
-            continue  # another target's temporary file, another host's, or an older naming
-        pid = int(parts[1])
-        if pid == os.getpid() or pid_running(pid):
-            continue
+    removed = []
+    for entry, _pid, _rest in dead_writers_leftovers(path, lambda rest: rest.endswith(".tmp") and rest.count(".") == 1):
         with contextlib.suppress(FileNotFoundError):
-            os.unlink(entry.path)
-            removed.append(pathlib.Path(entry.path))
+            os.unlink(entry)
+            removed.append(entry)
     return removed
 
 

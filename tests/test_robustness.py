@@ -269,9 +269,9 @@ def test_a_killed_writers_temp_file_is_removed_by_the_next_write(tmp_path):
     left = [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
     assert len(left) == 1 and f".{proc.pid}." in left[0].name and not target.exists()
     # files of a running writer, of another host and of another target stay
-    mine = tmp_path / f".result.json.{atomic._host()}.{os.getpid()}.abcdefgh.tmp"
+    mine = tmp_path / f".result.json.{atomic.host_tag()}.{os.getpid()}.abcdefgh.tmp"
     other_host = tmp_path / f".result.json.elsewhere.{proc.pid}.abcdefgh.tmp"
-    other_target = tmp_path / f".result.json.x.{atomic._host()}.{proc.pid}.abcdefgh.tmp"
+    other_target = tmp_path / f".result.json.x.{atomic.host_tag()}.{proc.pid}.abcdefgh.tmp"
     for p in (mine, other_host, other_target):
         p.write_bytes(b"")
     atomic_write_bytes(target, b"whole")

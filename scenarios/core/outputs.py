@@ -20,7 +20,7 @@ import pathlib
 import shutil
 import sys
 
-from correction.atomic import host_tag, pid_running
+from correction.atomic import dead_writers_leftovers, host_tag
 from scenarios.core.config import ScenarioError
 
 __all__ = ["Staging", "check_output_file", "check_output_folder", "remove_stale_staging", "staged_output"]
@@ -86,22 +86,10 @@ def remove_stale_staging(target) -> list[pathlib.Path]:
     in a warning line on stderr. POSIX only (elsewhere nothing is removed). Returns those removed.
     """
     target = pathlib.Path(os.path.abspath(target))
-    if os.name != "posix":
-        return []
-    prefix, host, removed = f".{target.name}.", host_tag(), []
-    try:
-        entries = sorted(os.scandir(target.parent), key=lambda e: e.name)
-    except OSError:
-        return []
-    for entry in entries:
-        parts = entry.name[len(prefix):].split(".") if entry.name.startswith(prefix) else []
-        if len(parts) != 3 or parts[0] != host or not parts[1].isdigit() or parts[2] not in _KINDS:
-            continue  # another target's, another host's, or no staging folder at all
-        pid, path = int(parts[1]), pathlib.Path(entry.path)
-        if pid == os.getpid() or pid_running(pid):
-            continue
+    removed = []
+    for path, pid, kind in dead_writers_leftovers(target, lambda rest: rest in _KINDS):
         try:
-            if parts[2] == "old" and not os.path.lexists(target):
+            if kind == "old" and not os.path.lexists(target):
                 os.rename(path, target)
                 _warn(f"put back the previous result {target} that a killed run (pid {pid}) had moved aside")
                 continue
