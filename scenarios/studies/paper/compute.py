@@ -171,28 +171,28 @@ class PaperResult:
         return "\n".join(lines)
 
 
+def _scenario(path, duration_s: float | None):
+    """The scenario at ``path``, with ``duration_s`` (s) in place of its own if given."""
+    scenario = load_scenario(path)
+    return scenario if duration_s is None else dataclasses.replace(scenario, duration_s=duration_s)
+
+
 def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None) -> RunResult:
     """Worker: load and run one scenario in one mode (in its own process)."""
-    scenario = load_scenario(path)
-    if duration_s is not None:
-        scenario = dataclasses.replace(scenario, duration_s=duration_s)
+    scenario = _scenario(path, duration_s)
     return run(scenario, mode, pose_rate_hz=pose_rate_hz)
 
 
 def _identify_job(path: str, duration_s: float | None = None) -> RigIdentification:
     """Worker: identify the rig of one scenario (its test drive sets the rms), in its own process."""
-    scenario = load_scenario(path)
-    if duration_s is not None:
-        scenario = dataclasses.replace(scenario, duration_s=duration_s)
+    scenario = _scenario(path, duration_s)
     return identify_rig(scenario)
 
 
 def _case_job(path: str, duration_s: float | None, noise_N: float, road: RunResult, rig: RunResult,
               ident: RigIdentification, finish: Callable | None) -> PairScore:
     """Worker: score one case (and ``finish(case)``, e.g. its files), as soon as its runs are in."""
-    scenario = load_scenario(path)
-    if duration_s is not None:
-        scenario = dataclasses.replace(scenario, duration_s=duration_s)
+    scenario = _scenario(path, duration_s)
     score = score_pair(road, rig, Rig(scenario), methods=METHODS, identified=ident.actuators(),
                        noise_N=noise_N, seed=scenario.seed)
     if finish is not None:
@@ -227,9 +227,7 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
         ``finish(case)`` with each :class:`PaperCase`, in the worker that scored it (picklable: a
         module-level function or a ``functools.partial`` of one; e.g. writing the case's files).
     """
-    scenarios = [load_scenario(p) for p in paths]
-    if duration_s is not None:
-        scenarios = [dataclasses.replace(s, duration_s=duration_s) for s in scenarios]
+    scenarios = [_scenario(p, duration_s) for p in paths]
     calls = []
     for p in paths:
         calls += [(_identify_job, (str(p), duration_s))]
