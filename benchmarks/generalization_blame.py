@@ -40,7 +40,6 @@ corrects anything in the project.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import pathlib
@@ -56,7 +55,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from generalization import GOAL_MOST_PCT, case_documents  # noqa: E402
-from nrmse_decomposition import LOWPASS, MODE, ExactLinearCorrection  # noqa: E402
+from nrmse_decomposition import LOWPASS, MODE, ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 
 from correction.apply import band_limit, correct_zero_phase  # noqa: E402
 from correction.dlc import dlc  # noqa: E402
@@ -64,7 +63,6 @@ from correction.filters import reference_filter  # noqa: E402
 from correction.pipeline import correct_forces  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.config import parse_scenario  # noqa: E402
-from scenarios.core.drive import Drive  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.core.rig import Rig  # noqa: E402
 from scenarios.core.run import run  # noqa: E402
@@ -81,11 +79,7 @@ EXACT_TOLERANCE = 1e-2
 
 def scenario(doc: dict, friction: bool):
     """The case's scenario, leaf-spring friction on or off."""
-    sc = parse_scenario(doc)
-    if not friction:
-        sc = dataclasses.replace(sc, vehicle=dataclasses.replace(
-            sc.vehicle, spring_friction_front_N=0.0, spring_friction_rear_N=0.0))
-    return sc
+    return with_friction(parse_scenario(doc), friction)
 
 
 def run_job(doc: dict, kind: str, friction: bool):
@@ -96,13 +90,7 @@ def run_job(doc: dict, kind: str, friction: bool):
         return identify_rig(sc)
     if kind != "linear":
         return run(sc, kind)
-    plant = Rig(sc).linearize()
-
-    def through_linear_ta(drive: Drive) -> Drive:
-        y = plant.simulate(drive.z_m, diagonal=True)
-        return Drive(t_s=drive.t_s, z_m=y[:, :4], v_mps=y[:, 4:])
-
-    return run(sc, "road", pan_drive=through_linear_ta)
+    return linear_pans_run(sc, diagonal=True)
 
 
 def analyse_job(doc: dict, runs: dict) -> dict:

@@ -105,13 +105,30 @@ FOLDS = 5
 KERNEL_WINDOW_S = 64.0
 
 
+def with_friction(sc, friction: bool):
+    """``sc`` with the leaf springs' dry friction as it is (True) or off (False)."""
+    if friction:
+        return sc
+    return dataclasses.replace(sc, vehicle=dataclasses.replace(
+        sc.vehicle, spring_friction_front_N=0.0, spring_friction_rear_N=0.0))
+
+
 def scenario_of(path: str, duration_s: float, friction: bool):
     """The scenario at ``path`` with ``duration_s`` (s), leaf-spring friction on or off."""
-    sc = dataclasses.replace(load_scenario(path), duration_s=float(duration_s))
-    if not friction:
-        sc = dataclasses.replace(sc, vehicle=dataclasses.replace(
-            sc.vehicle, spring_friction_front_N=0.0, spring_friction_rear_N=0.0))
-    return sc
+    return with_friction(dataclasses.replace(load_scenario(path), duration_s=float(duration_s)), friction)
+
+
+def linear_pans_run(sc, diagonal: bool):
+    """A road-mode run of ``sc`` whose pans follow the profile through the linearized plant: each
+    wheel's own path (``diagonal``) or the whole 4 x 4 plant (each pan also moved by the other
+    posts' drives). Friction never enters the linearization."""
+    plant = Rig(sc).linearize()
+
+    def through_linear_ta(drive: Drive) -> Drive:
+        y = plant.simulate(drive.z_m, diagonal=diagonal)
+        return Drive(t_s=drive.t_s, z_m=y[:, :4], v_mps=y[:, 4:])
+
+    return run(sc, "road", pan_drive=through_linear_ta)
 
 
 # ----------------------------------------------------------------------------- worker jobs: runs
@@ -125,13 +142,7 @@ def run_job(path: str, duration_s: float, kind: str, friction: bool):
         return identify_rig(sc)
     if kind not in ("linear", "linear_mimo"):
         return run(sc, kind)
-    plant = Rig(sc).linearize()  # friction is off in any linearization
-
-    def through_linear_ta(drive: Drive) -> Drive:
-        y = plant.simulate(drive.z_m, diagonal=(kind == "linear"))
-        return Drive(t_s=drive.t_s, z_m=y[:, :4], v_mps=y[:, 4:])
-
-    return run(sc, "road", pan_drive=through_linear_ta)
+    return linear_pans_run(sc, diagonal=(kind == "linear"))
 
 
 # ----------------------------------------------------------------------------- the exact linear correction
