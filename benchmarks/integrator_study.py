@@ -110,10 +110,11 @@ def drive_for(rig: Rig, i: int) -> Drive:
     """The scenario's road drive for configuration ``i``: sampled at the steps, or (mid-step) each
     step holding the profile's value at t_k + h/2 (the drive made at h/2, odd samples)."""
     if not CONFIGS[i][2]:
-        return rig.road_drive()
+        d = rig.road_drive()
+        return Drive(d.t_s, d.z_m, d.v_mps, held_m=d.z_m)  # each step holds its own sample
     half = road_drive(rig.scenario, dt_s=rig.dt_s / 2, wheelbase_m=rig.wheelbase_m, half_stroke_m=rig.half_stroke_m)
     mid = np.concatenate([half.z_m[1::2], half.z_m[-1:]])
-    return Drive(half.t_s[0::2].copy(), mid, np.zeros_like(mid))  # the hydraulic rig reads z_m only
+    return Drive(half.t_s[0::2].copy(), mid, np.zeros_like(mid), held_m=mid)  # the hydraulic rig reads held_m only
 
 
 def linear_check(rig: Rig) -> str:
@@ -160,7 +161,7 @@ def frf_job(i: int) -> dict:
     k = int(round(dt / dt_ref))
     held = drive.z_m[np.minimum(np.arange(0, drive.t_s.size, k) + (k // 2 if mid else 0), drive.t_s.size - 1)]
     u = drive.z_m[::int(round(1.0 / (sc.output_rate_hz * dt_ref)))]  # the drive at the output instants
-    drive = Drive(drive.t_s[::k].copy(), held, np.zeros_like(held))
+    drive = Drive(drive.t_s[::k].copy(), held, np.zeros_like(held), held_m=held)
     out = {}
     try:
         rig = make_rig(sc, i)

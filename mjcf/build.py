@@ -82,7 +82,7 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
                                    "damping and the time step's stability limit"),
     "pan_mass_kg": (50.0, 5000.0, "kg", "a wheelpan with piston and rod weighs hundreds of kg (DYNTRAC: ~500 kg)"),
     "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
-                   "only cost time and memory; 1e-4 s is the default"),
+                   "only cost time and memory; the defaults are 1e-4 s (road test) and 1e-3 s (rig test)"),
 }
 
 
@@ -131,9 +131,11 @@ class TruckVariant:
         step's explicit limit (see the tire stiffness), the upper one is ten times the estimate,
         heavier than the wheel station the pan carries.
     timestep_s : float, s, optional
-        Integration time step, 1e-6 to 1e-3 s: coarser steps do not resolve the tire and
-        hydraulic modes; below 1e-6 s a 60 s run is 6e7 steps (hours, gigabytes of drive) for
-        no gain: the model's fastest modes are resolved by 1e-4 s (the default).
+        Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
+        explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
+        ``benchmarks/integrator_study.py``; set by ``scenarios.core.rig``). Coarser steps do not
+        resolve the tire and hydraulic modes; below 1e-6 s a 60 s run is 6e7 steps (hours,
+        gigabytes of drive) for no gain.
     """
 
     payload_kg: float | None = None

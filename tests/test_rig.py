@@ -164,10 +164,11 @@ def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, tmp_
 
     def poisoned(self):
         d = real(self).drive()  # a Drive reads like the RoadDrive a run gets (chunk, times, ...)
-        z = d.z_m.copy()
-        z[np.searchsorted(d.t_s, 1.5), 0] = np.nan
+        z, held = d.z_m.copy(), d.held_m.copy()  # road mode reads z_m, rig mode the held values
+        z[np.searchsorted(d.t_s, 1.5), 0] = held[np.searchsorted(d.t_s, 1.5), 0] = np.nan
         out = object.__new__(Drive)  # Drive refuses NaN; bypass its check to poison the run
-        for name, value in (("t_s", d.t_s), ("z_m", z), ("v_mps", d.v_mps), ("corners", d.corners)):
+        for name, value in (("t_s", d.t_s), ("z_m", z), ("v_mps", d.v_mps), ("corners", d.corners),
+                            ("held_m", held)):
             object.__setattr__(out, name, value)
         return out
 

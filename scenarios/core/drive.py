@@ -1,8 +1,8 @@
 """Drives: the four wheel-pan drive signals x_ref, for identification, or a step.
 
 * :class:`Drive` holds a drive at every time step; a run reads any drive through the same few
-  methods (``n_steps``, ``dt_s``, ``times``, ``time_at``, ``first_step``, ``chunk``), which
-  :class:`scenarios.core.road_drive.RoadDrive` (a scenario's road, made on demand) also has;
+  methods (``n_steps``, ``dt_s``, ``times``, ``time_at``, ``first_step``, ``chunk``, ``held``),
+  which :class:`scenarios.core.road_drive.RoadDrive` (a scenario's road, made on demand) also has;
 * :func:`identification_drive` gives four independent road-like random drives (for
   identifying the rig's transfer functions), :func:`step_drive` a step on every corner;
 * :func:`check_stroke` refuses a drive that leaves the actuator's stroke.
@@ -44,6 +44,11 @@ class Drive:
         Vertical velocity per corner, shape (N, 4).
     corners : tuple of str
         Column names, :data:`mjcf.names.CORNERS`.
+    held_m : array_like, m, optional
+        The value each step holds in the rig test, shape (N, 4): the drive at mid-step,
+        t_k + dt / 2 (see :meth:`held`). Given by the drives that know their signal between the
+        samples (a step, a band-limited random drive); otherwise cubic Hermite interpolation of
+        ``z_m`` and ``v_mps`` at mid-step.
 
     The drive of a scenario starts with a lead-in (t < 0, faded in from rest); t = 0 starts
     the analysed record. Arrays are read-only copies.
@@ -53,14 +58,15 @@ class Drive:
     z_m: np.ndarray
     v_mps: np.ndarray
     corners: tuple = field(default=CORNERS)
+    held_m: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name in ("t_s", "z_m", "v_mps"):
+        for name in ("t_s", "z_m", "v_mps") + (("held_m",) if self.held_m is not None else ()):
             object.__setattr__(self, name, readonly_copy(getattr(self, name)))
         n = self.t_s.shape[0] if self.t_s.ndim == 1 else -1
         if n < 1:
             raise ValueError(f"drive.t_s must be 1-D and non-empty, got shape {self.t_s.shape}.")
-        for name in ("z_m", "v_mps"):
+        for name in ("z_m", "v_mps") + (("held_m",) if self.held_m is not None else ()):
             if getattr(self, name).shape != (n, len(self.corners)):
                 raise ValueError(f"drive.{name} has shape {getattr(self, name).shape}, "
                                  f"expected {(n, len(self.corners))}.")
@@ -92,6 +98,34 @@ class Drive:
     def chunk(self, k0: int, k1: int) -> tuple[np.ndarray, np.ndarray]:
         """Elevation (m) and velocity (m/s) of steps ``k0`` .. ``k1 - 1``, each (k1 - k0, 4)."""
         return self.z_m[k0:k1], self.v_mps[k0:k1]
+
+    def held(self, k0: int, k1: int) -> np.ndarray:
+        """The value (m) each of steps ``k0`` .. ``k1 - 1`` holds, (k1 - k0, 4): the drive at
+        mid-step, t_k + dt / 2.
+
+        MuJoCo holds ``ctrl`` constant over a step, so a drive sampled at t_k would lag the
+        continuous one by dt / 2 (5.4 degrees at 30 Hz at the rig test's 1e-3 s step); the value
+        at mid-step removes that lag to second order (``benchmarks/integrator_study.py``).
+        ``held_m`` if given, else the cubic Hermite interpolant of (z, v) at mid-step,
+        (z_k + z_k+1) / 2 + dt (v_k - v_k+1) / 8; the last step extrapolates z + v dt / 2.
+        """
+        if self.held_m is not None:
+            return self.held_m[k0:k1]
+        k1 = min(k1, self.n_steps)
+        z, v = self.z_m[k0:k1 + 1], self.v_mps[k0:k1 + 1]
+        h = self.dt_s if self.n_steps > 1 else 0.0
+        out = np.empty((k1 - k0, z.shape[1]))
+        m = z.shape[0] - 1  # steps with a next sample
+        out[:m] = 0.5 * (z[:m] + z[1:m + 1]) + h * (v[:m] - v[1:m + 1]) / 8.0
+        if m < k1 - k0:
+            out[m:] = z[m:] + 0.5 * h * v[m:]
+        return out
+
+    def scaled(self, gain) -> "Drive":
+        """This drive with each corner multiplied by ``gain`` (1, shape (4,) or scalar)."""
+        g = np.broadcast_to(np.asarray(gain, dtype=float), (len(self.corners),))[None, :]
+        return Drive(self.t_s, self.z_m * g, self.v_mps * g, self.corners,
+                     None if self.held_m is None else self.held_m * g)
 
     @classmethod
     def from_positions(cls, t_s, z_m) -> "Drive":
@@ -169,7 +203,9 @@ def identification_drive(duration_s: float, dt_s: float, seed: int = IDENT_SEED,
     Returns
     -------
     Drive
-        N = round(duration / dt) + 1 samples; velocity by centred differences.
+        N = round(duration / dt) + 1 samples; velocity by centred differences; the values held
+        over each step (:meth:`Drive.held`) are the same signal at mid-step, exactly (the
+        spectrum delayed by -dt / 2).
     """
     n = int(round(duration_s / dt_s)) + 1
     rng = np.random.default_rng(seed)
@@ -178,17 +214,25 @@ def identification_drive(duration_s: float, dt_s: float, seed: int = IDENT_SEED,
     amp[(f < band_hz[0]) | (f > band_hz[1])] = 0.0
     spec = amp[:, None] * np.exp(2j * np.pi * rng.random((f.size, len(CORNERS))))
     z = np.fft.irfft(spec, n=n, axis=0)
-    z *= rms_m / z.std(axis=0)
-    tau = np.clip(np.arange(n) * dt_s / fade_s, 0.0, 1.0)
-    z = z * (0.5 - 0.5 * np.cos(np.pi * tau))[:, None]
-    return Drive.from_positions(np.arange(n) * dt_s, z)
+    scale = rms_m / z.std(axis=0)
+    z *= scale
+    mid = np.fft.irfft(spec * np.exp(1j * np.pi * f * dt_s)[:, None], n=n, axis=0) * scale
+
+    def fade(t):
+        return (0.5 - 0.5 * np.cos(np.pi * np.clip(t / fade_s, 0.0, 1.0)))[:, None]
+
+    t = np.arange(n) * dt_s
+    drive = Drive.from_positions(t, z * fade(t))
+    return Drive(drive.t_s, drive.z_m, drive.v_mps, held_m=mid * fade(t + 0.5 * dt_s))
 
 
 def step_drive(duration_s: float, dt_s: float, size_m: float, at_s: float) -> Drive:
     """A step of ``size_m`` (m) at ``at_s`` (s) on every corner, from t = 0 to ``duration_s`` (s).
 
-    The velocity is zero (the step is an instant change of the reference)."""
+    The velocity is zero (the step is an instant change of the reference); each step holds
+    the value at its mid-step (:meth:`Drive.held`), so the step starts at ``at_s`` rounded to
+    the time grid."""
     n = int(round(duration_s / dt_s)) + 1
     z = np.zeros((n, len(CORNERS)))
     z[int(round(at_s / dt_s)):] = size_m
-    return Drive(np.arange(n) * dt_s, z, np.zeros_like(z))
+    return Drive(np.arange(n) * dt_s, z, np.zeros_like(z), held_m=z)

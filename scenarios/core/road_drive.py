@@ -117,8 +117,16 @@ class RoadDrive:
 
     def chunk(self, k0: int, k1: int) -> tuple[np.ndarray, np.ndarray]:
         """Elevation (m) and velocity (m/s) of steps ``k0`` .. ``k1 - 1``, each (k1 - k0, 4)."""
+        return self._at(np.arange(k0, k1) / self.fs_hz)
+
+    def held(self, k0: int, k1: int) -> np.ndarray:
+        """The value (m) each of steps ``k0`` .. ``k1 - 1`` holds in the rig test, (k1 - k0, 4):
+        the drive at mid-step, t_k + dt / 2 (see :meth:`scenarios.core.drive.Drive.held`)."""
+        return self._at((np.arange(k0, k1) + 0.5) / self.fs_hz)[0]
+
+    def _at(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Elevation (m) and velocity (m/s) at ``t`` (s from step 0), each (t.size, 4)."""
         x, v = self.profile.x_m, self.speed_mps
-        t = np.arange(k0, k1) / self.fs_hz
         s_front = np.minimum(self.start_m + v * t, x[-1])
         s_rear = s_front - self.wheelbase_m
         z, vz = np.empty((t.size, 4)), np.empty((t.size, 4))
@@ -138,7 +146,7 @@ class RoadDrive:
     def drive(self) -> Drive:
         """The whole drive as a :class:`~scenarios.core.drive.Drive` (arrays at the step rate)."""
         z, vz = self.chunk(0, self.n_steps)
-        return Drive(self.times(0, self.n_steps), z, vz, self.corners)
+        return Drive(self.times(0, self.n_steps), z, vz, self.corners, held_m=self.held(0, self.n_steps))
 
     def check_stroke(self, half_stroke_m: float) -> None:
         """Raise ValueError if a drive leaves +-``half_stroke_m`` (m); see :func:`~scenarios.core.drive.check_stroke`."""

@@ -159,8 +159,8 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
     with hydraulic_callbacks(model):
         for k in range(0, n, chunk):
             kk = min(chunk, n - k)
-            z = drive.chunk(k, k + kk)[0]  # x_ref; the velocity is not needed
-            ctrl[:kk, hyd] = z
+            z = drive.chunk(k, k + kk)[0]  # x_ref at the steps, recorded; the velocity is not needed
+            ctrl[:kk, hyd] = drive.held(k, k + kk)  # what each step holds: x_ref at mid-step
             warm = data.qacc_warmstart.copy()
             out_state, out_sensor = rollout.rollout(model, data, state, ctrl[:kk], initial_warmstart=warm)
             if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):

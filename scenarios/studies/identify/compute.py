@@ -81,7 +81,7 @@ def matched_drive(test_drive: Drive, duration_s: float, *, seed: int = IDENT_SEE
     drive = identification_drive(duration_s, dt, seed)
     skip = int(round(IDENT_SKIP_S / dt))
     gain = target / band_rms(drive.z_m[skip:], dt, band_hz)
-    return Drive(drive.t_s, drive.z_m * gain[None, :], drive.v_mps * gain[None, :]), target
+    return drive.scaled(gain), target
 
 
 @dataclass(frozen=True)

@@ -147,10 +147,10 @@ def validate(*, duration_s: float | None = None, ident_duration_s: float | None 
     results = dict(zip(names, out))
 
     _say(progress, "validate: route 3, H1 estimate and rational fits; comparing")
-    return _assemble(sc.name, params, lin, r1, results, table_s, ident_s, wall0)
+    return _assemble(sc.name, params, lin, r1, results, table_s, ident_s, wall0, rig.dt_s)
 
 
-def _assemble(name, params, lin, r1, results, table_s, ident_s, wall0) -> ValidateResult:
+def _assemble(name, params, lin, r1, results, table_s, ident_s, wall0, rig_dt_s) -> ValidateResult:
     f_bode = np.geomspace(BODE_RANGE_HZ[0], BODE_RANGE_HZ[1], 400)
     f_cmp = np.geomspace(BODE_RANGE_HZ[0], COMPARE_MAX_HZ, 400)
     h2_bode = lin.frequency_response(f_bode)
@@ -173,7 +173,7 @@ def _assemble(name, params, lin, r1, results, table_s, ident_s, wall0) -> Valida
                             fits=r3.fits, steps=step_curves)
     kept = {k: results[k].result for k in ("road", "rig") if results[k].result is not None}
     return ValidateResult(
-        scenario=name, duration_s=table_s, ident_duration_s=ident_s, timestep_s=lin.dt_s,
+        scenario=name, duration_s=table_s, ident_duration_s=ident_s, timestep_s=rig_dt_s, road_timestep_s=lin.dt_s,
         route1=route1, route2=route2, route3=sections.route3_section(r3, ident, ident_s),
         departure_budget=budget, steps=steps, table1=sections.table1_section(results),
         diagnostics_friction_off=friction_off, wall_time_s=round(time.perf_counter() - wall0, 2),

@@ -291,14 +291,19 @@ def route3(record: RigRecord, lin: PlantLinearization, f_cmp, h2_cmp) -> Route3:
 
 # --------------------------------------------------------------------------------------------
 # Step responses of the linear models (Figure 7).
-def linear_steps(lin: PlantLinearization, eq4: list, fits: list, size_m: float, n: int) -> dict[str, np.ndarray]:
-    """Pan displacement (m), (n, 4), of each linear model after a step of ``size_m`` (m) on all
-    four drives at :data:`STEP_AT_S`, sampled at ``lin.dt_s``: "route2" (the whole plant, all
-    inputs) and, when given, "route1" (``eq4``, eq. 4 per wheel) and "route3" (``fits``)."""
-    u = step_drive((n - 1) * lin.dt_s, lin.dt_s, size_m, STEP_AT_S).z_m
+def linear_steps(lin: PlantLinearization, eq4: list, fits: list, size_m: float, t_s) -> dict[str, np.ndarray]:
+    """Pan displacement (m), (len(t_s), 4), of each linear model after a step of ``size_m`` (m)
+    on all four drives at :data:`STEP_AT_S`, computed at ``lin.dt_s`` and read at the instants
+    ``t_s`` (s, on that grid: the nonlinear record's): "route2" (the whole plant, all inputs)
+    and, when given, "route1" (``eq4``, eq. 4 per wheel) and "route3" (``fits``)."""
+    t = np.asarray(t_s, dtype=float)
+    rows = np.rint(t / lin.dt_s).astype(int)
+    if np.any(np.abs(rows * lin.dt_s - t) > 1e-6 * lin.dt_s + 1e-12) or np.any(rows < 0):
+        raise ValueError(f"the step record's instants are not on the linear model's {lin.dt_s:g} s grid")
+    u = step_drive(rows[-1] * lin.dt_s, lin.dt_s, size_m, STEP_AT_S).z_m
     out = {"route2": lin.simulate(u, diagonal=False)[:, :4]}
     if eq4:
         out["route1"] = np.column_stack([apply_transfer_function(tf, u[:, i], lin.dt_s) for i, tf in enumerate(eq4)])
     if fits:
         out["route3"] = np.column_stack([apply_transfer_function(tf, u[:, i], lin.dt_s) for i, tf in enumerate(fits)])
-    return out
+    return {name: y[rows] for name, y in out.items()}

@@ -164,7 +164,7 @@ def steps_section(records: dict, lin: PlantLinearization, eq4: list, fits: list)
     for key, size in STEP_SIZES.items():
         rec = records[key]
         nl = rec.pan_m
-        linear = linear_steps(lin, eq4, fits, size, nl.shape[0])
+        linear = linear_steps(lin, eq4, fits, size, rec.t_s)
         entry = {"step_m": size, "step_at_s": STEP_AT_S, "events": dict(rec.events),
                  "nonlinear_overshoot_pct": float(100 * (np.max(nl) - size) / size),
                  "nonlinear_final_m": {c: float(nl[-1, i]) for i, c in enumerate(CORNERS)}}
@@ -192,7 +192,7 @@ def friction_off_section(r3: Route3, records: dict, lin: PlantLinearization) -> 
     }
     for key, size in STEP_SIZES.items():
         nl = records[key].pan_m
-        err = float(np.max(np.abs(linear_steps(lin, [], [], size, nl.shape[0])["route2"] - nl)))
+        err = float(np.max(np.abs(linear_steps(lin, [], [], size, records[key].t_s)["route2"] - nl)))
         out[f"step_max_error_{key}_mm"] = 1e3 * err
         out[f"step_max_error_{key}_pct"] = 100 * err / size
     return out
