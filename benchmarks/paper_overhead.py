@@ -4,15 +4,16 @@
 
     python benchmarks/paper_overhead.py [--jobs 2] [--duration-s 60] [--repeats 1]
 
-1. Counts the MuJoCo steps ``rigsim paper`` takes: per case the road run, the rig run (both the
-   lead-in plus the duration at the scenario's time step) and the rig's identification
-   (:func:`scenarios.studies.identify.compute.identify_rig`'s drive).
+1. Counts the MuJoCo steps ``rigsim paper`` takes: per case the road run (explicit Euler at
+   1e-4 s), the rig run (RK4 at 1e-3 s; both the lead-in plus the duration) and the rig's
+   identification (:func:`scenarios.studies.identify.compute.identify_rig`'s drive, RK4).
 2. Times ``rigsim paper --out TMP --jobs J --quiet`` end to end (a subprocess: imports, compiling
    or loading the hydraulic callbacks, the runs, the scoring, the report and its figures).
 3. Times bare MuJoCo stepping the same number of steps on the same J cores: J worker processes,
    each stepping its share of the steps with ``mujoco.rollout`` on the truck on the pans with a
    plain ``motor`` per pan instead of the hydraulics, replaying actuator forces recorded from the
-   hydraulic rig (:mod:`step_rate`'s "bare" model), after a warm-up; the bare wall time is the
+   hydraulic rig (:mod:`step_rate`'s "bare" model), each share under its own integration and
+   step, after a warm-up; the bare wall time is the
    slowest worker's. This is the cost of the multibody physics alone, with no callback, no I/O,
    no Python between steps.
 
@@ -45,35 +46,37 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 CHUNK_STEPS = 20_000
 
 
-def paper_steps(duration_s: float | None) -> int:
-    """MuJoCo steps of ``rigsim paper`` (road, rig and identification runs of the three cases)."""
+def paper_steps(duration_s: float | None) -> dict:
+    """MuJoCo steps of ``rigsim paper`` by integration: ``{"road": the road runs' (explicit Euler),
+    "rig": the rig runs' and the identifications' (RK4)}``, each at its test's time step."""
     import dataclasses
 
     from scenarios.core.config import load_scenario, paper_scenarios
     from scenarios.core.rig import Rig
     from scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S
 
-    total = 0
+    total = {"road": 0, "rig": 0}
     for p in paper_scenarios():
         sc = load_scenario(p)
         if duration_s is not None:
             sc = dataclasses.replace(sc, duration_s=float(duration_s))
-        rig = Rig(sc, hydraulic=False)
-        n = rig.road_drive().t_s.size
+        road, rig = Rig(sc, hydraulic=False), Rig(sc)
+        total["road"] += road.road_source().n_steps
         record_s = max(sc.duration_s, IDENT_MIN_S) + IDENT_SKIP_S
-        total += 2 * n + int(round(record_s / rig.dt_s)) + 1
+        total["rig"] += rig.road_source().n_steps + int(round(record_s / rig.dt_s)) + 1
     return total
 
 
-def bare_worker(steps: int) -> dict:
-    """Step the bare truck ``steps`` times (rollouts of :data:`CHUNK_STEPS`); wall and CPU time, s."""
+def bare_worker(steps: int, integration: str) -> dict:
+    """Step the bare truck ``steps`` times (rollouts of :data:`CHUNK_STEPS`) under ``integration``
+    ("road" or "rig", :data:`step_rate.INTEGRATIONS`); wall and CPU time, s."""
     import mujoco
     from mujoco import rollout
 
     import step_rate as sr
     from hydraulics.bridge import hydraulic_callbacks
 
-    rig, bare, corners = sr.build_models(argparse.Namespace(model="truck", spec=None))
+    rig, bare, corners = sr.build_models(argparse.Namespace(model="truck", spec=None, integration=integration))
     loads = sr.static_loads(bare, corners)
     hyd = [mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_ACTUATOR, f"hyd_{c}") for c in corners]
     sens = [int(rig.sensor_adr[mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_SENSOR, f"force_{c}")]) for c in corners]
@@ -95,12 +98,17 @@ def bare_worker(steps: int) -> dict:
     return {"wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
 
 
-def time_bare(steps: int, jobs: int) -> dict:
+def time_bare(steps: dict, jobs: int) -> dict:
+    """Bare stepping of ``steps`` (per integration) on ``jobs`` workers: each worker steps its
+    share of every integration's steps; the wall time is the slowest worker's, s."""
     from scenarios.core.pool import run_jobs
 
-    shares = [steps // jobs + (1 if i < steps % jobs else 0) for i in range(jobs)]
-    res = run_jobs([(bare_worker, (s,)) for s in shares], workers=jobs)
-    return {"wall_s": max(r["wall_s"] for r in res), "cpu_s": sum(r["cpu_s"] for r in res)}
+    def shares(n):
+        return [n // jobs + (1 if i < n % jobs else 0) for i in range(jobs)]
+
+    res = run_jobs([(bare_worker, (s, kind)) for kind, n in steps.items() for s in shares(n)], workers=jobs)
+    per_worker = [sum(r["wall_s"] for r in res[i::jobs]) for i in range(jobs)]
+    return {"wall_s": max(per_worker), "cpu_s": sum(r["cpu_s"] for r in res)}
 
 
 def time_paper(jobs: int, duration_s: float | None) -> dict:
@@ -140,7 +148,7 @@ def main(argv=None) -> int:
         "steps": steps, "jobs": args.jobs, "cpu_count": os.cpu_count(), "duration_s": args.duration_s or 60.0,
         "paper_wall_s": round(paper["wall_s"], 2), "paper_cpu_s": round(paper["cpu_s"], 2),
         "bare_wall_s": round(bare["wall_s"], 2), "bare_cpu_s": round(bare["cpu_s"], 2),
-        "bare_steps_per_s_per_worker": round(steps / bare["cpu_s"], 0),
+        "bare_steps_per_s_per_worker": round(sum(steps.values()) / bare["cpu_s"], 0),
         "ratio_wall": round(paper["wall_s"] / bare["wall_s"], 3),
         "ratio_cpu": round(paper["cpu_s"] / bare["cpu_s"], 3),
         "goal_ratio_wall": 1.2,

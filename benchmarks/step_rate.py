@@ -44,6 +44,9 @@ from mjcf.names import CORNERS  # noqa: E402
 
 PARAMS = ActuatorParams()
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
+#: How each test is integrated (scenarios.core.rig): the rig test RK4 at 1e-3 s, the road test
+#: explicit Euler at 1e-4 s; ``--integration`` picks one for both models.
+INTEGRATIONS = {"rig": (mujoco.mjtIntegrator.mjINT_RK4, 1e-3), "road": (mujoco.mjtIntegrator.mjINT_EULER, 1e-4)}
 
 
 def quarter_truck_spec(corners=CORNERS, *, tire=1.0e6, unsprung=450.0, sprung=2500.0,
@@ -120,7 +123,11 @@ def build_models(args):
         a.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
     _add_force_sensors(spec_rig, corners)
     _add_force_sensors(spec_bare, corners)
-    return spec_rig.compile(), spec_bare.compile(), corners
+    rig, bare = spec_rig.compile(), spec_bare.compile()
+    integrator, dt = INTEGRATIONS[getattr(args, "integration", "rig")]
+    for m in (rig, bare):
+        m.opt.integrator, m.opt.timestep = integrator, dt
+    return rig, bare, corners
 
 
 def static_loads(model: mujoco.MjModel, corners) -> dict:
@@ -165,6 +172,8 @@ def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--model", choices=("truck", "four", "single"), default="truck")
     ap.add_argument("--spec", help="module:function returning an MjSpec with pan_<c>_z joints")
+    ap.add_argument("--integration", choices=tuple(INTEGRATIONS), default="rig",
+                    help="rig: RK4 at 1e-3 s (the rig test's); road: explicit Euler at 1e-4 s")
     ap.add_argument("--steps", type=int, default=20_000)
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args(argv)
@@ -202,6 +211,7 @@ def main(argv=None) -> dict:
     bare_rate = n / float(np.min(bare_times))
     result = {
         "model": args.spec or args.model,
+        "integration": args.integration,
         "steps": n,
         "repeats": args.repeats,
         "bare_steps_per_s": round(bare_rate, 1),

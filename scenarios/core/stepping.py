@@ -3,7 +3,7 @@
 * :func:`run_hydraulic`, the rig test: the drive is the actuators' reference x_ref in ``ctrl``;
   the actuator states live in MuJoCo's activation vector, advanced by the callbacks of
   :mod:`hydraulics.bridge` (installed for the run only). Steps in C with ``mujoco.rollout``,
-  :data:`ROLLOUT_CHECKS` warning windows per call (the constraint warm start carried from call to
+  about :data:`ROLLOUT_STEPS` steps (whole warning windows) per call (the constraint warm start carried from call to
   call: bit-identical to a loop of ``mj_step``); a call that warned or diverged is replayed window
   by window from its first state so that the error names its 10 ms of simulated time.
 * :func:`run_kinematic`, the road test: the pans follow the drive exactly (positions and
@@ -30,15 +30,16 @@ from mjcf import names
 from scenarios.core.drive import CHUNK_STEPS
 from scenarios.core.watch import SimulationError, Watch, output_schedule
 
-__all__ = ["RigRecord", "run_hydraulic", "run_kinematic", "ROLLOUT_CHECKS", "RECORDED_STATES"]
+__all__ = ["RigRecord", "run_hydraulic", "run_kinematic", "ROLLOUT_STEPS", "RECORDED_STATES"]
 
 MPA = 1e6  # Pa per MPa: the pressure states are in MPa (see hydraulics.params.STATE_NAMES)
 #: The actuator states a rig run records: name in the record -> (index in STATE_NAMES, scale to SI).
 RECORDED_STATES = {"spool": (STATE_NAMES.index("spool"), 1.0), "p1_Pa": (STATE_NAMES.index("p1_MPa"), MPA),
                    "p2_Pa": (STATE_NAMES.index("p2_MPa"), MPA)}
-#: Warning windows (scenarios.core.watch.CHECK_EVERY_S) per rollout call of a hydraulic run:
-#: 0.1 s at the 1e-4 s step, so the calls' Python overhead is ~1 % of the stepping.
-ROLLOUT_CHECKS = 10
+#: Steps per rollout call of a hydraulic run, rounded down to whole warning windows
+#: (scenarios.core.watch.CHECK_EVERY_S; at least one): 1 s at the rig test's 1e-3 s step, so the
+#: calls' Python overhead (output rows, events, warning check) is ~1 % of the stepping.
+ROLLOUT_STEPS = 1000
 
 
 @dataclass(frozen=True)
@@ -154,7 +155,7 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
     poses = _pose_recorder(model, drive, decim, pose_rate_hz)
     scratch = mujoco.MjData(model) if poses is not None else None
     frames = set(int(k) for k in poses.steps) if poses is not None else set()
-    n, chunk = drive.n_steps, watch.check * ROLLOUT_CHECKS
+    n, chunk = drive.n_steps, watch.check * max(1, ROLLOUT_STEPS // watch.check)
     ctrl = np.zeros((chunk, model.nu))
     with hydraulic_callbacks(model):
         for k in range(0, n, chunk):
