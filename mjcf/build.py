@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 
 import mujoco
+import numpy as np
 
 from mjcf import names
 
@@ -21,6 +22,9 @@ __all__ = [
     "SCENE_FILE",
     "TruckVariant",
     "BOUNDS",
+    "CAB_MASS_KG",
+    "CAB_DAMPING_RATIO",
+    "CAB_MOUNT_SPACING_M",
     "resource_path",
     "load_spec",
     "build_spec",
@@ -81,9 +85,26 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "tire_damping_rear_Ns_per_m": (0.0, 5e4, "N s/m", "a tire's is ~1.5 kN s/m; more is beyond critical "
                                    "damping and the time step's stability limit"),
     "pan_mass_kg": (50.0, 5000.0, "kg", "a wheelpan with piston and rod weighs hundreds of kg (DYNTRAC: ~500 kg)"),
+    "cab_mount_hz": (0.5, 10.0, "Hz", "a suspended truck cab bounces at 1.5-3 Hz; below 0.5 Hz no cab mount "
+                     "holds the cab, above 10 Hz it is a rubber-bushed (near-rigid) cab, which is the model "
+                     "without cab_mount_hz"),
+    "cab_mass_kg": (200.0, 1200.0, "kg", "a truck cab weighs 0.8-1.5 t; the chassis' roll inertia (2600 kg m^2, "
+                    "truck_rig.xml) leaves the frame without its cab no roll inertia beyond ~1.35 t and "
+                    "an implausibly small one above 1.2 t"),
     "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
                    "only cost time and memory; the defaults are 1e-4 s (road test) and 1e-3 s (rig test)"),
 }
+
+
+#: kg: the suspended cab's mass when ``TruckVariant.cab_mass_kg`` is not given: an estimate for
+#: the steel day cab of a medium/heavy two-axle truck with its interior (0.8-1.5 t; mjcf/README.md).
+CAB_MASS_KG = 1000.0
+#: Fraction of critical damping of the cab mount's dampers on the cab bounce mode (cab alone on
+#: its mounts): an estimate in the 20-40 % of suspended cabs with shock absorbers (mjcf/README.md).
+CAB_DAMPING_RATIO = 0.3
+#: m: fore-aft distance between the cab's front and rear mount pairs (each 0.2 m inside the
+#: 1.8 m long cab), which sets the mounts' pitch stiffness and damping from the bounce ones.
+CAB_MOUNT_SPACING_M = 1.4
 
 
 @dataclass(frozen=True)
@@ -130,6 +151,20 @@ class TruckVariant:
         the lower bound keeps the pan-on-tire mode of the stiffest tire inside the coarsest
         step's explicit limit (see the tire stiffness), the upper one is ten times the estimate,
         heavier than the wheel station the pan carries.
+    cab_mount_hz : float, Hz, optional
+        Natural frequency of the cab bouncing on its own suspension against a fixed frame,
+        sqrt(k / m_cab) / (2 pi). ``None`` (default): the cab is part of the rigid chassis, the
+        model of ``truck_rig.xml``. Set: the cab (geom ``cab``) becomes the body
+        :data:`mjcf.names.CAB_BODY` on the chassis with a vertical slide and a pitch hinge
+        through its centre of mass (:data:`mjcf.names.CAB_JOINTS`), on springs preloaded to hold
+        it at rest at zero deflection, with :data:`CAB_DAMPING_RATIO` of critical damping; two
+        mount pairs :data:`CAB_MOUNT_SPACING_M` apart give the pitch stiffness. Its mass and
+        inertia are taken out of the chassis so that the truck's mass, centre of mass and roll
+        and pitch inertia are unchanged. 0.5 to 10 Hz (see :data:`BOUNDS`). This is the plant
+        feature a model of the rigid-cab family lacks (issue 17).
+    cab_mass_kg : float, kg, optional
+        Mass of the suspended cab (default :data:`CAB_MASS_KG`; only with ``cab_mount_hz``),
+        a uniform box of the cab geom's size. 200 to 1200 kg (see :data:`BOUNDS`).
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
@@ -149,6 +184,8 @@ class TruckVariant:
     spring_friction_rear_N: float | None = None
     pan_mass_kg: float | None = None
     timestep_s: float | None = None
+    cab_mount_hz: float | None = None
+    cab_mass_kg: float | None = None
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -167,6 +204,9 @@ class TruckVariant:
                 lo, hi, unit, why = BOUNDS[f.name]
                 if not lo <= value <= hi:
                     raise ValueError(f"vehicle.{f.name} = {value:g} {unit} is outside {lo:g} to {hi:g} {unit}: {why}")
+        if self.cab_mass_kg is not None and self.cab_mount_hz is None:
+            raise ValueError("vehicle.cab_mass_kg only applies to a suspended cab: set vehicle.cab_mount_hz too "
+                             "(without it the cab is part of the chassis' mass)")
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
@@ -186,6 +226,66 @@ def _set_tire(spec: mujoco.MjSpec, corner: str, k: float | None, c: float | None
     if c is not None:
         prm[2] = -float(c)
     act.biasprm = prm
+
+
+def _parallel_axis(offset: np.ndarray, mass: float) -> np.ndarray:
+    """Inertia (kg m^2, 3x3) of a point ``mass`` (kg) at ``offset`` (m) about the origin."""
+    return mass * (float(offset @ offset) * np.eye(3) - np.outer(offset, offset))
+
+
+def _add_cab_mount(spec: mujoco.MjSpec, hz: float, cab_kg: float) -> None:
+    """Put the cab (geom ``cab`` of the chassis) on its own mounts; see ``TruckVariant.cab_mount_hz``.
+
+    The chassis keeps the truck's mass and centre of mass: it loses the cab's mass, its CoM moves
+    so that chassis and cab together keep the old one, and its inertia about its new CoM is the
+    old inertia minus the cab's (own box inertia plus parallel axis) minus the parallel-axis term
+    of the shift, in the roll, pitch and roll-pitch entries (the only ones in the mass matrix of
+    the rig's heave, pitch and roll). The yaw entries, held by the rig, would turn unphysical (a
+    tall cab taken out of the flat lumped tensor): the yaw moment is set to the pitch one and the
+    yaw products to 0, which only touches the roll-rate x pitch-rate terms (the dropped product
+    of inertia is ~2900 kg m^2 at 1000 kg: 29 N m at 0.1 rad/s each, against spring moments of
+    1e4 N m).
+    """
+    chassis, geom = spec.body("chassis"), spec.geom("cab")
+    total_kg, com = float(chassis.mass), np.array(chassis.ipos, dtype=float)
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, np.asarray(chassis.iquat, dtype=float))
+    rot = rot.reshape(3, 3)
+    inertia = rot @ np.diag(np.asarray(chassis.inertia, dtype=float)) @ rot.T  # about com, chassis axes
+    pos, side = np.array(geom.pos, dtype=float), 2.0 * np.array(geom.size, dtype=float)
+    cab_inertia = cab_kg / 12.0 * np.array([side[1] ** 2 + side[2] ** 2, side[0] ** 2 + side[2] ** 2,
+                                            side[0] ** 2 + side[1] ** 2])
+    rest_kg = total_kg - cab_kg
+    rest_com = (total_kg * com - cab_kg * pos) / rest_kg
+    about_origin = inertia + _parallel_axis(com, total_kg) - np.diag(cab_inertia) - _parallel_axis(pos, cab_kg)
+    rest = about_origin - _parallel_axis(rest_com, rest_kg)
+    rest[2, 2], rest[0, 2], rest[2, 0] = rest[1, 1], 0.0, 0.0
+    moments, axes = np.linalg.eigh(rest)
+    # A body's principal moments obey the triangle inequality (its sum m r r^T is positive definite).
+    if np.linalg.eigvalsh(0.5 * moments.sum() * np.eye(3) - np.diag(moments))[0] <= 0:
+        raise ValueError(f"vehicle.cab_mass_kg = {cab_kg:g} kg leaves the chassis without its cab a negative roll "
+                         "inertia; give a lighter cab")
+    axes = axes * np.sign(np.linalg.det(axes))  # a rotation, not a reflection
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, axes.reshape(9))
+    chassis.mass, chassis.ipos, chassis.iquat, chassis.inertia = rest_kg, rest_com, quat, moments
+
+    looks = dict(type=geom.type, size=list(geom.size), rgba=list(geom.rgba), group=geom.group)
+    spec.delete(geom)
+    cab = chassis.add_body(name=names.CAB_BODY, pos=pos, mass=cab_kg, ipos=[0.0, 0.0, 0.0], inertia=cab_inertia)
+    cab.add_geom(name="cab", pos=[0.0, 0.0, 0.0], contype=0, conaffinity=0, density=0.0, **looks)
+    omega = 2.0 * math.pi * float(hz)
+    k = cab_kg * omega**2  # N/m, all four mounts together
+    c = 2.0 * CAB_DAMPING_RATIO * cab_kg * omega  # N s/m
+    arm2 = (0.5 * CAB_MOUNT_SPACING_M) ** 2  # m^2: each mount pair at half the spacing from the CoM
+    g = -float(spec.option.gravity[2])
+    for name, kind, axis, stiffness, damping, ref in (
+        (names.CAB_JOINTS[0], mujoco.mjtJoint.mjJNT_SLIDE, [0, 0, 1], k, c, g / omega**2),  # preload: k ref = m g
+        (names.CAB_JOINTS[1], mujoco.mjtJoint.mjJNT_HINGE, [0, 1, 0], k * arm2, c * arm2, 0.0),
+    ):
+        joint = cab.add_joint(name=name, type=kind, axis=axis, pos=[0.0, 0.0, 0.0], springref=ref)
+        joint.stiffness = [stiffness] + [0.0] * (len(joint.stiffness) - 1)
+        joint.damping = [damping] + [0.0] * (len(joint.damping) - 1)
 
 
 def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scene: bool = True) -> mujoco.MjSpec:
@@ -234,6 +334,8 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
             spec.delete(spec.joint(names.pan_joint(corner)))
     if v.timestep_s is not None:
         spec.option.timestep = float(v.timestep_s)
+    if v.cab_mount_hz is not None:
+        _add_cab_mount(spec, v.cab_mount_hz, CAB_MASS_KG if v.cab_mass_kg is None else float(v.cab_mass_kg))
     return spec
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 __all__ = [
     "CORNERS", "FRONT", "REAR", "TRUCK_BODIES",
     "pan_body", "pan_joint", "tire_actuator", "tire_sensor", "wheel_site", "hydraulic_actuator",
-    "axle_body",
+    "axle_body", "CAB_BODY", "CAB_JOINTS",
 ]
 
 #: Wheel stations, in the order every per-wheel array of this project uses:
@@ -22,6 +22,15 @@ REAR: tuple[str, ...] = ("rl", "rr")
 
 #: Bodies of the truck (pans excluded): their masses sum to the vehicle mass.
 TRUCK_BODIES: tuple[str, ...] = ("chassis", "payload", "front_axle", "rear_axle")
+
+#: The cab as its own body on its mounts, present only with ``TruckVariant.cab_mount_hz`` set
+#: (otherwise the cab is part of the chassis); a truck body too, so its mass adds to
+#: :data:`TRUCK_BODIES`' when it exists.
+CAB_BODY: str = "cab"
+#: The cab's joints on the chassis: its vertical slide (qpos in m, 0 = at rest under gravity,
+#: + up) and its pitch hinge about the cab's centre of mass (rad, + nose down); only with
+#: ``TruckVariant.cab_mount_hz`` set.
+CAB_JOINTS: tuple[str, ...] = ("cab_z", "cab_pitch")
 
 
 def _check(corner: str) -> str:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from mjcf.names import CORNERS, pan_joint, tire_actuator
+from mjcf.names import CAB_JOINTS, CORNERS, pan_joint, tire_actuator
 
 __all__ = [
     "TRUCK_JOINTS",
@@ -28,7 +28,8 @@ __all__ = [
     "modal_analysis",
 ]
 
-#: The truck's degrees of freedom (the pans' are :func:`mjcf.names.pan_joint`).
+#: The truck's degrees of freedom (the pans' are :func:`mjcf.names.pan_joint`; a suspended cab
+#: adds :data:`mjcf.names.CAB_JOINTS`).
 TRUCK_JOINTS: tuple[str, ...] = (
     "chassis_z",
     "chassis_pitch",
@@ -48,6 +49,8 @@ MODE_NAMES: dict[str, str] = {
     "front_axle_roll": "front axle roll",
     "rear_axle_z": "rear axle hop",
     "rear_axle_roll": "rear axle roll",
+    "cab_z": "cab bounce",
+    "cab_pitch": "cab pitch",
 }
 
 
@@ -67,7 +70,8 @@ class RigIndex:
     Attributes
     ----------
     truck_qpos, truck_dof : numpy.ndarray of int
-        qpos and dof addresses of :data:`TRUCK_JOINTS`, in that order.
+        qpos and dof addresses of :data:`TRUCK_JOINTS`, in that order, then of
+        :data:`mjcf.names.CAB_JOINTS` when the model has a suspended cab.
     pan_qpos, pan_dof : numpy.ndarray of int
         qpos and dof addresses of :func:`mjcf.names.pan_joint` in :data:`mjcf.names.CORNERS` order
         (empty when the pans are fixed).
@@ -89,7 +93,8 @@ class RigIndex:
                 raise KeyError(f"the model has no joint named {name!r}")
             return i
 
-        truck = [jid(n) for n in TRUCK_JOINTS]
+        has_cab = all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) >= 0 for n in CAB_JOINTS)
+        truck = [jid(n) for n in TRUCK_JOINTS + (CAB_JOINTS if has_cab else ())]
         pan_names = [pan_joint(c) for c in CORNERS]
         has_pans = all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) >= 0 for n in pan_names)
         pans = [jid(n) for n in pan_names] if has_pans else []

@@ -156,9 +156,10 @@ class Rig:
 
     @property
     def truck_mass_kg(self) -> float:
-        """float, kg: chassis, payload and axles (pans excluded)."""
+        """float, kg: chassis, payload, axles and a suspended cab if any (pans excluded)."""
         ids = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names.TRUCK_BODIES]
-        return float(self.model.body_mass[ids].sum())
+        cab = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, names.CAB_BODY)
+        return float(self.model.body_mass[ids + ([cab] if cab >= 0 else [])].sum())
 
     @property
     def unsprung_kg(self) -> np.ndarray:
