@@ -330,7 +330,8 @@ def parse_grid(doc: Mapping, *, source: pathlib.Path | None = None) -> SweepGrid
         seen = [format_value(v) for v in values]
         dup = next((s for s in seen if seen.count(s) > 1), None)
         if dup is not None:
-            raise ScenarioError(f"{where}axis {key} lists the value {dup} twice")
+            shown = dup if dup and dup.isprintable() and dup.strip() == dup else repr(dup)  # one line, visible
+            raise ScenarioError(f"{where}axis {key} lists the value {shown} twice")
         axes.append((key, tuple(values)))
 
     cases_list = doc.get("cases", None)
