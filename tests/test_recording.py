@@ -271,3 +271,16 @@ def test_viewer_opened_only_when_asked(runs, tmp_path, monkeypatch):
     assert opened == []
     write_recording(tmp_path / "b.rrd", [road], spawn=True)
     assert opened == [tmp_path / "b.rrd"]
+
+
+def test_preload_imports_rerun_on_a_thread_before_it_is_needed():
+    """``rigsim run --rrd`` starts importing rerun before its run (the import overlaps the
+    stepping); a fresh process has no rerun until the preload thread has loaded it."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from scenarios.review.recording import preload_rerun; "
+            "assert 'rerun' not in sys.modules; t = preload_rerun(); t.join(); "
+            "assert 'rerun' in sys.modules and 'scenarios.review.blueprint' in sys.modules; print('ok')")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-500:]

@@ -107,6 +107,9 @@ def _cmd_run(args) -> int:
 
         check_output_file(args.rrd, "--rrd", force=args.force, folder=args.out)
         pose_rate = DEFAULT_POSE_RATE_HZ
+        from scenarios.review.recording import preload_rerun
+
+        preload_rerun()  # the import overlaps the run
     with staged_output(args.out, force=args.force) as stage:
         with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
             result = run(scenario, args.mode, progress=progress, pose_rate_hz=pose_rate)
