@@ -257,3 +257,34 @@ def test_envelope_is_a_moving_average_with_sinc_response():
     assert np.max(np.abs(envelope(Profile(x, z, z), 0.25).left_m[2000:-2000])) < 1e-9
     q = Profile(x, z, z)
     assert envelope(q, 0.0) is q
+
+
+def test_road_drive_reads_only_the_profile_points_it_needs_and_gets_the_same_bits():
+    """RoadDrive interpolates each chunk on a slice of the profile and makes the slopes of that
+    slice only (memory: a 600 s drive no longer holds two profile-long slope arrays); the values
+    are bit for bit those of numpy.gradient and numpy.interp on the whole profile."""
+    import numpy as np
+
+    from scenarios.core import road_drive as rd
+    from scenarios.core.config import parse_scenario
+    from scenarios.core.rig import Rig
+
+    rng = np.random.default_rng(5)
+    track = rng.normal(size=200)
+    for i0, i1 in ((0, 200), (0, 7), (193, 200), (50, 51), (10, 120)):
+        assert np.array_equal(rd._slope(track, i0, i1, 0.02), np.gradient(track, 0.02)[i0:i1])
+    sc = parse_scenario({"name": "slice", "speed_kmh": 72.0, "duration_s": 2.0, "lead_in_s": 1.0, "seed": 4,
+                         "road": {"roughness": "C"}})
+    src = Rig(sc, hydraulic=False).road_source()
+    p, v = src.profile, src.speed_mps
+    for k0, k1 in ((0, 1), (0, 1000), (12345, 13999), (src.n_steps - 5, src.n_steps)):
+        t = np.arange(k0, k1) / src.fs_hz
+        s = np.minimum(src.start_m + v * t, p.x_m[-1])
+        z, vz = src.chunk(k0, k1)
+        fade = src.lead_in_s > 0 and k0 < src.lead_in_s * src.fs_hz
+        for col, (track, pos) in enumerate(((p.left_m, s), (p.right_m, s), (p.left_m, s - src.wheelbase_m),
+                                            (p.right_m, s - src.wheelbase_m))):
+            ref_z = np.interp(pos, p.x_m, track)
+            ref_v = v * np.interp(pos, p.x_m, np.gradient(track, p.dx_m))
+            if not fade:
+                assert np.array_equal(z[:, col], ref_z) and np.array_equal(vz[:, col], ref_v)

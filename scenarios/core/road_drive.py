@@ -15,7 +15,7 @@ test's rms, iteration); the values are the same, bit for bit, however the steps 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -36,8 +36,8 @@ class RoadDrive:
 
     Step k is at t_k = k / fs - lead_in (s); the front axle is then at
     s = start + v k / fs (m), the rear at s - wheelbase. Elevation: linear interpolation of each
-    track; velocity: v times the centred finite-difference slope dz/dx (``numpy.gradient``),
-    linearly interpolated (continuous, unlike the derivative of the linear interpolant). With a
+    track; velocity: v times the centred finite-difference slope dz/dx (``numpy.gradient``, made
+    for the points a chunk reads only), linearly interpolated (continuous, unlike the derivative of the linear interpolant). With a
     lead-in, a cosine fade w(t) from rest over its first half: z w and v w + z dw/dt.
 
     Parameters
@@ -70,7 +70,6 @@ class RoadDrive:
     n_steps: int
     lead_in_s: float = 0.0
     corners: tuple = CORNERS
-    slopes: tuple = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         for name in ("speed_mps", "wheelbase_m", "fs_hz"):
@@ -90,8 +89,6 @@ class RoadDrive:
                 f"profile is too short: duration_s = {(self.n_steps - 1) / fs} s at {v} m/s from start_m = "
                 f"{self.start_m:.6g} m needs distance up to {end:.6g} m, profile ends at "
                 f"{x[-1]:.6g} m; shorten duration_s or use a longer profile.")
-        object.__setattr__(self, "slopes", tuple(np.gradient(track, self.profile.dx_m)
-                                                 for track in (self.profile.left_m, self.profile.right_m)))
 
     @property
     def dt_s(self) -> float:
@@ -130,11 +127,16 @@ class RoadDrive:
         s_front = np.minimum(self.start_m + v * t, x[-1])
         s_rear = s_front - self.wheelbase_m
         z, vz = np.empty((t.size, 4)), np.empty((t.size, 4))
-        for track, slope, cols in ((self.profile.left_m, self.slopes[0], (0, 2)),
-                                   (self.profile.right_m, self.slopes[1], (1, 3))):
-            for col, s in zip(cols, (s_front, s_rear)):
-                z[:, col] = np.interp(s, x, track)
-                vz[:, col] = v * np.interp(s, x, slope)
+        for col, s in ((0, s_front), (2, s_rear)):
+            if s.size == 0:
+                continue
+            # Only the profile points this chunk reads (s rises with t): interpolating on a slice
+            # gives the same values as on the whole profile, and the slopes are made here.
+            i0 = max(int(np.searchsorted(x, s[0], side="right")) - 2, 0)
+            i1 = min(int(np.searchsorted(x, s[-1], side="left")) + 2, x.size)
+            for track, c in ((self.profile.left_m, col), (self.profile.right_m, col + 1)):
+                z[:, c] = np.interp(s, x[i0:i1], track[i0:i1])
+                vz[:, c] = v * np.interp(s, x[i0:i1], _slope(track, i0, i1, self.profile.dx_m))
         if self.lead_in_s > 0:
             lead, t_fade = self.lead_in_s, 0.5 * self.lead_in_s
             tau = np.clip(((t - lead) + lead) / t_fade, 0.0, 1.0)
@@ -151,6 +153,21 @@ class RoadDrive:
     def check_stroke(self, half_stroke_m: float) -> None:
         """Raise ValueError if a drive leaves +-``half_stroke_m`` (m); see :func:`~scenarios.core.drive.check_stroke`."""
         check_stroke(self, half_stroke_m)
+
+
+def _slope(track: np.ndarray, i0: int, i1: int, dx_m: float) -> np.ndarray:
+    """dz/dx (1) of ``track`` at points ``i0`` .. ``i1 - 1``: the centred difference inside, one-sided
+    at the profile's ends, bit for bit ``numpy.gradient(track, dx_m)[i0:i1]`` without making
+    the whole array."""
+    j = np.arange(i0, i1)
+    out = np.empty(j.size)
+    inner = (j > 0) & (j < track.size - 1)
+    out[inner] = (track[j[inner] + 1] - track[j[inner] - 1]) / (2.0 * dx_m)
+    if i0 == 0:
+        out[0] = (track[1] - track[0]) / dx_m
+    if i1 == track.size:
+        out[-1] = (track[-1] - track[-2]) / dx_m
+    return out
 
 
 def sample_wheels(profile: Profile, speed_mps: float, wheelbase_m: float, fs_hz: float,
