@@ -315,7 +315,8 @@ def table(rows: list[dict], taps: tuple[int, int], fs: float) -> str:
     return "\n".join(lines)
 
 
-def _pick(cases: list[str] | None) -> list[pathlib.Path]:
+def pick_cases(cases: list[str] | None) -> list[pathlib.Path]:
+    """The paper scenarios whose file names contain each of ``cases`` (all three by default)."""
     paths = paper_scenarios()
     if not cases:
         return paths
@@ -341,7 +342,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if not (args.duration_s > 0 and args.lead_s >= 0 and args.lag_s > 0 and args.noise_N >= 0):
         raise SystemExit("--duration-s and --lag-s must be > 0 s, --lead-s and --noise-N >= 0")
-    paths = [str(p) for p in _pick(args.cases)]
+    paths = [str(p) for p in pick_cases(args.cases)]
     fs = load_scenario(paths[0]).output_rate_hz
     lead, lag = int(round(args.lead_s * fs)), int(round(args.lag_s * fs))
     t0 = time.perf_counter()

@@ -1,0 +1,15 @@
+"""Output correction by a rig-calibrated truck model (issue 17): F_corr = F_rig + F_model(x_ref) - F_model(x_a).
+
+* :mod:`.model_runs`: :func:`~.model_runs.model_forces`, the truck model's tire forces with its pans
+  following a measured motion (x_ref or x_a, 1 kHz);
+* :mod:`.calibrate`: :func:`~.calibrate.calibrate`, the uncertain truck parameters fitted so the
+  model, pans following x_a, reproduces F_rig (rig signals only), weighted by :mod:`.weighting`
+  towards the frequencies the correction uses the model at;
+* :mod:`.differential`: :func:`~.differential.differential_correction` and
+  :func:`~.differential.correct_with_model` (calibrate, check, correct, or fall back to the linear
+  correction with one sentence why);
+* :mod:`.score`: the NRMSE / DLC of a corrected force against the road force;
+* :mod:`.result`: :class:`~.result.Calibration`, :class:`~.result.ModelCorrection`.
+
+Kept empty of imports: a command's parser may import the package without loading numpy or MuJoCo.
+"""

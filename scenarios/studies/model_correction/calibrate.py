@@ -1,0 +1,345 @@
+"""Calibrating the truck model from the rig's own signals (x_a and F_rig), never the road run.
+
+What is fitted, and why (:data:`FITTED`): the fields of :class:`mjcf.build.TruckVariant` that a
+lab does not know to better than ~10-30 % and that change the wheel forces:
+
+* ``payload_kg``, ``payload_x_m``: the ballast's mass and its position along the truck set the
+  static loads and the body's bounce and pitch; the first guess comes from the measured static
+  loads (:func:`static_guess`), the fit refines them;
+* ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
+  right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
+  motion puts straight through the tire;
+* ``spring_friction_front/rear_N``: the leaf springs' interleaf friction per axle, the truck's
+  main nonlinearity (it locks the springs at small amplitude).
+
+Not fitted: the chassis (5.2 t, its CoM and inertia), the axles' masses and the leaf springs'
+rate and viscous damping are held at their catalogue (XML) values; the tire free radius only moves
+the static ride height, and the pan mass does not enter a tire force whose pans follow a given
+motion, so neither can be identified from x_a and F_rig. Every fitted field came out identifiable
+on the paper's cases (the 1-sigma of :class:`~scenarios.studies.model_correction.result.Calibration`
+are ~1 % or less, ``benchmarks/model_correction.py``).
+
+First guess: payload and its x from the measured static loads (the record's mean wheel forces:
+the weight split, since the dynamic forces average out) on the catalogue truck; everything else
+at :data:`CATALOGUE`, a catalogue guess: the XML's nominal values times fixed factors (0.85 or
+1.15), documented as such so that the fit always has work to do and never starts from a plant's
+true values.
+
+The fit: ``scipy.optimize.least_squares`` (trust-region reflective, bounded) of the residual
+(F_model(x_a) - F_rig) / std(F_rig) per wheel over a few windows of the record (each run starts
+from rest with a lead-in of measured x_a before its scored span, so the unknown truck state at
+the window's start has decayed). Given the drive x_ref, the residual is weighted towards the
+frequencies where the pans miss the drive (:mod:`scenarios.studies.model_correction.weighting`):
+what the differential correction takes from the model. With the plant in the model family it
+changes nothing; with a structural mismatch it keeps the mismatch from bending the parameters
+where the correction needs them (medium case, cab mode on, 20 s: front tire stiffness +4.4 %
+-> +0.7 %, friction +10.7 % -> +5.6 %, corrected NRMSE front 0.129 / 0.141 -> 0.119 / 0.133). The leaves' dry friction is MuJoCo's ``frictionloss``, a soft
+constraint (smoothed), so the forces are smooth in the parameters and a forward-difference
+Jacobian (step :data:`FD_STEP` of each scaled parameter) works; its perturbed runs go to the
+worker pool (:func:`scenarios.core.pool.run_jobs`) together, one model run per window and variant.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from mjcf.build import BOUNDS, TruckVariant, build_model
+from mjcf.names import CORNERS, FRONT
+from mjcf.physics import RigIndex
+from scenarios.core.config import Scenario, ScenarioError
+from scenarios.core.pool import local_executor, run_jobs
+from scenarios.studies.model_correction.model_runs import (SETTLE_S, check_record, portable, static_axle_loads,
+                                                           window_job)
+from scenarios.studies.model_correction.result import Calibration
+from scenarios.studies.model_correction.weighting import differential_kernel
+
+__all__ = ["FITTED", "UNITS", "CATALOGUE_FACTORS", "xml_nominal", "catalogue", "static_guess", "fit_windows",
+           "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "GRAVITY_M_S2",
+           "BLOCK_S", "uncertainties"]
+
+#: The fitted fields, in this order.
+FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
+          "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
+          "spring_friction_rear_N")
+UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
+         "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
+         "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N"}
+#: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
+#: lab's catalogue values are 10-30 % off the truck on its rig.
+CATALOGUE_FACTORS = {"tire_stiffness_front_N_per_m": 0.85, "tire_stiffness_rear_N_per_m": 1.15,
+                     "tire_damping_front_Ns_per_m": 1.15, "tire_damping_rear_Ns_per_m": 0.85,
+                     "spring_friction_front_N": 0.85, "spring_friction_rear_N": 1.15}
+#: Search range of each fitted field about its first guess: (low, high) factors, or for the
+#: payload's x, metres either side. Clipped to :data:`mjcf.build.BOUNDS`.
+RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
+          "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
+          "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 4.0),
+          "spring_friction_rear_N": (0.05, 4.0)}
+#: Windows of the record fitted: how many, scored seconds each, measured lead-in before each (s).
+#: The lead-in: a model run started at rest on a moving truck's record carries the start's state
+#: error for ~3 s (leaf friction makes it slow: at 2.5 s it is down to ~10 % of the fit's residual
+#: on the medium case), so 2.5 s is run and not scored.
+WINDOWS, WINDOW_S, WINDOW_LEAD_S = 3, 4.0, 2.5
+#: Forward-difference step of each scaled parameter (1: 1 % of a positive field, 1 cm of payload x).
+FD_STEP = 0.01
+#: Most residual evaluations of the least squares (the Jacobians come on top, one per iteration).
+MAX_NFEV = 20
+#: Block of the robust uncertainty, s: longer than the fit residual's correlation (the truck's
+#: slowest modes, ~0.6 s period), short enough for a few dozen blocks in the windows.
+BLOCK_S = 0.5
+#: m/s^2, the model's gravity (truck_rig.xml).
+GRAVITY_M_S2 = 9.81
+
+
+def xml_nominal() -> dict[str, float]:
+    """The fitted fields' values in ``truck_rig.xml`` (SI), read from the compiled nominal model."""
+    import mujoco
+
+    model = build_model(TruckVariant())
+    idx = RigIndex.of(model)
+    f, r = CORNERS.index(FRONT[0]), CORNERS.index("rl")
+    bias = model.actuator_biasprm[idx.tire_actuator]
+    ten = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, f"spring_{c}") for c in CORNERS]
+    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "payload")
+    return {"payload_kg": float(model.body_mass[body]),
+            "payload_x_m": float(model.body_pos[body, 0]),
+            "tire_stiffness_front_N_per_m": float(-bias[f, 1]), "tire_stiffness_rear_N_per_m": float(-bias[r, 1]),
+            "tire_damping_front_Ns_per_m": float(-bias[f, 2]), "tire_damping_rear_Ns_per_m": float(-bias[r, 2]),
+            "spring_friction_front_N": float(model.tendon_frictionloss[ten[f]]),
+            "spring_friction_rear_N": float(model.tendon_frictionloss[ten[r]])}
+
+
+def catalogue() -> dict[str, float]:
+    """The catalogue guess of the non-payload fields: :func:`xml_nominal` times :data:`CATALOGUE_FACTORS`."""
+    nominal = xml_nominal()
+    return {k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}
+
+
+def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
+    """Payload (kg) and its x (m, chassis frame) from the measured static loads.
+
+    The record's mean wheel force is the static load (the dynamic forces average out over the
+    record); the catalogue truck without payload gives its own static loads; the difference is
+    the payload's weight, and the front axle's share of it places it between the axles.
+
+    Raises
+    ------
+    ScenarioError
+        Measured loads that imply no payload on the truck (one sentence).
+    """
+    f = np.asarray(force_N, dtype=float).mean(axis=0)
+    cat = catalogue()
+    empty = static_axle_loads(TruckVariant(payload_kg=0.0, **cat), base_scenario)
+    front = np.array([c in FRONT for c in CORNERS])
+    d_total = float(f.sum() - empty.sum())
+    d_front = float(f[front].sum() - empty[front].sum())
+    payload = d_total / GRAVITY_M_S2
+    lo, hi = BOUNDS["payload_kg"][:2]
+    if not (lo < payload <= hi) or d_total <= 0:
+        raise ScenarioError(f"the measured mean wheel loads ({f.sum() / 1e3:.1f} kN in all) imply a payload of "
+                            f"{payload:.0f} kg, outside {lo:g} to {hi:g} kg: check the force channels' scale and sign")
+    x_f, x_r = 2.5, -2.5  # axle positions in the chassis frame (truck_rig.xml: front_axle / rear_axle pos)
+    x = x_r + (x_f - x_r) * d_front / d_total
+    if abs(x) > 3.5:
+        raise ScenarioError(f"the measured front/rear load split puts the payload at x = {x:.2f} m, off the truck "
+                            "(-3.5 to 3.5 m): check which force channels are front and rear")
+    return float(payload), float(x)
+
+
+def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
+                lead_s: float = WINDOW_LEAD_S) -> list[tuple[int, int, int]]:
+    """``n`` windows spread evenly over the record: (first run sample, first scored sample, end).
+
+    Raises
+    ------
+    ScenarioError
+        A record shorter than one lead-in plus one scored window.
+    """
+    t = np.asarray(t_s, dtype=float)
+    fs = 1.0 / (t[1] - t[0])
+    lead, span = int(round(lead_s * fs)), int(round(scored_s * fs))
+    if t.size < lead + span:
+        raise ScenarioError(f"the record ({t.size / fs:g} s) is shorter than a calibration window "
+                            f"({lead_s:g} s lead-in + {scored_s:g} s); record at least {lead_s + scored_s:g} s")
+    starts = np.linspace(lead, t.size - span, n).round().astype(int)
+    return [(int(s - lead), int(s), int(s + span)) for s in starts]
+
+
+def uncertainties(jac, residual, block: int) -> tuple[np.ndarray, np.ndarray]:
+    """1-sigma of the fitted (scaled) parameters: formal, sqrt(diag((J^T J)^-1 s^2)) with s^2 the
+    residual variance on m - n degrees of freedom (white residual), and block-robust, the sandwich
+    (J^T J)^-1 (sum_b J_b^T r_b r_b^T J_b) (J^T J)^-1 over blocks of ``block`` samples (4 residual
+    rows each: one per wheel), which holds for a residual correlated over less than a block."""
+    m, p = jac.shape
+    bread = np.linalg.pinv(jac.T @ jac)
+    formal = np.diag(bread) * float(residual @ residual) / max(m - p, 1)
+    labels = (np.arange(m) // 4) // max(int(block), 1)
+    scores = np.zeros((int(labels[-1]) + 1, p))
+    np.add.at(scores, labels, jac * residual[:, None])
+    robust = np.diag(bread @ (scores.T @ scores) @ bread)
+    return np.sqrt(np.clip(formal, 0.0, None)), np.sqrt(np.clip(robust, 0.0, None))
+
+
+class _Problem:
+    """The least-squares problem in scaled parameters theta (1 at the first guess).
+
+    Residual: per window, (F_model - F_rig) through the weighting ``kernel`` (zero-phase FIR,
+    none: unweighted) on the scored samples, less the kernel's half-length at the end; each wheel
+    divided by the std of its measured force on the scored samples."""
+
+    def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None):
+        self.names, self.t, self.x_a, self.force, self.windows = names, t, x_a, force, windows
+        self.base, self.fixed, self.executor, self.kernel = portable(base), fixed, executor, kernel
+        self.offset = np.array([guess[k] - RANGES[k] if k == "payload_x_m" else 0.0 for k in names])
+        self.scale = np.array([RANGES[k] if k == "payload_x_m" else guess[k] for k in names])
+        self.norm = np.concatenate([force[s:e] for _, s, e in windows]).std(axis=0)
+        self.half = 0 if kernel is None else kernel.size // 2
+        self.evaluations, self.cache = 0, {}
+
+    def values(self, theta) -> dict[str, float]:
+        return dict(zip(self.names, (self.offset + self.scale * np.asarray(theta)).tolist()))
+
+    def variant(self, theta) -> TruckVariant:
+        return TruckVariant(**self.fixed, **self.values(theta))
+
+    def model(self, thetas) -> list[list[np.ndarray]]:
+        """The model's force on each window (lead-in included), per theta."""
+        jobs = [(window_job, (self.variant(th), self.t[a:e], self.x_a[a:e], self.base, SETTLE_S))
+                for th in thetas for a, _, e in self.windows]
+        out = run_jobs(jobs, executor=self.executor)
+        self.evaluations += len(thetas)
+        w = len(self.windows)
+        return [out[i * w:(i + 1) * w] for i in range(len(thetas))]
+
+    def plain(self, model_N) -> np.ndarray:
+        """Unweighted residual (scored samples x 4), N."""
+        return np.concatenate([m[s - a:] - self.force[s:e] for m, (a, s, e) in zip(model_N, self.windows)])
+
+    def residual(self, model_N) -> np.ndarray:
+        if self.kernel is None:
+            return (self.plain(model_N) / self.norm).ravel()
+        from scipy.signal import fftconvolve
+
+        parts = []
+        for m, (a, s, e) in zip(model_N, self.windows):
+            err = fftconvolve(m - self.force[a:e], self.kernel[:, None], mode="same", axes=0)
+            parts.append(err[s - a:e - a - self.half])
+        return (np.concatenate(parts) / self.norm).ravel()
+
+    def fun(self, theta) -> np.ndarray:
+        key = tuple(np.asarray(theta, float))
+        if key not in self.cache:
+            m = self.model([theta])[0]
+            self.cache = {key: (self.residual(m), m)}
+        return self.cache[key][0]
+
+    def jac(self, theta, lower, upper) -> np.ndarray:
+        theta = np.asarray(theta, float)
+        f0 = self.fun(theta)
+        steps = np.where(theta + FD_STEP <= upper, FD_STEP, -FD_STEP)
+        thetas = [theta + h * np.eye(theta.size)[i] for i, h in enumerate(steps)]
+        return np.column_stack([(self.residual(m) - f0) / h for m, h in zip(self.model(thetas), steps)])
+
+
+def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, names=FITTED,
+              fitted_guess: dict | None = None,
+              windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
+              workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None) -> Calibration:
+    """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
+
+    Parameters
+    ----------
+    t_s : array_like, s, (n,)
+        The record's time axis (uniform, 1 kHz).
+    x_a_m : array_like, m, (n, 4)
+        Measured pan displacement (LVDTs), corners fl, fr, rl, rr.
+    force_N : array_like, N, (n, 4)
+        Measured wheel force (load cells, with their noise).
+    base_scenario : Scenario
+        The rig (actuator stroke) and output rate; its truck is never used.
+    x_ref_m : array_like, m, (n, 4), optional
+        The drive: given, the residual is weighted by where the differential correction uses the
+        model (:mod:`scenarios.studies.model_correction.weighting`); None: unweighted.
+    names : sequence of str
+        The fields to fit (default :data:`FITTED`); the others of :data:`FITTED` are held at their
+        first guess (:attr:`Calibration.fixed`).
+    fitted_guess : dict, optional
+        First guesses (SI) of fitted fields to use instead of the static-load and catalogue ones.
+    windows, window_s, lead_s : int, s, s
+        See :func:`fit_windows`.
+    workers : int, optional
+        Worker processes (default: all cores).
+    max_nfev : int
+        Most residual evaluations.
+    executor : concurrent.futures.Executor, optional
+        A running pool to use instead of starting one.
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    ScenarioError
+        A bad record or static loads that imply no truck (before any model run).
+    """
+    from scipy.optimize import least_squares
+
+    wall0 = time.perf_counter()
+    names = tuple(names)
+    unknown = sorted(set(names) - set(FITTED))
+    if unknown or not names:
+        raise ScenarioError(f"names must be a non-empty subset of {', '.join(FITTED)}, got {', '.join(unknown) or 'none'}")
+    t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
+    x_a, force = np.asarray(x_a_m, float), np.asarray(force_N, float)
+    kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
+    wins = fit_windows(t, windows, window_s, lead_s)
+    payload, x = static_guess(force, base_scenario)
+    guess = {"payload_kg": payload, "payload_x_m": x, **catalogue(), **(fitted_guess or {})}
+    lower, upper = [], []
+    fixed = {k: float(v) for k, v in guess.items() if k not in names}
+    for k in names:
+        lo, hi = BOUNDS.get(k, (-3.5, 3.5) if k == "payload_x_m" else (0.0, np.inf))[:2]
+        r = RANGES[k]
+        a, b = (guess[k] - r, guess[k] + r) if k == "payload_x_m" else (guess[k] * r[0], guess[k] * r[1])
+        lower.append(max(a, lo))
+        upper.append(min(b, hi))
+    with local_executor(workers) if executor is None else _Given(executor) as ex:
+        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel)
+        lb = (np.array(lower) - prob.offset) / prob.scale
+        ub = (np.array(upper) - prob.offset) / prob.scale
+        theta0 = np.ones(len(names))
+        prob.fun(theta0)
+        m_init = prob.cache[tuple(theta0)][1]
+        res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, lb, ub), bounds=(lb, ub), method="trf",
+                            x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
+        f_opt, m_opt = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
+    sigma, robust = uncertainties(res.jac, f_opt, int(round(BLOCK_S * fs)))
+    fitted = prob.offset + prob.scale * res.x
+
+    def per_wheel(model_N):
+        return tuple(float(v) for v in np.sqrt(np.mean(prob.plain(model_N) ** 2, axis=0)) / prob.norm)
+
+    return Calibration(names=names, units=tuple(UNITS[k] for k in names),
+                       initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
+                       sigma=tuple(float(s) for s in sigma * prob.scale),
+                       sigma_robust=tuple(float(s) for s in robust * prob.scale), fixed=fixed, fit_nrmse=per_wheel(m_opt),
+                       initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
+                       windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
+                       evaluations=int(prob.evaluations), converged=bool(res.status > 0),
+                       message=str(res.message), wall_time_s=round(time.perf_counter() - wall0, 3))
+
+
+class _Given:
+    """Context manager handing out an executor the caller owns (not shut down on exit)."""
+
+    def __init__(self, executor) -> None:
+        self.executor = executor
+
+    def __enter__(self):
+        return self.executor
+
+    def __exit__(self, *exc) -> None:
+        return None

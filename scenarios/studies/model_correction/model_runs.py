@@ -1,0 +1,162 @@
+"""Truck-model runs driven by measured pan motion: the model half of the model correction.
+
+:func:`model_forces` is the road test of a truck variant (:class:`mjcf.build.TruckVariant`) whose
+wheelpans follow a given motion sampled at the output rate (a rig's drive x_ref or its LVDTs'
+x_a, 1 kHz): the motion is interpolated onto the road test's 1e-4 s steps by a cubic spline
+(positions and, from the same spline, velocities), the truck starts from static rest on the
+pans at the first sample's positions and is held there for a settling lead-in
+(:data:`SETTLE_S`, so the leaf springs' dry friction and the soft constraints settle), then the
+pans follow the motion. It uses the one rig (:class:`scenarios.core.rig.Rig`, ``hydraulic=False``)
+and nothing of a road: only measured signals enter.
+
+:func:`static_axle_loads` gives the static tire loads of a variant at rest (the catalogue
+truck's weight split, used for the calibration's first guess), :func:`window_job` is the
+picklable unit of work the calibration sends to the worker pool.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from mjcf.build import TruckVariant
+from mjcf.physics import EquilibriumError
+from scenarios.core.config import Scenario, ScenarioError
+from scenarios.core.drive import Drive
+from scenarios.core.rig import Rig
+
+__all__ = ["SETTLE_S", "model_forces", "pan_motion_drive", "static_axle_loads", "window_job", "check_record", "portable"]
+
+#: Settling lead-in before a model run follows its pan motion, s: the truck is put at static
+#: rest on the pans' first positions (the frictionless equilibrium, :meth:`Rig.rest_state`), then
+#: held there with the leaves' friction on, so that the friction's soft constraint settles before
+#: the pans move. It does not remove the other start-up: the truck on the rig was moving at the
+#: record's first sample, the model's is at rest (see ``differential.START_S`` and
+#: ``calibrate.WINDOW_LEAD_S``, which handle that).
+SETTLE_S = 0.5
+
+
+def check_record(t_s, signals: dict) -> tuple[np.ndarray, float]:
+    """Check a measured record before any run: ``t_s`` (s) 1-D, uniformly spaced, increasing;
+    each of ``signals`` (name -> array) of shape (n, 4) and finite. Returns (t_s, rate in Hz).
+
+    Raises
+    ------
+    ScenarioError
+        Naming the field and the fix (one sentence).
+    """
+    t = np.asarray(t_s, dtype=float)
+    if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)):
+        raise ScenarioError(f"t_s must be a finite 1-D time axis of at least 2 samples, got shape {t.shape}; "
+                            "pass the record's time column in s")
+    dt = np.diff(t)
+    if not (dt[0] > 0 and np.allclose(dt, dt[0], rtol=1e-6, atol=1e-12)):
+        raise ScenarioError("t_s must be uniformly spaced and increasing; resample the record to a constant rate")
+    for name, arr in signals.items():
+        a = np.asarray(arr, dtype=float)
+        if a.shape != (t.size, 4):
+            raise ScenarioError(f"{name} must have shape ({t.size}, 4) (samples x corners fl, fr, rl, rr), "
+                                f"got {a.shape}; pass one column per wheel on the record's time axis")
+        if not np.all(np.isfinite(a)):
+            raise ScenarioError(f"{name} contains NaN or infinite values; clean or cut the record first")
+    return t, float(1.0 / dt[0])
+
+
+def pan_motion_drive(t_s, pan_m, dt_s: float, settle_s: float = SETTLE_S) -> Drive:
+    """The pans' drive on the model's steps: ``pan_m`` (m, (n, 4), sampled at ``t_s``, s) through
+    a cubic spline (not-a-knot) onto steps of ``dt_s`` (s) from ``-settle_s`` (s) before the first
+    sample to the last one; held at the first sample (velocity 0) during the lead-in. Times are
+    relative to ``t_s[0]``; the output rate's samples fall on steps exactly."""
+    from scipy.interpolate import CubicSpline
+
+    t = np.asarray(t_s, dtype=float) - float(t_s[0])
+    x = np.asarray(pan_m, dtype=float)
+    decim = (t[1] - t[0]) / dt_s
+    if abs(decim - round(decim)) > 1e-6:
+        raise ScenarioError(f"the record's sample interval {t[1] - t[0]:g} s must be a multiple of the model's "
+                            f"step {dt_s:g} s; resample the record (1 kHz works)")
+    decim = int(round(decim))
+    n_lead = int(round(settle_s / dt_s))
+    k = np.arange(-n_lead, (t.size - 1) * decim + 1)
+    tt = k * dt_s
+    spline = CubicSpline(t, x, axis=0)
+    ahead = k >= 0
+    z = np.empty((k.size, 4))
+    v = np.zeros((k.size, 4))
+    z[~ahead] = x[0]
+    z[ahead] = spline(tt[ahead])
+    v[ahead] = spline(tt[ahead], 1)
+    return Drive(tt, z, v)
+
+
+def model_scenario(variant: TruckVariant, base_scenario: Scenario, duration_s: float, settle_s: float) -> Scenario:
+    """``base_scenario`` (output rate, actuator stroke) carrying ``variant`` as its whole truck."""
+    return dataclasses.replace(base_scenario, vehicle=variant, duration_s=float(duration_s),
+                               lead_in_s=float(settle_s))
+
+
+def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
+                 settle_s: float = SETTLE_S) -> np.ndarray:
+    """Tire forces of the truck ``variant`` with its pans following ``pan_m``.
+
+    Parameters
+    ----------
+    variant : TruckVariant
+        The model truck (every field; nothing is taken from ``base_scenario.vehicle``).
+    t_s : array_like, s, (n,)
+        Sample times of the motion (uniform, a multiple of the road test's 1e-4 s step: 1 kHz).
+    pan_m : array_like, m, (n, 4)
+        Pan displacement per corner (fl, fr, rl, rr) from mid-stroke: the drive x_ref or the
+        measured x_a.
+    base_scenario : Scenario
+        Supplies the actuator stroke (the pans' travel) and the output rate; its truck is not used.
+    settle_s : float, s
+        Settling lead-in at the first sample's positions (see :data:`SETTLE_S`).
+
+    Returns
+    -------
+    numpy.ndarray, N, (n, 4)
+        Tire force on each pan at the samples ``t_s`` (compression positive), the force of the
+        state at that instant (as the rig's load cells and the road test record it).
+
+    Raises
+    ------
+    ScenarioError
+        A bad record, a motion that leaves the stroke, or a truck with no rest (before the run).
+    """
+    t, fs = check_record(t_s, {"pan_m": pan_m})
+    sc = model_scenario(variant, base_scenario, t[-1] - t[0], settle_s)
+    rig = Rig(sc, hydraulic=False)
+    drive = pan_motion_drive(t, pan_m, rig.dt_s, settle_s)
+    try:
+        drive.check_stroke(rig.half_stroke_m)
+    except ValueError as exc:
+        raise ScenarioError(f"pan motion: {exc}") from None
+    try:
+        rig.rest_state(pan_z_m=drive.z_m[0])  # a truck with no rest is refused before the run
+    except EquilibriumError as exc:
+        raise ScenarioError(f"model truck: {exc}") from None
+    rec = rig.run(drive, rate_hz=fs)
+    if rec.tire_force_N.shape != (t.size, 4):
+        raise RuntimeError(f"the model run gave {rec.tire_force_N.shape[0]} samples for {t.size}")
+    return np.asarray(rec.tire_force_N)
+
+
+def static_axle_loads(variant: TruckVariant, base_scenario: Scenario) -> np.ndarray:
+    """Static tire load of each wheel (N, (4,)) of ``variant`` at rest on the pans at mid-stroke
+    (dry friction off: the frictionless equilibrium)."""
+    rig = Rig(model_scenario(variant, base_scenario, 1.0, SETTLE_S), hydraulic=False)
+    data = rig.rest_state()
+    return np.asarray(data.actuator_force[rig.index.tire_actuator], dtype=float).copy()
+
+
+def portable(scenario: Scenario) -> Scenario:
+    """``scenario`` with its actuator overrides as a plain dict, so that it pickles to a worker
+    (a :class:`types.MappingProxyType` does not)."""
+    return dataclasses.replace(scenario, actuator=dict(scenario.actuator))
+
+
+def window_job(variant: TruckVariant, t_s, pan_m, base_scenario: Scenario, settle_s: float) -> np.ndarray:
+    """:func:`model_forces` as a worker job (positional arguments only)."""
+    return model_forces(variant, t_s, pan_m, base_scenario=base_scenario, settle_s=settle_s)

@@ -1,0 +1,139 @@
+"""The model correction (issue 17): differential correction, calibration from rig signals, fallback.
+
+Short records (8 s of the paper's medium 72 km/h case) so that the file runs in well under a minute;
+the plant differs from the XML's nominal truck (:func:`plant_scenario`), so calibration has work to do.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mjcf.build import TruckVariant
+from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
+from scenarios.core.pool import run_jobs
+from scenarios.core.run import run
+from scenarios.studies import scoring
+from scenarios.studies.model_correction.calibrate import calibrate, catalogue, xml_nominal
+from scenarios.studies.model_correction.differential import (FIT_NRMSE_LIMIT, correct_with_model,
+                                                             differential_correction, settled_mask)
+from scenarios.studies.model_correction.model_runs import pan_motion_drive
+from scenarios.studies.model_correction.score import score_correction
+
+DURATION_S = 8.0
+
+
+def _paper(stem: str) -> str:
+    return str(next(p for p in paper_scenarios() if stem in p.stem))
+
+
+def plant_scenario(stem: str = "medium_72"):
+    """A paper case with a plant truck that is not the XML's nominal one: payload -5 % and 0.1 m forward, tire
+    stiffness +10 % front / -10 % rear of the XML's; tire damping and leaf friction at the calibration's
+    catalogue values (XML x 1.15 or 0.85), so that a fit of the payload and the tire stiffness alone has
+    nothing else to absorb (the benchmark fits all of them on a plant off the catalogue in every field)."""
+    sc = load_scenario(_paper(stem))
+    nominal = xml_nominal()
+    plant = TruckVariant(payload_kg=0.95 * sc.vehicle.payload_kg, payload_x_m=nominal["payload_x_m"] + 0.1,
+                         tire_stiffness_front_N_per_m=1.1 * nominal["tire_stiffness_front_N_per_m"],
+                         tire_stiffness_rear_N_per_m=0.9 * nominal["tire_stiffness_rear_N_per_m"],
+                         **{k: v for k, v in catalogue().items() if "stiffness" not in k})
+    return dataclasses.replace(sc, duration_s=DURATION_S, vehicle=plant)
+
+
+def _run(stem: str, mode: str):
+    return run(plant_scenario(stem), mode)
+
+
+@pytest.fixture(scope="module")
+def record():
+    """Road and rig runs of the medium case's plant, and a rig run of another case (high, 72 km/h)."""
+    road, rig, other = run_jobs([(_run, ("medium_72", "road")), (_run, ("medium_72", "rig")),
+                                 (_run, ("high_72", "rig"))], workers=2)
+    sc = plant_scenario()
+    measured = scoring.measured_force(rig, scoring.NOISE_N, sc.seed)
+    other_measured = scoring.measured_force(other, scoring.NOISE_N, sc.seed)
+    return {"sc": sc, "t": rig.t_s, "x_ref": rig.signals["profile_m"], "x_a": rig.signals["pan_m"],
+            "F_rig": measured, "F_road": road.signals["tire_force_N"], "F_other": other_measured}
+
+
+def test_the_pan_motion_is_splined_onto_the_model_steps():
+    """The 1 kHz motion onto the road test's 1e-4 s steps: through every sample, the velocity of a 10 Hz sine
+    within 0.1 % (a cubic spline's error at 100 samples per period is ~1e-5), held during the lead-in."""
+    t = np.arange(0, 1.0001, 1e-3)
+    z = 0.01 * np.sin(2 * np.pi * 10 * t)[:, None] * np.ones(4)
+    drive = pan_motion_drive(t, z, 1e-4, settle_s=0.05)
+    ahead = drive.t_s >= -1e-12
+    assert drive.t_s[0] == pytest.approx(-0.05) and np.all(drive.z_m[~ahead] == z[0]) and np.all(drive.v_mps[~ahead] == 0)
+    np.testing.assert_allclose(drive.z_m[ahead][::10], z, atol=1e-12)
+    v = 0.01 * 2 * np.pi * 10 * np.cos(2 * np.pi * 10 * drive.t_s[ahead])
+    inner = (drive.t_s[ahead] > 0.05) & (drive.t_s[ahead] < 0.95)
+    assert np.max(np.abs(drive.v_mps[ahead][inner, 0] - v[inner])) < 1e-3 * np.max(np.abs(v))
+
+
+def test_exact_model_differential_correction_beats_the_rig_by_far(record):
+    """With the plant's own truck as the model, F_rig + F_model(x_ref) - F_model(x_a) reaches the road force to
+    NRMSE ~0.01 (issue 17's trial: 0.008 on the 60 s case; measured on this 8 s record 0.013-0.015 per wheel,
+    0.009-0.012 at 20 s), against 0.71-0.78 for the uncorrected rig force: a factor 49-60 here. Pinned at
+    > 25 and < 0.025 absolute; DLC within 1 % (measured 0.3 %)."""
+    sc, t = record["sc"], record["t"]
+    corrected = differential_correction(sc.vehicle, t, record["x_ref"], record["x_a"], record["F_rig"],
+                                        base_scenario=sc, workers=2)
+    rows = settled_mask(t)
+    model = score_correction(corrected, record["F_road"], 1000.0, rows)
+    rig = score_correction(record["F_rig"], record["F_road"], 1000.0, rows)
+    assert np.all(rig["nrmse"] > 0.5), rig["nrmse"]
+    assert np.all(model["nrmse"] < 0.025), model["nrmse"]
+    assert np.all(rig["nrmse"] / model["nrmse"] > 25.0)
+    assert np.all(np.abs(model["dlc_error"]) < 0.01), model["dlc_error"]
+
+
+def test_calibration_recovers_the_plant_from_rig_signals(record):
+    """Calibration from x_a and F_rig only: the payload (static guess then fit) within 2 % of the plant's, the
+    tire stiffness per axle (catalogue guess 23 % / 28 % off the plant) within 5 %, and the fit NRMSE against
+    F_rig at least halved on every wheel."""
+    sc, t = record["sc"], record["t"]
+    names = ("payload_kg", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m")
+    cal = calibrate(t, record["x_a"], record["F_rig"], base_scenario=sc, x_ref_m=record["x_ref"], names=names,
+                    windows=1, window_s=1.5, lead_s=2.0, max_nfev=3, workers=2)
+    fitted = dict(zip(cal.names, cal.fitted))
+    truth = sc.vehicle
+    assert abs(fitted["payload_kg"] / truth.payload_kg - 1) < 0.02
+    assert abs(cal.initial[1] / truth.tire_stiffness_front_N_per_m - 1) > 0.2  # the guess was far off
+    assert abs(fitted["tire_stiffness_front_N_per_m"] / truth.tire_stiffness_front_N_per_m - 1) < 0.05
+    assert abs(fitted["tire_stiffness_rear_N_per_m"] / truth.tire_stiffness_rear_N_per_m - 1) < 0.05
+    assert np.all(np.array(cal.fit_nrmse) < 0.5 * np.array(cal.initial_nrmse)), (cal.fit_nrmse, cal.initial_nrmse)
+    assert cal.fixed["spring_friction_front_N"] == pytest.approx(catalogue()["spring_friction_front_N"])
+    assert all(s > 0 for s in cal.sigma) and len(cal.sigma_robust) == len(names)
+
+
+def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
+    """F_rig of another case (high roughness, 3640 kg) with this case's x_a: no truck reproduces it (fit NRMSE
+    measured 1.03-1.18, against 0.05-0.07 for its own forces), and the answer is the linear correction with one
+    sentence why."""
+    sc, t = record["sc"], record["t"]
+    out = correct_with_model(t, record["x_ref"], record["x_a"], record["F_other"], base_scenario=sc, workers=2,
+                             names=("payload_kg", "spring_friction_front_N"), windows=1, window_s=2.0, lead_s=2.0,
+                             max_nfev=2)
+    assert out.use_linear and out.corrected_N is None
+    assert out.calibration is not None and max(out.calibration.fit_nrmse) > FIT_NRMSE_LIMIT
+    assert out.reason.endswith("so the linear correction is to be used.")
+    assert out.reason.count(". ") == 0 and out.reason[0].islower()
+
+
+def test_forces_with_no_truck_in_them_fall_back_before_any_model_run(record):
+    """Forces of the wrong sign imply a negative payload: refused by the static guess, one sentence."""
+    out = correct_with_model(record["t"], record["x_ref"], record["x_a"], -record["F_rig"],
+                             base_scenario=record["sc"], workers=1)
+    assert out.use_linear and out.calibration is None
+    assert "payload" in out.reason and out.reason.endswith("so the linear correction is to be used.")
+
+
+def test_a_malformed_record_is_refused_before_any_run(record):
+    with pytest.raises(ScenarioError, match="force_N"):
+        correct_with_model(record["t"], record["x_ref"], record["x_a"], record["F_rig"][:, :3],
+                           base_scenario=record["sc"])
+    with pytest.raises(ScenarioError, match="shorter than a calibration window"):
+        calibrate(record["t"][:2000], record["x_a"][:2000], record["F_rig"][:2000], base_scenario=record["sc"])
