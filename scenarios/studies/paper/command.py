@@ -24,6 +24,9 @@ def add_parser(subparsers) -> None:
     pp.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd), one recording per case")
     pp.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     pp.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
+    pp.add_argument("--model", action="store_true",
+                    help="add a third method: each rig record corrected by a truck model calibrated on its own "
+                         "signals (about 1-2 CPU-minutes per case)")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
     pp.set_defaults(func=cmd_paper)
 
@@ -85,6 +88,13 @@ def cmd_paper(args) -> int:
         # other cases still run; the rest once every case is in.
         result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,
                            pose_rate_hz=pose_rate, on_done=progress, finish=functools.partial(write_case, out=stage.path))
+        if getattr(args, "model", False):
+            import dataclasses
+
+            from scenarios.studies.paper.model import model_scores
+
+            say = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+            result = dataclasses.replace(result, models=model_scores(result, workers=args.jobs, progress=say))
         files = render_report(result, case_files=False)
         files["paper.json"] = to_json(result).encode("utf-8")
         write_files(stage.path, files)
@@ -107,5 +117,8 @@ def cmd_paper(args) -> int:
     print(table)
     print()
     print(result.damage_table())
+    if result.model_table() is not None:
+        print()
+        print(result.model_table())
     print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {n_fig} figures and one folder per case and mode")
     return 0

@@ -117,13 +117,24 @@ class PaperResult:
         In the paper's order (medium 72 km/h, high 48 km/h, high 72 km/h).
     noise_N : float, N
         rms of the measurement noise added to the rig forces.
+    models : tuple of scenarios.studies.paper.model.ModelScore, optional
+        With ``rigsim paper --model``: the third method, one per case in the same order.
     """
 
     cases: tuple
     noise_N: float
+    models: tuple | None = None
 
     def rows(self) -> list[dict]:
         return [c.row() for c in self.cases]
+
+    def model_table(self) -> str | None:
+        """The third method's table (``--model``), or None."""
+        if self.models is None:
+            return None
+        from scenarios.studies.paper.model import model_table
+
+        return model_table(self.models)
 
     def to_dict(self) -> dict:
         """Everything of ``paper.json``."""
@@ -133,6 +144,7 @@ class PaperResult:
             "note": ("means over the four wheels (per wheel under 'wheels'); the unfiltered road and rig DLC "
                      "over the whole record, every corrected figure over the samples where that method's "
                      "filters have settled ('analysed_s' per method); 'paper': Table 2 of the reference paper"),
+            **({"model_correction": list(self.models)} if self.models is not None else {}),
         }
 
     def damage_table(self) -> str:

@@ -1,0 +1,126 @@
+"""``rigsim paper --model``: the third method, output correction by a rig-calibrated truck model.
+
+For each case, after its road and rig runs and the project's linear correction: the truck model is
+calibrated on the rig record's own signals (drive x_ref, LVDT x_a and the measured force F_rig
+with its load-cell noise; never the road run, never the plant's parameters) and the record is
+corrected differentially, F_rig + F_model(x_ref) - F_model(x_a)
+(:func:`scenarios.studies.model_correction.differential.correct_with_model`). Where the model cannot
+be trusted the case keeps the linear correction and says why in one sentence. Scored like the other
+methods against the road force: DLC on the unfiltered force, NRMSE against the band-limited one,
+on the samples where both the model's start-up and the linear method's filters have settled.
+
+The calibration needs a process pool of its own, so it runs in the parent after the paper's pool
+has finished, case by case, on all of ``workers``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from scenarios.studies.model_correction.differential import correct_with_model
+from scenarios.studies.model_correction.result import ModelCorrection
+from scenarios.studies.model_correction.score import score_correction
+
+__all__ = ["ModelScore", "model_scores", "model_table"]
+
+
+@dataclass(frozen=True)
+class ModelScore:
+    """The model correction of one paper case.
+
+    Attributes
+    ----------
+    case : str
+        Scenario name.
+    correction : ModelCorrection
+        The calibration, the corrected forces (or the fallback's reason) and timings.
+    figures : Mapping or None
+        Per wheel (corners fl fr rl rr), each (4,): ``nrmse`` (1), ``dlc`` and ``dlc_road`` (1),
+        ``dlc_error`` (1, relative), ``scored_s`` (s); None when the linear correction is used.
+    linear_nrmse : numpy.ndarray, (4,)
+        The project's linear correction's NRMSE on the same case, for comparison.
+    """
+
+    case: str
+    correction: ModelCorrection
+    figures: Mapping | None
+    linear_nrmse: np.ndarray
+
+    @property
+    def used(self) -> bool:
+        """True when the model correction was used (False: the linear one, :attr:`reason`)."""
+        return self.figures is not None
+
+    @property
+    def reason(self) -> str:
+        return self.correction.reason
+
+    def to_dict(self) -> dict:
+        """paper.json's ``model`` entry of a case: means and per-wheel figures, the calibration."""
+        out = {"case": self.case, "method": self.correction.method, "reason": self.correction.reason,
+               "linear_nrmse": [round(float(v), 6) for v in self.linear_nrmse],
+               "correction": self.correction}
+        if self.figures is not None:
+            out["mean"] = {k: round(float(np.mean(v)), 6) for k, v in self.figures.items() if k != "scored_s"}
+            out["wheels"] = {k: [round(float(x), 6) for x in np.atleast_1d(v)] for k, v in self.figures.items()}
+        return out
+
+
+def _score_case(case, workers: int | None) -> ModelScore:
+    rig, road, score = case.rig, case.road, case.score
+    best = score.methods["best"]
+    mc = correct_with_model(rig.t_s, rig.signals["profile_m"], rig.signals["pan_m"], score.rig_N,
+                            base_scenario=case.scenario, workers=workers)
+    figures = None
+    if not mc.use_linear:
+        figures = score_correction(mc.corrected_N, road.signals["tire_force_N"], rig.rate_hz,
+                                   rows=mc.settled & best.settled)
+    return ModelScore(case=case.name, correction=mc, figures=figures,
+                      linear_nrmse=np.asarray(best.figures["nrmse_corrected"], dtype=float))
+
+
+def model_scores(result, *, workers: int | None = None,
+                 progress: Callable[[str], None] | None = None) -> tuple[ModelScore, ...]:
+    """The model correction of every case of ``result`` (a PaperResult), in its order.
+
+    Parameters
+    ----------
+    result : scenarios.studies.paper.compute.PaperResult
+    workers : int, optional
+        Worker processes for each calibration (default: all cores).
+    progress : callable, optional
+        ``progress(line)`` after each case.
+    """
+    out = []
+    for case in result.cases:
+        ms = _score_case(case, workers)
+        out.append(ms)
+        if progress is not None:
+            what = (f"NRMSE {np.mean(ms.figures['nrmse']):.3f}" if ms.used else ms.reason)
+            progress(f"model correction {case.name}: {what} ({ms.correction.wall_time_s:.0f} s)")
+    return tuple(out)
+
+
+def model_table(scores) -> str:
+    """Table 2's third method for the terminal and report.md: DLC and its error against the road,
+    NRMSE beside the linear correction's, the calibration's fit, means over the wheels."""
+    head = (f"{'case':28s} {'road':>7s} {'model-corr.':>11s} {'error':>7s} {'NRMSE model':>11s} "
+            f"{'linear':>7s} {'fit NRMSE':>9s} {'time s':>7s}")
+    lines = [head, "-" * len(head)]
+    for s in scores:
+        cal = s.correction.calibration
+        fit = f"{np.mean(cal.fit_nrmse):9.3f}" if cal is not None else f"{'-':>9s}"
+        if s.used:
+            f = s.figures
+            lines.append(f"{s.case:28s} {np.mean(f['dlc_road']):7.4f} {np.mean(f['dlc']):11.4f} "
+                         f"{100 * np.mean(f['dlc_error']):+6.1f}% {np.mean(f['nrmse']):11.3f} "
+                         f"{np.mean(s.linear_nrmse):7.3f} {fit} {s.correction.wall_time_s:7.0f}")
+        else:
+            lines.append(f"{s.case:28s} linear correction kept: {s.reason}")
+    lines.append("model-corr.: F_rig + F_model(x_ref) - F_model(x_a), the truck model calibrated on the rig record's own")
+    lines.append("signals; DLC and its error against the road on the same samples; linear: the project's correction's NRMSE;")
+    lines.append("fit NRMSE: the calibrated model, pans following x_a, against the measured F_rig.")
+    return "\n".join(lines)
