@@ -12,7 +12,8 @@
 3. Times bare MuJoCo stepping the same number of steps on the same J cores: J worker processes,
    each stepping its share of the steps with ``mujoco.rollout`` on the truck on the pans with a
    plain ``motor`` per pan instead of the hydraulics, replaying actuator forces recorded from the
-   hydraulic rig (:mod:`step_rate`'s "bare" model), each share under its own integration and
+   hydraulic rig (under RK4 a stiff built-in position servo replaying the pan motion:
+   :func:`step_rate.bare_controls`), each share under its own integration and
    step, after a warm-up; the bare wall time is the
    slowest worker's. This is the cost of the multibody physics alone, with no callback, no I/O,
    no Python between steps.
@@ -79,14 +80,12 @@ def bare_worker(steps: int, integration: str) -> dict:
     rig, bare, corners = sr.build_models(argparse.Namespace(model="truck", spec=None, integration=integration))
     loads = sr.static_loads(bare, corners)
     hyd = [mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_ACTUATOR, f"hyd_{c}") for c in corners]
-    sens = [int(rig.sensor_adr[mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_SENSOR, f"force_{c}")]) for c in corners]
     n = min(CHUNK_STEPS, steps)
     x_ref = np.zeros((n, rig.nu))
     x_ref[:, hyd] = sr.drive_signal(n, rig.opt.timestep, corners)
     with hydraulic_callbacks(rig, fast=True):
-        _, sensordata = rollout.rollout(rig, mujoco.MjData(rig), sr.initial_state(rig, corners, loads, True), x_ref)
-    forces = np.zeros((n, bare.nu))
-    forces[:, hyd] = sensordata[0][:, sens]
+        state, sensordata = rollout.rollout(rig, mujoco.MjData(rig), sr.initial_state(rig, corners, loads, True), x_ref)
+    forces = sr.bare_controls(rig, bare, corners, state, sensordata)
     data, s0 = mujoco.MjData(bare), sr.initial_state(bare, corners, loads, False)
     rollout.rollout(bare, data, s0, forces[:10])  # warm-up
     left = steps
