@@ -334,3 +334,70 @@ def test_cycles_counted_on_the_turning_points_are_the_librarys_on_every_sample()
         ours = rainflow_cycles(f)
         ref = library(f)
         assert all(np.array_equal(a, b) for a, b in zip(ours, ref)), f
+
+
+# ---------------------------------------------------------------- input checks and reversals (rainflow_damage)
+
+
+def test_turning_points_are_the_first_sample_the_reversals_and_the_last_twice():
+    # Worked by hand from the definition (turning_points docstring): plateaus count once, a
+    # monotone sample is no reversal, however small its slope, and the last point is repeated.
+    from correction.rainflow_damage import turning_points
+
+    f = np.array([0.0, 0.1, 0.2, 0.1, 0.1, 0.15, 0.3, -2.0, -2.5])
+    assert turning_points(f).tolist() == [0.0, 0.2, 0.1, 0.3, -2.5, -2.5]
+    assert turning_points(np.array([1.0, 2.0, 3.0, 4.0])).tolist() == [1.0, 4.0, 4.0]
+    assert turning_points(np.array([5.0, 5.0, 5.0])).tolist() == [5.0, 5.0, 5.0]
+
+
+def test_force_records_are_checked_with_one_sentence_naming_the_fault():
+    from correction.rainflow_damage import force_columns
+
+    with pytest.raises(ValueError, match=r"needs at least two samples along axis 0, got 1$"):
+        pseudo_damage(np.array([F0]), 5)
+    with pytest.raises(ValueError, match=r"needs at least two samples along axis 0, got 1$"):
+        pseudo_damage(np.full((1, 3), F0), 5)
+    with pytest.raises(ValueError, match="has no columns"):
+        pseudo_damage(np.zeros((5, 0)), 5)
+    with pytest.raises(ValueError, match="must be 1-D"):
+        force_columns(np.zeros((4, 2, 2)))
+    f, one = force_columns(np.arange(2.0))  # two samples are enough
+    assert f.shape == (2, 1) and one
+
+
+@pytest.mark.parametrize("m, ok", [(0.5, True), (3.0, True), (0.0, False), (-1.0, False), (-0.5, False),
+                                   (math.inf, False), (math.nan, False)])
+def test_wohler_exponent_must_be_a_positive_number(m, ok):
+    f = _cosine(periods=2)
+    if ok:  # pseudo-damage sum n S^m: 2 cycles of 2a
+        assert pseudo_damage(f, m) == pytest.approx(2 * (2 * A) ** m, rel=1e-12)
+        return
+    with pytest.raises(ValueError, match="the Woehler exponent m must be a positive number"):
+        pseudo_damage(f, m)
+
+
+@pytest.mark.parametrize("n_eq, ok", [(0.5, True), (-2.0, False), (0.0, False), (math.inf, False)])
+def test_equivalent_cycles_must_be_positive(n_eq, ok):
+    f = _cosine(periods=2)
+    if ok:  # Miner: (2 (2a)^m / N_eq)^(1/m)
+        assert damage_equivalent_load(f, 5, n_equivalent=n_eq) == pytest.approx(2 * A * (2 / n_eq) ** 0.2, rel=1e-12)
+        return
+    with pytest.raises(ValueError, match="n_equivalent must be a positive number of equivalent cycles"):
+        damage_equivalent_load(f, 5, n_equivalent=n_eq)
+
+
+def test_del_of_a_small_force_is_not_rounded():
+    # 8 cycles of range 0.6 N, N_eq = 7: DEL = 0.6 (8/7)^(1/3) N (the damage ratio 0.247 is below 1).
+    f = _cosine(a=0.3, f0=1.0, periods=8)
+    assert damage_equivalent_load(f, 3, n_equivalent=7) == pytest.approx(0.6 * (8 / 7) ** (1 / 3), rel=1e-12)
+
+
+def test_level_crossings_per_column_and_level_checks():
+    # Column 0: the hand-worked record (3 crossings of 1.0); column 1: a ramp 0..5 (one crossing).
+    two = np.c_[[0, 2, 0, 2, 1, 3], np.arange(6.0)]
+    with np.errstate(all="raise"):  # counted without any numpy floating-point or division warning
+        counts = level_crossings(two, [1.0, 2.5])
+    assert counts.tolist() == [[3, 1], [1, 1]]
+    for bad in ([np.nan], [[1.0, 2.0]], [1.0, math.inf]):
+        with pytest.raises(ValueError, match="levels_N must be a finite scalar or 1-D array"):
+            level_crossings(two, bad)

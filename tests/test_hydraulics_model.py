@@ -23,7 +23,12 @@ from hydraulics.model import (MPA, chamber_flows, orifice_root, orifice_root_slo
 from hydraulics.packing import FIELD_NAMES, NPACK
 
 PKG = pathlib.Path(__file__).resolve().parents[1] / "hydraulics"
-DEFAULT = ActuatorParams()
+
+
+def default() -> ActuatorParams:
+    """The default parameters, built inside each test (never at import: a construction that raises
+    then fails the tests that use it, by name, instead of breaking the collection of the file)."""
+    return ActuatorParams()
 
 
 # --- project rules --------------------------------------------------------------------------
@@ -51,7 +56,7 @@ def test_only_the_bridge_imports_mujoco_and_nothing_imports_scenarios():
 # --- parameters -------------------------------------------------------------------------------
 def test_defaults_follow_dyntrac():
     # Paper: 156 kN actuators at 21 MPa, 380 lpm valves rated at 7 MPa drop, 15.2 cm stroke.
-    p = DEFAULT
+    p = default()
     assert p.piston_area_m2 * p.supply_pressure_Pa == pytest.approx(156e3, rel=1e-12)
     assert p.rated_flow_m3_s * 60e3 == pytest.approx(380.0, rel=1e-12)
     assert p.rated_valve_drop_Pa == 7e6
@@ -70,25 +75,25 @@ def test_defaults_follow_dyntrac():
 ])
 def test_validation_names_the_field(field, value, needle):
     with pytest.raises(ValueError) as err:
-        DEFAULT.replace(**{field: value})
+        default().replace(**{field: value})
     assert needle in str(err.value)
 
 
 def test_params_are_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
-        DEFAULT.kp_per_m = 1.0
+        default().kp_per_m = 1.0
 
 
 def test_pack_roundtrip_and_slots():
-    v = pack(DEFAULT)
+    v = pack(default())
     assert v.shape == (NPACK,) and v.dtype == np.float64
-    assert unpack(v) == DEFAULT
+    assert unpack(v) == default()
     # Every P_* slot constant points at the field of the same declaration position.
     import hydraulics.packing as pk
     slots = sorted((getattr(pk, n), n) for n in dir(pk) if n.startswith("P_") and n not in
                    ("P_TAG", "P_NSTATE", "P_NPACK"))
     assert [s for s, _ in slots] == list(range(3, NPACK))
-    assert v[pk.P_KDP] == DEFAULT.kdp_per_Pa and v[pk.P_SUPPLY] == DEFAULT.supply_pressure_Pa
+    assert v[pk.P_KDP] == default().kdp_per_Pa and v[pk.P_SUPPLY] == default().supply_pressure_Pa
     assert len(FIELD_NAMES) == NPACK - 3
     with pytest.raises(ValueError, match="not a packed ActuatorParams"):
         unpack(np.zeros(NPACK))
@@ -97,7 +102,7 @@ def test_pack_roundtrip_and_slots():
 # --- valve and orifice ------------------------------------------------------------------------
 def test_rated_flow_at_rated_drop():
     # Definition of the rating: full opening, 7 MPa across the valve = 3.5 MPa per land -> 380 lpm.
-    p = DEFAULT.replace(null_opening=0.0)
+    p = default().replace(null_opening=0.0)
     prm = pack(p)
     p1 = p.supply_pressure_Pa - 3.5e6
     p2 = p.return_pressure_Pa + 3.5e6
@@ -132,7 +137,7 @@ def test_merritt_coefficients_at_null():
     # Merritt ch. 5, critical-centre valve at null: Kq0 = kv sqrt((Ps - Pr)/2) per unit opening;
     # the smoothed null region of width w adds Kc0 = kv w / (4 sqrt((Ps - Pr)/2)).
     for w in (0.0, 0.01):
-        p = DEFAULT.replace(null_opening=w)
+        p = default().replace(null_opening=w)
         lin = linearization(p, 0.0)
         kv = p.rated_flow_m3_s / math.sqrt(0.5 * p.rated_valve_drop_Pa)
         half = 0.5 * (p.supply_pressure_Pa - p.return_pressure_Pa)
@@ -148,7 +153,7 @@ def test_continuity_with_closed_valve_matches_compliance_law():
     # Merritt ch. 2: dP/dt = beta/V (Q - A dx/dt). Closed valve (no null flow, no leakage, no
     # controller), pan moved 0.5 mm at constant speed: P1 - P10 = -beta ln(V1/V10) exactly, about
     # -beta A dx / V0 (the displaced volume over the chamber volume) for small dx.
-    p = DEFAULT.replace(null_opening=0.0, leakage_m3_s_Pa=0.0, kp_per_m=0.0, kdp_per_Pa=0.0)
+    p = default().replace(null_opening=0.0, leakage_m3_s_Pa=0.0, kp_per_m=0.0, kdp_per_Pa=0.0)
     x = np.array([0.0, 0.0, 10.0, 10.0, 0.0])
     speed, dt, n = 0.05, 1e-6, 10_000
     for k in range(n):  # explicit midpoint (RK2) of the prescribed motion x_a = speed * t
@@ -171,7 +176,7 @@ def test_continuity_with_closed_valve_matches_compliance_law():
 def test_bulk_modulus_falls_near_cavitation_so_pressure_stays_above_floor():
     # Pull the pan hard (1 m/s) against a closed valve: the chamber that expands must approach
     # the cavitation floor without crossing it far (Euler at the simulator's dt = 1e-4 s).
-    p = DEFAULT.replace(null_opening=0.0, kp_per_m=0.0, kdp_per_Pa=0.0)
+    p = default().replace(null_opening=0.0, kp_per_m=0.0, kdp_per_Pa=0.0)
     prm = pack(p)
     x = np.array([0.0, 0.0, 10.0, 10.0, 0.0])
     lowest = 10.0
@@ -191,14 +196,14 @@ def test_bulk_modulus_falls_near_cavitation_so_pressure_stays_above_floor():
 
 def test_force_is_area_times_pressure_difference_minus_friction():
     x = np.array([0.0, 0.0, 12.0, 5.0, 0.0])
-    f = actuator_force(x, 0.1, DEFAULT)
-    assert f == pytest.approx(DEFAULT.piston_area_m2 * 7e6 - DEFAULT.friction_N_s_m * 0.1, rel=1e-14)
+    f = actuator_force(x, 0.1, default())
+    assert f == pytest.approx(default().piston_area_m2 * 7e6 - default().friction_N_s_m * 0.1, rel=1e-14)
 
 
 # --- equilibrium -----------------------------------------------------------------------------------
 @pytest.mark.parametrize("load", [0.0, 15e3, 35e3, 45e3 + 500 * 9.81, -5e3])
 def test_equilibrium_balances_load_and_is_a_rest_point(load):
-    p = DEFAULT
+    p = default()
     a = equilibrium_activation(p, load)
     assert (a[2] - a[3]) * MPA * p.piston_area_m2 == pytest.approx(load, rel=1e-9, abs=1e-6)
     dx = actuator_derivatives(0.0, a, (0.0, 0.0, 0.0), p)
@@ -209,13 +214,13 @@ def test_equilibrium_balances_load_and_is_a_rest_point(load):
 
 def test_equilibrium_refuses_a_load_beyond_stall():
     with pytest.raises(ValueError, match="load_N"):
-        equilibrium_activation(DEFAULT, 1.01 * DEFAULT.stall_force_N)
+        equilibrium_activation(default(), 1.01 * default().stall_force_N)
 
 
 # --- reference vs compiled kernels ---------------------------------------------------------------
 def test_compiled_kernels_match_reference():
     rng = np.random.default_rng(3)
-    for p in (DEFAULT, DEFAULT.replace(spool_hz=math.inf), DEFAULT.replace(ti_s=math.inf)):
+    for p in (default(), default().replace(spool_hz=math.inf), default().replace(ti_s=math.inf)):
         prm = pack(p)
         for _ in range(200):
             x = np.array([rng.uniform(-1.2, 1.2), rng.uniform(-500, 500), rng.uniform(-0.5, 27),
@@ -231,7 +236,7 @@ def test_compiled_kernels_match_reference():
 # --- linearization and eq. 4 ------------------------------------------------------------------------
 def test_eq4_structure_matches_the_paper():
     # Paper eq. 4: b0 = b1 = a0 = Ksv Kq Ke with Ke = Kp/Ap (Ti = 1 s), unit static gain.
-    p = DEFAULT
+    p = default()
     kt = 1.2e6
     num, den = eq4_coefficients_from(**eq4_parameters(p, kt))
     lin = linearization(p)
@@ -250,7 +255,7 @@ def test_two_chamber_linearization_reproduces_eq4_at_null():
     # Independent route: central-difference Jacobian of the nonlinear two-chamber equations
     # (static valve, tire to ground, unloaded so the valve sits at null) must give eq. 4's
     # frequency response; the mean-pressure mode decouples there.
-    p = DEFAULT.replace(spool_hz=math.inf)
+    p = default().replace(spool_hz=math.inf)
     kt = 1e6
     a, b, c, _ = loop_matrices(p, kt, math.inf, load_N=0.0)
     num, den = eq4_coefficients_from(**eq4_parameters(p, kt))
@@ -263,7 +268,7 @@ def test_two_chamber_linearization_reproduces_eq4_at_null():
 
 # --- events --------------------------------------------------------------------------------------
 def test_events_from_states():
-    p = DEFAULT
+    p = default()
     states = np.array([
         [0.0, 0.0, 10.0, 10.0, 0.0],   # nothing
         [0.95, 0.0, 10.0, 10.0, 0.0],  # spool beyond the clip's linear range
@@ -286,13 +291,13 @@ def test_default_loop_meets_the_design_brief(kt, mass):
     # Issue 3: stable with margin (here: 6 dB gain margin, and the explicit-Euler map at the
     # simulator's 1e-4 s) under a truck wheel (tire 0.9-1.8 MN/m, unsprung 300-600 kg), and a
     # -3 dB bandwidth of about 10-20 Hz (envelope: ignoring the narrow wheel-hop notch).
-    report = check_stable(DEFAULT, kt, mass, gain_margin=2.0, dt_s=1e-4)
+    report = check_stable(default(), kt, mass, gain_margin=2.0, dt_s=1e-4)
     assert 10.0 <= report.envelope_bandwidth_hz <= 20.0
     assert np.all(report.poles.real < 0)
 
 
 def test_check_stable_explains_the_fix():
-    p = DEFAULT.replace(kdp_per_Pa=0.0)  # plain data: constructing an unstable set is allowed
+    p = default().replace(kdp_per_Pa=0.0)  # plain data: constructing an unstable set is allowed
     with pytest.raises(ValueError) as err:
         check_stable(p, 1e6, 450.0)
     msg = str(err.value)
@@ -303,8 +308,8 @@ def test_check_stable_explains_the_fix():
 def test_check_design_station_checks_the_reference_wheel_station():
     # The defaults pass on their own station; an unstable set (no pressure feedback) is built
     # without complaint and refused by the check, with the same one-sentence explanation.
-    check_design_station(DEFAULT)
-    p = DEFAULT.replace(kdp_per_Pa=0.0)
+    check_design_station(default())
+    p = default().replace(kdp_per_Pa=0.0)
     with pytest.raises(ValueError) as err:
         check_design_station(p)
     msg = str(err.value)
@@ -318,7 +323,7 @@ def test_eq4_parameters_feed_the_one_formula(kt, load, mass, ti):
     # eq4_parameters supplies exactly eq4_coefficients_from's keywords, from the linearization
     # at the load, and the formula keeps eq. 4's properties: T_a(0) = b0/a0 = 1,
     # b1 = Ksv Kq Kp / Ap, b0 = b1 / Ti, a4 = Vf mp / (4 beta_e Ap^2) (paper's eq. 4, Ti = 1 s).
-    p = DEFAULT.replace(ti_s=ti)
+    p = default().replace(ti_s=ti)
     args = eq4_parameters(p, kt, load, mass_kg=mass)
     assert set(args) == set(EQ4_PARAMETERS)
     lin = linearization(p, load)
@@ -336,7 +341,7 @@ def test_eq4_parameters_feed_the_one_formula(kt, load, mass, ti):
 def test_tire_stiffness_is_checked_by_the_formula_only():
     # One rule (correction.eq4): tire_N_per_m >= 0; eq4_parameters passes the value through.
     with pytest.raises(ValueError, match="tire_N_per_m must be >= 0"):
-        eq4_coefficients_from(**eq4_parameters(DEFAULT, -1.0))
+        eq4_coefficients_from(**eq4_parameters(default(), -1.0))
 
 
 def test_params_are_plain_data_and_the_stability_check_is_separate():
@@ -345,8 +350,8 @@ def test_params_are_plain_data_and_the_stability_check_is_separate():
     # naming the gain to change. (Import circles are tested project-wide in tests/test_layers.py.)
     from hydraulics.loop import check_design_station
 
-    p = DEFAULT.replace(kdp_per_Pa=0.0)
+    p = default().replace(kdp_per_Pa=0.0)
     assert p.kdp_per_Pa == 0.0
     with pytest.raises(ValueError, match="raise kdp_per_Pa"):
         check_design_station(p)
-    check_design_station(DEFAULT)  # the defaults pass
+    check_design_station(default())  # the defaults pass

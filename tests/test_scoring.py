@@ -12,6 +12,8 @@ is 1/8 of class B's amplitude (Gd(n0) = 1e-6 m^3).
 from __future__ import annotations
 
 import dataclasses
+import math
+from types import SimpleNamespace
 
 import control
 import numpy as np
@@ -26,7 +28,15 @@ from mjcf.build import TruckVariant
 from scenarios.core.config import parse_scenario
 from scenarios.core.rig import Rig, actuator_params
 from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.scoring import BEST, METHODS, PAPER, SETTLING_TOLERANCE, score_pair
+from correction.damage import damage_equivalent_load, stress_factor
+from correction.eq4 import eq4_coefficients_from
+from correction.pipeline import correct_forces
+from hydraulics.linearization import eq4_parameters
+from hydraulics.params import ActuatorParams
+from scenarios.core.config import ScenarioError
+from scenarios.core.results import RunResult
+from scenarios.studies.scoring import (BEST, METHODS, MIN_DURATION_S, MIN_SCORED_S, PAPER, SETTLING_TOLERANCE, Method,
+                                       measured_force, method_named, score_pair, shortest_scorable_s)
 from scenarios.core.drive import Drive
 from scenarios.core.run import run
 
@@ -39,6 +49,193 @@ DOC = {
     "road": {"roughness": "B"},
     "vehicle": {"spring_friction_front_N": 0.0, "spring_friction_rear_N": 0.0},
 }
+
+
+# --- the scoring's arithmetic on synthetic runs (fast: no simulation) ---------------------------
+# A RunResult built by hand and a stand-in rig (the three attributes score_pair reads): every
+# figure is re-derived here from the correction library's primitives, so the scoring's wiring
+# (which force, which samples, which filter, which load) is pinned, not its numbers copied.
+FS = 1000.0  # Hz
+SYNTH_CORNERS = ("fl", "fr", "rl", "rr")
+
+
+def _synthetic_runs(seconds=12.0):
+    t = np.arange(int(seconds * FS)) / FS
+    phase = np.arange(4)[None, :]
+    road = 40e3 + 3e3 * np.sin(2 * np.pi * 1.7 * t[:, None] + phase) + 1.2e3 * np.sin(2 * np.pi * 11.0 * t[:, None])
+    rig = 40e3 + 2.4e3 * np.sin(2 * np.pi * 1.7 * t[:, None] + phase - 0.2) + 0.5e3 * np.sin(2 * np.pi * 11.0 * t[:, None])
+    rig = rig + 1e3 * np.arange(4)[None, :]  # a different static load on each corner
+    make = lambda mode, f: RunResult(scenario_name="synthetic", mode=mode, t_s=t,  # noqa: E731
+                                     signals={"tire_force_N": f}, vehicle_mass_kg=0.0, corners=SYNTH_CORNERS)
+    return make("road", road), make("rig", rig)
+
+
+def _synthetic_rig_model():
+    return SimpleNamespace(params=ActuatorParams(), pan_mass_kg=480.0,
+                           tire_stiffness_N_per_m=np.array([0.9e6, 1.1e6, 1.4e6, 1.8e6]))
+
+
+def _synthetic_actuators():
+    """Second-order T_a, unit static gain, a different bandwidth per corner (12-21 Hz)."""
+    out = []
+    for hz in (12.0, 15.0, 18.0, 21.0):
+        wn = 2 * np.pi * hz
+        out.append((np.array([wn * wn]), np.array([1.0, 2 * 0.7 * wn, wn * wn])))
+    return out
+
+
+def _expected_mask(tas, m, n, tol=SETTLING_TOLERANCE):
+    mask = reference_filter(FS, m.lowpass, settling_tolerance=tol).transient_mask(n, m.mode)
+    for ta in tas:
+        mask = mask & design_correction(ta, FS, m.lowpass, settling_tolerance=tol).transient_mask(n, m.mode)
+    return mask
+
+
+def _eq4_actuators(rig_model, rig_N):
+    # eq. 4 at each wheel's static actuator load: mean tire force + pan weight (9.81 m/s^2, the
+    # models' gravity), with the rig's pan mass and the corner's tire stiffness.
+    return [eq4_coefficients_from(**eq4_parameters(rig_model.params, rig_model.tire_stiffness_N_per_m[i],
+                                                   float(np.mean(rig_N[:, i])) + rig_model.pan_mass_kg * 9.81,
+                                                   mass_kg=rig_model.pan_mass_kg)) for i in range(4)]
+
+
+@pytest.mark.parametrize("tol", [SETTLING_TOLERANCE, 1e-2])
+def test_synthetic_scores_are_taken_on_exactly_the_union_of_every_filters_transient(tol):
+    road, rig = _synthetic_runs()
+    rig_model, ta = _synthetic_rig_model(), _synthetic_actuators()
+    kw = {} if tol == SETTLING_TOLERANCE else {"settling_tolerance": tol}
+    score = score_pair(road, rig, rig_model, identified=ta, noise_N=50.0, seed=4, **kw)
+    n = road.t_s.size
+    road_f = road.signals["tire_force_N"]
+    assert set(score.methods) == {"paper", "best"}
+    for m in METHODS:
+        ms = score.methods[m.name]
+        tas = _eq4_actuators(rig_model, score.rig_N) if m is PAPER else ta
+        for (num, den), (n_exp, d_exp) in zip(ms.actuators, tas):
+            assert np.array_equal(num, n_exp) and np.array_equal(den, d_exp), m.name
+        s = _expected_mask(tas, m, n, tol)
+        assert np.array_equal(ms.settled, s), m.name
+        assert 0 < s.sum() < n
+        assert ms.scored_s == s.sum() / FS
+        road_b = band_limit(road_f, FS, m.lowpass, m.mode)
+        rig_b = band_limit(score.rig_N, FS, m.lowpass, m.mode)
+        cor = correct_forces(score.rig_N, tas, FS, lowpass=m.lowpass, mode=m.mode, settling_tolerance=tol).corrected_N
+        assert np.array_equal(ms.road_band_N, road_b) and np.array_equal(ms.rig_band_N, rig_b)
+        assert np.array_equal(ms.corrected_N, cor)
+        expected = {"dlc_corrected": dlc(cor[s]), "dlc_road_settled": dlc(road_f[s]),
+                    "dlc_road_band": dlc(road_b[s]), "dlc_rig_band": dlc(rig_b[s]),
+                    "nrmse_corrected": nrmse(cor[s], road_b[s]), "nrmse_rig": nrmse(rig_b[s], road_b[s])}
+        secs = s.sum() / FS
+        for name, f in (("road", road_f[s]), ("rig", score.rig_N[s]), ("corrected", cor[s])):
+            # pavement: the fourth-power law (n = 4); components: Woehler m = 5 at 1 Hz (MethodScore)
+            expected[f"stress_factor_{name}"] = stress_factor(f, n=4)
+            expected[f"del_{name}_N"] = damage_equivalent_load(f, 5, duration_s=secs)
+        assert set(ms.figures) == set(expected)
+        for key, value in expected.items():
+            assert np.array_equal(ms.figures[key], value), (m.name, key)
+    assert np.array_equal(score.dlc_road, dlc(road_f)) and np.array_equal(score.dlc_rig, dlc(score.rig_N))
+
+
+def test_synthetic_measured_force_is_the_clean_force_plus_seeded_white_noise():
+    road, rig = _synthetic_runs()
+    clean = rig.signals["tire_force_N"]
+    rng = np.random.default_rng((7, 8))  # the documented stream: default_rng((seed, 8))
+    assert np.array_equal(measured_force(rig, 30.0, 7), clean + 30.0 * rng.standard_normal(clean.shape))
+    assert np.array_equal(measured_force(rig, 0.0, 7), clean)
+    # the default is a 100 N rms load-cell noise (NOISE_N: ~0.05 % of a 156 kN cell, rounded up)
+    score = score_pair(road, rig, _synthetic_rig_model(), methods=(BEST,), identified=_synthetic_actuators(), seed=3)
+    assert score.noise_N == 100.0
+    assert np.array_equal(score.rig_N, clean + 100.0 * np.random.default_rng((3, 8)).standard_normal(clean.shape))
+    assert np.array_equal(score.road_N, road.signals["tire_force_N"])
+
+
+def test_synthetic_pair_score_aggregates_per_wheel_mean_and_json():
+    road, rig = _synthetic_runs()
+    score = score_pair(road, rig, _synthetic_rig_model(), identified=_synthetic_actuators(), noise_N=0.0)
+    per = score.per_wheel()
+    figs = {f"{k}_{m}": v for m, ms in score.methods.items() for k, v in ms.figures.items()}
+    assert set(per) == {"dlc_road", "dlc_rig"} | set(figs)
+    assert np.array_equal(per["dlc_road"], score.dlc_road) and np.array_equal(per["dlc_corrected_best"],
+                                                                               figs["dlc_corrected_best"])
+    for key, v in per.items():
+        assert score.mean[key] == float(np.mean(v))
+        for i, c in enumerate(SYNTH_CORNERS):
+            assert score.wheels[c][key] == float(v[i])
+    assert np.array_equal(score.settled, score.methods["paper"].settled & score.methods["best"].settled)
+    assert not np.array_equal(score.methods["paper"].settled, score.methods["best"].settled)
+    assert set(score.corrected_N) == set(score.road_lowpassed_N) == {"paper", "best"}
+    assert score.road_lowpassed_N["best"] is score.methods["best"].road_band_N
+    d = score.to_dict()
+    assert d["mean"] == score.mean and d["wheels"] == score.wheels and d["noise_N"] == 0.0
+    best = d["methods"]["best"]
+    assert best["description"] == BEST.description and best["scored_s"] == score.methods["best"].scored_s
+    assert best["actuators"][1] == {"num": _synthetic_actuators()[1][0].tolist(),
+                                    "den": _synthetic_actuators()[1][1].tolist()}
+    empty = dataclasses.replace(score, methods={})
+    assert np.array_equal(empty.settled, np.ones(road.t_s.size, dtype=bool))
+
+
+def test_synthetic_record_needs_min_scored_s_settled_seconds():
+    # MIN_SCORED_S = 0.25 s: exactly 0.25 s of settled samples is scored, one sample less is refused
+    # with one sentence naming duration_s and the fix.
+    ta = _synthetic_actuators()
+    long_mask = _expected_mask(ta, BEST, 20_000)
+    lost = int(20_000 - long_mask.sum())  # head + tail samples, independent of n
+    assert MIN_SCORED_S == 0.25
+    for n_settled, ok in ((250, True), (249, False)):
+        road, rig = _synthetic_runs()
+        n = lost + n_settled
+        cut = lambda r: dataclasses.replace(r, t_s=r.t_s[:n], signals={"tire_force_N": r.signals["tire_force_N"][:n]})  # noqa: E731
+        args = (cut(road), cut(rig), _synthetic_rig_model())
+        if ok:
+            assert score_pair(*args, methods=(BEST,), identified=ta).methods["best"].scored_s == 0.25
+            continue
+        with pytest.raises(ScenarioError) as err:
+            score_pair(*args, methods=(BEST,), identified=ta)
+        assert str(err.value) == (f"duration_s = {n / FS:g} s leaves {n_settled / FS:.2f} s to score after the best "
+                                  f"correction's transients ({lost / FS:.2f} s); use duration_s >= {lost / FS + 1:.0f} s")
+
+
+def test_synthetic_bad_inputs_are_refused_before_scoring():
+    road, rig = _synthetic_runs()
+    model, ta = _synthetic_rig_model(), _synthetic_actuators()
+    shifted = dataclasses.replace(rig, t_s=rig.t_s + 1e-3)
+    with pytest.raises(ValueError, match="road and rig runs must share their time axis"):
+        score_pair(road, shifted, model, identified=ta)
+    shorter = dataclasses.replace(rig, t_s=rig.t_s[:-1])
+    with pytest.raises(ValueError, match="share their time axis"):
+        score_pair(road, shorter, model, identified=ta)
+    for bad in (-1.0, math.nan, math.inf):
+        with pytest.raises(ScenarioError, match="noise_N must be >= 0 N"):
+            score_pair(road, rig, model, identified=ta, noise_N=bad)
+    with pytest.raises(ValueError, match="the best method corrects with identified T_a: pass identified="):
+        score_pair(road, rig, model, methods=(BEST,))
+    score_pair(road, rig, model, methods=(PAPER,), noise_N=0.0)  # eq. 4 needs no identification
+
+
+@pytest.mark.parametrize("field, value", [("actuator", "eq5"), ("lowpass", "none"), ("mode", "acausal")])
+def test_method_settings_are_checked(field, value):
+    kw = dict(name="x", actuator="eq4", lowpass="paper", mode="causal")
+    kw[field] = value
+    with pytest.raises(ScenarioError, match=f"correction {field} must be one of .*, got '{value}'"):
+        Method(**kw)
+
+
+def test_method_named_finds_paper_and_best_or_makes_a_custom_one():
+    assert method_named("eq4", "paper", "causal") is PAPER
+    assert method_named("identified", "regularized", "zerophase") is BEST
+    custom = method_named("eq4", "regularized", "zerophase")
+    assert (custom.name, custom.actuator, custom.lowpass, custom.mode) == ("custom", "eq4", "regularized", "zerophase")
+    assert custom.description == "T_a eq4, low-pass regularized, zerophase"
+
+
+@pytest.mark.parametrize("m", METHODS, ids=lambda m: m.name)
+def test_shortest_scorable_record_is_the_band_limits_transients_plus_min_scored_s(m):
+    n = 50_000
+    lost = n - reference_filter(FS, m.lowpass, settling_tolerance=1e-3).transient_mask(n, m.mode).sum()
+    assert shortest_scorable_s(FS, m) == pytest.approx(lost / FS + 0.25, rel=1e-12)
+    assert MIN_DURATION_S == 10.0  # docstring: the correction's zero-phase transients alone take ~4 s
+    assert shortest_scorable_s(FS, m) < MIN_DURATION_S
 
 
 def test_eq4_rig_corrected_with_eq4_and_the_papers_filter_gives_the_road_force():
