@@ -377,6 +377,9 @@ class _FakePaper:
     def damage_table(self) -> str:
         return "damage"
 
+    def model_table(self) -> None:  # no --model
+        return None
+
 
 def _fake_paper(monkeypatch, fail):
     from scenarios.studies.paper import compute, report

@@ -15,10 +15,11 @@ from scenarios.core.config import ScenarioError
 __all__ = ["BASE_BYTES", "BYTES_PER_STEP", "BYTES_PER_OUTPUT", "available_memory_bytes", "check_memory"]
 
 #: Peak memory of a road or rig run per simulation step, bytes. The drive is made chunk by chunk
-#: (:class:`scenarios.core.road_drive.RoadDrive`) and not held; what grows with the run's length
-#: is the road profile (0.02 m spacing) and its filtering: measured (tracemalloc peak of
-#: scenarios.core.run.run, 120 km/h, 1e-4 s) ~17 B per step; 24 with a margin.
-BYTES_PER_STEP = 24
+#: (:class:`scenarios.core.road_drive.RoadDrive`, on the slice of the profile each chunk reads) and
+#: not held; what grows with the run's length is the road profile (0.02 m spacing) and its
+#: filtering: measured (tracemalloc peak of scenarios.core.run.run, 120 km/h, 1e-4 s, 2 s against
+#: 8 s: tests/test_memory.py) ~3.5 B per step; 8 with a margin.
+BYTES_PER_STEP = 8
 #: Memory per output sample, bytes: the records and the result's signals (~280 B measured in rig
 #: mode); ``timeseries.csv`` is streamed in blocks (scenarios.core.results.csv_parts).
 BYTES_PER_OUTPUT = 512
