@@ -142,10 +142,12 @@ def test_synthetic_measured_force_is_the_clean_force_plus_seeded_white_noise():
     rng = np.random.default_rng((7, 8))  # the documented stream: default_rng((seed, 8))
     assert np.array_equal(measured_force(rig, 30.0, 7), clean + 30.0 * rng.standard_normal(clean.shape))
     assert np.array_equal(measured_force(rig, 0.0, 7), clean)
-    # the default is a 100 N rms load-cell noise (NOISE_N: ~0.05 % of a 156 kN cell, rounded up)
-    score = score_pair(road, rig, _synthetic_rig_model(), methods=(BEST,), identified=_synthetic_actuators(), seed=3)
+    small = 0.5 * np.random.default_rng((7, 8)).standard_normal(clean.shape)  # any positive rms, however small
+    assert np.array_equal(measured_force(rig, 0.5, 7), clean + small)
+    # the defaults: a 100 N rms load-cell noise (NOISE_N: ~0.05 % of a 156 kN cell, rounded up), seed 0
+    score = score_pair(road, rig, _synthetic_rig_model(), methods=(BEST,), identified=_synthetic_actuators())
     assert score.noise_N == 100.0
-    assert np.array_equal(score.rig_N, clean + 100.0 * np.random.default_rng((3, 8)).standard_normal(clean.shape))
+    assert np.array_equal(score.rig_N, clean + 100.0 * np.random.default_rng((0, 8)).standard_normal(clean.shape))
     assert np.array_equal(score.road_N, road.signals["tire_force_N"])
 
 
@@ -211,6 +213,21 @@ def test_synthetic_bad_inputs_are_refused_before_scoring():
     with pytest.raises(ValueError, match="the best method corrects with identified T_a: pass identified="):
         score_pair(road, rig, model, methods=(BEST,))
     score_pair(road, rig, model, methods=(PAPER,), noise_N=0.0)  # eq. 4 needs no identification
+    # a method named at run time (a command line's strings, not the module's literals) is the same method
+    identified = "".join(["ident", "ified"])
+    with pytest.raises(ValueError, match="pass identified="):
+        score_pair(road, rig, model, methods=(method_named(identified, "paper", "causal"),))
+    with pytest.raises(TypeError):  # the options are keyword-only
+        score_pair(road, rig, model, (BEST,))
+
+
+def test_scoring_results_and_methods_are_frozen():
+    # Project rule: results are frozen dataclasses.
+    road, rig = _synthetic_runs()
+    score = score_pair(road, rig, _synthetic_rig_model(), methods=(BEST,), identified=_synthetic_actuators())
+    for obj, field in ((score, "noise_N"), (score.methods["best"], "scored_s"), (BEST, "mode")):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(obj, field, 0)
 
 
 @pytest.mark.parametrize("field, value", [("actuator", "eq5"), ("lowpass", "none"), ("mode", "acausal")])
