@@ -327,7 +327,7 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
         )
         friction = v.spring_friction_front_N if front else v.spring_friction_rear_N
         if friction is not None:
-            spec.tendon(f"spring_{corner}").frictionloss = float(friction)
+            spec.tendon(names.spring_tendon(corner)).frictionloss = float(friction)
         if v.pan_mass_kg is not None:
             spec.body(names.pan_body(corner)).mass = float(v.pan_mass_kg)
         if pans == "fixed":

@@ -11,7 +11,7 @@ from __future__ import annotations
 __all__ = [
     "CORNERS", "FRONT", "REAR", "TRUCK_BODIES",
     "pan_body", "pan_joint", "tire_actuator", "tire_sensor", "wheel_site", "hydraulic_actuator",
-    "axle_body", "CAB_BODY", "CAB_JOINTS",
+    "axle_body", "spring_tendon", "CAB_BODY", "CAB_JOINTS",
 ]
 
 #: Wheel stations, in the order every per-wheel array of this project uses:
@@ -72,3 +72,8 @@ def hydraulic_actuator(corner: str) -> str:
 def axle_body(corner: str) -> str:
     """The axle body that carries ``corner``'s wheel."""
     return "front_axle" if _check(corner) in FRONT else "rear_axle"
+
+
+def spring_tendon(corner: str) -> str:
+    """The leaf spring's tendon at ``corner`` (its rate, damping and interleaf friction)."""
+    return f"spring_{_check(corner)}"

@@ -41,13 +41,17 @@ worker pool (:func:`scenarios.core.pool.run_jobs`) together, one model run per w
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import time
 
 import numpy as np
 
+from hydraulics.params import GRAVITY_M_S2
+from mjcf import names as mjnames
 from mjcf.build import BOUNDS, TruckVariant, build_model
 from mjcf.names import CORNERS, FRONT
-from mjcf.physics import RigIndex
+from mjcf.physics import RigIndex, tire_stiffness
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.studies.model_correction.model_runs import (SETTLE_S, check_record, portable, static_axle_loads,
@@ -56,8 +60,8 @@ from scenarios.studies.model_correction.result import Calibration
 from scenarios.studies.model_correction.weighting import differential_kernel
 
 __all__ = ["FITTED", "UNITS", "CATALOGUE_FACTORS", "xml_nominal", "catalogue", "static_guess", "fit_windows",
-           "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "GRAVITY_M_S2",
-           "BLOCK_S", "uncertainties"]
+           "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S",
+           "uncertainties"]
 
 #: The fitted fields, in this order.
 FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
@@ -89,26 +93,38 @@ MAX_NFEV = 20
 #: Block of the robust uncertainty, s: longer than the fit residual's correlation (the truck's
 #: slowest modes, ~0.6 s period), short enough for a few dozen blocks in the windows.
 BLOCK_S = 0.5
-#: m/s^2, the model's gravity (truck_rig.xml).
-GRAVITY_M_S2 = 9.81
 
 
-def xml_nominal() -> dict[str, float]:
-    """The fitted fields' values in ``truck_rig.xml`` (SI), read from the compiled nominal model."""
+@functools.lru_cache(maxsize=1)
+def _nominal() -> tuple[dict, tuple[float, float]]:
+    """(the fitted fields' values, (front, rear) axle x in the chassis frame, m) of the compiled
+    nominal model, compiled once per process."""
     import mujoco
 
     model = build_model(TruckVariant())
     idx = RigIndex.of(model)
     f, r = CORNERS.index(FRONT[0]), CORNERS.index("rl")
-    bias = model.actuator_biasprm[idx.tire_actuator]
-    ten = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, f"spring_{c}") for c in CORNERS]
-    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "payload")
-    return {"payload_kg": float(model.body_mass[body]),
-            "payload_x_m": float(model.body_pos[body, 0]),
-            "tire_stiffness_front_N_per_m": float(-bias[f, 1]), "tire_stiffness_rear_N_per_m": float(-bias[r, 1]),
-            "tire_damping_front_Ns_per_m": float(-bias[f, 2]), "tire_damping_rear_Ns_per_m": float(-bias[r, 2]),
-            "spring_friction_front_N": float(model.tendon_frictionloss[ten[f]]),
-            "spring_friction_rear_N": float(model.tendon_frictionloss[ten[r]])}
+    stiffness = tire_stiffness(model, idx)
+    damping = -model.actuator_biasprm[idx.tire_actuator, 2]
+
+    def body(name: str) -> int:
+        return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+
+    ten = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, mjnames.spring_tendon(c)) for c in CORNERS]
+    payload = body("payload")
+    values = {"payload_kg": float(model.body_mass[payload]),
+              "payload_x_m": float(model.body_pos[payload, 0]),
+              "tire_stiffness_front_N_per_m": float(stiffness[f]), "tire_stiffness_rear_N_per_m": float(stiffness[r]),
+              "tire_damping_front_Ns_per_m": float(damping[f]), "tire_damping_rear_Ns_per_m": float(damping[r]),
+              "spring_friction_front_N": float(model.tendon_frictionloss[ten[f]]),
+              "spring_friction_rear_N": float(model.tendon_frictionloss[ten[r]])}
+    axles = tuple(float(model.body_pos[body(mjnames.axle_body(c)), 0]) for c in (CORNERS[f], CORNERS[r]))
+    return values, axles
+
+
+def xml_nominal() -> dict[str, float]:
+    """The fitted fields' values in ``truck_rig.xml`` (SI), read from the compiled nominal model."""
+    return dict(_nominal()[0])
 
 
 def catalogue() -> dict[str, float]:
@@ -140,7 +156,7 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
     if not (lo < payload <= hi) or d_total <= 0:
         raise ScenarioError(f"the measured mean wheel loads ({f.sum() / 1e3:.1f} kN in all) imply a payload of "
                             f"{payload:.0f} kg, outside {lo:g} to {hi:g} kg: check the force channels' scale and sign")
-    x_f, x_r = 2.5, -2.5  # axle positions in the chassis frame (truck_rig.xml: front_axle / rear_axle pos)
+    x_f, x_r = _nominal()[1]  # the axles' positions in the chassis frame
     x = x_r + (x_f - x_r) * d_front / d_total
     if abs(x) > 3.5:
         raise ScenarioError(f"the measured front/rear load split puts the payload at x = {x:.2f} m, off the truck "
@@ -306,7 +322,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         a, b = (guess[k] - r, guess[k] + r) if k == "payload_x_m" else (guess[k] * r[0], guess[k] * r[1])
         lower.append(max(a, lo))
         upper.append(min(b, hi))
-    with local_executor(workers) if executor is None else _Given(executor) as ex:
+    with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
         prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel)
         lb = (np.array(lower) - prob.offset) / prob.scale
         ub = (np.array(upper) - prob.offset) / prob.scale
@@ -331,15 +347,3 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                        evaluations=int(prob.evaluations), converged=bool(res.status > 0),
                        message=str(res.message), wall_time_s=round(time.perf_counter() - wall0, 3))
 
-
-class _Given:
-    """Context manager handing out an executor the caller owns (not shut down on exit)."""
-
-    def __init__(self, executor) -> None:
-        self.executor = executor
-
-    def __enter__(self):
-        return self.executor
-
-    def __exit__(self, *exc) -> None:
-        return None

@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["KERNEL_S", "BAND_HZ", "differential_weight", "differential_kernel"]
+from correction.lowpass import as_lowpass
+from scenarios.studies.scoring import BEST
+
+__all__ = ["KERNEL_S", "differential_weight", "differential_kernel"]
 
 #: Half-length of the weighting kernel, s (W is smooth, so its kernel is short).
 KERNEL_S = 0.1
-#: The band limit's corner and order the correction is judged through (6th-order Butterworth, 30 Hz).
-BAND_HZ, BAND_ORDER = 30.0, 6
 
 
 def differential_weight(x_ref_m, x_a_m, fs: float, nperseg: int = 2048) -> tuple[np.ndarray, np.ndarray]:
@@ -39,7 +40,7 @@ def differential_weight(x_ref_m, x_a_m, fs: float, nperseg: int = 2048) -> tuple
     _, s_a = welch(x_a, fs=fs, nperseg=nper, axis=0)
     ratio = np.sqrt(s_dx.sum(axis=1) / np.maximum(s_a.sum(axis=1), 1e-300))
     ratio[0] = ratio[1]  # the mean is no frequency the correction has to follow
-    band = 1.0 / np.sqrt(1.0 + (f / BAND_HZ) ** (2 * BAND_ORDER))
+    band = np.abs(as_lowpass(BEST.lowpass).response(f))  # the band limit the correction is judged through
     return f, ratio * band
 
 
