@@ -29,7 +29,7 @@ from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.core.watch import SimulationError
-from scenarios.studies.model_correction.calibrate import calibrate
+from scenarios.studies.model_correction.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, calibrate, fit_windows
 from scenarios.studies.model_correction.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.studies.model_correction.result import LINEAR, MODEL, ModelCorrection
 
@@ -131,14 +131,16 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     """
     wall0 = time.perf_counter()
     t, _ = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
+    # A record too short for the calibration's windows is the caller's to fix (raised); any other
+    # refusal by the calibration means the model cannot be used on this record (the fallback).
+    fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),
+                                                          ("lead_s", WINDOW_LEAD_S))))
     timings = {}
     with local_executor(workers) as ex:
         try:
             cal = calibrate(t, x_a_m, force_N, base_scenario=base_scenario, x_ref_m=x_ref_m, executor=ex,
                             **calibrate_kw)
         except ScenarioError as exc:
-            if "shorter than a calibration window" in str(exc):
-                raise
             return _linear(f"the truck model could not be calibrated on this record ({str(exc).rstrip('.')}), "
                            "so the linear correction is to be used.", None, wall0, timings)
         except SimulationError as exc:

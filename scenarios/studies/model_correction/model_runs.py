@@ -134,10 +134,9 @@ def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
     except ValueError as exc:
         raise ScenarioError(f"pan motion: {exc}") from None
     try:
-        rig.rest_state(pan_z_m=drive.z_m[0])  # a truck with no rest is refused before the run
+        rec = rig.run(drive, rate_hz=fs)  # its first act is the rest state: a truck with none stops before a step
     except EquilibriumError as exc:
         raise ScenarioError(f"model truck: {exc}") from None
-    rec = rig.run(drive, rate_hz=fs)
     if rec.tire_force_N.shape != (t.size, 4):
         raise RuntimeError(f"the model run gave {rec.tire_force_N.shape[0]} samples for {t.size}")
     return np.asarray(rec.tire_force_N)
