@@ -117,8 +117,9 @@ def cmd_paper(args) -> int:
     print(table)
     print()
     print(result.damage_table())
-    if result.model_table() is not None:
+    model_table = result.model_table()
+    if model_table is not None:
         print()
-        print(result.model_table())
+        print(model_table)
     print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {n_fig} figures and one folder per case and mode")
     return 0

@@ -228,9 +228,10 @@ def render_report(result, *, case_files: bool = True) -> dict[str, bytes]:
     files["table2.png"] = _bars(rows)
     figures = [f"{kind}_{c.name}.png" for c in result.cases for kind in ("figure8", "damage")]
     md = _report_md(rows, result.table(), figures, result.damage_table())
-    if result.model_table() is not None:
+    model_table = result.model_table()
+    if model_table is not None:
         md += ("\n## Third method: correction by a rig-calibrated truck model (`--model`)\n\n```\n"
-               + result.model_table() + "\n```\n")
+               + model_table + "\n```\n")
     files["report.md"] = md.encode("utf-8")
     return files
 
