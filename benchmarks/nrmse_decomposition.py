@@ -125,8 +125,7 @@ def linear_pans_run(sc, diagonal: bool):
     plant = Rig(sc).linearize()
 
     def through_linear_ta(drive: Drive) -> Drive:
-        y = plant.simulate(drive.z_m, diagonal=diagonal)
-        return Drive(t_s=drive.t_s, z_m=y[:, :4], v_mps=y[:, 4:])
+        return plant.pan_drive(drive, diagonal=diagonal)
 
     return run(sc, "road", pan_drive=through_linear_ta)
 

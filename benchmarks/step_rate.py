@@ -44,9 +44,9 @@ from mjcf.names import CORNERS  # noqa: E402
 
 PARAMS = ActuatorParams()
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
-#: How each test is integrated (scenarios.core.rig): the rig test RK4 at 1e-3 s, the road test
-#: explicit Euler at 1e-4 s; ``--integration`` picks one for both models.
-INTEGRATIONS = {"rig": (mujoco.mjtIntegrator.mjINT_RK4, 1e-3), "road": (mujoco.mjtIntegrator.mjINT_EULER, 1e-4)}
+#: Integrations to compare: RK4 at 1e-3 s (both tests', scenarios.core.rig), explicit Euler at
+#: 1e-4 s (their former one); ``--integration`` picks one for both models.
+INTEGRATIONS = {"rk4": (mujoco.mjtIntegrator.mjINT_RK4, 1e-3), "euler": (mujoco.mjtIntegrator.mjINT_EULER, 1e-4)}
 #: The bare model's pan servos under RK4, N/m and N s/m: 316 rad/s on a 500 kg pan, 70 % of critical
 #: damping, well inside RK4's region at 1e-3 s; they hold the tire load with a 0.6 mm error.
 SERVO_KP, SERVO_KV = 5e7, 2.2e5
@@ -139,7 +139,7 @@ def build_models(args):
     spec_rig, corners = _spec_from(args)
     spec_bare, _ = _spec_from(args)
     add_hydraulic_actuators(spec_rig, PARAMS, corners)
-    servo = getattr(args, "integration", "rig") == "rig"
+    servo = getattr(args, "integration", "rk4") == "rk4"
     for c in corners:
         a = spec_bare.add_actuator(name=f"hyd_{c}", target=f"pan_{c}_z",
                                    trntype=mujoco.mjtTrn.mjTRN_JOINT)
@@ -151,7 +151,7 @@ def build_models(args):
     _add_force_sensors(spec_rig, corners)
     _add_force_sensors(spec_bare, corners)
     rig, bare = spec_rig.compile(), spec_bare.compile()
-    integrator, dt = INTEGRATIONS[getattr(args, "integration", "rig")]
+    integrator, dt = INTEGRATIONS[getattr(args, "integration", "rk4")]
     for m in (rig, bare):
         m.opt.integrator, m.opt.timestep = integrator, dt
     return rig, bare, corners
@@ -199,8 +199,8 @@ def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--model", choices=("truck", "four", "single"), default="truck")
     ap.add_argument("--spec", help="module:function returning an MjSpec with pan_<c>_z joints")
-    ap.add_argument("--integration", choices=tuple(INTEGRATIONS), default="rig",
-                    help="rig: RK4 at 1e-3 s (the rig test's); road: explicit Euler at 1e-4 s")
+    ap.add_argument("--integration", choices=tuple(INTEGRATIONS), default="rk4",
+                    help="rk4: RK4 at 1e-3 s (both tests'); euler: explicit Euler at 1e-4 s (their former)")
     ap.add_argument("--steps", type=int, default=20_000)
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args(argv)

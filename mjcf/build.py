@@ -228,6 +228,27 @@ def _set_tire(spec: mujoco.MjSpec, corner: str, k: float | None, c: float | None
     act.biasprm = prm
 
 
+def _prescribe_pan(spec: mujoco.MjSpec, corner: str) -> None:
+    """Make ``corner``'s pan (its joint already removed) a mocap body whose motion the caller sets.
+
+    A mocap body has no velocity in MuJoCo, so the tire's damping would not see the pan's own
+    velocity: the tire's gain becomes its damping (N s/m), so that ``ctrl`` carries the pan's
+    vertical velocity (m/s, + up). The force stays the XML's affine law, clamped to the same
+    range: kt (R0 - L) - ct (dL/dt) with dL/dt = (truck side) - v_pan, for the near-vertical
+    tendon. Two sensors report the tendon's length (m) and its truck-side rate (m/s), from
+    which the force at any other pan position follows (:func:`mjcf.physics.tire_law`).
+    """
+    spec.body(names.pan_body(corner)).mocap = True
+    act = spec.actuator(names.tire_actuator(corner))
+    gain = list(act.gainprm)
+    gain[0] = -act.biasprm[2]
+    act.gainprm = gain
+    tendon = names.tire_tendon(corner)
+    for name, kind in ((names.tire_length_sensor(corner), mujoco.mjtSensor.mjSENS_TENDONPOS),
+                       (names.tire_rate_sensor(corner), mujoco.mjtSensor.mjSENS_TENDONVEL)):
+        spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_TENDON, objname=tendon)
+
+
 def _parallel_axis(offset: np.ndarray, mass: float) -> np.ndarray:
     """Inertia (kg m^2, 3x3) of a point ``mass`` (kg) at ``offset`` (m) about the origin."""
     return mass * (float(offset @ offset) * np.eye(3) - np.outer(offset, offset))
@@ -295,10 +316,11 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
     ----------
     variant : TruckVariant, optional
         Changes to the nominal model; ``None`` gives the XML as shipped.
-    pans : {"slide", "fixed"}
-        ``"slide"``: each pan moves on its vertical slide joint (road and rig modes).
-        ``"fixed"``: the pan joints are removed, the pans are welded to the ground
-        (modal analysis of the truck alone on rigid supports).
+    pans : {"slide", "mocap", "fixed"}
+        ``"slide"``: each pan moves on its vertical slide joint (the rig test: the actuators
+        drive it). ``"mocap"``: the pans are mocap bodies whose motion the caller prescribes
+        (the road test, :func:`_prescribe_pans`). ``"fixed"``: the pan joints are removed, the
+        pans are welded to the ground (modal analysis of the truck alone on rigid supports).
     scene : bool
         Load ``scene.xml`` (floor, light, cameras) instead of the bare model file.
 
@@ -306,8 +328,8 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
     -------
     mujoco.MjSpec
     """
-    if pans not in ("slide", "fixed"):
-        raise ValueError(f"pans must be 'slide' or 'fixed', got {pans!r}")
+    if pans not in ("slide", "mocap", "fixed"):
+        raise ValueError(f"pans must be 'slide', 'mocap' or 'fixed', got {pans!r}")
     v = variant or TruckVariant()
     spec = load_spec(SCENE_FILE if scene else MODEL_FILE)
 
@@ -330,8 +352,10 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
             spec.tendon(names.spring_tendon(corner)).frictionloss = float(friction)
         if v.pan_mass_kg is not None:
             spec.body(names.pan_body(corner)).mass = float(v.pan_mass_kg)
-        if pans == "fixed":
+        if pans in ("fixed", "mocap"):
             spec.delete(spec.joint(names.pan_joint(corner)))
+        if pans == "mocap":
+            _prescribe_pan(spec, corner)
     if v.timestep_s is not None:
         spec.option.timestep = float(v.timestep_s)
     if v.cab_mount_hz is not None:

@@ -11,7 +11,8 @@ from __future__ import annotations
 __all__ = [
     "CORNERS", "FRONT", "REAR", "TRUCK_BODIES",
     "pan_body", "pan_joint", "tire_actuator", "tire_sensor", "wheel_site", "hydraulic_actuator",
-    "axle_body", "spring_tendon", "CAB_BODY", "CAB_JOINTS",
+    "axle_body", "spring_tendon", "CAB_BODY", "CAB_JOINTS", "tire_tendon", "tire_length_sensor",
+    "tire_rate_sensor",
 ]
 
 #: Wheel stations, in the order every per-wheel array of this project uses:
@@ -52,6 +53,22 @@ def pan_joint(corner: str) -> str:
 def tire_actuator(corner: str) -> str:
     """The tire's force element (an actuator on a spatial tendon, N, compression positive)."""
     return f"tire_{_check(corner)}"
+
+
+def tire_tendon(corner: str) -> str:
+    """The tire's spatial tendon, wheel centre to pan top (its length in m)."""
+    return f"tire_{_check(corner)}"
+
+
+def tire_length_sensor(corner: str) -> str:
+    """Sensor of the tire tendon's length (m); only on prescribed pans (``build_spec(pans="mocap")``)."""
+    return f"tire_length_{_check(corner)}"
+
+
+def tire_rate_sensor(corner: str) -> str:
+    """Sensor of the tire tendon's rate of change from the truck's motion alone (m/s; a mocap pan
+    has no velocity in MuJoCo); only on prescribed pans (``build_spec(pans="mocap")``)."""
+    return f"tire_rate_{_check(corner)}"
 
 
 def tire_sensor(corner: str) -> str:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from mjcf.names import CAB_JOINTS, CORNERS, pan_joint, tire_actuator
+from mjcf.names import CAB_JOINTS, CORNERS, pan_body, pan_joint, tire_actuator
 
 __all__ = [
     "TRUCK_JOINTS",
@@ -23,6 +23,7 @@ __all__ = [
     "friction_disabled",
     "static_equilibrium",
     "tire_forces",
+    "tire_law",
     "tire_stiffness",
     "Mode",
     "modal_analysis",
@@ -74,9 +75,13 @@ class RigIndex:
         :data:`mjcf.names.CAB_JOINTS` when the model has a suspended cab.
     pan_qpos, pan_dof : numpy.ndarray of int
         qpos and dof addresses of :func:`mjcf.names.pan_joint` in :data:`mjcf.names.CORNERS` order
-        (empty when the pans are fixed).
+        (empty when the pans are fixed or prescribed).
     tire_actuator : numpy.ndarray of int
         Actuator ids of :func:`mjcf.names.tire_actuator`, in the same order.
+    pan_body : numpy.ndarray of int
+        Body ids of :func:`mjcf.names.pan_body`, in the same order.
+    pan_mocap : numpy.ndarray of int
+        Mocap ids of the pans when they are prescribed (``build_spec(pans="mocap")``), else empty.
     """
 
     truck_qpos: np.ndarray
@@ -84,6 +89,8 @@ class RigIndex:
     pan_qpos: np.ndarray
     pan_dof: np.ndarray
     tire_actuator: np.ndarray
+    pan_body: np.ndarray
+    pan_mocap: np.ndarray
 
     @classmethod
     def of(cls, model: mujoco.MjModel) -> "RigIndex":
@@ -105,12 +112,16 @@ class RigIndex:
                 raise KeyError(f"the model has no actuator named {tire_actuator(c)!r}")
             tires.append(i)
         as_int = lambda v: np.asarray(v, dtype=np.intp)  # noqa: E731
+        bodies = as_int([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, pan_body(c)) for c in CORNERS])
+        mocap = model.body_mocapid[bodies]
         return cls(
             truck_qpos=as_int(model.jnt_qposadr[truck]),
             truck_dof=as_int(model.jnt_dofadr[truck]),
             pan_qpos=as_int(model.jnt_qposadr[pans] if pans else []),
             pan_dof=as_int(model.jnt_dofadr[pans] if pans else []),
             tire_actuator=as_int(tires),
+            pan_body=bodies,
+            pan_mocap=as_int(mocap if np.all(mocap >= 0) else []),
         )
 
 
@@ -145,6 +156,24 @@ def tire_forces(model: mujoco.MjModel, data: mujoco.MjData, index: RigIndex | No
     """
     index = index or RigIndex.of(model)
     return data.actuator_force[index.tire_actuator].copy()
+
+
+def tire_law(model: mujoco.MjModel, index: RigIndex, length_m, rate_m_s) -> np.ndarray:
+    """The tires' compiled force law evaluated for given tendon states, N (compression positive).
+
+    F = b0 + b1 L + b2 dL/dt clamped to the actuator's force range (the XML's affine bias,
+    ``actuator_biasprm``, with its parameters as compiled): the force MuJoCo applies for a
+    tendon of length ``length_m`` (m) changing at ``rate_m_s`` (m/s), each (..., 4) in
+    :data:`mjcf.names.CORNERS` order. The road test evaluates it at the pan position of an output
+    instant while MuJoCo held the pan at mid-step (:mod:`scenarios.core.stepping`).
+    """
+    tires = index.tire_actuator
+    b = model.actuator_biasprm[tires]
+    force = b[:, 0] + b[:, 1] * np.asarray(length_m, float) + b[:, 2] * np.asarray(rate_m_s, float)
+    limited = model.actuator_forcelimited[tires].astype(bool)
+    lo = np.where(limited, model.actuator_forcerange[tires, 0], -np.inf)
+    hi = np.where(limited, model.actuator_forcerange[tires, 1], np.inf)
+    return np.clip(force, lo, hi)
 
 
 def static_equilibrium(
@@ -184,8 +213,12 @@ def static_equilibrium(
     """
     idx = RigIndex.of(model)
     data.qvel[:] = 0.0
+    z = 0.0 if pan_z_m is None else np.asarray(pan_z_m, dtype=float)
     if idx.pan_qpos.size:
-        data.qpos[idx.pan_qpos] = 0.0 if pan_z_m is None else np.asarray(pan_z_m, dtype=float)
+        data.qpos[idx.pan_qpos] = z
+    if idx.pan_mocap.size:  # prescribed pans: their bodies' positions, raised by z
+        data.mocap_pos[idx.pan_mocap] = model.body_pos[idx.pan_body]
+        data.mocap_pos[idx.pan_mocap, 2] += z
     q_adr, dof = idx.truck_qpos, idx.truck_dof
 
     def residual(q: np.ndarray) -> np.ndarray:

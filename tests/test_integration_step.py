@@ -88,13 +88,14 @@ def test_road_drive_holds_the_road_at_mid_step():
 
 def test_each_test_gets_its_integrator_and_step():
     sc = parse_scenario(SHORT)
-    road, rig = Rig(sc, hydraulic=False).model.opt, Rig(sc).model.opt
-    assert (road.integrator, road.timestep) == (mujoco.mjtIntegrator.mjINT_EULER, 1e-4)
-    assert (rig.integrator, rig.timestep) == (mujoco.mjtIntegrator.mjINT_RK4, RIG_TIMESTEP_S)
+    road, rig = Rig(sc, hydraulic=False), Rig(sc)
+    for opt in (road.model.opt, rig.model.opt):  # both tests: RK4 at 1e-3 s
+        assert (opt.integrator, opt.timestep) == (mujoco.mjtIntegrator.mjINT_RK4, RIG_TIMESTEP_S)
+    assert rig.linear_dt_s == road.linear_dt_s == 1e-4  # the XML's Euler step: the linear models'
     fast = Rig(dataclasses.replace(sc, output_rate_hz=4000.0)).model.opt  # an output faster than 1 kHz
     assert fast.timestep == pytest.approx(2.5e-4)
     fine = Rig(parse_scenario({**SHORT, "vehicle": {"timestep_s": 2e-4}}))
-    assert fine.dt_s == 2e-4 and fine.road_dt_s == 2e-4 and fine.linearize().dt_s == 2e-4
+    assert fine.dt_s == 2e-4 and fine.linear_dt_s == 2e-4 and fine.linearize().dt_s == 2e-4
 
 
 def test_rk4_growth_factor_matches_its_published_stability_boundary():

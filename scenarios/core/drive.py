@@ -121,6 +121,39 @@ class Drive:
             out[m:] = z[m:] + 0.5 * h * v[m:]
         return out
 
+    def refined(self, factor: int) -> "Drive":
+        """This drive on steps ``factor`` (int >= 1) times finer, for a linear model that runs on
+        a finer step than the runs: z and v by the cubic Hermite interpolant of (z, v) between
+        samples (its value and derivative; exact for a cubic), from the first sample to the last."""
+        r = _factor(factor)
+        h = self.dt_s if self.n_steps > 1 else 0.0
+        s = np.arange(r) / r  # positions inside a step, 0 <= s < 1
+        s2, s3 = s * s, s * s * s
+        w = np.stack([2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2])  # h00 h10 h01 h11
+        dw = np.stack([6 * s2 - 6 * s, 3 * s2 - 4 * s + 1, -6 * s2 + 6 * s, 3 * s2 - 2 * s])
+        z0, z1, v0, v1 = self.z_m[:-1, None], self.z_m[1:, None], self.v_mps[:-1, None], self.v_mps[1:, None]
+
+        def mix(c):
+            return (c[0][None, :, None] * z0 + c[1][None, :, None] * h * v0 + c[2][None, :, None] * z1
+                    + c[3][None, :, None] * h * v1)
+
+        z = np.concatenate([mix(w).reshape(-1, z0.shape[2]), self.z_m[-1:]])
+        v = np.concatenate([(mix(dw) / h if h else mix(dw)).reshape(-1, z0.shape[2]), self.v_mps[-1:]])
+        t = np.concatenate([(self.t_s[:-1, None] + s[None, :] * h).reshape(-1), self.t_s[-1:]])  # t_s[::r] exact
+        return Drive(t, z, v, self.corners)
+
+    def every(self, factor: int) -> "Drive":
+        """Every ``factor``-th step of this drive (``factor`` even), each step holding the sample
+        at its middle: the inverse of :meth:`refined` for a signal made on the fine steps (the
+        values a coarse step holds are then exact, not interpolated)."""
+        r = _factor(factor)
+        if r % 2:
+            raise ValueError(f"factor must be even (a sample at each coarse step's middle), got {factor}")
+        z, v, t = self.z_m[::r], self.v_mps[::r], self.t_s[::r]
+        mid = self.z_m[r // 2::r]
+        held = np.concatenate([mid, z[mid.shape[0]:] + 0.5 * r * self.dt_s * v[mid.shape[0]:]])
+        return Drive(t, z, v, self.corners, held)
+
     def scaled(self, gain) -> "Drive":
         """This drive with each corner multiplied by ``gain`` (1, shape (4,) or scalar)."""
         g = np.broadcast_to(np.asarray(gain, dtype=float), (len(self.corners),))[None, :]
@@ -139,6 +172,13 @@ class Drive:
         """float, s: the step of the time axis."""
         return float(self.t_s[1] - self.t_s[0]) if self.t_s.size > 1 else float("nan")
 
+
+
+def _factor(factor) -> int:
+    r = int(factor)
+    if r != factor or r < 1:
+        raise ValueError(f"factor must be a positive integer, got {factor!r}")
+    return r
 
 
 #: Steps a drive is read in at a time by :func:`check_stroke` and the runs, 1 (0.1 s at 1e-4 s).

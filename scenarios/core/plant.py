@@ -14,7 +14,7 @@ from scipy import signal
 
 from correction.transfer import state_space_frequency_response
 
-__all__ = ["PlantLinearization", "simulate"]
+__all__ = ["PlantLinearization", "fine_factor", "simulate"]
 
 
 @dataclass(frozen=True)
@@ -69,10 +69,36 @@ class PlantLinearization:
         keep = [s for s in zc if np.min(np.abs(pc - s)) > 0.01 * max(abs(s), 1.0)]
         return np.array(keep)
 
+    def pan_drive(self, drive, *, diagonal: bool = False):
+        """The pans' motion this model gives for the drive x_ref = ``drive``, as a drive on
+        ``drive``'s own steps (for a road test whose pans follow the linear model).
+
+        The model runs on its own step (:attr:`dt_s`): ``drive`` is refined onto it
+        (:meth:`~scenarios.core.drive.Drive.refined`, cubic Hermite), each fine step holds the
+        drive at its middle (as MuJoCo's steps hold ``ctrl``), and the result is taken back at
+        every run step with exact mid-step values (:meth:`~scenarios.core.drive.Drive.every`).
+        ``drive``'s step must be an even multiple of :attr:`dt_s` (ValueError otherwise)."""
+        from scenarios.core.drive import Drive
+
+        r = fine_factor(drive.dt_s, self.dt_s)
+        fine = drive.refined(r)
+        y = self.simulate(fine.held(0, fine.n_steps), diagonal=diagonal)
+        return Drive(fine.t_s, y[:, :4], y[:, 4:], drive.corners).every(r)
+
     def simulate(self, u, *, diagonal: bool = False) -> np.ndarray:
         """Pan displacement (m) and velocity (m/s), shape (N, 8), from rest on drives ``u``
         (N, 4), m: :func:`simulate` with this model's ``a``, ``b``, ``c``."""
         return simulate(self.a, self.b, self.c, u, diagonal=diagonal)
+
+
+def fine_factor(coarse_dt_s: float, fine_dt_s: float) -> int:
+    """How many steps of ``fine_dt_s`` (s) make one of ``coarse_dt_s`` (s): an even integer
+    (ValueError naming both steps otherwise)."""
+    r = coarse_dt_s / fine_dt_s
+    if abs(r - round(r)) > 1e-6 * r or round(r) < 2 or round(r) % 2:
+        raise ValueError(f"the run's step {coarse_dt_s:g} s must be an even multiple of the linear "
+                         f"model's step {fine_dt_s:g} s")
+    return int(round(r))
 
 
 def simulate(a, b, c, u, *, diagonal: bool) -> np.ndarray:

@@ -11,7 +11,7 @@ Two kinds of rig:
   x_ref in ``ctrl``; the actuator states live in MuJoCo's activation vector and are advanced
   by the callbacks of :mod:`hydraulics.bridge`, installed for a run only.
 * ``Rig(scenario, hydraulic=False)``, the road test: the pans follow the drive exactly
-  (positions and velocities set before every step).
+  (mocap bodies whose positions and velocities each step prescribes).
 
 :meth:`Rig.run` hands the stepping to :mod:`scenarios.core.stepping` (the loops themselves).
 """
@@ -38,18 +38,19 @@ from scenarios.core.road_drive import RoadDrive, road_source
 from scenarios.core.stepping import RigRecord, run_hydraulic, run_kinematic
 from scenarios.core.watch import mujoco_warnings_captured, output_schedule
 
-__all__ = ["actuator_params", "Rig", "RIG_INTEGRATOR", "RIG_TIMESTEP_S"]
+__all__ = ["actuator_params", "Rig", "RIG_INTEGRATOR", "RIG_INTEGRATOR_NAME", "RIG_TIMESTEP_S"]
 
-#: How the rig test is integrated, chosen by measurement (``benchmarks/integrator_study.py``,
+#: How both tests are integrated, chosen by measurement (``benchmarks/integrator_study.py``,
 #: docs/integrator_study.md): MuJoCo's RK4 at 1e-3 s with the drive held at mid-step passes the
 #: accuracy goals (rig DLC within 0.1 %, FRF within 0.1 dB / 1 degree to 30 Hz against Euler at
-#: 2.5e-5 s; 24/24 generalization cases stable) at 0.37 of explicit Euler at 1e-4 s. A scenario's
-#: ``vehicle.timestep_s`` overrides the step; an ``output_rate_hz`` above 1 kHz makes it the output
-#: period. The road test (pans set at every step, not studied
-#: at larger steps) keeps the XML's explicit Euler at 1e-4 s.
+#: 2.5e-5 s; 24/24 generalization cases stable) at 0.37 of explicit Euler at 1e-4 s; the road
+#: test (pans prescribed as mocap bodies) passes them too (road DLC within 0.1 %). A scenario's
+#: ``vehicle.timestep_s`` overrides the step; an ``output_rate_hz`` above 1 kHz makes it the
+#: output period.
 RIG_INTEGRATOR = mujoco.mjtIntegrator.mjINT_RK4
 RIG_TIMESTEP_S = 1e-3
-
+#: :data:`RIG_INTEGRATOR` as reports name it ("RK4").
+RIG_INTEGRATOR_NAME = RIG_INTEGRATOR.name.removeprefix("mjINT_")
 
 
 def actuator_params(scenario: Scenario) -> ActuatorParams:
@@ -102,26 +103,34 @@ class Rig:
             except ValueError as exc:
                 raise ScenarioError(f"actuator: {exc}") from None
         try:
-            spec = build_spec(variant)
+            spec = build_spec(variant, pans="slide" if hydraulic else "mocap")
         except ValueError as exc:
             raise ScenarioError(str(exc)) from None
-        # One stroke: the actuator's. The pan joints' limits are set from it.
-        for c in names.CORNERS:
-            spec.joint(names.pan_joint(c)).range = [-params.half_stroke_m, params.half_stroke_m]
         if hydraulic:
+            # One stroke: the actuator's. The pan joints' limits are set from it.
+            for c in names.CORNERS:
+                spec.joint(names.pan_joint(c)).range = [-params.half_stroke_m, params.half_stroke_m]
             add_hydraulic_actuators(spec, params, names.CORNERS)
         self.model = model = spec.compile()
-        #: float, s: the road test's step (the XML's or ``vehicle.timestep_s``), explicit Euler.
-        self.road_dt_s = float(model.opt.timestep)
-        if hydraulic:
-            model.opt.integrator = RIG_INTEGRATOR
-            # An output faster than the step's rate gets a step of its own period (RK4, finer).
-            model.opt.timestep = (min(RIG_TIMESTEP_S, 1.0 / scenario.output_rate_hz)
-                                  if variant.timestep_s is None else variant.timestep_s)
+        #: float, s: the step of the linear models (the XML's explicit Euler step, or
+        #: ``vehicle.timestep_s``), where :meth:`linearize` discretizes the plant.
+        self.linear_dt_s = float(model.opt.timestep)
+        model.opt.integrator = RIG_INTEGRATOR
+        # An output faster than the step's rate gets a step of its own period (RK4, finer).
+        model.opt.timestep = (min(RIG_TIMESTEP_S, 1.0 / scenario.output_rate_hz)
+                              if variant.timestep_s is None else variant.timestep_s)
         self.index = RigIndex.of(model)
         obj = mujoco.mjtObj
-        self.sensors = np.array([model.sensor_adr[mujoco.mj_name2id(model, obj.mjOBJ_SENSOR, names.tire_sensor(c))]
-                                 for c in names.CORNERS])
+
+        def sensor_adr(name_of) -> np.ndarray:
+            return np.array([model.sensor_adr[mujoco.mj_name2id(model, obj.mjOBJ_SENSOR, name_of(c))]
+                             for c in names.CORNERS])
+
+        self.sensors = sensor_adr(names.tire_sensor)
+        if not hydraulic:
+            #: Road test: sensordata addresses of the tire tendons' lengths (m) and truck-side rates (m/s).
+            self.tire_length_sensors = sensor_adr(names.tire_length_sensor)
+            self.tire_rate_sensors = sensor_adr(names.tire_rate_sensor)
         if hydraulic:
             self.actuators = np.array([mujoco.mj_name2id(model, obj.mjOBJ_ACTUATOR, names.hydraulic_actuator(c))
                                        for c in names.CORNERS])
@@ -207,15 +216,15 @@ class Rig:
         ``mujoco.mjd_transitionFD`` (centred differences with step ``eps`` in the state's units)
         with the hydraulic callbacks installed and leaf-spring dry friction off (it locks the
         springs at rest and has no derivative), for the linearization only. It refuses RK4, so
-        the map is that of explicit Euler at the road test's step (:attr:`road_dt_s`, the
-        result's ``dt_s``): the linear models run on the road test's time base.
+        the map is that of explicit Euler at :attr:`linear_dt_s` (the result's ``dt_s``), the
+        linear models' time base.
         """
         if not self.hydraulic:
             raise ValueError("linearize() needs the hydraulic rig (Rig(scenario, hydraulic=True))")
         model, data = self.model, self.rest_state()
         n = 2 * model.nv + model.na
         a, b = np.zeros((n, n)), np.zeros((n, model.nu))
-        dt = self.road_dt_s
+        dt = self.linear_dt_s
         with hydraulic_callbacks(model), friction_disabled(model), _euler(model, dt):
             mujoco.mj_forward(model, data)
             mujoco.mjd_transitionFD(model, data, eps, True, a, b, None, None)

@@ -6,11 +6,11 @@
   about :data:`ROLLOUT_STEPS` steps (whole warning windows) per call (the constraint warm start carried from call to
   call: bit-identical to a loop of ``mj_step``); a call that warned or diverged is replayed window
   by window from its first state so that the error names its 10 ms of simulated time.
-* :func:`run_kinematic`, the road test: the pans follow the drive exactly (positions and
-  velocities set before every step; MuJoCo cannot prescribe joint motion inside a rollout).
+* :func:`run_kinematic`, the road test: the pans follow the drive exactly, as mocap bodies
+  whose positions (and, through the tires' ``ctrl``, velocities) each step of the rollout sets.
 
-Both read the drive :data:`~scenarios.core.drive.CHUNK_STEPS` steps at a time (``drive.chunk``),
-so a road drive made on demand (:class:`~scenarios.core.road_drive.RoadDrive`) is never held at
+Both step in rollouts of about :data:`ROLLOUT_STEPS` steps and read the drive one rollout at a
+time (``drive.chunk``, ``drive.held``), so a road drive made on demand (:class:`~scenarios.core.road_drive.RoadDrive`) is never held at
 the step rate: memory grows with the output samples only.
 """
 
@@ -27,7 +27,7 @@ from hydraulics.bridge import hydraulic_callbacks
 from hydraulics.events import events as hydraulic_events
 from hydraulics.params import STATE_NAMES
 from mjcf import names
-from scenarios.core.drive import CHUNK_STEPS
+from mjcf.physics import tire_law
 from scenarios.core.watch import SimulationError, Watch, output_schedule
 
 __all__ = ["RigRecord", "run_hydraulic", "run_kinematic", "ROLLOUT_STEPS", "RECORDED_STATES"]
@@ -40,6 +40,9 @@ RECORDED_STATES = {"spool": (STATE_NAMES.index("spool"), 1.0), "p1_Pa": (STATE_N
 #: (scenarios.core.watch.CHECK_EVERY_S; at least one): 1 s at the rig test's 1e-3 s step, so the
 #: calls' Python overhead (output rows, events, warning check) is ~1 % of the stepping.
 ROLLOUT_STEPS = 1000
+#: What a road-test step's controls set: ``ctrl`` (the tires' pan velocities) and the mocap
+#: bodies' positions (the pans).
+_PRESCRIBED = int(mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_POS)
 
 
 @dataclass(frozen=True)
@@ -91,39 +94,59 @@ def _output_rows(k: int, kk: int, k0: int, decim: int) -> tuple[np.ndarray, np.n
 
 
 def run_kinematic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigRecord:
-    """The road test of ``rig`` (``hydraulic=False``): the pans follow ``drive`` exactly."""
+    """The road test of ``rig`` (``hydraulic=False``): the pans follow ``drive`` exactly.
+
+    The pans are mocap bodies (``build_spec(pans="mocap")``): each step holds each pan at the
+    drive's mid-step value (:meth:`~scenarios.core.drive.Drive.held`) moving at its mean velocity
+    over the step, (z_k+1 - z_k) / dt, fed to the tire's damping through ``ctrl``. The tire force
+    recorded at t_k is the tire's law (:func:`mjcf.physics.tire_law`) with the pan at z_k moving
+    at v_k, from the tendon's length and rate MuJoCo computed at the step's start with the pan at
+    mid-step: the tendon is near vertical, so it is longer by (held - z_k).
+    """
     model, idx = rig.model, rig.index
     data = rig.rest_state(pan_z_m=drive.chunk(0, 1)[0][0])
     k0, decim, n_out = output_schedule(drive, rig.dt_s, rate_hz)
     t_out, x_ref, pan, force = np.empty(n_out), np.empty((n_out, 4)), np.empty((n_out, 4)), np.empty((n_out, 4))
     watch = Watch(drive, rig.dt_s, progress)
+    state = _full_state(model, data)
+    q0 = 1  # offset of qpos in a FULLPHYSICS state
     poses = _pose_recorder(model, drive, decim, pose_rate_hz)
-    qa, da, tires = idx.pan_qpos, idx.pan_dof, idx.tire_actuator
-    # Views and the warning window hoisted out of the loop: a step costs mj_step's plus ~2 us.
-    qpos, qvel, act_force, step = data.qpos, data.qvel, data.actuator_force, mujoco.mj_step
-    check, n = watch.check, drive.n_steps
-    for k in range(0, n, CHUNK_STEPS):
-        kk = min(CHUNK_STEPS, n - k)
-        z, vz = drive.chunk(k, k + kk)
-        out_i, out_j = _output_rows(k, kk, k0, decim)
-        if out_i.size:
-            t_out[out_j] = drive.times(k, k + kk)[out_i]
-            x_ref[out_j] = z[out_i]
-            pan[out_j] = z[out_i]
-        record = np.zeros(kk, dtype=bool)
-        record[out_i] = True
-        j = int(out_j[0]) if out_j.size else 0
-        for i in range(kk):
-            qpos[qa] = z[i]
-            qvel[da] = vz[i]
-            step(model, data)
-            if record[i]:
-                force[j] = act_force[tires]
-                j += 1
-                if poses is not None:
-                    poses(data, k + i)
-            if (k + i) % check == check - 1:
-                watch.checked(data, k + i - check + 1, k + i)
+    frames = _Frames(model, poses)
+    n, chunk, dt = drive.n_steps, watch.check * max(1, ROLLOUT_STEPS // watch.check), rig.dt_s
+    # The controls of a step: ctrl (the tires' pan velocities) then every mocap body's position.
+    control = np.zeros((chunk, model.nu + 3 * model.nmocap))
+    mocap = control[:, model.nu:].reshape(chunk, model.nmocap, 3)
+    mocap[:] = data.mocap_pos
+    base_z = model.body_pos[idx.pan_body, 2]
+    lengths, rates = rig.tire_length_sensors, rig.tire_rate_sensors
+    for k in range(0, n, chunk):
+        kk = min(chunk, n - k)
+        z_next, v_next = drive.chunk(k, min(k + kk + 1, n))
+        z, v = z_next[:kk], v_next[:kk]
+        held = drive.held(k, k + kk)
+        rate = np.empty((kk, 4))
+        m = z_next.shape[0] - 1  # steps with a next sample; the drive's last step keeps its velocity
+        rate[:m] = (z_next[1:] - z_next[:-1]) / dt
+        rate[m:] = v[m:]
+        control[:kk, idx.tire_actuator] = rate
+        mocap[:kk, idx.pan_mocap, 2] = base_z + held
+        warm = data.qacc_warmstart.copy()
+        out_state, out_sensor = rollout.rollout(model, data, state, control[:kk], control_spec=_PRESCRIBED,
+                                                initial_warmstart=warm)
+        if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):
+            _replay_windows(model, watch, data, state, warm, control[:kk], k, _PRESCRIBED)
+        i, j = _output_rows(k, kk, k0, decim)
+        if i.size:
+            t_out[j] = drive.times(k, k + kk)[i]
+            x_ref[j] = z[i]
+            pan[j] = z[i]
+            s = out_sensor[0, i]
+            force[j] = tire_law(model, idx, s[:, lengths] + (held[i] - z[i]), s[:, rates] - v[i])
+            if poses is not None:
+                pre = np.where((i == 0)[:, None], state[None, :], out_state[0, np.maximum(i - 1, 0)])
+                frames.record(pre[:, q0:q0 + model.nq], i + k, mocap_z=(idx.pan_mocap, base_z + z[i]))
+        state = out_state[0, -1].copy()
+        watch.checked(data, k, k + kk - 1)
     watch.finish(data)
     if not np.all(np.isfinite(force)):
         raise SimulationError("the simulation produced non-finite tire forces")
@@ -147,14 +170,11 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
                                   "the actuator parameters make the loop unstable")
 
     watch = Watch(drive, rig.dt_s, progress, extra=diverged)
-    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    state = np.empty(mujoco.mj_stateSize(model, kind))
-    mujoco.mj_getState(model, data, state, kind)
+    state = _full_state(model, data)
     q0, a0 = 1, 1 + model.nq + model.nv  # offsets of qpos and act in a FULLPHYSICS state
     qa, hyd, sensors = rig.index.pan_qpos, rig.actuators, rig.sensors
     poses = _pose_recorder(model, drive, decim, pose_rate_hz)
-    scratch = mujoco.MjData(model) if poses is not None else None
-    frames = set(int(k) for k in poses.steps) if poses is not None else set()
+    frames = _Frames(model, poses)
     n, chunk = drive.n_steps, watch.check * max(1, ROLLOUT_STEPS // watch.check)
     ctrl = np.zeros((chunk, model.nu))
     with hydraulic_callbacks(model):
@@ -180,11 +200,7 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
                 events.add(states, t_out[j])
                 force[j] = out_sensor[0, i][:, sensors]
                 if poses is not None:
-                    for row, k_row in zip(pre, i + k):
-                        if int(k_row) in frames:
-                            scratch.qpos[:] = row[q0:q0 + model.nq]
-                            mujoco.mj_kinematics(model, scratch)
-                            poses(scratch, int(k_row))
+                    frames.record(pre[:, q0:q0 + model.nq], i + k)
             state = out_state[0, -1].copy()
             watch.checked(data, k, k + kk - 1)
         watch.finish(data)
@@ -193,13 +209,43 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
                      poses=None if poses is None else poses.track())
 
 
-def _replay_windows(model, watch: Watch, data, state, warm, ctrl, k0: int) -> None:
+def _full_state(model, data) -> np.ndarray:
+    """``data``'s full physics state (``mjSTATE_FULLPHYSICS``), the initial state of a rollout."""
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    return state
+
+
+class _Frames:
+    """Body poses for a recording, taken from a rollout's recorded states on a scratch MjData."""
+
+    def __init__(self, model, poses) -> None:
+        self.model, self.poses = model, poses
+        self.scratch = mujoco.MjData(model) if poses is not None else None
+        self.steps = set(int(k) for k in poses.steps) if poses is not None else set()
+
+    def record(self, qpos: np.ndarray, steps: np.ndarray, mocap_z=None) -> None:
+        """Record the frames among ``steps`` (their pre-step ``qpos`` rows); ``mocap_z``: (mocap
+        ids, heights (rows, 4), m) of prescribed pans at those steps."""
+        for r, k in enumerate(steps):
+            if int(k) in self.steps:
+                self.scratch.qpos[:] = qpos[r]
+                if mocap_z is not None:
+                    self.scratch.mocap_pos[mocap_z[0], 2] = mocap_z[1][r]
+                mujoco.mj_kinematics(self.model, self.scratch)
+                self.poses(self.scratch, int(k))
+
+
+def _replay_windows(model, watch: Watch, data, state, warm, ctrl, k0: int,
+                    control_spec: int = int(mujoco.mjtState.mjSTATE_CTRL)) -> None:
     """Replay a rollout that warned or diverged, one warning window at a time from its first
     ``state``, so that :class:`Watch` names the window where it went wrong (raises)."""
     data.warning.number[:] = 0
     w = watch.check
     for j in range(0, ctrl.shape[0], w):
-        out_state, _ = rollout.rollout(model, data, state, ctrl[j:j + w], initial_warmstart=warm)
+        out_state, _ = rollout.rollout(model, data, state, ctrl[j:j + w], control_spec=control_spec,
+                                       initial_warmstart=warm)
         watch.checked(data, k0 + j, k0 + j + ctrl[j:j + w].shape[0] - 1)
         state, warm = out_state[0, -1].copy(), data.qacc_warmstart.copy()
 

@@ -2,8 +2,8 @@
 
 :func:`model_forces` is the road test of a truck variant (:class:`mjcf.build.TruckVariant`) whose
 wheelpans follow a given motion sampled at the output rate (a rig's drive x_ref or its LVDTs'
-x_a, 1 kHz): the motion is interpolated onto the road test's 1e-4 s steps by a cubic spline
-(positions and, from the same spline, velocities), the truck starts from static rest on the
+x_a, 1 kHz): the motion is interpolated onto the road test's steps by a cubic spline
+(positions, velocities and the mid-step values each step holds, all from the one spline), the truck starts from static rest on the
 pans at the first sample's positions and is held there for a settling lead-in
 (:data:`SETTLE_S`, so the leaf springs' dry friction and the soft constraints settle), then the
 pans follow the motion. It uses the one rig (:class:`scenarios.core.rig.Rig`, ``hydraulic=False``)
@@ -66,8 +66,9 @@ def check_record(t_s, signals: dict) -> tuple[np.ndarray, float]:
 def pan_motion_drive(t_s, pan_m, dt_s: float, settle_s: float = SETTLE_S) -> Drive:
     """The pans' drive on the model's steps: ``pan_m`` (m, (n, 4), sampled at ``t_s``, s) through
     a cubic spline (not-a-knot) onto steps of ``dt_s`` (s) from ``-settle_s`` (s) before the first
-    sample to the last one; held at the first sample (velocity 0) during the lead-in. Times are
-    relative to ``t_s[0]``; the output rate's samples fall on steps exactly."""
+    sample to the last one; held at the first sample (velocity 0) during the lead-in. Each step
+    holds the spline's value at mid-step (:meth:`Drive.held`; the last step's is extrapolated).
+    Times are relative to ``t_s[0]``; the output rate's samples fall on steps exactly."""
     from scipy.interpolate import CubicSpline
 
     t = np.asarray(t_s, dtype=float) - float(t_s[0])
@@ -87,7 +88,9 @@ def pan_motion_drive(t_s, pan_m, dt_s: float, settle_s: float = SETTLE_S) -> Dri
     z[~ahead] = x[0]
     z[ahead] = spline(tt[ahead])
     v[ahead] = spline(tt[ahead], 1)
-    return Drive(tt, z, v)
+    mid = tt + 0.5 * dt_s
+    held = np.where((mid < 0.0)[:, None], x[0], spline(np.maximum(mid, 0.0)))
+    return Drive(tt, z, v, held_m=held)
 
 
 def model_scenario(variant: TruckVariant, base_scenario: Scenario, duration_s: float, settle_s: float) -> Scenario:

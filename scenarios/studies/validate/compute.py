@@ -32,7 +32,7 @@ import numpy as np
 from mjcf.names import CORNERS
 from scenarios.core.config import ScenarioError
 from scenarios.core.pool import run_jobs, worker_count
-from scenarios.core.rig import Rig
+from scenarios.core.rig import RIG_INTEGRATOR_NAME, Rig
 from scenarios.core.watch import SayFn
 from scenarios.studies.validate import runs, sections
 from scenarios.studies.validate.result import ValidateCurves, ValidateResult
@@ -117,8 +117,8 @@ def validate(*, duration_s: float | None = None, ident_duration_s: float | None 
     _say(progress, "validate: route 1, eq. 4 per wheel station")
     r1 = [route1_models(params, lin.kt_N_per_m[i], lin.load_N[i]) for i in range(4)]
     eq4 = [r1[i]["static_mean"][0] for i in range(4)]
-    model_r2 = (lin.a, lin.b, lin.c)
-    model_eq4 = [(np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])) for tf in eq4]
+    model_r2 = lin
+    model_eq4 = ([(np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])) for tf in eq4], lin.dt_s)
 
     # Longest first. The friction-free runs are a diagnostic (route 2 linearizes without friction).
     job_table = {
@@ -173,7 +173,8 @@ def _assemble(name, params, lin, r1, results, table_s, ident_s, wall0, rig_dt_s)
                             fits=r3.fits, steps=step_curves)
     kept = {k: results[k].result for k in ("road", "rig") if results[k].result is not None}
     return ValidateResult(
-        scenario=name, duration_s=table_s, ident_duration_s=ident_s, timestep_s=rig_dt_s, road_timestep_s=lin.dt_s,
+        scenario=name, duration_s=table_s, ident_duration_s=ident_s, timestep_s=rig_dt_s,
+        integrator=RIG_INTEGRATOR_NAME, linear_timestep_s=lin.dt_s,
         route1=route1, route2=route2, route3=sections.route3_section(r3, ident, ident_s),
         departure_budget=budget, steps=steps, table1=sections.table1_section(results),
         diagnostics_friction_off=friction_off, wall_time_s=round(time.perf_counter() - wall0, 2),

@@ -34,7 +34,8 @@ def _report_md(js: dict) -> str:
         "# Validation of the linearized actuator model (paper eq. 4) against the multibody plant",
         "",
         f"Scenario `{js['scenario']}` (truck 3640 kg payload on the four-post rig), rig test "
-        f"RK4 at {js['timestep_s']:g} s, road test and linearization explicit Euler at {js['road_timestep_s']:g} s. Table 1 runs {js['duration_s']:g} s, identification record "
+        f"and road test {js['integrator']} at {js['timestep_s']:g} s, linearization explicit Euler at "
+        f"{js['linear_timestep_s']:g} s. Table 1 runs {js['duration_s']:g} s, identification record "
         f"{js['ident_duration_s']:g} s. Every number is in [`validate.json`](validate.json); wall time "
         f"{js['wall_time_s']:.1f} s.",
         "",

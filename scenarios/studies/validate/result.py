@@ -84,9 +84,11 @@ class ValidateResult:
     ident_duration_s : float, s
         Analysed duration of the identification record.
     timestep_s : float, s
-        The rig test's time step (RK4, the drive held at mid-step).
-    road_timestep_s : float, s
-        The road test's and the linearization's time step (explicit Euler).
+        The rig and road tests' time step (the drive held at mid-step).
+    integrator : str
+        Their integrator, as MuJoCo names it without its prefix ("RK4").
+    linear_timestep_s : float, s
+        The linearization's time step (explicit Euler).
     route1, route2, route3 : Mapping
         The routes (:mod:`scenarios.studies.validate.sections`): bandwidths in Hz, errors
         against route 2 in dB and deg up to :data:`COMPARE_MAX_HZ`, poles and zeros in rad/s.
@@ -110,7 +112,8 @@ class ValidateResult:
     duration_s: float
     ident_duration_s: float
     timestep_s: float
-    road_timestep_s: float
+    integrator: str
+    linear_timestep_s: float
     route1: Mapping
     route2: Mapping
     route3: Mapping
@@ -164,7 +167,8 @@ class ValidateResult:
             "duration_s": self.duration_s,
             "ident_duration_s": self.ident_duration_s,
             "timestep_s": self.timestep_s,
-            "road_timestep_s": self.road_timestep_s,
+            "integrator": self.integrator,
+            "linear_timestep_s": self.linear_timestep_s,
             "compare_range_hz": [BODE_RANGE_HZ[0], COMPARE_MAX_HZ],
             "coherence_min": COHERENCE_MIN,
             "route2": self.route2,

@@ -21,7 +21,7 @@ import numpy as np
 from scipy import signal
 
 from scenarios.core.drive import Drive, identification_drive, step_drive
-from scenarios.core.plant import simulate
+from scenarios.core.plant import fine_factor
 from scenarios.core.rig import Rig, RigRecord
 from scenarios.core.run import run
 from scenarios.studies.validate.settings import IDENT_RATE_HZ, IDENT_SKIP_S, STEP_AT_S, STEP_RUN_S, validation_scenario
@@ -128,28 +128,28 @@ def linear_model_run(path: str, duration_s: float | None, kind: str, model) -> S
         "route2_per_wheel": each pan through its own path of the linearized plant;
         "route2_mimo": the whole linear plant with all four profiles (cross-coupling included);
         "eq4": eq. 4 per wheel.
-    model : tuple
-        Route 2: ``(A, B, C)`` of :class:`scenarios.core.plant.PlantLinearization`; eq. 4:
-        per corner ``(num, den)`` in s (rad/s).
+    model : PlantLinearization or tuple
+        Route 2: the :class:`scenarios.core.plant.PlantLinearization`; eq. 4: ``(tfs, dt_s)``,
+        per corner ``(num, den)`` in s (rad/s) and the step (s) to discretize them at (the
+        plant's; the run's drive is refined onto it and taken back, as route 2's is).
     """
     if kind not in LINEAR_KINDS:
         raise ValueError(f"kind must be one of {', '.join(LINEAR_KINDS)}, got {kind!r}")
 
     def pan_drive(drive: Drive) -> Drive:
-        dt = float(drive.t_s[1] - drive.t_s[0])
         if kind.startswith("route2"):
-            a, b, c = model
-            y = simulate(a, b, c, drive.z_m, diagonal=(kind == "route2_per_wheel"))
-            z, v = y[:, :4], y[:, 4:]
-        else:
-            # First-order hold (exact for the piecewise-linear drive; a zero-order hold adds half
-            # a step of delay), and the profile's velocity through the same T_a (d/dt commutes).
-            z = np.empty_like(drive.z_m)
-            v = np.empty_like(drive.z_m)
-            for i, (num, den) in enumerate(model):
-                bd, ad, _ = signal.cont2discrete((num, den), dt, method="foh")
-                z[:, i] = signal.lfilter(np.ravel(bd), ad, drive.z_m[:, i])
-                v[:, i] = signal.lfilter(np.ravel(bd), ad, drive.v_mps[:, i])
-        return Drive(t_s=drive.t_s, z_m=z, v_mps=v)
+            return model.pan_drive(drive, diagonal=(kind == "route2_per_wheel"))
+        tfs, dt = model
+        r = fine_factor(drive.dt_s, dt)
+        fine = drive.refined(r)
+        # First-order hold (exact for a piecewise-linear drive; a zero-order hold adds half a
+        # step of delay), and the profile's velocity through the same T_a (d/dt commutes).
+        z = np.empty_like(fine.z_m)
+        v = np.empty_like(fine.z_m)
+        for i, (num, den) in enumerate(tfs):
+            bd, ad, _ = signal.cont2discrete((num, den), dt, method="foh")
+            z[:, i] = signal.lfilter(np.ravel(bd), ad, fine.z_m[:, i])
+            v[:, i] = signal.lfilter(np.ravel(bd), ad, fine.v_mps[:, i])
+        return Drive(fine.t_s, z, v, fine.corners).every(r)
 
     return _scenario_run(run(validation_scenario(path, duration_s), "road", pan_drive=pan_drive), keep=False)
