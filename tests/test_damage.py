@@ -309,11 +309,11 @@ def test_damage_metrics_of_a_sine_and_compare():
 
 
 def test_cycles_counted_on_the_turning_points_are_the_librarys_on_every_sample():
-    """rainflow_cycles counts the cycles of the reversals found with numpy (turning_points)
-    instead of letting ``rainflow`` walk every sample: the reference is ``rainflow.extract_cycles``
-    on the raw history, exactly (ranges, means and counts, in order), on 3000 short histories
-    with plateaus, constant and monotone runs, and on a long noisy one."""
-    import rainflow
+    """rainflow_cycles counts with numpy (reversals, four-point passes, the stack on the rest;
+    tests/test_rainflow_fast.py for generated and awkward histories): the reference is
+    ``rainflow.extract_cycles`` on the raw history, exactly (ranges, means and counts, in order),
+    on 3000 short histories with plateaus, constant and monotone runs, and on a long noisy one."""
+    rainflow = pytest.importorskip("rainflow")  # the test extra's reference
 
     from correction.rainflow_damage import rainflow_cycles
 
@@ -341,15 +341,15 @@ def test_cycles_counted_on_the_turning_points_are_the_librarys_on_every_sample()
 # ---------------------------------------------------------------- input checks and reversals (rainflow_damage)
 
 
-def test_turning_points_are_the_first_sample_the_reversals_and_the_last_twice():
+def test_turning_points_are_the_first_sample_the_reversals_and_the_last():
     # Worked by hand from the definition (turning_points docstring): plateaus count once, a
-    # monotone sample is no reversal, however small its slope, and the last point is repeated.
+    # monotone sample is no reversal, however small its slope; a constant record is one value.
     from correction.rainflow_damage import turning_points
 
     f = np.array([0.0, 0.1, 0.2, 0.1, 0.1, 0.15, 0.3, -2.0, -2.5])
-    assert turning_points(f).tolist() == [0.0, 0.2, 0.1, 0.3, -2.5, -2.5]
-    assert turning_points(np.array([1.0, 2.0, 3.0, 4.0])).tolist() == [1.0, 4.0, 4.0]
-    assert turning_points(np.array([5.0, 5.0, 5.0])).tolist() == [5.0, 5.0, 5.0]
+    assert turning_points(f).tolist() == [0.0, 0.2, 0.1, 0.3, -2.5]
+    assert turning_points(np.array([1.0, 2.0, 3.0, 4.0])).tolist() == [1.0, 4.0]
+    assert turning_points(np.array([5.0, 5.0, 5.0])).tolist() == [5.0]
 
 
 def test_force_records_are_checked_with_one_sentence_naming_the_fault():
