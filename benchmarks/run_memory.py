@@ -9,7 +9,14 @@ fresh process per duration and reads its peak resident memory (``getrusage`` of 
 child, ``ru_maxrss``). Prints one JSON line: the peak per duration (MB), the fixed part (the
 shortest run: interpreter, MuJoCo, numpy, scipy, numba, the model), the slope (MB per simulated
 minute: the record; the drive is made chunk by chunk and not held) and the size of the output
-(``timeseries.csv``, MB) for comparison. Goal of issue 11: a 600 s run under 400 MB.
+(``timeseries.csv``, MB) for comparison. Goal of issue 11: a 600 s run under 400 MB
+(``goal_met``, when 600 s is among the durations).
+
+What the peak is made of (rig mode, 600 s): ~184 MB of imports (numpy, scipy.signal with
+scipy.stats, MuJoCo, numba), ~40 MB of model and hydraulic callbacks (numba's code generator
+loading the cached machine code: ~32 MB), the road profile read during the run (15 MB) and the
+record (25 float64 columns at 1 kHz: 120 MB). The statistics and ``timeseries.csv`` work block
+by block after the run, within what the profile freed.
 """
 
 from __future__ import annotations
@@ -26,6 +33,8 @@ import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCENARIO = "scenarios/data/paper/high_72kmh_3640kg.toml"
+#: Peak of a 600 s run to stay under, MB (1e6 bytes).
+GOAL_MB = 400.0
 
 
 def peak_mb(mode: str, duration_s: float) -> tuple[float, float]:
@@ -55,10 +64,13 @@ def main(argv=None) -> int:
     rows = {d: peak_mb(args.mode, d) for d in sorted(args.durations)}
     ds = sorted(rows)
     slope = (rows[ds[-1]][0] - rows[ds[0]][0]) / ((ds[-1] - ds[0]) / 60.0) if len(ds) > 1 else float("nan")
-    print(json.dumps({"mode": args.mode, "peak_mb": {f"{d:g}": round(rows[d][0], 1) for d in ds},
-                      "csv_mb": {f"{d:g}": round(rows[d][1], 1) for d in ds},
-                      "fixed_mb": round(rows[ds[0]][0], 1), "mb_per_simulated_min": round(slope, 1),
-                      "goal": "600 s under 400 MB"}))
+    report = {"mode": args.mode, "peak_mb": {f"{d:g}": round(rows[d][0], 1) for d in ds},
+              "csv_mb": {f"{d:g}": round(rows[d][1], 1) for d in ds},
+              "fixed_mb": round(rows[ds[0]][0], 1), "mb_per_simulated_min": round(slope, 1),
+              "goal": f"600 s under {GOAL_MB:g} MB"}
+    if 600.0 in rows:
+        report["goal_met"] = rows[600.0][0] < GOAL_MB
+    print(json.dumps(report))
     return 0
 
 

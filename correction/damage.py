@@ -30,6 +30,7 @@ import math
 
 import numpy as np
 
+from correction.dlc import column_sum
 from correction.dlc import dlc as dynamic_load_coefficient
 from correction.rainflow_damage import (
     WOHLER_PRESETS,
@@ -106,7 +107,8 @@ def stress_factor(force_N, static_N=None, n: float = 4.0):
         raise ValueError(f"the damage exponent n must be a positive number, got {n}")
     f, one = force_columns(force_N)
     s = _static(static_N, f)
-    return _out(np.mean((np.maximum(f, 0.0) / s) ** n, axis=0), one)
+    # np.mean((max(f, 0) / s) ** n, axis=0) bit for bit, without three temporaries as large as f
+    return _out(column_sum(f, lambda b: (np.maximum(b, 0.0) / s) ** n) / f.shape[0], one)
 
 
 def stress_factor_gaussian(dlc, n: int = 4):

@@ -81,10 +81,12 @@ def _progress_bar(label: str, quiet: bool):
 
 def _cmd_run(args) -> int:
     from scenarios.core.config import ScenarioError, load_scenario
+    from scenarios.core.memory import return_freed_arrays
     from scenarios.core.outputs import check_output_file, staged_output
     from scenarios.core.results import check_timeseries_format, write_run
     from scenarios.core.run import run
 
+    return_freed_arrays()  # freed arrays leave the process: a long run peaks at its record plus one temporary
     check_timeseries_format(args.format)
     scenario = load_scenario(args.scenario)
     if args.duration_s is not None:

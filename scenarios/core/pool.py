@@ -19,9 +19,6 @@ from collections.abc import Callable, Iterator, Sequence
 
 __all__ = ["worker_count", "local_executor", "stop_process_pool", "run_jobs", "keep_heap_memory"]
 
-#: glibc's mallopt parameters (malloc.h): M_TRIM_THRESHOLD, M_MMAP_THRESHOLD.
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
-
 
 def keep_heap_memory(mmap_threshold_bytes: int = 64 * 2**20) -> bool:
     """Let this process's C heap keep and reuse the memory of large arrays (glibc only).
@@ -32,18 +29,12 @@ def keep_heap_memory(mmap_threshold_bytes: int = 64 * 2**20) -> bool:
     nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which freezes the threshold at
     128 KiB, and a sweep case then ran 23 % slower (4.9 against 4.0 s, measured). Setting the
     thresholds explicitly (``mallopt``) restores the reuse; the memory stays with the process
-    for its next case. Returns whether it was applied (False off glibc).
+    for its next case (:func:`scenarios.core.memory.malloc_thresholds`). Returns whether it was
+    applied (False off glibc).
     """
-    import ctypes
-    import ctypes.util
+    from scenarios.core.memory import malloc_thresholds
 
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        mallopt = libc.mallopt
-    except (OSError, AttributeError):
-        return False
-    ok = mallopt(_M_MMAP_THRESHOLD, int(mmap_threshold_bytes)) == 1
-    return bool(mallopt(_M_TRIM_THRESHOLD, 2 * int(mmap_threshold_bytes)) == 1 and ok)
+    return malloc_thresholds(mmap_threshold_bytes)
 
 
 def worker_count(requested: int | None, jobs: int | None = None) -> int:

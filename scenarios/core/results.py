@@ -84,7 +84,7 @@ class RunResult:
             "vehicle_mass_kg": self.vehicle_mass_kg,
             "rate_hz": round(self.rate_hz, 9),
             "samples": int(self.t_s.size),
-            "dlc_mean": float(np.mean([s["dlc"] for s in stats.values()])),
+            "dlc_mean": _dlc_mean(stats),
             "wheels": stats,
             "events": dict(self.events),
             "info": dict(self.info),
@@ -99,12 +99,13 @@ class RunResult:
         f = np.asarray(self.signals["tire_force_N"], dtype=float)
         sf = np.atleast_1d(stress_factor(f))
         del5 = np.atleast_1d(damage_equivalent_load(f, 5, duration_s=f.shape[0] / self.rate_hz))
+        stats = self.statistics()
         lines = [f"{self.scenario_name} ({self.mode} mode)",
                  f"{'wheel':>6} {'mean N':>10} {'std N':>9} {'DLC':>7} {'SF4':>7} {'DEL5 kN':>8}"]
-        for i, (c, s) in enumerate(self.statistics().items()):
+        for i, (c, s) in enumerate(stats.items()):
             lines.append(f"{c:>6} {s['mean_force_N']:10.0f} {s['std_force_N']:9.0f} {s['dlc']:7.4f} "
                          f"{sf[i]:7.4f} {del5[i] / 1e3:8.2f}")
-        lines.append(f"{'mean':>6} {'':>10} {'':>9} {self.summary()['dlc_mean']:7.4f} {np.mean(sf):7.4f} "
+        lines.append(f"{'mean':>6} {'':>10} {'':>9} {_dlc_mean(stats):7.4f} {np.mean(sf):7.4f} "
                      f"{np.mean(del5) / 1e3:8.2f}")
         return "\n".join(lines)
 
@@ -130,6 +131,11 @@ class RunResult:
     def columns(self) -> tuple[list[str], np.ndarray]:
         """Header and the whole (N, 1 + 4 k) matrix of the time series file."""
         return self.column_names(), self.rows(0, self.t_s.shape[0])
+
+
+def _dlc_mean(stats: Mapping[str, Mapping[str, float]]) -> float:
+    """The wheels' mean DLC (``result.json``'s ``dlc_mean``) from :meth:`RunResult.statistics`."""
+    return float(np.mean([s["dlc"] for s in stats.values()]))
 
 
 #: Rows of ``timeseries.csv`` formatted at a time: the file is streamed to disk in blocks of this
