@@ -25,7 +25,12 @@ from scipy import signal
 
 from .lowpass import LowPass
 
-__all__ = ["CorrectionFilter"]
+__all__ = ["CorrectionFilter", "SETTLING_TOLERANCE"]
+
+#: Default tolerance (1) of a correction filter's start-up and run-out transients: the samples
+#: whose filter output may still differ from the steady state by more than this fraction are not
+#: settled. The one value every correction uses (``rigsim correct``, the studies' scoring).
+SETTLING_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,7 +83,7 @@ class CorrectionFilter:
     band_error: float
     settling_time_s: float = field(default=0.0)
     zero_phase_margins_s: tuple[float, float] = field(default=(0.0, 0.0))
-    settling_tolerance: float = field(default=1e-3)
+    settling_tolerance: float = field(default=SETTLING_TOLERANCE)
 
     # ------------------------------------------------------------------ transfer functions
     def tf(self) -> control.TransferFunction:

@@ -19,9 +19,10 @@ import numpy as np
 
 from .actuator_fit import ActuatorFit
 from .apply import correct
+from .correction_filter import SETTLING_TOLERANCE
 from .filters import design_correction, reference_filter
 
-__all__ = ["CorrectedForces", "CorrectionError", "correct_forces"]
+__all__ = ["CorrectedForces", "CorrectionError", "correct_forces", "SETTLING_TOLERANCE"]
 
 _MODES = ("causal", "zerophase")
 
@@ -105,7 +106,7 @@ def _actuator_list(actuators, k: int) -> list:
 
 
 def correct_forces(force_N, actuators, fs: float, *, lowpass="regularized", mode: str = "zerophase",
-                   settling_tolerance: float = 1e-3, normalize_dc: bool = False) -> CorrectedForces:
+                   settling_tolerance: float = SETTLING_TOLERANCE, normalize_dc: bool = False) -> CorrectedForces:
     """Correct measured wheel forces by ``T_a^-1 T_F``, each column with its own ``T_a``.
 
     Parameters

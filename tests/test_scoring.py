@@ -392,3 +392,16 @@ def test_papers_method_uses_eq4_at_the_static_actuator_load(road_rig):
                                                           load, mass_kg=rig_model.pan_mass_kg))
         got = score.methods["paper"].actuators[i]
         assert np.array_equal(got[0], num) and np.array_equal(got[1], den)
+
+
+@pytest.mark.parametrize("noise", [-1.0, float("nan"), float("inf")])
+def test_a_negative_or_non_finite_noise_is_refused_by_the_measured_force_itself(noise):
+    """measured_force is public: it refuses what score_pair refuses, not only when scored."""
+    from types import SimpleNamespace
+
+    from scenarios.studies.scoring import measured_force
+
+    rig = SimpleNamespace(signals={"tire_force_N": np.ones((10, 4))})
+    with pytest.raises(ScenarioError, match="noise_N"):
+        measured_force(rig, noise, seed=1)
+    assert np.array_equal(measured_force(rig, 0.0, seed=1), np.ones((10, 4)))

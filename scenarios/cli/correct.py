@@ -40,11 +40,11 @@ from __future__ import annotations
 import argparse
 
 from scenarios.cli.correct_channels import parse_options, plan_channels, read_input
-from scenarios.cli.correct_output import (SETTLING_TOLERANCE, check_out_file, fit_metadata, linear_correction,
+from scenarios.cli.correct_output import (check_out_file, fit_metadata, linear_correction,
                                           linear_metadata, output_units, probe_output, rigsim_version,
                                           write_corrected)
 
-__all__ = ["add_parser", "cmd_correct", "SETTLING_TOLERANCE"]
+__all__ = ["add_parser", "cmd_correct"]
 
 
 def _error(message: str):

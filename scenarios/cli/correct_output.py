@@ -13,11 +13,8 @@ from __future__ import annotations
 import math
 import pathlib
 
-__all__ = ["SETTLING_TOLERANCE", "check_out_file", "header_value", "fit_metadata", "rigsim_version",
+__all__ = ["check_out_file", "header_value", "fit_metadata", "rigsim_version",
            "linear_metadata", "output_units", "probe_output", "dlc_table", "linear_correction", "write_corrected"]
-
-#: Tolerance (1) of the correction filters' start-up and run-out transients: the samples kept.
-SETTLING_TOLERANCE = 1e-3
 
 
 def _error(message: str):
@@ -69,6 +66,7 @@ def rigsim_version() -> str:
 
 def linear_metadata(args) -> dict[str, str]:
     """How the linear correction was made: its formula, low-pass, mode, tolerance, transients."""
+    from correction.correction_filter import SETTLING_TOLERANCE
     from correction.lowpass import as_lowpass
 
     return {"correction": "F_corrected = T_a^-1 T_F F_measured", "force_unit": "N",
@@ -131,7 +129,7 @@ def linear_correction(args, forces, tas, fs: float, cols, corners):
     :class:`~correction.pipeline.CorrectedForces`."""
     import numpy as np
 
-    from correction.pipeline import CorrectionError, correct_forces
+    from correction.pipeline import SETTLING_TOLERANCE, CorrectionError, correct_forces
 
     try:
         res = correct_forces(forces, tas, fs, lowpass=args.lowpass, mode=args.mode, normalize_dc=args.normalize_dc,

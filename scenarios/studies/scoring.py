@@ -41,13 +41,13 @@ from correction.apply import band_limit
 from correction.damage import damage_equivalent_load, stress_factor
 from correction.dlc import dlc, nrmse
 from correction.eq4 import eq4_coefficients_from
-from correction.pipeline import correct_forces
+from correction.pipeline import SETTLING_TOLERANCE, correct_forces
 from hydraulics.linearization import eq4_parameters
 from hydraulics.params import GRAVITY_M_S2
 from scenarios.core.config import ScenarioError
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "MIN_DURATION_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
-           "PairScore", "score_pair", "SETTLING_TOLERANCE", "measured_force", "shortest_scorable_s"]
+           "PairScore", "score_pair", "SETTLING_TOLERANCE", "check_noise", "measured_force", "shortest_scorable_s"]
 
 #: Default rms of the white measurement noise added to the rig's wheel forces, N. A strain-gauge
 #: load cell rated for the 156 kN actuator force resolves ~0.05 % of its range (~80 N);
@@ -61,9 +61,6 @@ MIN_SCORED_S = 0.25
 #: correction's zero-phase start-up and end transients alone take ~4 s of the record.
 MIN_DURATION_S = 10.0
 
-#: Relative tolerance of the filters' transients: samples where a filter's start-up (and, zero-phase,
-#: end) transient still exceeds this fraction of a step are not scored (the correction's default).
-SETTLING_TOLERANCE = 1e-3
 
 @dataclass(frozen=True)
 class Method:
@@ -225,11 +222,18 @@ def shortest_scorable_s(rate_hz: float, method: Method) -> float:
     return (head + tail) / float(rate_hz) + MIN_SCORED_S
 
 
+def check_noise(noise_N: float) -> None:
+    """Refuse a load-cell noise (N rms) that is negative or not finite (ScenarioError)."""
+    if not (np.isfinite(noise_N) and noise_N >= 0):
+        raise ScenarioError(f"noise_N must be >= 0 N, got {noise_N!r}")
+
+
 def measured_force(rig, noise_N: float, seed: int) -> np.ndarray:
     """The rig run's tire forces as a load cell measures them: plus white noise of ``noise_N``
-    (N rms) from ``numpy.random.default_rng((seed, 8))``."""
+    (N rms, >= 0: ScenarioError otherwise) from ``numpy.random.default_rng((seed, 8))``."""
+    check_noise(noise_N)
     clean = np.asarray(rig.signals["tire_force_N"], dtype=float)
-    if not noise_N > 0:
+    if noise_N == 0:
         return clean.copy()
     return clean + noise_N * np.random.default_rng((int(seed), 8)).standard_normal(clean.shape)
 
@@ -292,8 +296,7 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
     """
     if road.t_s.shape != rig.t_s.shape or not np.array_equal(road.t_s, rig.t_s):
         raise ValueError("road and rig runs must share their time axis (the same scenario)")
-    if not (np.isfinite(noise_N) and noise_N >= 0):
-        raise ScenarioError(f"noise_N must be >= 0 N, got {noise_N!r}")
+    check_noise(noise_N)
     fs = road.rate_hz
     road_f = np.asarray(road.signals["tire_force_N"], dtype=float)
     rig_f = measured_force(rig, noise_N, seed)
