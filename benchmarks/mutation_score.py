@@ -34,7 +34,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 TARGETS = {
     "correction/dlc.py": ["tests/test_dlc.py", "tests/test_damage.py"],
     "correction/eq4.py": ["tests/test_transfer.py", "tests/test_correction.py"],
-    "correction/rainflow_damage.py": ["tests/test_damage.py"],
+    "correction/rainflow_damage.py": ["tests/test_rainflow_fast.py", "tests/test_damage.py"],
     "hydraulics/model.py": ["tests/test_hydraulics_laws.py", "tests/test_hydraulics_model.py"],
     "scenarios/studies/scoring.py": ["tests/test_scoring.py"],
 }
