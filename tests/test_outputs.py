@@ -334,32 +334,51 @@ def test_run_refuses_an_rrd_into_a_read_only_folder(tmp_path, scenario, capsys, 
     assert not out.exists() and list(readonly.iterdir()) == [] and _no_staging(tmp_path)
 
 
+class _RecordingStandIn:
+    """Stands in for :class:`scenarios.review.recording_process.RecordingProcess` (the real child
+    process is tested in test_recording_process.py): writes b"rrd" where it is told, or fails."""
+
+    seen: list = []
+    failure: BaseException | None = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        return None
+
+    def submit(self, path, results, *, dlc_table=None):
+        self.path = pathlib.Path(path)
+
+    def commit(self):
+        if self.failure is not None:
+            raise self.failure
+        type(self).seen.append(self.path)
+        self.path.write_bytes(b"rrd")
+        return self.path
+
+
+def _stand_in_recording(monkeypatch, failure=None):
+    from scenarios.review import recording_process
+
+    stand_in = type("StandIn", (_RecordingStandIn,), {"seen": [], "failure": failure})
+    monkeypatch.setattr(recording_process, "RecordingProcess", stand_in)
+    return stand_in
+
+
 def test_run_writes_an_rrd_inside_its_folder_with_the_rest(tmp_path, scenario, capsys, monkeypatch):
-    """--rrd inside --out lands there with the other files (one rename); the recording itself is
-    replaced by a stand-in writer (the real one is tested in test_recording.py)."""
-    from scenarios.review import recording
-
-    seen = []
-
-    def fake_write(path, results, **kwargs):
-        seen.append(pathlib.Path(path))
-        pathlib.Path(path).write_bytes(b"rrd")
-
-    monkeypatch.setattr(recording, "write_recording", fake_write)
+    """--rrd inside --out lands there with the other files (one rename); the recording process is
+    replaced by a stand-in (the real one is tested in test_recording_process.py)."""
+    stand_in = _stand_in_recording(monkeypatch)
     out = tmp_path / "out"
     assert main(["run", str(scenario), "--out", str(out), "--rrd", str(out / "run.rrd"), "--quiet"]) == 0
-    assert seen and seen[0].parent.name.endswith(".partial")  # written into the staging folder
+    assert stand_in.seen and stand_in.seen[0].parent.name.endswith(".partial")  # written into the staging folder
     assert (out / "run.rrd").read_bytes() == b"rrd" and (out / "result.json").is_file()
     assert f"wrote recording {out / 'run.rrd'}" in capsys.readouterr().out
 
 
 def test_run_failing_after_the_simulation_leaves_nothing(tmp_path, scenario, capsys, monkeypatch):
-    from scenarios.review import recording
-
-    def fail(*a, **k):
-        raise OSError(28, "No space left on device")
-
-    monkeypatch.setattr(recording, "write_recording", fail)
+    _stand_in_recording(monkeypatch, failure=OSError(28, "No space left on device"))
     out = tmp_path / "out"
     assert main(["run", str(scenario), "--out", str(out), "--rrd", str(tmp_path / "x.rrd"), "--quiet"]) == 2
     assert "No space left" in _one_line(capsys.readouterr().err)

@@ -80,11 +80,13 @@ def _progress_bar(label: str, quiet: bool):
 
 
 def _cmd_run(args) -> int:
+    import os
+
     from scenarios.core.config import ScenarioError, load_scenario
     from scenarios.core.memory import return_freed_arrays
     from scenarios.core.outputs import check_output_file, staged_output
     from scenarios.core.results import check_timeseries_format, write_run
-    from scenarios.core.run import run
+    from scenarios.review.recording_process import RecordingError, RecordingProcess
 
     return_freed_arrays()  # freed arrays leave the process: a long run peaks at its record plus one temporary
     check_timeseries_format(args.format)
@@ -101,32 +103,39 @@ def _cmd_run(args) -> int:
         raise ScenarioError(f"duration_s (--duration-s) = {scenario.duration_s:g} s is shorter than one output "
                             f"sample at output_rate_hz = {rate:g} Hz; a DLC needs two, so give at least "
                             f"{1.0 / rate:g} s")
-    pose_rate = None
     if args.view and args.rrd is None:
         raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
     if args.rrd is not None:  # checked with --out before the run: both are written, or neither
-        from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
-
         check_output_file(args.rrd, "--rrd", force=args.force, folder=args.out)
-        pose_rate = DEFAULT_POSE_RATE_HZ
-        from scenarios.review.recording import preload_rerun
+        if os.path.exists(args.rrd) and os.path.samefile(args.rrd, args.scenario):
+            raise ScenarioError(f"--rrd {args.rrd} is the scenario file; name another file for the recording")
+    # --rrd: a child process imports rerun and writes the recording (scenarios.review.recording_process);
+    # it starts before the simulation's imports, so that its own overlap them and the run
+    recording = RecordingProcess() if args.rrd is not None else contextlib.nullcontext()
+    try:
+        with staged_output(args.out, force=args.force) as stage, recording as recorder:
+            from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
+            from scenarios.core.run import run
 
-        preload_rerun()  # the import overlaps the run
-    with staged_output(args.out, force=args.force) as stage:
-        with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
-            result = run(scenario, args.mode, progress=progress, pose_rate_hz=pose_rate)
-        paths = {k: stage.final(p) for k, p in write_run(result, stage.path, fmt=args.format).items()}
-        if args.rrd is not None:
-            from scenarios.review.recording import write_recording
-
-            write_recording(stage.place(args.rrd), [result], dlc_table=result.table())
+            with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
+                result = run(scenario, args.mode, progress=progress,
+                             pose_rate_hz=None if recorder is None else DEFAULT_POSE_RATE_HZ)
+            table = result.table()
+            if recorder is not None:  # the child writes the .rrd while this process writes the rest
+                recorder.submit(stage.place(args.rrd), [result], dlc_table=table)
+            paths = {k: stage.final(p) for k, p in write_run(result, stage.path, fmt=args.format).items()}
+            if recorder is not None:
+                recorder.commit()
+    except RecordingError as exc:  # not bad input nor an unwritable file: exit 1, nothing written
+        print(f"rigsim: error: {exc}", file=sys.stderr)
+        return 1
     if args.rrd is not None:
         print(f"wrote recording {args.rrd}" + (" and opened the viewer" if args.view else ""))
         if args.view:
             from scenarios.review.recording import open_viewer
 
             open_viewer(args.rrd)
-    print(result.table())
+    print(table)
     if result.events:
         print("events: " + json.dumps(result.events))
     print(f"wrote {paths['result']} and {paths['timeseries']}")
