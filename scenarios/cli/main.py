@@ -1,7 +1,8 @@
 """The ``rigsim`` command line.
 
 Exit codes: 0 success; 2 bad input or a run that cannot go on (one sentence on stderr,
-nothing written); 130 interrupted, 143 terminated (nothing written: every command that writes a
+nothing written); 1 a recording process that failed for another reason (``rigsim run --rrd``,
+one sentence, nothing written); 130 interrupted, 143 terminated (nothing written: every command that writes a
 folder builds it beside the target and renames it at the end, :mod:`scenarios.core.outputs`).
 """
 
