@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 
 from mjcf import names
+from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M, add_progressive_tire, set_tire, tire_elements
 
 __all__ = [
     "MODEL_FILE",
@@ -85,12 +86,17 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "tire_damping_rear_Ns_per_m": (0.0, 5e4, "N s/m", "a tire's is ~1.5 kN s/m; more is beyond critical "
                                    "damping and the time step's stability limit"),
     "pan_mass_kg": (50.0, 5000.0, "kg", "a wheelpan with piston and rod weighs hundreds of kg (DYNTRAC: ~500 kg)"),
-    "cab_mount_hz": (0.5, 10.0, "Hz", "a suspended truck cab bounces at 1.5-3 Hz; below 0.5 Hz no cab mount "
-                     "holds the cab, above 10 Hz it is a rubber-bushed (near-rigid) cab, which is the model "
-                     "without cab_mount_hz"),
+    "cab_mount_hz": (0.5, 30.0, "Hz", "a suspended truck cab bounces at 1.5-3 Hz; below 0.5 Hz no cab mount "
+                     "holds the cab, above ~10 Hz it is a rubber-bushed (near-rigid) cab, and at 30 Hz, a decade "
+                     "above the body modes, it moves with the frame (a stiffer one is the model without "
+                     "cab_mount_hz)"),
     "cab_mass_kg": (200.0, 1200.0, "kg", "a truck cab weighs 0.8-1.5 t; the chassis' roll inertia (2600 kg m^2, "
                     "truck_rig.xml) leaves the frame without its cab no roll inertia beyond ~1.35 t and "
                     "an implausibly small one above 1.2 t"),
+    "tire_progressive_ratio": (0.0, 3.0, "1", "a pneumatic tire stiffens by tens of % over its working deflection; "
+                               "a tire whose stiffness more than quadruples is not one"),
+    "tire_progressive_onset_m": (0.0, 0.1, "m", "a truck tire deflects 2-4 cm under its rated load; an onset beyond "
+                                 "0.1 m (a fifth of the radius) is never reached by a tire that is not flat"),
     "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
                    "only cost time and memory; the defaults are 1e-4 s (road test) and 1e-3 s (rig test)"),
 }
@@ -160,11 +166,23 @@ class TruckVariant:
         it at rest at zero deflection, with :data:`CAB_DAMPING_RATIO` of critical damping; two
         mount pairs :data:`CAB_MOUNT_SPACING_M` apart give the pitch stiffness. Its mass and
         inertia are taken out of the chassis so that the truck's mass, centre of mass and roll
-        and pitch inertia are unchanged. 0.5 to 10 Hz (see :data:`BOUNDS`). This is the plant
+        and pitch inertia are unchanged. 0.5 to 30 Hz (see :data:`BOUNDS`). This is the plant
         feature a model of the rigid-cab family lacks (issue 17).
     cab_mass_kg : float, kg, optional
         Mass of the suspended cab (default :data:`CAB_MASS_KG`; only with ``cab_mount_hz``),
         a uniform box of the cab geom's size. 200 to 1200 kg (see :data:`BOUNDS`).
+    tire_progressive_ratio : float, 1, optional
+        A progressive tire (every wheel station): beyond :attr:`tire_progressive_onset_m` of
+        deflection the stiffness rises from kt to kt (1 + ratio). ``None`` (default): the XML's
+        linear tire. Set: a second affine element on each tire tendon
+        (:func:`mjcf.names.tire_progressive_actuator`), F2 = ratio kt (d - onset) for a deflection
+        d = R0 - L beyond the onset and 0 before it (its force range is [0, 1e7] N: unilateral),
+        without damping; the tire force sensors (:func:`mjcf.names.tire_sensor`) then report the
+        sum of the tendon's elements. 0 to 3 (see :data:`BOUNDS`). A plant feature the calibrated
+        model family (a linear tire) lacks.
+    tire_progressive_onset_m : float, m, optional
+        Deflection at which the progressive element engages (default
+        :data:`mjcf.tires.TIRE_PROGRESSIVE_ONSET_M`; only with ``tire_progressive_ratio``). 0 to 0.1 m.
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
@@ -186,6 +204,8 @@ class TruckVariant:
     timestep_s: float | None = None
     cab_mount_hz: float | None = None
     cab_mass_kg: float | None = None
+    tire_progressive_ratio: float | None = None
+    tire_progressive_onset_m: float | None = None
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -198,7 +218,7 @@ class TruckVariant:
                         f"vehicle.payload_x_m must lie on the truck (between -3.5 and 3.5 m), got {value!r}"
                     )
                 continue
-            zero_ok = f.name.startswith(("spring_friction", "tire_damping", "payload_kg"))
+            zero_ok = f.name.startswith(("spring_friction", "tire_damping", "payload_kg", "tire_progressive"))
             _positive(f.name, value, allow_zero=zero_ok)
             if value is not None and f.name in BOUNDS:
                 lo, hi, unit, why = BOUNDS[f.name]
@@ -207,25 +227,14 @@ class TruckVariant:
         if self.cab_mass_kg is not None and self.cab_mount_hz is None:
             raise ValueError("vehicle.cab_mass_kg only applies to a suspended cab: set vehicle.cab_mount_hz too "
                              "(without it the cab is part of the chassis' mass)")
+        if self.tire_progressive_onset_m is not None and self.tire_progressive_ratio is None:
+            raise ValueError("vehicle.tire_progressive_onset_m only applies to a progressive tire: set "
+                             "vehicle.tire_progressive_ratio too (without it the tire is linear)")
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
         """Names of the parameters a scenario may override."""
         return tuple(f.name for f in dataclasses.fields(cls))
-
-
-def _set_tire(spec: mujoco.MjSpec, corner: str, k: float | None, c: float | None, r0: float | None) -> None:
-    act = spec.actuator(names.tire_actuator(corner))
-    prm = list(act.biasprm)
-    k_old = -prm[1]
-    r0_old = prm[0] / k_old
-    k_new = k_old if k is None else float(k)
-    r0_new = r0_old if r0 is None else float(r0)
-    prm[0] = k_new * r0_new
-    prm[1] = -k_new
-    if c is not None:
-        prm[2] = -float(c)
-    act.biasprm = prm
 
 
 def _prescribe_pan(spec: mujoco.MjSpec, corner: str) -> None:
@@ -239,10 +248,10 @@ def _prescribe_pan(spec: mujoco.MjSpec, corner: str) -> None:
     which the force at any other pan position follows (:func:`mjcf.physics.tire_law`).
     """
     spec.body(names.pan_body(corner)).mocap = True
-    act = spec.actuator(names.tire_actuator(corner))
-    gain = list(act.gainprm)
-    gain[0] = -act.biasprm[2]
-    act.gainprm = gain
+    for act in tire_elements(spec, corner):  # each element's gain is its own damping (the progressive one: 0)
+        gain = list(act.gainprm)
+        gain[0] = -act.biasprm[2]
+        act.gainprm = gain
     tendon = names.tire_tendon(corner)
     for name, kind in ((names.tire_length_sensor(corner), mujoco.mjtSensor.mjSENS_TENDONPOS),
                        (names.tire_rate_sensor(corner), mujoco.mjtSensor.mjSENS_TENDONVEL)):
@@ -340,13 +349,16 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
         body.pos = [float(v.payload_x_m), body.pos[1], body.pos[2]]
     for corner in names.CORNERS:
         front = corner in names.FRONT
-        _set_tire(
+        set_tire(
             spec,
             corner,
             v.tire_stiffness_front_N_per_m if front else v.tire_stiffness_rear_N_per_m,
             v.tire_damping_front_Ns_per_m if front else v.tire_damping_rear_Ns_per_m,
             v.tire_free_radius_m,
         )
+        if v.tire_progressive_ratio is not None:
+            onset = TIRE_PROGRESSIVE_ONSET_M if v.tire_progressive_onset_m is None else v.tire_progressive_onset_m
+            add_progressive_tire(spec, corner, v.tire_progressive_ratio, onset)
         friction = v.spring_friction_front_N if front else v.spring_friction_rear_N
         if friction is not None:
             spec.tendon(names.spring_tendon(corner)).frictionloss = float(friction)

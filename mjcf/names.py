@@ -12,7 +12,7 @@ __all__ = [
     "CORNERS", "FRONT", "REAR", "TRUCK_BODIES",
     "pan_body", "pan_joint", "tire_actuator", "tire_sensor", "wheel_site", "hydraulic_actuator",
     "axle_body", "spring_tendon", "CAB_BODY", "CAB_JOINTS", "tire_tendon", "tire_length_sensor",
-    "tire_rate_sensor",
+    "tire_rate_sensor", "tire_progressive_actuator",
 ]
 
 #: Wheel stations, in the order every per-wheel array of this project uses:
@@ -55,6 +55,12 @@ def tire_actuator(corner: str) -> str:
     return f"tire_{_check(corner)}"
 
 
+def tire_progressive_actuator(corner: str) -> str:
+    """The progressive tire's second force element on the tire tendon (N, compression positive);
+    only with ``TruckVariant.tire_progressive_ratio`` set."""
+    return f"tire_progressive_{_check(corner)}"
+
+
 def tire_tendon(corner: str) -> str:
     """The tire's spatial tendon, wheel centre to pan top (its length in m)."""
     return f"tire_{_check(corner)}"
@@ -72,7 +78,8 @@ def tire_rate_sensor(corner: str) -> str:
 
 
 def tire_sensor(corner: str) -> str:
-    """Sensor of the tire force on the pan (N)."""
+    """Sensor of the tire force on the pan (N): the tire actuator's force, or with a progressive tire
+    (``TruckVariant.tire_progressive_ratio``) the total force of the tire tendon's elements."""
     return f"tire_force_{_check(corner)}"
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from mjcf.names import CAB_JOINTS, CORNERS, pan_body, pan_joint, tire_actuator
+from mjcf.names import CAB_JOINTS, CORNERS, pan_body, pan_joint, tire_actuator, tire_tendon
 
 __all__ = [
     "TRUCK_JOINTS",
@@ -78,6 +78,12 @@ class RigIndex:
         (empty when the pans are fixed or prescribed).
     tire_actuator : numpy.ndarray of int
         Actuator ids of :func:`mjcf.names.tire_actuator`, in the same order.
+    tire_extra : numpy.ndarray of int
+        Ids of every other actuator on a tire tendon (:func:`mjcf.names.tire_tendon`; the
+        progressive tire's second element, ``TruckVariant.tire_progressive_ratio``), empty for
+        the XML's tire; a wheel's tire force is the sum of its tendon's elements.
+    tire_extra_corner : numpy.ndarray of int
+        Index in :data:`mjcf.names.CORNERS` of each of :attr:`tire_extra`.
     pan_body : numpy.ndarray of int
         Body ids of :func:`mjcf.names.pan_body`, in the same order.
     pan_mocap : numpy.ndarray of int
@@ -91,6 +97,8 @@ class RigIndex:
     tire_actuator: np.ndarray
     pan_body: np.ndarray
     pan_mocap: np.ndarray
+    tire_extra: np.ndarray
+    tire_extra_corner: np.ndarray
 
     @classmethod
     def of(cls, model: mujoco.MjModel) -> "RigIndex":
@@ -112,6 +120,10 @@ class RigIndex:
                 raise KeyError(f"the model has no actuator named {tire_actuator(c)!r}")
             tires.append(i)
         as_int = lambda v: np.asarray(v, dtype=np.intp)  # noqa: E731
+        tendons = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, tire_tendon(c)) for c in CORNERS]
+        on_tendon = model.actuator_trntype == mujoco.mjtTrn.mjTRN_TENDON
+        extra = [(a, tendons.index(int(model.actuator_trnid[a, 0]))) for a in range(model.nu)
+                 if on_tendon[a] and int(model.actuator_trnid[a, 0]) in tendons and a not in tires]
         bodies = as_int([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, pan_body(c)) for c in CORNERS])
         mocap = model.body_mocapid[bodies]
         return cls(
@@ -122,6 +134,8 @@ class RigIndex:
             tire_actuator=as_int(tires),
             pan_body=bodies,
             pan_mocap=as_int(mocap if np.all(mocap >= 0) else []),
+            tire_extra=as_int([a for a, _ in extra]),
+            tire_extra_corner=as_int([c for _, c in extra]),
         )
 
 
@@ -143,7 +157,8 @@ def friction_disabled(model: mujoco.MjModel):
 
 
 def tire_stiffness(model: mujoco.MjModel, index: RigIndex | None = None) -> np.ndarray:
-    """Vertical stiffness of each wheel station's tire in N/m (fl, fr, rl, rr), as compiled."""
+    """Vertical stiffness of each wheel station's tire in N/m (fl, fr, rl, rr), as compiled: the
+    tire element's (:func:`mjcf.names.tire_actuator`; a progressive tire's below its onset)."""
     index = index or RigIndex.of(model)
     return -model.actuator_biasprm[index.tire_actuator, 1].copy()
 
@@ -152,10 +167,22 @@ def tire_forces(model: mujoco.MjModel, data: mujoco.MjData, index: RigIndex | No
     """Tire forces in N per corner (fl, fr, rl, rr), compression positive.
 
     Exact: the forces MuJoCo applied at the last force evaluation (``mj_forward`` or the
-    start of the last ``mj_step``).
+    start of the last ``mj_step``), summed over each tire tendon's elements (:class:`RigIndex`).
     """
     index = index or RigIndex.of(model)
-    return data.actuator_force[index.tire_actuator].copy()
+    force = data.actuator_force[index.tire_actuator].copy()
+    np.add.at(force, index.tire_extra_corner, data.actuator_force[index.tire_extra])
+    return force
+
+
+def _affine_law(model: mujoco.MjModel, actuators: np.ndarray, length, rate) -> np.ndarray:
+    """b0 + b1 L + b2 dL/dt of ``actuators`` (``actuator_biasprm``) clamped to their force ranges, N."""
+    b = model.actuator_biasprm[actuators]
+    force = b[:, 0] + b[:, 1] * length + b[:, 2] * rate
+    limited = model.actuator_forcelimited[actuators].astype(bool)
+    lo = np.where(limited, model.actuator_forcerange[actuators, 0], -np.inf)
+    hi = np.where(limited, model.actuator_forcerange[actuators, 1], np.inf)
+    return np.clip(force, lo, hi)
 
 
 def tire_law(model: mujoco.MjModel, index: RigIndex, length_m, rate_m_s) -> np.ndarray:
@@ -164,16 +191,19 @@ def tire_law(model: mujoco.MjModel, index: RigIndex, length_m, rate_m_s) -> np.n
     F = b0 + b1 L + b2 dL/dt clamped to the actuator's force range (the XML's affine bias,
     ``actuator_biasprm``, with its parameters as compiled): the force MuJoCo applies for a
     tendon of length ``length_m`` (m) changing at ``rate_m_s`` (m/s), each (..., 4) in
-    :data:`mjcf.names.CORNERS` order. The road test evaluates it at the pan position of an output
-    instant while MuJoCo held the pan at mid-step (:mod:`scenarios.core.stepping`).
+    :data:`mjcf.names.CORNERS` order; summed over every element on the tire tendon, each clamped
+    to its own range (a progressive tire's second element, :attr:`RigIndex.tire_extra`). The road
+    test evaluates it at the pan position of an output instant while MuJoCo held the pan at
+    mid-step (:mod:`scenarios.core.stepping`).
     """
-    tires = index.tire_actuator
-    b = model.actuator_biasprm[tires]
-    force = b[:, 0] + b[:, 1] * np.asarray(length_m, float) + b[:, 2] * np.asarray(rate_m_s, float)
-    limited = model.actuator_forcelimited[tires].astype(bool)
-    lo = np.where(limited, model.actuator_forcerange[tires, 0], -np.inf)
-    hi = np.where(limited, model.actuator_forcerange[tires, 1], np.inf)
-    return np.clip(force, lo, hi)
+    length, rate = np.asarray(length_m, float), np.asarray(rate_m_s, float)
+    force = _affine_law(model, index.tire_actuator, length, rate)
+    if index.tire_extra.size:
+        corner = index.tire_extra_corner
+        extra = _affine_law(model, index.tire_extra, length[..., corner], rate[..., corner])
+        for j, c in enumerate(corner):
+            force[..., c] += extra[..., j]
+    return force
 
 
 def static_equilibrium(

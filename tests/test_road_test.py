@@ -2,7 +2,8 @@
 
 The choice is measured by ``benchmarks/road_integrator_study.py`` (docs/road_integrator_study.md);
 these tests pin the pieces it rests on: the tire force the record reports is MuJoCo's own force
-law (:func:`mjcf.physics.tire_law` against ``actuator_force``), the pan velocity reaches the tire's
+law (:func:`mjcf.physics.tire_law` against ``actuator_force``, a progressive tire's two elements
+summed), the pan velocity reaches the tire's
 damping through ``ctrl``, and a run agrees with a fine explicit-Euler reference (the former road
 test's integration at a quarter of its step), the reference being independent of the mid-step
 hold and of the force reconstruction.
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 from mjcf import names
-from mjcf.build import build_spec
+from mjcf.build import TruckVariant, build_spec
 from mjcf.physics import RigIndex, static_equilibrium, tire_law
 from scenarios.core.config import parse_scenario
 from scenarios.core.rig import Rig
@@ -29,31 +30,47 @@ def _sensor(model, name_of):
                      for c in names.CORNERS])
 
 
-def test_tire_law_is_mujocos_force_with_the_pan_velocity_in_ctrl():
+@pytest.mark.parametrize("variant", [None, TruckVariant(tire_progressive_ratio=0.5, tire_progressive_onset_m=0.027)])
+def test_tire_law_is_mujocos_force_with_the_pan_velocity_in_ctrl(variant):
     """With pans as mocap bodies the force MuJoCo applies is kt (R0 - L) - ct (dL/dt_truck - v_pan),
     clamped at 0 (lift-off): ``tire_law`` of the sensed length and truck-side rate minus the pan
-    velocity fed as ``ctrl`` gives ``actuator_force`` to rounding, in contact and lifted off."""
-    model = build_spec(None, pans="mocap").compile()
+    velocity fed as ``ctrl`` gives ``actuator_force`` to rounding, in contact and lifted off.
+    With a progressive tire (its onset 2.7 cm: between the front tires' deflections of the two pan
+    positions below, so that it is engaged at one and not at the other) ``tire_law`` is the sum of
+    both elements' ``actuator_force`` and the tire force sensor (the tendon's actuator force)."""
+    model = build_spec(variant, pans="mocap").compile()
     idx = RigIndex.of(model)
     assert idx.pan_qpos.size == 0 and idx.pan_mocap.size == 4
+    assert idx.tire_extra.size == (0 if variant is None else 4)
     data = mujoco.MjData(model)
     static_equilibrium(model, data)
     rng = np.random.default_rng(1)
     data.qvel[idx.truck_dof] = rng.normal(0.0, 0.2, idx.truck_dof.size)
     pan_v = np.array([0.3, -0.2, 0.1, -0.4])
-    for dz in (np.array([4e-3, -2e-3, 1e-3, 0.0]), np.array([-0.2, 0.0, 0.0, 0.0])):  # the second lifts fl off
+    engaged = []
+    for dz in (np.array([4e-3, 3e-3, 1e-3, 0.0]), np.array([-5e-3, -3e-3, -1e-3, 2e-3]),
+               np.array([-0.2, 0.0, 0.0, 0.0])):  # the last lifts fl off
         data.mocap_pos[idx.pan_mocap, 2] = model.body_pos[idx.pan_body, 2] + dz
         data.ctrl[idx.tire_actuator] = pan_v
         mujoco.mj_forward(model, data)
         length = data.sensordata[_sensor(model, names.tire_length_sensor)]
         rate = data.sensordata[_sensor(model, names.tire_rate_sensor)]
-        force = data.actuator_force[idx.tire_actuator]
-        np.testing.assert_allclose(tire_law(model, idx, length, rate - pan_v), force, rtol=1e-12, atol=1e-6)
+        force = data.actuator_force[idx.tire_actuator].copy()
+        extra = np.zeros(4)
+        extra[idx.tire_extra_corner] = data.actuator_force[idx.tire_extra]
+        engaged.append(extra > 0)
+        np.testing.assert_allclose(tire_law(model, idx, length, rate - pan_v), force + extra, rtol=1e-12, atol=1e-6)
+        np.testing.assert_allclose(data.sensordata[_sensor(model, names.tire_sensor)], force + extra, rtol=1e-12,
+                                   atol=1e-6)
         # The damping of the pan's own velocity is in the force: the same state with the pan at rest differs by ct v.
         ct = -model.actuator_biasprm[idx.tire_actuator, 2]
         on = force > 0
-        np.testing.assert_allclose((force - tire_law(model, idx, length, rate))[on], (ct * pan_v)[on], rtol=1e-9)
+        np.testing.assert_allclose((force + extra - tire_law(model, idx, length, rate))[on], (ct * pan_v)[on],
+                                   rtol=1e-9)
     assert force[0] == 0.0 and np.all(force[1:] > 0)
+    if variant is not None:  # the progressive element was engaged and idle at the front tires
+        front = np.array([c in names.FRONT for c in names.CORNERS])
+        assert engaged[0][front].all() and not engaged[1][front].any() and not engaged[2][0]
 
 
 def test_road_test_agrees_with_a_fine_explicit_euler_reference():

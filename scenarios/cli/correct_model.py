@@ -14,8 +14,8 @@ holds the corner as a token, or ``--map``'s; converted to N); then
 F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
 (:func:`scenarios.studies.model_correction.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
-and its ``[vehicle]`` tire stiffness, tire damping and leaf friction, where given, are the
-calibration's first guesses instead of the catalogue values; the payload and its position always
+and its ``[vehicle]`` tire stiffness, tire damping, leaf friction and cab mount frequency, where
+given, are the calibration's first guesses instead of the catalogue values; the payload and its position always
 start from the record's static loads. Every fitted value is only a starting guess.
 
 Where the model cannot be trusted on this record (it does not reproduce F_rig, or its calibration
@@ -52,8 +52,9 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--model", metavar="TRUCK.toml",
                    help="correct each wheel as F_rig + F_model(drive) - F_model(LVDT), the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
-                        "damping and leaf friction per axle; minutes of CPU). TRUCK.toml is a scenario file: its rig "
-                        "(actuator stroke) is used, and its [vehicle] tire and leaf-friction values are only the "
+                        "damping and leaf friction per axle, cab mount frequency; minutes of CPU). TRUCK.toml is a "
+                        "scenario file: its rig (actuator stroke) is used, and its [vehicle] tire, leaf-friction and "
+                        "cab values are only the "
                         "starting guess (default: catalogue values; payload and position start from the record's "
                         "static loads). Needs --pairs and at least 6.5 s of record (the windows are spread over "
                         "it). Where the model does not reproduce the forces, the linear correction is used "

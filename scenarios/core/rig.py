@@ -29,7 +29,7 @@ from hydraulics.loop import check_design_station
 from hydraulics.params import ActuatorParams
 from mjcf import names
 from mjcf.build import build_spec
-from mjcf.physics import RigIndex, friction_disabled, static_equilibrium, tire_stiffness
+from mjcf.physics import RigIndex, friction_disabled, static_equilibrium, tire_forces, tire_stiffness
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive
 from scenarios.core.memory import check_memory
@@ -204,7 +204,7 @@ class Rig:
     def _actuator_loads(self, data: mujoco.MjData) -> np.ndarray:
         g = -self.model.opt.gravity[2]
         pans = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, names.pan_body(c)) for c in names.CORNERS]
-        return data.actuator_force[self.index.tire_actuator] + self.model.body_mass[pans] * g
+        return tire_forces(self.model, data, self.index) + self.model.body_mass[pans] * g
 
     def static_loads_N(self) -> np.ndarray:
         """numpy.ndarray, N, (4,): each actuator's static load at rest (tire force + pan weight)."""

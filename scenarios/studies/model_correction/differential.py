@@ -46,9 +46,10 @@ START_S = 3.0
 #: calibration windows, load-cell noise included) for which the model correction is used, 1.
 #: Measured (benchmarks/model_correction.py, tests/test_model_correction.py): 0.03-0.07 with the
 #: plant in the model family (mostly the 100 N load-cell noise); 0.12-0.42 with the plant's 2 Hz cab
-#: mode the model lacks (paper cases, 60 s), where the model correction is still as good as or
-#: better than the project's linear correction on every wheel (front 0.093-0.122 against
-#: 0.114-0.160, rear 0.035-0.046 against 0.117-0.152); 1.03-1.18 for another case's forces.
+#: mode a model lacks (paper cases, 60 s, the former rigid-cab model family), where the model
+#: correction is still as good as or better than the project's linear correction on every wheel
+#: (front 0.093-0.122 against 0.114-0.160, rear 0.035-0.046 against 0.117-0.152); 1.03-1.18 for
+#: another case's forces.
 #: 0.5 passes the first two and refuses the last: a model that misses half of the force's
 #: fluctuation is not a model of this truck.
 FIT_NRMSE_LIMIT = 0.5

@@ -21,7 +21,7 @@ import dataclasses
 import numpy as np
 
 from mjcf.build import TruckVariant
-from mjcf.physics import EquilibriumError
+from mjcf.physics import EquilibriumError, tire_forces
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive
 from scenarios.core.rig import Rig
@@ -150,7 +150,7 @@ def static_axle_loads(variant: TruckVariant, base_scenario: Scenario) -> np.ndar
     (dry friction off: the frictionless equilibrium)."""
     rig = Rig(model_scenario(variant, base_scenario, 1.0, SETTLE_S), hydraulic=False)
     data = rig.rest_state()
-    return np.asarray(data.actuator_force[rig.index.tire_actuator], dtype=float).copy()
+    return np.asarray(tire_forces(rig.model, data, rig.index), dtype=float)
 
 
 def portable(scenario: Scenario) -> Scenario:

@@ -29,10 +29,10 @@ class Calibration:
     names : tuple of str
         The fitted :class:`mjcf.build.TruckVariant` fields.
     units : tuple of str
-        Their SI units ("kg", "m", "N/m", "N s/m", "N").
+        Their SI units ("kg", "m", "N/m", "N s/m", "N", "Hz").
     initial : tuple of float
         The first guess, SI (payload and its position from the measured static loads, the rest
-        catalogue values: :data:`scenarios.studies.model_correction.calibrate.CATALOGUE`).
+        catalogue values: :func:`scenarios.studies.model_correction.calibrate.catalogue`).
     fitted : tuple of float
         The fitted values, SI.
     sigma : tuple of float
@@ -43,8 +43,9 @@ class Calibration:
         1-sigma from the block-robust sandwich estimate (blocks of
         :data:`~scenarios.studies.model_correction.calibrate.BLOCK_S`), which allows a residual
         correlated in time; neither includes the bias a structural model error leaves.
-    fixed : Mapping[str, float]
-        Fields held at catalogue values (not identifiable from the record, or not asked for), SI.
+    fixed : Mapping[str, float or None]
+        Fields held at catalogue values (not identifiable from the record, or not asked for), SI;
+        None: the XML's (``cab_mount_hz`` None: the rigid cab).
     fit_nrmse : tuple of float
         Per wheel (fl, fr, rl, rr): NRMSE (1, :func:`correction.dlc.nrmse`) of the fitted model's
         force, pans following the measured x_a, against the measured rig force, on the windows'
