@@ -208,3 +208,13 @@ def test_the_help_literals_match_their_homes():
     assert f"(default {MAX_NFEV})" in text and f"(default {WINDOWS})" in text
     assert f"each {WINDOW_LEAD_S:g} s lead-in + {WINDOW_S:g} s" in text
     assert f"at least {WINDOW_LEAD_S + WINDOW_S:g} s of record" in text
+
+
+def test_fit_cab_is_refused_without_model(tmp_path, capsys):
+    """--fit-cab belongs to --model: alone it is refused before any work, naming the option."""
+    from scenarios.cli.main import main
+
+    src = tmp_path / "in.csv"
+    src.write_text("time_s,Fz_FL [N]\n0,1\n0.001,2\n")
+    assert main(["correct", str(src), "--fit-cab", "-o", str(tmp_path / "out.csv"), "--actuator", str(src)]) == 2
+    assert "--fit-cab" in capsys.readouterr().err and not (tmp_path / "out.csv").exists()

@@ -16,7 +16,7 @@ from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from scenarios.core.pool import run_jobs
 from scenarios.core.run import run
 from scenarios.studies import scoring
-from scenarios.studies.model_correction.calibrate import (CATALOGUE_CAB_MOUNT_HZ, FITTED, calibrate, catalogue,
+from scenarios.studies.model_correction.calibrate import (CATALOGUE_CAB_MOUNT_HZ, DEFAULT_NAMES, FITTED, calibrate, catalogue,
                                                            xml_nominal)
 from scenarios.studies.model_correction.differential import (FIT_NRMSE_LIMIT, correct_with_model,
                                                              differential_correction, settled_mask)
@@ -33,14 +33,15 @@ def _paper(stem: str) -> str:
 def plant_scenario(stem: str = "medium_72"):
     """A paper case with a plant truck that is not the XML's nominal one: payload -5 % and 0.1 m forward, tire
     stiffness +10 % front / -10 % rear of the XML's; tire damping and leaf friction at the calibration's
-    catalogue values (XML x 1.15 or 0.85) and its cab on mounts at the catalogue's 2.5 Hz, so that a fit of the payload and the tire stiffness alone has
-    nothing else to absorb (the benchmark fits all of them on a plant off the catalogue in every field)."""
+    catalogue values (XML x 1.15 or 0.85) and its cab rigid as the default family holds it, so that a fit of the
+    payload and the tire stiffness alone has nothing else to absorb (the benchmark fits all of them on a plant off
+    the catalogue in every field)."""
     sc = load_scenario(_paper(stem))
     nominal = xml_nominal()
     plant = TruckVariant(payload_kg=0.95 * sc.vehicle.payload_kg, payload_x_m=nominal["payload_x_m"] + 0.1,
                          tire_stiffness_front_N_per_m=1.1 * nominal["tire_stiffness_front_N_per_m"],
                          tire_stiffness_rear_N_per_m=0.9 * nominal["tire_stiffness_rear_N_per_m"],
-                         **{k: v for k, v in catalogue().items() if "stiffness" not in k})
+                         **{k: v for k, v in catalogue().items() if "stiffness" not in k and k != "cab_mount_hz"})
     return dataclasses.replace(sc, duration_s=DURATION_S, vehicle=plant)
 
 
@@ -107,7 +108,15 @@ def test_calibration_recovers_the_plant_from_rig_signals(record):
     assert abs(fitted["tire_stiffness_rear_N_per_m"] / truth.tire_stiffness_rear_N_per_m - 1) < 0.05
     assert np.all(np.array(cal.fit_nrmse) < 0.5 * np.array(cal.initial_nrmse)), (cal.fit_nrmse, cal.initial_nrmse)
     assert cal.fixed["spring_friction_front_N"] == pytest.approx(catalogue()["spring_friction_front_N"])
+    assert cal.fixed["cab_mount_hz"] is None  # not named, not given: the XML's rigid cab, not the 2.5 Hz guess
     assert all(s > 0 for s in cal.sigma) and len(cal.sigma_robust) == len(names)
+
+
+def test_the_cab_is_fitted_only_on_request():
+    """The default family holds the cab rigid (a smooth road may not pin its mount frequency: see
+    calibrate.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
+    assert "cab_mount_hz" in FITTED and "cab_mount_hz" not in DEFAULT_NAMES
+    assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz"}
 
 
 def test_forces_of_another_case_fall_back_to_the_linear_correction(record):

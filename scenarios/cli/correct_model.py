@@ -14,9 +14,11 @@ holds the corner as a token, or ``--map``'s; converted to N); then
 F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
 (:func:`scenarios.studies.model_correction.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
-and its ``[vehicle]`` tire stiffness, tire damping, leaf friction and cab mount frequency, where
-given, are the calibration's first guesses instead of the catalogue values; the payload and its position always
-start from the record's static loads. Every fitted value is only a starting guess.
+and its ``[vehicle]`` tire stiffness, tire damping and leaf friction, where given, are the
+calibration's first guesses instead of the catalogue values; the payload and its position always
+start from the record's static loads. The cab is rigid, or held at ``[vehicle] cab_mount_hz``
+if given; ``--fit-cab`` fits its mount frequency too (from that value or 2.5 Hz). Every fitted
+value is only a starting guess.
 
 Where the model cannot be trusted on this record (it does not reproduce F_rig, or its calibration
 did not converge or could not run) the linear correction is used instead, with ``--actuator`` /
@@ -40,7 +42,7 @@ __all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "
 
 #: The options only ``--model`` reads: argparse dest -> option.
 MODEL_OPTIONS = {"pairs": "--pairs", "jobs": "--jobs", "max_evaluations": "--max-evaluations",
-                 "calibration_windows": "--calibration-windows", "quiet": "--quiet"}
+                 "calibration_windows": "--calibration-windows", "fit_cab": "--fit-cab", "quiet": "--quiet"}
 #: The fields the payload's first guess comes from the record for (a [vehicle] value is not used).
 FROM_STATIC_LOADS = ("payload_kg", "payload_x_m")
 
@@ -52,9 +54,10 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--model", metavar="TRUCK.toml",
                    help="correct each wheel as F_rig + F_model(drive) - F_model(LVDT), the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
-                        "damping and leaf friction per axle, cab mount frequency; minutes of CPU). TRUCK.toml is a "
-                        "scenario file: its rig (actuator stroke) is used, and its [vehicle] tire, leaf-friction and "
-                        "cab values are only the "
+                        "damping and leaf friction per axle, with --fit-cab the cab's mount frequency; minutes of "
+                        "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "
+                        "cab_mount_hz is the cab's mount (held, or with --fit-cab the first guess), and its tire and "
+                        "leaf-friction values are only the "
                         "starting guess (default: catalogue values; payload and position start from the record's "
                         "static loads). Needs --pairs and at least 6.5 s of record (the windows are spread over "
                         "it). Where the model does not reproduce the forces, the linear correction is used "
@@ -73,6 +76,10 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--calibration-windows", type=int, default=None, metavar="N",
                    help="with --model: windows of the record the model is fitted on, each 2.5 s lead-in + 4 s "
                         "(default 3); 1 is about 3 times faster, on less of the record")
+    g.add_argument("--fit-cab", action="store_true",
+                   help="with --model: also fit the cab's mount frequency (1-30 Hz), for a truck whose cab sits on "
+                        "soft mounts; otherwise the model's cab is rigid, or held at TRUCK.toml's "
+                        "vehicle.cab_mount_hz (a smooth record may not pin it: see the README)")
     g.add_argument("--quiet", action="store_true", help="with --model: no progress lines on stderr")
 
 
@@ -272,7 +279,7 @@ def cmd_correct_model(args) -> int:
     probe_output(args.out, output_units(force_cols, args.transient), _metadata(args, pairs, force_cols, None, None))
     guess, unused = _first_guess(scenario)
 
-    from scenarios.studies.model_correction.calibrate import WINDOW_LEAD_S, WINDOW_S
+    from scenarios.studies.model_correction.calibrate import DEFAULT_NAMES, FITTED, WINDOW_LEAD_S, WINDOW_S
     from scenarios.studies.model_correction.differential import correct_with_model
 
     fs, forces = mc.fs_hz, mc.array(force_cols)
@@ -284,7 +291,8 @@ def cmd_correct_model(args) -> int:
                f"evaluations, {workers} worker process(es); this takes minutes")
     res = correct_with_model(mc.time_s, mc.array([d for d, _ in pairs.values()]),
                              mc.array([x for _, x in pairs.values()]), forces, base_scenario=scenario,
-                             workers=workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess)
+                             workers=workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess,
+                             names=FITTED if args.fit_cab else DEFAULT_NAMES)
     cal = res.calibration
     if cal is not None:
         _say(args, f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
