@@ -185,7 +185,9 @@ def analyse(case, duration_s, cab, road, rig, ident, noise_N, workers, setup: tu
         out["model"] = nrmse(corr_b[rows], road_b[rows])
         out["model_dlc_error"] = dlc(mc.corrected_N[rows]) / dlc(road_f[rows]) - 1.0
     truth = {k: getattr(sc.vehicle, k) for k in (mc.calibration.names if mc.calibration else ())}
-    return {"case": case_name(case), "mismatch": "on" if cab else "off", "scored_s": float(rows.sum()) / fs,
+    plant = ("progressive tire" if setup[0] else "cab on") if cab else ("family, cab fitted" if setup[0] else "family")
+    return {"case": case_name(case), "mismatch": "on" if cab else "off", "plant": plant,
+            "scored_s": float(rows.sum()) / fs,
             "wheels": {k: {c: float(v[i]) for i, c in enumerate(CORNERS)} for k, v in out.items()},
             "mean": {k: float(np.mean(v)) for k, v in out.items()}, "method": mc.method, "reason": mc.reason,
             "calibration": mc.calibration, "truth": truth, "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
@@ -265,9 +267,10 @@ def goals(rows: list[dict], duration_s: float) -> str:
     for mismatch, word in (("off", "at most half"), ("on", "below")):
         g = s.get(mismatch)
         if g is None:
-            out.append(f"- mismatch {mismatch}: not run (TruckVariant has no cab_mount_hz)")
+            out.append(f"- mismatch {mismatch}: not run" + ("" if has_cab() else " (TruckVariant has no cab_mount_hz)"))
             continue
-        out.append(f"- mismatch {mismatch} ({PLANTS[mismatch]}, {g['wheels']} wheels, {g['fallbacks']} of "
+        plant = next((r.get("plant", PLANTS[mismatch]) for r in rows if r["mismatch"] == mismatch), PLANTS[mismatch])
+        out.append(f"- mismatch {mismatch} ({plant}, {g['wheels']} wheels, {g['fallbacks']} of "
                    f"{g['wheels'] // 4} cases fell back to the linear correction): NRMSE {word} the linear floor: "
                    f"{g['floor_goal_share']:.0%} of wheels, {'met' if g['floor_goal_share'] == 1 else 'NOT met'} "
                    f"(worst wheel delivered / floor {g['worst_ratio']:.2f}); within 1 % of the road DLC: "

@@ -87,9 +87,10 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m":
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
-#: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s: fitted 1.0 Hz,
-#: front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's rougher
-#: cases fit a rigid cab to the top, 30 Hz, and lose nothing).
+#: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, measured at commit
+#: d95a96c where the cab was fitted by default: 1.0 Hz, front wheels 1.36 of the linear floor against
+#: 0.19 with the cab held rigid; the paper's rougher cases fit a rigid cab to the top, 30 Hz, and
+#: lose nothing).
 DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
 #: lab's catalogue values are 10-30 % off the truck on its rig.
