@@ -72,7 +72,7 @@ from scenarios.studies.model_correction.model_runs import (SETTLE_S, check_recor
 from scenarios.studies.model_correction.result import Calibration
 from scenarios.studies.model_correction.weighting import differential_kernel
 
-__all__ = ["FITTED", "DEFAULT_NAMES", "UNITS", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "COMPLIANCE", "RANGES", "xml_nominal",
+__all__ = ["FITTED", "DEFAULT_NAMES", "EMPTY_FRACTION", "UNITS", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "COMPLIANCE", "RANGES", "xml_nominal",
            "catalogue", "static_guess", "fit_windows", "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S",
            "uncertainties"]
 
@@ -163,12 +163,21 @@ def catalogue() -> dict[str, float]:
     return {**{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ}
 
 
+#: An estimated payload within this fraction of the empty truck's weight (1) is an empty truck:
+#: the mean wheel loads of an empty truck put its payload a few kg either side of zero (the
+#: catalogue's axle and cab masses are not the plant's exactly), where its position is meaningless
+#: (measured on the generalization suite's four empty trucks: -11 to -6 kg, x -4.3 to -10.8 m).
+EMPTY_FRACTION = 0.01
+
+
 def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
     """Payload (kg) and its x (m, chassis frame) from the measured static loads.
 
     The record's mean wheel force is the static load (the dynamic forces average out over the
     record); the catalogue truck without payload gives its own static loads; the difference is
-    the payload's weight, and the front axle's share of it places it between the axles.
+    the payload's weight, and the front axle's share of it places it between the axles. A payload
+    within :data:`EMPTY_FRACTION` of the empty truck's weight is an empty truck: (0, the XML's x),
+    which :func:`calibrate` holds instead of fitting.
 
     Raises
     ------
@@ -182,6 +191,8 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
     d_total = float(f.sum() - empty.sum())
     d_front = float(f[front].sum() - empty[front].sum())
     payload = d_total / GRAVITY_M_S2
+    if abs(payload) <= EMPTY_FRACTION * empty.sum() / GRAVITY_M_S2:
+        return 0.0, float(xml_nominal()["payload_x_m"])
     lo, hi = BOUNDS["payload_kg"][:2]
     if not (lo < payload <= hi) or d_total <= 0:
         raise ScenarioError(f"the measured mean wheel loads ({f.sum() / 1e3:.1f} kN in all) imply a payload of "
@@ -372,6 +383,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
     wins = fit_windows(t, windows, window_s, lead_s)
     payload, x = static_guess(force, base_scenario)
+    if payload == 0.0 and "payload_kg" not in (fitted_guess or {}):  # an empty truck: nothing to fit there
+        names = tuple(k for k in names if k not in ("payload_kg", "payload_x_m"))
+        if not names:
+            raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
+                                "name other fields to fit")
     guess = {"payload_kg": payload, "payload_x_m": x, **catalogue(), **(fitted_guess or {})}
     if "cab_mount_hz" not in names and "cab_mount_hz" not in (fitted_guess or {}):
         guess["cab_mount_hz"] = None  # held: the XML's rigid cab
