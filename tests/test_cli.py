@@ -51,3 +51,24 @@ def test_the_same_flag_in_every_subcommand(flag, commands):
     for name in commands:
         options = {o for a in subs[name]._actions for o in a.option_strings}
         assert flag in options, f"rigsim {name} has no {flag}"
+
+
+def test_model_command_shows_a_suspended_cab(capsys):
+    """rigsim model --cab-mount-hz: the cab on its own mounts (TruckVariant.cab_mount_hz) appears as
+    cab modes near the mount frequency (the cab's own bounce/pitch on the mount springs; see
+    tests/test_cab_mount.py for the modal reference), with the same static loads as the rigid cab
+    (the cab's mass moves from the chassis to its own body); a bad value is refused with exit 2."""
+    from scenarios.cli.main import main
+
+    assert main(["model", "--cab-mount-hz", "2"]) == 0
+    cab = capsys.readouterr().out
+    assert "cab on 2 Hz mounts" in cab
+    cab_hz = [float(line.split()[2]) for line in cab.splitlines() if line.strip().startswith("cab ")]
+    assert cab_hz and all(1.0 < f < 4.0 for f in cab_hz)
+    assert main(["model"]) == 0
+    rigid = capsys.readouterr().out
+    assert "rigid cab" in rigid and "cab " not in rigid.split("modes")[1]
+    loads = [line for line in (cab, rigid) for line in line.splitlines() if line.startswith("static wheel loads")]
+    assert loads[0] == loads[1]
+    assert main(["model", "--cab-mount-hz", "-1"]) == 2
+    assert "cab_mount_hz" in capsys.readouterr().err

@@ -150,12 +150,13 @@ def _cmd_model(args) -> int:
     from mjcf.names import CORNERS
     from mjcf.physics import modal_analysis, static_equilibrium, tire_forces
 
-    variant = TruckVariant(payload_kg=args.payload_kg)
+    variant = TruckVariant(payload_kg=args.payload_kg, cab_mount_hz=args.cab_mount_hz)
     model = build_model(variant, pans="fixed")
     data = mujoco.MjData(model)
     static_equilibrium(model, data)
     forces = tire_forces(model, data)
-    print(f"truck on rigid pans, payload {args.payload_kg:g} kg")
+    cab = "rigid cab" if args.cab_mount_hz is None else f"cab on {args.cab_mount_hz:g} Hz mounts"
+    print(f"truck on rigid pans, payload {args.payload_kg:g} kg, {cab}")
     print("static wheel loads: " + ", ".join(f"{c} {f:.0f} N" for c, f in zip(CORNERS, forces))
           + f"; total {forces.sum():.0f} N")
     print("modes (leaf friction off):")
@@ -201,6 +202,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     m = sub.add_parser("model", help="print the truck's static wheel loads and natural frequencies")
     m.add_argument("--payload-kg", type=float, default=3640.0, help="payload mass in kg")
+    m.add_argument("--cab-mount-hz", type=float, default=None, metavar="HZ",
+                   help="the cab on its own mounts bouncing at HZ (vehicle.cab_mount_hz; default: a rigid cab)")
     m.set_defaults(func=_cmd_model)
     for name, parser in sub.choices.items():
         parser.epilog = f"example: {EXAMPLES[name]}"
