@@ -63,12 +63,14 @@ def check_record(t_s, signals: dict) -> tuple[np.ndarray, float]:
     return t, float(1.0 / dt[0])
 
 
-def pan_motion_drive(t_s, pan_m, dt_s: float, settle_s: float = SETTLE_S) -> Drive:
+def pan_motion_drive(t_s, pan_m, dt_s: float, settle_s: float = SETTLE_S, start_m=None) -> Drive:
     """The pans' drive on the model's steps: ``pan_m`` (m, (n, 4), sampled at ``t_s``, s) through
     a cubic spline (not-a-knot) onto steps of ``dt_s`` (s) from ``-settle_s`` (s) before the first
-    sample to the last one; held at the first sample (velocity 0) during the lead-in. Each step
-    holds the spline's value at mid-step (:meth:`Drive.held`; the last step's is extrapolated).
-    Times are relative to ``t_s[0]``; the output rate's samples fall on steps exactly."""
+    sample to the last one; held at the first sample (velocity 0) during the lead-in, or, with
+    ``start_m`` (m, (4,)), moved from ``start_m`` to the first sample over the lead-in (a
+    half-cosine: at rest at both ends). Each step holds the drive's value at mid-step
+    (:meth:`Drive.held`; the last step's is extrapolated). Times are relative to ``t_s[0]``; the
+    output rate's samples fall on steps exactly."""
     from scipy.interpolate import CubicSpline
 
     t = np.asarray(t_s, dtype=float) - float(t_s[0])
@@ -85,12 +87,33 @@ def pan_motion_drive(t_s, pan_m, dt_s: float, settle_s: float = SETTLE_S) -> Dri
     ahead = k >= 0
     z = np.empty((k.size, 4))
     v = np.zeros((k.size, 4))
-    z[~ahead] = x[0]
     z[ahead] = spline(tt[ahead])
     v[ahead] = spline(tt[ahead], 1)
     mid = tt + 0.5 * dt_s
-    held = np.where((mid < 0.0)[:, None], x[0], spline(np.maximum(mid, 0.0)))
+    held = spline(np.maximum(mid, 0.0))
+    if start_m is None:
+        z[~ahead] = x[0]
+        held[mid < 0.0] = x[0]
+    else:
+        z0, dz = np.asarray(start_m, float), x[0] - np.asarray(start_m, float)
+
+        def ramp(tau):  # 0 at -settle_s, 1 at 0
+            return 0.5 - 0.5 * np.cos(np.pi * (tau + settle_s) / settle_s)
+
+        z[~ahead] = z0 + ramp(tt[~ahead])[:, None] * dz
+        v[~ahead] = (0.5 * np.pi / settle_s * np.sin(np.pi * (tt[~ahead] + settle_s) / settle_s))[:, None] * dz
+        held[mid < 0.0] = z0 + ramp(mid[mid < 0.0])[:, None] * dz
     return Drive(tt, z, v, held_m=held)
+
+
+def planar_part(rig: Rig, pan_m) -> np.ndarray:
+    """The pans' heights (m, (4,)) on the plane that best fits ``pan_m`` (m, (4,)) at the pans'
+    positions (least squares, z = a + b x + c y): the pose without its twist, which a truck whose
+    frame is stiff in torsion can stand on."""
+    xy = rig.model.body_pos[rig.index.pan_body][:, :2]
+    a = np.column_stack([np.ones(4), xy])
+    coef, *_ = np.linalg.lstsq(a, np.asarray(pan_m, float), rcond=None)
+    return a @ coef
 
 
 def model_scenario(variant: TruckVariant, base_scenario: Scenario, duration_s: float, settle_s: float) -> Scenario:
@@ -138,8 +161,15 @@ def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
         raise ScenarioError(f"pan motion: {exc}") from None
     try:
         rec = rig.run(drive, rate_hz=fs)  # its first act is the rest state: a truck with none stops before a step
-    except EquilibriumError as exc:
-        raise ScenarioError(f"model truck: {exc}") from None
+    except EquilibriumError:
+        # The first pose is twisted beyond what the truck can rest on (a diagonal pair of tires
+        # unloaded: class-D roads with independent tracks, ~3 cm): start on its planar part and
+        # twist the pans in over the lead-in, which ends before any scored sample.
+        drive = pan_motion_drive(t, pan_m, rig.dt_s, settle_s, start_m=planar_part(rig, np.asarray(pan_m)[0]))
+        try:
+            rec = rig.run(drive, rate_hz=fs)
+        except EquilibriumError as exc:
+            raise ScenarioError(f"model truck: {exc}") from None
     if rec.tire_force_N.shape != (t.size, 4):
         raise RuntimeError(f"the model run gave {rec.tire_force_N.shape[0]} samples for {t.size}")
     return np.asarray(rec.tire_force_N)
