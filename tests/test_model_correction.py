@@ -220,3 +220,26 @@ def test_a_twisted_first_pose_starts_on_its_plane_and_twists_in():
     assert np.abs(drive.v_mps[0]).max() < 1e-12 and np.abs(drive.v_mps[lead][-1]).max() < 1e-3
     force = model_forces(TruckVariant(), t, pan, base_scenario=sc)
     assert np.all(np.isfinite(force)) and force.min() > 0.0
+
+
+def test_formal_uncertainties_are_the_least_squares_standard_errors():
+    """For a straight-line fit the formal 1-sigma is the textbook OLS standard error,
+    sqrt(s^2 (X^T X)^-1) with s^2 = RSS / (m - p) (e.g. Montgomery & Peck, Introduction to Linear
+    Regression Analysis, eq. 2.14); with a white residual the block-robust one agrees to sampling
+    error, and a residual correlated over a block makes the robust one larger."""
+    from scenarios.studies.model_correction.uncertainty import uncertainties
+
+    rng = np.random.default_rng(7)
+    x = np.linspace(0.0, 1.0, 4000)
+    jac = np.column_stack([x, np.ones_like(x)])
+    r = rng.normal(0.0, 0.3, x.size)
+    beta, *_ = np.linalg.lstsq(jac, 2.0 * x + 1.0 + r, rcond=None)
+    res = 2.0 * x + 1.0 + r - jac @ beta
+    formal, robust = uncertainties(jac, res, block=25)
+    s2 = res @ res / (x.size - 2)
+    np.testing.assert_allclose(formal, np.sqrt(s2 * np.diag(np.linalg.inv(jac.T @ jac))), rtol=1e-12)
+    assert np.all(np.abs(robust / formal - 1) < 0.3)
+    walk = np.repeat(rng.normal(0.0, 0.3, x.size // 100), 100)  # constant over 100 rows: correlated
+    _, robust_corr = uncertainties(jac, walk - jac @ np.linalg.lstsq(jac, walk, rcond=None)[0], block=25)
+    formal_corr, _ = uncertainties(jac, walk - jac @ np.linalg.lstsq(jac, walk, rcond=None)[0], block=25)
+    assert np.all(robust_corr > 2.0 * formal_corr)

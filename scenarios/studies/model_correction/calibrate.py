@@ -70,11 +70,11 @@ from scenarios.core.pool import local_executor, run_jobs
 from scenarios.studies.model_correction.model_runs import (SETTLE_S, check_record, portable, static_axle_loads,
                                                            window_job)
 from scenarios.studies.model_correction.result import Calibration
+from scenarios.studies.model_correction.uncertainty import uncertainties
 from scenarios.studies.model_correction.weighting import differential_kernel
 
 __all__ = ["FITTED", "DEFAULT_NAMES", "EMPTY_FRACTION", "UNITS", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "COMPLIANCE", "RANGES", "xml_nominal",
-           "catalogue", "static_guess", "fit_windows", "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S",
-           "uncertainties"]
+           "catalogue", "static_guess", "fit_windows", "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
 
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
@@ -222,21 +222,6 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
                             f"({lead_s:g} s lead-in + {scored_s:g} s); record at least {lead_s + scored_s:g} s")
     starts = np.linspace(lead, t.size - span, n).round().astype(int)
     return [(int(s - lead), int(s), int(s + span)) for s in starts]
-
-
-def uncertainties(jac, residual, block: int) -> tuple[np.ndarray, np.ndarray]:
-    """1-sigma of the fitted (scaled) parameters: formal, sqrt(diag((J^T J)^-1 s^2)) with s^2 the
-    residual variance on m - n degrees of freedom (white residual), and block-robust, the sandwich
-    (J^T J)^-1 (sum_b J_b^T r_b r_b^T J_b) (J^T J)^-1 over blocks of ``block`` samples (4 residual
-    rows each: one per wheel), which holds for a residual correlated over less than a block."""
-    m, p = jac.shape
-    bread = np.linalg.pinv(jac.T @ jac)
-    formal = np.diag(bread) * float(residual @ residual) / max(m - p, 1)
-    labels = (np.arange(m) // 4) // max(int(block), 1)
-    scores = np.zeros((int(labels[-1]) + 1, p))
-    np.add.at(scores, labels, jac * residual[:, None])
-    robust = np.diag(bread @ (scores.T @ scores) @ bread)
-    return np.sqrt(np.clip(formal, 0.0, None)), np.sqrt(np.clip(robust, 0.0, None))
 
 
 class _Problem:
