@@ -112,7 +112,7 @@ def run_kinematic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
     q0 = 1  # offset of qpos in a FULLPHYSICS state
     poses = _pose_recorder(model, drive, decim, pose_rate_hz)
     frames = _Frames(model, poses)
-    n, chunk, dt = drive.n_steps, watch.check * max(1, ROLLOUT_STEPS // watch.check), rig.dt_s
+    n, chunk, dt = drive.n_steps, _chunk_steps(watch), rig.dt_s
     # The controls of a step: ctrl (the tires' pan velocities) then every mocap body's position.
     control = np.zeros((chunk, model.nu + 3 * model.nmocap))
     mocap = control[:, model.nu:].reshape(chunk, model.nmocap, 3)
@@ -130,11 +130,7 @@ def run_kinematic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
         rate[m:] = v[m:]
         control[:kk, idx.tire_actuator] = rate
         mocap[:kk, idx.pan_mocap, 2] = base_z + held
-        warm = data.qacc_warmstart.copy()
-        out_state, out_sensor = rollout.rollout(model, data, state, control[:kk], control_spec=_PRESCRIBED,
-                                                initial_warmstart=warm)
-        if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):
-            _replay_windows(model, watch, data, state, warm, control[:kk], k, _PRESCRIBED)
+        out_state, out_sensor = _rollout_watched(model, watch, data, state, control[:kk], k, _PRESCRIBED)
         i, j = _output_rows(k, kk, k0, decim)
         if i.size:
             t_out[j] = drive.times(k, k + kk)[i]
@@ -143,7 +139,7 @@ def run_kinematic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
             s = out_sensor[0, i]
             force[j] = tire_law(model, idx, s[:, lengths] + (held[i] - z[i]), s[:, rates] - v[i])
             if poses is not None:
-                pre = np.where((i == 0)[:, None], state[None, :], out_state[0, np.maximum(i - 1, 0)])
+                pre = _pre_step(state, out_state, i)
                 frames.record(pre[:, q0:q0 + model.nq], i + k, mocap_z=(idx.pan_mocap, base_z + z[i]))
         state = out_state[0, -1].copy()
         watch.checked(data, k, k + kk - 1)
@@ -175,22 +171,18 @@ def run_hydraulic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
     qa, hyd, sensors = rig.index.pan_qpos, rig.actuators, rig.sensors
     poses = _pose_recorder(model, drive, decim, pose_rate_hz)
     frames = _Frames(model, poses)
-    n, chunk = drive.n_steps, watch.check * max(1, ROLLOUT_STEPS // watch.check)
+    n, chunk = drive.n_steps, _chunk_steps(watch)
     ctrl = np.zeros((chunk, model.nu))
     with hydraulic_callbacks(model):
         for k in range(0, n, chunk):
             kk = min(chunk, n - k)
             z = drive.chunk(k, k + kk)[0]  # x_ref at the steps, recorded; the velocity is not needed
             ctrl[:kk, hyd] = drive.held(k, k + kk)  # what each step holds: x_ref at mid-step
-            warm = data.qacc_warmstart.copy()
-            out_state, out_sensor = rollout.rollout(model, data, state, ctrl[:kk], initial_warmstart=warm)
-            if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):
-                _replay_windows(model, watch, data, state, warm, ctrl[:kk], k)
-            # Output samples in this chunk: the pre-step state of step k+i is the chunk's
-            # initial state (i = 0) or the state after step k+i-1; forces are step k+i's.
+            out_state, out_sensor = _rollout_watched(model, watch, data, state, ctrl[:kk], k)
+            # Output samples in this chunk: their pre-step states (:func:`_pre_step`); forces are step k+i's.
             i, j = _output_rows(k, kk, k0, decim)
             if i.size:
-                pre = np.where((i == 0)[:, None], state[None, :], out_state[0, np.maximum(i - 1, 0)])
+                pre = _pre_step(state, out_state, i)
                 t_out[j] = drive.times(k, k + kk)[i]
                 x_ref[j] = z[i]
                 pan[j] = pre[:, q0 + qa]
@@ -235,6 +227,30 @@ class _Frames:
                     self.scratch.mocap_pos[mocap_z[0], 2] = mocap_z[1][r]
                 mujoco.mj_kinematics(self.model, self.scratch)
                 self.poses(self.scratch, int(k))
+
+
+def _chunk_steps(watch: Watch) -> int:
+    """Steps per rollout call: :data:`ROLLOUT_STEPS` rounded down to whole warning windows (at least one)."""
+    return watch.check * max(1, ROLLOUT_STEPS // watch.check)
+
+
+def _rollout_watched(model, watch: Watch, data, state, controls, k0: int,
+                     control_spec: int = int(mujoco.mjtState.mjSTATE_CTRL)):
+    """One rollout call from ``state`` (steps ``k0`` on), carrying ``data``'s constraint warm start;
+    a call that warned or diverged is replayed window by window so that the error names its
+    window (raises). Returns rollout's (state, sensordata), each (1, steps, ...)."""
+    warm = data.qacc_warmstart.copy()
+    out_state, out_sensor = rollout.rollout(model, data, state, controls, control_spec=control_spec,
+                                            initial_warmstart=warm)
+    if watch.warned(data) or not np.all(np.isfinite(out_state[0, -1])):
+        _replay_windows(model, watch, data, state, warm, controls, k0, control_spec)
+    return out_state, out_sensor
+
+
+def _pre_step(state: np.ndarray, out_state: np.ndarray, i: np.ndarray) -> np.ndarray:
+    """The states before a chunk's steps ``i``: the chunk's initial ``state`` for i = 0, else the
+    rollout's state after step i - 1."""
+    return np.where((i == 0)[:, None], state[None, :], out_state[0, np.maximum(i - 1, 0)])
 
 
 def _replay_windows(model, watch: Watch, data, state, warm, ctrl, k0: int,
