@@ -61,7 +61,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from generalization import case_documents  # noqa: E402
-from integrator_study import paper_case, scenario_at  # noqa: E402
+from integrator_study import INTEGRATORS, paper_case, scenario_at  # noqa: E402
 from correction.dlc import dlc, nrmse  # noqa: E402
 from mjcf.build import build_spec  # noqa: E402
 from mjcf.names import CORNERS, pan_joint  # noqa: E402
@@ -72,8 +72,6 @@ from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.core.rig import RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S, Rig, actuator_params  # noqa: E402
 from scenarios.core.watch import SimulationError, output_schedule  # noqa: E402
 
-INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER, "RK4": mujoco.mjtIntegrator.mjINT_RK4,
-               "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}
 #: (integrator, time step in s); "former": the loop of explicit Euler steps with the pan joints set.
 CONFIGS = (("Euler", 2.5e-5), ("RK4", 1e-4), ("former", 1e-4), ("Euler", 1e-4), ("RK4", 5e-4),
            ("RK4", 1e-3), ("RK4", 2e-3), ("implicitfast", 1e-3))

@@ -95,18 +95,18 @@ def cmd_paper(args) -> int:
 
             say = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
             result = dataclasses.replace(result, models=model_scores(result, workers=args.jobs, progress=say))
-        files = render_report(result, case_files=False)
+        table, damage_table, model_table = result.table(), result.damage_table(), result.model_table()
+        files = render_report(result, case_files=False, tables=(table, damage_table, model_table))
         files["paper.json"] = to_json(result).encode("utf-8")
         write_files(stage.path, files)
         n_fig = sum(1 for f in stage.path.glob("*.png"))
-        table = result.table()
         if args.rrd:
             from scenarios.review.recording import write_recording
 
             runs = [r for c in result.cases for r in (c.road, c.rig)]
             write_recording(stage.place(args.rrd), runs,
                             corrected={c.name: c.score.corrected_N["best"] for c in result.cases},
-                            dlc_table=table + "\n\n" + result.damage_table())
+                            dlc_table=table + "\n\n" + damage_table)
     out = pathlib.Path(args.out)
     if args.rrd:
         print(f"wrote recording {args.rrd} (one recording per case)" + (" and opened the viewer" if args.view else ""))
@@ -116,8 +116,7 @@ def cmd_paper(args) -> int:
             open_viewer(args.rrd)
     print(table)
     print()
-    print(result.damage_table())
-    model_table = result.model_table()
+    print(damage_table)
     if model_table is not None:
         print()
         print(model_table)

@@ -216,10 +216,11 @@ def write_case(case, out) -> list[pathlib.Path]:
     return paths
 
 
-def render_report(result, *, case_files: bool = True) -> dict[str, bytes]:
+def render_report(result, *, case_files: bool = True, tables: tuple | None = None) -> dict[str, bytes]:
     """The Table 2 bars, ``report.md`` and (``case_files``) every case's figures of a
     :class:`scenarios.studies.paper.compute.PaperResult`, rendered in memory: ``{file name: bytes}``
-    (``case_files=False`` when :func:`write_case` wrote them already)."""
+    (``case_files=False`` when :func:`write_case` wrote them already). ``tables``: the result's
+    ``(table(), damage_table(), model_table())`` if the caller has them already."""
     rows = result.rows()
     files = {}
     if case_files:
@@ -227,8 +228,8 @@ def render_report(result, *, case_files: bool = True) -> dict[str, bytes]:
             files.update(case_figures(c))
     files["table2.png"] = _bars(rows)
     figures = [f"{kind}_{c.name}.png" for c in result.cases for kind in ("figure8", "damage")]
-    md = _report_md(rows, result.table(), figures, result.damage_table())
-    model_table = result.model_table()
+    table, damage_table, model_table = tables or (result.table(), result.damage_table(), result.model_table())
+    md = _report_md(rows, table, figures, damage_table)
     if model_table is not None:
         md += ("\n## Third method: correction by a rig-calibrated truck model (`--model`)\n\n```\n"
                + model_table + "\n```\n")
