@@ -66,7 +66,7 @@ def rigsim_version() -> str:
 
 def linear_metadata(args) -> dict[str, str]:
     """How the linear correction was made: its formula, low-pass, mode, tolerance, transients."""
-    from correction.correction_filter import SETTLING_TOLERANCE
+    from correction.pipeline import SETTLING_TOLERANCE
     from correction.lowpass import as_lowpass
 
     return {"correction": "F_corrected = T_a^-1 T_F F_measured", "force_unit": "N",
