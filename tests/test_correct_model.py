@@ -90,6 +90,8 @@ def test_model_correction_end_to_end(record, tmp_path, capsys):
     assert meta["scenario_file"] == str(record["scenario"]) and meta["rigsim_version"] == version("rigsim")
     assert meta["corners"] == "fl=Fz_FL,fr=Fz_FR,rl=Fz_RL,rr=Fz_RR" and meta["pairs"] == PAIRS
     assert meta["cal_runs"].endswith(", converged")
+    # the default --cab auto calibrated twice; this rigid-cab truck keeps the cab held (cab_choice.choose)
+    assert meta["cal_cab"].startswith("cab held: ") and "cal_cab_mount_hz" not in meta
     fit = [float(x.split()[1]) for x in meta["cal_fit_nrmse"].split(" (")[0].split(", ")]
     assert len(fit) == 4 and max(fit) < 0.1  # the model reproduces F_rig up to the load cells' noise
     truth = xml_nominal()
@@ -103,7 +105,7 @@ def test_model_correction_end_to_end(record, tmp_path, capsys):
         corrected = dlc(got.data[f"Fz_{c.upper()}_corrected"][settled]) / road - 1.0
         assert raw < -0.1, c  # the rig loses dynamic load: the test can fail
         assert abs(corrected) < 0.01 and abs(corrected) < abs(raw) / 10, (c, raw, corrected)
-    assert "| payload_kg | kg |" in printed and "DLC before" in printed
+    assert "| payload_kg | kg |" in printed and "DLC before" in printed and "Cab held: " in printed
     assert "by the truck model calibrated on the record" in printed and "3000 start-up samples kept" in printed
     assert "calibrating the truck model on 1 window(s)" in progress and "calibrated in" in progress
 
@@ -118,7 +120,7 @@ def test_fallback_is_the_linear_correction_with_its_reason(record, tmp_path, cap
     _write_csv(csv, record["t"], noisy, record["drive_m"], record["lvdt_m"])
     out = tmp_path / "fallback.csv"
     assert main(["correct", str(csv), "--model", str(record["scenario"]), "--pairs", PAIRS, "-o", str(out), "--quiet",
-                 "--calibration-windows", "1", "--max-evaluations", "1"]) == 0
+                 "--calibration-windows", "1", "--max-evaluations", "1", "--cab", "held"]) == 0
     printed, progress = capsys.readouterr()
     assert progress == ""  # --quiet
     first = printed.splitlines()[0]
@@ -210,11 +212,11 @@ def test_the_help_literals_match_their_homes():
     assert f"at least {WINDOW_LEAD_S + WINDOW_S:g} s of record" in text
 
 
-def test_fit_cab_is_refused_without_model(tmp_path, capsys):
-    """--fit-cab belongs to --model: alone it is refused before any work, naming the option."""
+def test_cab_is_refused_without_model(tmp_path, capsys):
+    """--cab belongs to --model: alone it is refused before any work, naming the option."""
     from scenarios.cli.main import main
 
     src = tmp_path / "in.csv"
     src.write_text("time_s,Fz_FL [N]\n0,1\n0.001,2\n")
-    assert main(["correct", str(src), "--fit-cab", "-o", str(tmp_path / "out.csv"), "--actuator", str(src)]) == 2
-    assert "--fit-cab" in capsys.readouterr().err and not (tmp_path / "out.csv").exists()
+    assert main(["correct", str(src), "--cab", "fitted", "-o", str(tmp_path / "out.csv"), "--actuator", str(src)]) == 2
+    assert "--cab" in capsys.readouterr().err and not (tmp_path / "out.csv").exists()

@@ -16,9 +16,11 @@ F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
 and its ``[vehicle]`` tire stiffness, tire damping and leaf friction, where given, are the
 calibration's first guesses instead of the catalogue values; the payload and its position always
-start from the record's static loads. The cab is rigid, or held at ``[vehicle] cab_mount_hz``
-if given; ``--fit-cab`` fits its mount frequency too (from that value or 2.5 Hz). Every fitted
-value is only a starting guess.
+start from the record's static loads. The cab (``--cab``): by default the model is calibrated
+twice, the cab held (rigid, or at ``[vehicle] cab_mount_hz`` if given) and the cab's mount
+frequency fitted (from that value or 2.5 Hz), and the clearly better fit is kept
+(:func:`scenarios.studies.model_correction.cab_choice.calibrate_cab`); ``--cab held`` or
+``--cab fitted`` calibrates once. Every fitted value is only a starting guess.
 
 Where the model cannot be trusted on this record (it does not reproduce F_rig, or its calibration
 did not converge or could not run) the linear correction is used instead, with ``--actuator`` /
@@ -42,7 +44,7 @@ __all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "
 
 #: The options only ``--model`` reads: argparse dest -> option.
 MODEL_OPTIONS = {"pairs": "--pairs", "jobs": "--jobs", "max_evaluations": "--max-evaluations",
-                 "calibration_windows": "--calibration-windows", "fit_cab": "--fit-cab", "quiet": "--quiet"}
+                 "calibration_windows": "--calibration-windows", "cab": "--cab", "quiet": "--quiet"}
 #: The fields the payload's first guess comes from the record for (a [vehicle] value is not used).
 FROM_STATIC_LOADS = ("payload_kg", "payload_x_m")
 
@@ -54,9 +56,10 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--model", metavar="TRUCK.toml",
                    help="correct each wheel as F_rig + F_model(drive) - F_model(LVDT), the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
-                        "damping and leaf friction per axle, with --fit-cab the cab's mount frequency; minutes of "
+                        "damping and leaf friction per axle, the cab's mount frequency where it fits clearly better "
+                        "(--cab); minutes of "
                         "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "
-                        "cab_mount_hz is the cab's mount (held, or with --fit-cab the first guess), and its tire and "
+                        "cab_mount_hz is the cab's mount (held, or the first guess of its fit), and its tire and "
                         "leaf-friction values are only the "
                         "starting guess (default: catalogue values; payload and position start from the record's "
                         "static loads). Needs --pairs and at least 6.5 s of record (the windows are spread over "
@@ -76,10 +79,11 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--calibration-windows", type=int, default=None, metavar="N",
                    help="with --model: windows of the record the model is fitted on, each 2.5 s lead-in + 4 s "
                         "(default 3); 1 is about 3 times faster, on less of the record")
-    g.add_argument("--fit-cab", action="store_true",
-                   help="with --model: also fit the cab's mount frequency (1-30 Hz), for a truck whose cab sits on "
-                        "soft mounts; otherwise the model's cab is rigid, or held at TRUCK.toml's "
-                        "vehicle.cab_mount_hz (a smooth record may not pin it: see the README)")
+    g.add_argument("--cab", choices=("auto", "held", "fitted"), default=None,
+                   help="with --model: the model's cab. auto (default): calibrate with the cab held and with its "
+                        "mount frequency fitted (1-30 Hz), keep the fit that reproduces the forces clearly better "
+                        "(twice the CPU); held: the cab rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
+                        "always fit the mount (a smooth record may not pin it: see the README)")
     g.add_argument("--quiet", action="store_true", help="with --model: no progress lines on stderr")
 
 
@@ -240,10 +244,15 @@ def _metadata(args, pairs, force_cols, mc_result, fallback_source: str | None) -
     method = "probe" if mc_result is None else mc_result.method
     meta = {"made_by": "rigsim correct --model", "rigsim_version": rigsim_version(), "input": str(args.input),
             "scenario_file": str(args.model), "method": method}
+    rpc3 = format_of(args.out) == "rpc3"
+
+    def sentence(key: str, text: str) -> None:  # RPC III values hold 96 bytes: there split over key, key_2...
+        parts = textwrap.wrap(text, 96) if rpc3 else [text]
+        meta.update({key + (f"_{i + 1}" if i else ""): p for i, p in enumerate(parts)})
+
     reason = "x " * 100 if mc_result is None else mc_result.reason
-    if reason:  # a sentence: RPC III values hold 96 bytes, so there it is split over reason, reason_2...
-        parts = textwrap.wrap(reason, 96) if format_of(args.out) == "rpc3" else [reason]
-        meta.update({"fallback_reason" + (f"_{i + 1}" if i else ""): p for i, p in enumerate(parts)})
+    if reason:
+        sentence("fallback_reason", reason)
     meta.update({"corners": ",".join(f"{k}={c}" for k, c in zip(pairs, force_cols)),
                  "pairs": ",".join(f"{k}={d}:{x}" for k, (d, x) in pairs.items())})
     if method in ("model", "probe"):
@@ -257,8 +266,11 @@ def _metadata(args, pairs, force_cols, mc_result, fallback_source: str | None) -
 
         meta.update({f"cal_{n}": f"0 {UNITS[n]}" for n in FITTED})
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_windows_s", "cal_runs")})
+        sentence("cal_cab", "x " * 150)
     elif cal is not None:
         meta.update(_calibration_meta(cal))
+        if cal.cab_choice:
+            sentence("cal_cab", cal.cab_choice)
     return fit_metadata(args.out, meta)
 
 
@@ -279,7 +291,8 @@ def cmd_correct_model(args) -> int:
     probe_output(args.out, output_units(force_cols, args.transient), _metadata(args, pairs, force_cols, None, None))
     guess, unused = _first_guess(scenario)
 
-    from scenarios.studies.model_correction.calibrate import DEFAULT_NAMES, FITTED, WINDOW_LEAD_S, WINDOW_S
+    from scenarios.studies.model_correction.cab_choice import AUTO
+    from scenarios.studies.model_correction.calibrate import WINDOW_LEAD_S, WINDOW_S
     from scenarios.studies.model_correction.differential import correct_with_model
 
     fs, forces = mc.fs_hz, mc.array(force_cols)
@@ -292,7 +305,7 @@ def cmd_correct_model(args) -> int:
     res = correct_with_model(mc.time_s, mc.array([d for d, _ in pairs.values()]),
                              mc.array([x for _, x in pairs.values()]), forces, base_scenario=scenario,
                              workers=workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess,
-                             names=FITTED if args.fit_cab else DEFAULT_NAMES)
+                             cab=args.cab or AUTO)
     cal = res.calibration
     if cal is not None:
         _say(args, f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
@@ -323,6 +336,8 @@ def cmd_correct_model(args) -> int:
         print(cal.table())
         print(f"fit NRMSE per wheel (calibrated model against the measured force): {meta['cal_fit_nrmse']}; "
               f"{meta['cal_runs']}")
+        if cal.cab_choice:
+            print(cal.cab_choice[0].upper() + cal.cab_choice[1:])
     write_corrected(args, mc, force_cols, forces, corrected, settled, meta, inputs)
     print(f"corrected {len(force_cols)} channel(s) of {str(args.input)!r} at {fs:.6g} Hz {what}; "
           f"{forces.shape[0] - int(settled.sum())} {kind} samples {'dropped' if args.transient == 'drop' else 'kept'}; "

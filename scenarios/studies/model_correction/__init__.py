@@ -5,6 +5,8 @@
 * :mod:`.calibrate`: :func:`~.calibrate.calibrate`, the uncertain truck parameters fitted so the
   model, pans following x_a, reproduces F_rig (rig signals only), weighted by :mod:`.weighting`
   towards the frequencies the correction uses the model at;
+* :mod:`.cab_choice`: :func:`~.cab_choice.calibrate_cab`, the cab held, fitted, or (default) both
+  calibrated and the clearly better fit kept;
 * :mod:`.differential`: :func:`~.differential.differential_correction` and
   :func:`~.differential.correct_with_model` (calibrate, check, correct, or fall back to the linear
   correction with one sentence why);

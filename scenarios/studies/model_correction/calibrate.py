@@ -409,5 +409,6 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                        initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
                        windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
                        evaluations=int(prob.evaluations), converged=bool(res.status > 0),
-                       message=str(res.message), wall_time_s=round(time.perf_counter() - wall0, 3))
+                       message=str(res.message), wall_time_s=round(time.perf_counter() - wall0, 3),
+                       bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)))
 

@@ -29,7 +29,8 @@ from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.core.watch import SimulationError
-from scenarios.studies.model_correction.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, calibrate, fit_windows
+from scenarios.studies.model_correction.cab_choice import AUTO, calibrate_cab, check_cab
+from scenarios.studies.model_correction.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from scenarios.studies.model_correction.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.studies.model_correction.result import LINEAR, MODEL, ModelCorrection
 
@@ -103,7 +104,7 @@ def fallback_reason(calibration, fit_limit: float = FIT_NRMSE_LIMIT) -> str:
 
 
 def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario, workers: int | None = None,
-                       fit_limit: float = FIT_NRMSE_LIMIT, **calibrate_kw) -> ModelCorrection:
+                       fit_limit: float = FIT_NRMSE_LIMIT, cab: str = AUTO, **calibrate_kw) -> ModelCorrection:
     """Calibrate the truck model on the record, then correct it, or say why the linear correction is to be used.
 
     Parameters
@@ -117,8 +118,12 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         Worker processes (default: all cores), one pool for the calibration and the correction.
     fit_limit : float, 1
         :data:`FIT_NRMSE_LIMIT`.
+    cab : {"auto", "held", "fitted"}
+        Whether the model's cab is held, fitted, or (default) chosen by the two fits
+        (:func:`~scenarios.studies.model_correction.cab_choice.calibrate_cab`).
     **calibrate_kw
-        Passed to :func:`~scenarios.studies.model_correction.calibrate.calibrate` (windows, max_nfev...).
+        Passed to :func:`~scenarios.studies.model_correction.calibrate.calibrate` (windows, max_nfev,
+        fitted_guess...).
 
     Returns
     -------
@@ -132,6 +137,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     """
     wall0 = time.perf_counter()
     t, _ = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
+    check_cab(cab, calibrate_kw.get("names"))
     # A record too short for the calibration's windows is the caller's to fix (raised); any other
     # refusal by the calibration means the model cannot be used on this record (the fallback).
     fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),
@@ -139,8 +145,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     timings = {}
     with local_executor(workers) as ex:
         try:
-            cal = calibrate(t, x_a_m, force_N, base_scenario=base_scenario, x_ref_m=x_ref_m, executor=ex,
-                            **calibrate_kw)
+            cal = calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
+                                executor=ex, **calibrate_kw)
         except ScenarioError as exc:
             return _linear(f"the truck model could not be calibrated on this record ({str(exc).rstrip('.')}), "
                            "so the linear correction is to be used.", None, wall0, timings)

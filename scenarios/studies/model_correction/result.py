@@ -65,6 +65,14 @@ class Calibration:
     message : str
         The optimizer's word on how it stopped.
     wall_time_s : float, s
+    bounds : tuple of (float, float)
+        Each fitted field's search range, SI (its first guess times
+        :data:`~scenarios.studies.model_correction.calibrate.RANGES`, clipped to
+        :data:`mjcf.build.BOUNDS`): a value at its edge was stopped there, not fitted.
+    cab_choice : str
+        Where the calibration chose whether to fit the cab's mount
+        (:func:`scenarios.studies.model_correction.cab_choice.calibrate_cab`): one sentence on which
+        and why; "" otherwise.
     """
 
     names: tuple
@@ -82,6 +90,8 @@ class Calibration:
     converged: bool
     message: str
     wall_time_s: float
+    bounds: tuple = ()
+    cab_choice: str = ""
 
     def values(self) -> dict[str, float]:
         """The whole model truck: fitted and fixed fields, SI."""
@@ -92,6 +102,21 @@ class Calibration:
     def variant(self) -> TruckVariant:
         """The fitted truck as a :class:`mjcf.build.TruckVariant`."""
         return TruckVariant(**self.values())
+
+    def at_edge(self, name: str, fraction: float = 0.02) -> bool:
+        """Whether fitted field ``name`` ended within ``fraction`` (1) of an end of its search range
+        (:attr:`bounds`), relative to that end's magnitude (to the range's width for an end at 0);
+        False without bounds."""
+        if not self.bounds:
+            return False
+        i = self.names.index(name)
+        lo, hi = self.bounds[i]
+        v = self.fitted[i]
+
+        def tol(end: float) -> float:
+            return fraction * (abs(end) if end != 0 else hi - lo)
+
+        return bool(v - lo <= tol(lo) or hi - v <= tol(hi))
 
     @property
     def worst_fit_nrmse(self) -> float:
