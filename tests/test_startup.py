@@ -77,3 +77,21 @@ def test_paper_noise_default_is_the_studies(monkeypatch, tmp_path):
     with pytest.raises(KeyboardInterrupt):
         command.cmd_paper(args)
     assert seen["noise_N"] == NOISE_N
+
+
+@pytest.mark.parametrize("user_value", [None, "glfw"])
+def test_commands_skip_mujocos_opengl_unless_asked(tmp_path, user_value):
+    """A command draws nothing with MuJoCo, so ``main`` sets MUJOCO_GL=disable (mujoco's import then
+    skips glfw, ~0.06 s per process); a MUJOCO_GL the user set is kept (glfw: loaded as asked)."""
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    if user_value is not None:
+        env["MUJOCO_GL"] = user_value
+    code = ("import sys\nfrom scenarios.cli.main import main\n"
+            "scenario = 'scenarios/data/paper/high_72kmh_3640kg.toml'\n"
+            f"assert main(['run', scenario, '--mode', 'road', '--duration-s', '0.05', '--quiet', '--out', {str(tmp_path / 'o')!r}]) == 0\n"
+            "print('mujoco' in sys.modules, 'mujoco.glfw' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.strip().splitlines()[-1] == ("True False" if user_value is None else "True True")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import os
 import sys
 
 __all__ = ["main"]
@@ -238,6 +239,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``rigsim`` console command; returns the exit code (SIGTERM: the run
     stops as for Ctrl-C, "rigsim: terminated" on stderr, 143)."""
     args = build_parser().parse_args(argv)  # --help and bad options end here, before the imports below
+    # The commands draw nothing with MuJoCo (recordings are rerun's): its import then skips loading
+    # OpenGL (glfw), ~0.06 s of every process's start (benchmarks/startup.py); a value set is kept.
+    os.environ.setdefault("MUJOCO_GL", "disable")
     from scenarios.core.config import ScenarioError
     from scenarios.core.watch import SimulationError
 
