@@ -62,7 +62,7 @@ def cmd_paper(args) -> int:
     from scenarios.core.files import to_json
     from scenarios.core.outputs import staged_output
     from scenarios.studies.paper.compute import run_paper
-    from scenarios.studies.paper.report import render_report, write_case, write_files
+    from scenarios.studies.paper.report import render_report, write_case, write_case_run, write_files
     from scenarios.studies.scoring import NOISE_N
 
     paths = paper_scenarios()
@@ -84,10 +84,11 @@ def cmd_paper(args) -> int:
 
     noise_N = NOISE_N if args.noise_N is None else args.noise_N
     with staged_output(args.out, force=getattr(args, "force", False)) as stage:
-        # Each case's figures and run files are written by the worker that scores it, while the
-        # other cases still run; the rest once every case is in.
+        # Each run's files are written by the worker that ran it, each case's figures by the worker
+        # that scores it, while the other runs go on; the rest once every case is in.
         result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,
-                           pose_rate_hz=pose_rate, on_done=progress, finish=functools.partial(write_case, out=stage.path))
+                           pose_rate_hz=pose_rate, on_done=progress, finish=functools.partial(write_case, out=stage.path),
+                           finish_run=functools.partial(write_case_run, out=stage.path))
         if getattr(args, "model", False):
             import dataclasses
 

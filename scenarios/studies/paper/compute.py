@@ -189,10 +189,14 @@ def _scenario(path, duration_s: float | None):
     return scenario if duration_s is None else dataclasses.replace(scenario, duration_s=duration_s)
 
 
-def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None) -> RunResult:
-    """Worker: load and run one scenario in one mode (in its own process)."""
+def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None,
+             finish_run: Callable | None = None) -> RunResult:
+    """Worker: load and run one scenario in one mode (in its own process), then ``finish_run(result)``."""
     scenario = _scenario(path, duration_s)
-    return run(scenario, mode, pose_rate_hz=pose_rate_hz)
+    result = run(scenario, mode, pose_rate_hz=pose_rate_hz)
+    if finish_run is not None:
+        finish_run(result)
+    return result
 
 
 def _identify_job(path: str, duration_s: float | None = None) -> RigIdentification:
@@ -214,7 +218,8 @@ def _case_job(path: str, duration_s: float | None, noise_N: float, road: RunResu
 
 def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float | None = None,
               noise_N: float = NOISE_N, pose_rate_hz: float | None = None,
-              on_done: Callable[[RunResult], None] | None = None, finish: Callable | None = None) -> PaperResult:
+              on_done: Callable[[RunResult], None] | None = None, finish: Callable | None = None,
+              finish_run: Callable | None = None) -> PaperResult:
     """Run the cases of ``paths`` on the road and on the rig, and score each pair.
 
     The three runs of every case (identification, road, rig) are jobs of one process pool; a
@@ -237,13 +242,16 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
         ``on_done(run_result)`` as each run finishes (progress).
     finish : callable, optional
         ``finish(case)`` with each :class:`PaperCase`, in the worker that scored it (picklable: a
-        module-level function or a ``functools.partial`` of one; e.g. writing the case's files).
+        module-level function or a ``functools.partial`` of one; e.g. writing the case's figures).
+    finish_run : callable, optional
+        ``finish_run(run_result)`` with each road and rig run, in the worker that ran it, as soon as
+        it is done (picklable; e.g. writing the run's files while other runs go on).
     """
     scenarios = [_scenario(p, duration_s) for p in paths]
     calls = []
     for p in paths:
         calls += [(_identify_job, (str(p), duration_s))]
-        calls += [(_run_job, (str(p), mode, duration_s, pose_rate_hz)) for mode in ("road", "rig")]
+        calls += [(_run_job, (str(p), mode, duration_s, pose_rate_hz, finish_run)) for mode in ("road", "rig")]
     runs: list = [None] * len(calls)
     scores: list = [None] * len(paths)
     with local_executor(worker_count(workers, len(calls))) as ex:

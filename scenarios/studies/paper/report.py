@@ -9,7 +9,7 @@ import numpy as np
 
 from scenarios.core.files import atomic_write_bytes
 
-__all__ = ["render_report", "case_figures", "write_case", "write_files"]
+__all__ = ["render_report", "case_figures", "write_case", "write_case_run", "write_files"]
 
 _WINDOW_S = 3.0  # s of trace shown in the Figure 8 analogue
 _EXCEEDANCE_POINTS = 500  # points of each exceedance curve (log-spaced ranks), 1
@@ -211,14 +211,17 @@ def case_figures(case) -> dict[str, bytes]:
 
 
 def write_case(case, out) -> list[pathlib.Path]:
-    """Write one case's figures and its road and rig runs (``out/<scenario>/<mode>/``) into
-    ``out``: what ``rigsim paper`` has each worker do as soon as it has scored the case."""
+    """Write one case's figures into ``out``: what ``rigsim paper`` has each worker do as soon as it
+    has scored the case (its runs' files are :func:`write_case_run`'s)."""
+    return write_files(out, case_figures(case))
+
+
+def write_case_run(result, out) -> list[pathlib.Path]:
+    """Write one road or rig run of a case into ``out/<scenario>/<mode>/``: what ``rigsim paper``
+    has the worker that ran it do at once, while the other runs go on."""
     from scenarios.core.results import write_run
 
-    paths = write_files(out, case_figures(case))
-    for r in (case.road, case.rig):
-        paths += list(write_run(r, pathlib.Path(out) / r.scenario_name / r.mode).values())
-    return paths
+    return list(write_run(result, pathlib.Path(out) / result.scenario_name / result.mode).values())
 
 
 def render_report(result, *, case_files: bool = True, tables: tuple | None = None) -> dict[str, bytes]:
