@@ -161,8 +161,10 @@ def _cmd_model(args) -> int:
     print("static wheel loads: " + ", ".join(f"{c} {f:.0f} N" for c, f in zip(CORNERS, forces))
           + f"; total {forces.sum():.0f} N")
     print("modes (leaf friction off):")
-    for m in modal_analysis(model, data):
-        print(f"  {m.name:16s} {m.frequency_hz:6.2f} Hz  damping ratio {m.damping_ratio:.3f}")
+    modes = modal_analysis(model, data)
+    width = max(len(m.name) for m in modes)
+    for m in modes:
+        print(f"  {m.name:{width}s} {m.frequency_hz:6.2f} Hz  damping ratio {m.damping_ratio:.3f}")
     return 0
 
 
