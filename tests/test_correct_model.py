@@ -94,6 +94,8 @@ def test_model_correction_end_to_end(record, tmp_path, capsys):
     assert meta["cal_cab"].startswith("cab held: ") and "cal_cab_mount_hz" not in meta
     fit = [float(x.split()[1]) for x in meta["cal_fit_nrmse"].split(" (")[0].split(", ")]
     assert len(fit) == 4 and max(fit) < 0.1  # the model reproduces F_rig up to the load cells' noise
+    error = [float(x.split()[1]) for x in meta["cal_model_error"].split(" (")[0].split(", ")]
+    assert all(e < f for e, f in zip(error, fit)) and max(error) < 0.05  # most of the fit NRMSE is the noise
     truth = xml_nominal()
     for name in ("tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m", "tire_damping_front_Ns_per_m",
                  "tire_damping_rear_Ns_per_m", "spring_friction_front_N", "spring_friction_rear_N"):

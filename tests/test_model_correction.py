@@ -18,7 +18,7 @@ from scenarios.core.run import run
 from scenarios.studies import scoring
 from scenarios.studies.model_correction.calibrate import (CATALOGUE_CAB_MOUNT_HZ, DEFAULT_NAMES, FITTED, calibrate, catalogue,
                                                            xml_nominal)
-from scenarios.studies.model_correction.differential import (FIT_NRMSE_LIMIT, correct_with_model,
+from scenarios.studies.model_correction.differential import (EXCESS_NRMSE_LIMIT, correct_with_model,
                                                              differential_correction, settled_mask)
 from scenarios.studies.model_correction.model_runs import pan_motion_drive
 from scenarios.studies.model_correction.score import score_correction
@@ -110,6 +110,11 @@ def test_calibration_recovers_the_plant_from_rig_signals(record):
     assert cal.fixed["spring_friction_front_N"] == pytest.approx(catalogue()["spring_friction_front_N"])
     assert cal.fixed["cab_mount_hz"] is None  # not named, not given: the XML's rigid cab, not the 2.5 Hz guess
     assert all(s > 0 for s in cal.sigma) and len(cal.sigma_robust) == len(names)
+    # the load cells' share of the fit NRMSE: their 100 N rms (scoring.NOISE_N) over the force's std on the window
+    a, b = cal.windows_s[0]
+    std = record["F_rig"][(t >= a - 1e-9) & (t < b - 1e-9)].std(axis=0)
+    np.testing.assert_allclose(cal.noise_nrmse, scoring.NOISE_N / std, rtol=0.05)
+    assert all(e < f for e, f in zip(cal.excess_nrmse, cal.fit_nrmse))
 
 
 def test_the_cab_is_fitted_only_on_request():
@@ -128,7 +133,7 @@ def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
                              names=("payload_kg", "spring_friction_front_N"), windows=1, window_s=2.0, lead_s=2.0,
                              max_nfev=2)
     assert out.use_linear and out.corrected_N is None
-    assert out.calibration is not None and max(out.calibration.fit_nrmse) > FIT_NRMSE_LIMIT
+    assert out.calibration is not None and max(out.calibration.excess_nrmse) > EXCESS_NRMSE_LIMIT
     assert out.reason.endswith("so the linear correction is to be used.")
     assert out.reason.count(". ") == 0 and out.reason[0].islower()
 

@@ -60,6 +60,7 @@ import time
 
 import numpy as np
 
+from correction.noise import noise_rms
 from hydraulics.params import GRAVITY_M_S2
 from mjcf import names as mjnames
 from mjcf.build import BOUNDS, TruckVariant, build_model
@@ -402,6 +403,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     def per_wheel(model_N):
         return tuple(float(v) for v in np.sqrt(np.mean(prob.plain(model_N) ** 2, axis=0)) / prob.norm)
 
+    noise = noise_rms(force, fs) / prob.norm  # the load cells' share of the fit NRMSE (whole record)
+
     return Calibration(names=names, units=tuple(UNITS[k] for k in names),
                        initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
                        sigma=tuple(float(s) for s in sigma * slope),
@@ -410,5 +413,6 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                        windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
                        evaluations=int(prob.evaluations), converged=bool(res.status > 0),
                        message=str(res.message), wall_time_s=round(time.perf_counter() - wall0, 3),
-                       bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)))
+                       bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)),
+                       noise_nrmse=tuple(float(v) for v in noise))
 

@@ -69,6 +69,10 @@ class Calibration:
         Each fitted field's search range, SI (its first guess times
         :data:`~scenarios.studies.model_correction.calibrate.RANGES`, clipped to
         :data:`mjcf.build.BOUNDS`): a value at its edge was stopped there, not fitted.
+    noise_nrmse : tuple of float
+        Per wheel: the measured force's white noise (:func:`correction.noise.noise_rms`, read above
+        the truck's band) over the same std as :attr:`fit_nrmse`, 1: the part of the fit NRMSE no
+        model can remove; () when not estimated.
     cab_choice : str
         Where the calibration chose whether to fit the cab's mount
         (:func:`scenarios.studies.model_correction.cab_choice.calibrate_cab`): one sentence on which
@@ -92,6 +96,7 @@ class Calibration:
     wall_time_s: float
     bounds: tuple = ()
     cab_choice: str = ""
+    noise_nrmse: tuple = ()
 
     def values(self) -> dict[str, float]:
         """The whole model truck: fitted and fixed fields, SI."""
@@ -117,6 +122,14 @@ class Calibration:
             return fraction * (abs(end) if end != 0 else hi - lo)
 
         return bool(v - lo <= tol(lo) or hi - v <= tol(hi))
+
+    @property
+    def excess_nrmse(self) -> tuple:
+        """Per wheel: the fit NRMSE beyond the load cells' noise, sqrt(fit^2 - noise^2) (1; the fit
+        NRMSE itself where the noise was not estimated): the model's own error on the record."""
+        if not self.noise_nrmse:
+            return tuple(self.fit_nrmse)
+        return tuple(float(np.sqrt(max(f * f - n * n, 0.0))) for f, n in zip(self.fit_nrmse, self.noise_nrmse))
 
     @property
     def worst_fit_nrmse(self) -> float:

@@ -1,0 +1,46 @@
+"""Where the model correction stops: the model's own error on the record, beyond the load cells' noise.
+
+Pure checks of :attr:`Calibration.excess_nrmse` and :func:`fallback_reason` on hand-made
+calibrations (the numbers behind the limit are measured by benchmarks/model_correction.py; the
+runs that produce a real fallback are tests/test_model_correction.py's and tests/test_correct_model.py's).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from scenarios.studies.model_correction.differential import EXCESS_NRMSE_LIMIT, fallback_reason
+from scenarios.studies.model_correction.result import Calibration
+
+
+def _cal(fit, noise=(), converged=True) -> Calibration:
+    return Calibration(names=("payload_kg",), units=("kg",), initial=(1.0,), fitted=(1.0,), sigma=(0.0,),
+                       sigma_robust=(0.0,), fixed={}, fit_nrmse=tuple(fit), initial_nrmse=(1.0,) * 4,
+                       windows_s=((0.0, 1.0),), weighted=True, evaluations=3, converged=converged, message="stopped",
+                       wall_time_s=1.0, noise_nrmse=tuple(noise))
+
+
+def test_the_excess_is_the_fit_beyond_independent_noise():
+    """Independent errors add in power: fit^2 = model^2 + noise^2 (3-4-5: 0.05 from 0.04 and 0.03)."""
+    cal = _cal((0.05, 0.05, 0.02, 0.10), (0.03, 0.05, 0.03, 0.0))
+    assert cal.excess_nrmse == pytest.approx((0.04, 0.0, 0.0, 0.10))
+    assert _cal((0.05,) * 4).excess_nrmse == (0.05,) * 4  # no noise estimate: the fit itself
+
+
+def test_a_noisy_record_is_not_taken_for_a_bad_model():
+    """A fit NRMSE of 0.20 made mostly of noise (0.16) leaves a model error of 0.12: the model is used;
+    the same fit with little noise is a model error of 0.199: the linear correction, one sentence why."""
+    assert fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.16, 0.03, 0.03))) == ""
+    why = fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.02, 0.03, 0.03)))
+    assert why.startswith("the calibrated truck model reproduces the measured wheel force of fr only to NRMSE 0.200")
+    assert f"a model error of {math.sqrt(0.2 ** 2 - 0.02 ** 2):.3f} (limit {EXCESS_NRMSE_LIMIT:g})" in why
+    assert why.endswith("so the linear correction is to be used.") and why.count(". ") == 0
+
+
+def test_the_limit_and_convergence():
+    just = EXCESS_NRMSE_LIMIT
+    assert fallback_reason(_cal((just,) * 4)) == ""
+    assert "limit" in fallback_reason(_cal((just * 1.01,) * 4))
+    assert "did not converge" in fallback_reason(_cal((0.05,) * 4, converged=False))
