@@ -262,7 +262,7 @@ def main(argv=None) -> int:
           "itself, in-sample; DLC errors against the unfiltered road DLC on the same samples (the model correction "
           "unfiltered, the linear one band-limited as the project scores it)"
           + ("; fit NRMSE: the calibrated model against the measured F_rig on the calibration windows (load-cell "
-             "noise included)." if args.suite == "paper" else "; per axle, the worse of its two wheels; DLC error "
+             "noise included), in brackets the model error, beyond the noise, that the fallback reads." if args.suite == "paper" else "; per axle, the worse of its two wheels; DLC error "
              "delivered: the model correction's, or the linear correction's where it fell back; CPU: calibration "
              "plus correction, this process and its workers; cab: the calibrated model's (held rigid, or its "
              "mount frequency fitted)."))

@@ -60,18 +60,19 @@ def table(rows: list[dict]) -> str:
         mine = [r for r in rows if r["case"] == case]
         lines += [f"\n### {case} ({mine[0]['scored_s']:.1f} s scored)\n",
                   "| plant (mismatch) | wheel | rig | linear floor | linear correction | model correction "
-                  "| model / floor | DLC error linear | DLC error model | fit NRMSE |", "|" + " --- |" * 10]
+                  "| model / floor | DLC error linear | DLC error model | fit NRMSE (model error) |", "|" + " --- |" * 10]
         for r in mine:
             w, cal = r["wheels"], r["calibration"]
             for i, c in enumerate(CORNERS + ("mean",)):
                 get = (lambda k: r["mean"].get(k)) if c == "mean" else (lambda k: w[k][c] if k in w else None)
                 fit = (float(np.mean(cal.fit_nrmse)) if c == "mean" else cal.fit_nrmse[i]) if cal else None
+                err = (float(np.mean(cal.excess_nrmse)) if c == "mean" else cal.excess_nrmse[i]) if cal else None
                 model = get("model")
                 cells = [f"{r['plant_key']} ({r['mismatch']})", c, f"{get('rig'):.4f}", f"{get('floor'):.4f}",
                          f"{get('linear'):.4f}", "-" if model is None else f"{model:.4f}",
                          "-" if model is None else f"{model / get('floor'):.2f}",
                          f"{get('linear_dlc_error'):+.2%}",
-                         "-" if model is None else f"{get('model_dlc_error'):+.2%}", "-" if fit is None else f"{fit:.3f}"]
+                         "-" if model is None else f"{get('model_dlc_error'):+.2%}", "-" if fit is None else f"{fit:.3f} ({err:.3f})"]
                 lines.append("| " + " | ".join(cells) + " |")
         for r in mine:
             cal = r["calibration"]
