@@ -35,7 +35,8 @@ def test_a_noisy_record_is_not_taken_for_a_bad_model():
     assert fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.16, 0.03, 0.03))) == ""
     why = fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.02, 0.03, 0.03)))
     assert why.startswith("the calibrated truck model reproduces the measured wheel force of fr only to NRMSE 0.200")
-    assert f"a model error of {math.sqrt(0.2 ** 2 - 0.02 ** 2):.3f} (limit {EXCESS_NRMSE_LIMIT:g})" in why
+    assert (f"0.200: a model error of {math.sqrt(0.2 ** 2 - 0.02 ** 2):.3f} beyond the load cells' noise "
+            f"(0.020; limit {EXCESS_NRMSE_LIMIT:g})") in why
     assert why.endswith("so the linear correction is to be used.") and why.count(". ") == 0
 
 

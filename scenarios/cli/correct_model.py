@@ -230,7 +230,7 @@ def _calibration_meta(cal) -> dict[str, str]:
             for n, u, g, v, s, sr in zip(cal.names, cal.units, cal.initial, cal.fitted, cal.sigma, cal.sigma_robust)}
     meta["cal_fit_nrmse"] = ", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.fit_nrmse))
     meta["cal_model_error"] = (", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.excess_nrmse))
-                               + f" (beyond noise; limit {EXCESS_NRMSE_LIMIT:g})")
+                               + f" (limit {EXCESS_NRMSE_LIMIT:g})")
     meta["cal_windows_s"] = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in cal.windows_s)
     meta["cal_runs"] = f"{cal.evaluations} truck variants, {'converged' if cal.converged else 'not converged'}"
     return meta

@@ -97,11 +97,11 @@ def fallback_reason(calibration, excess_limit: float = EXCESS_NRMSE_LIMIT) -> st
     excess = calibration.excess_nrmse
     worst = int(np.argmax(excess))
     if excess[worst] > excess_limit:
-        noise = (f", {calibration.noise_nrmse[worst]:.3f} of it the load cells' noise" if calibration.noise_nrmse
-                 else "")
+        noise = (f" beyond the load cells' noise ({calibration.noise_nrmse[worst]:.3f}; limit {excess_limit:g})"
+                 if calibration.noise_nrmse else f" (limit {excess_limit:g})")
         return (f"the calibrated truck model reproduces the measured wheel force of {CORNERS[worst]} only to NRMSE "
-                f"{calibration.fit_nrmse[worst]:.3f}{noise}, a model error of {excess[worst]:.3f} (limit "
-                f"{excess_limit:g}), so the linear correction is to be used.")
+                f"{calibration.fit_nrmse[worst]:.3f}: a model error of {excess[worst]:.3f}{noise}, so the linear "
+                "correction is to be used.")
     if not calibration.converged:
         return (f"the truck model's calibration did not converge within {calibration.evaluations} model evaluations "
                 f"({calibration.message.rstrip('.')}), so the linear correction is to be used.")

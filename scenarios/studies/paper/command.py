@@ -26,7 +26,7 @@ def add_parser(subparsers) -> None:
     pp.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
     pp.add_argument("--model", action="store_true",
                     help="add a third method: each rig record corrected by a truck model calibrated on its own "
-                         "signals (about 1-2 CPU-minutes per case)")
+                         "signals, the cab held and fitted, the better kept (about 1-2.5 CPU-minutes per case)")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
     pp.set_defaults(func=cmd_paper)
 
