@@ -47,13 +47,14 @@ START_S = 3.0
 #: Largest per-wheel excess fit NRMSE (:attr:`Calibration.excess_nrmse`: the model's force, pans
 #: following x_a, against the measured F_rig on the calibration windows, with the load cells' white
 #: noise taken out) for which the model correction is used, 1. The differential correction's own
-#: error against the road is about that excess (measured with a progressive tire the model lacks,
-#: paper cases, 60 s: model NRMSE 1.0-1.3 x the excess where it exceeds 0.06), so past the linear
-#: correction's typical error (0.11-0.20 on the paper's cases) the linear correction is the better
-#: one: at +50 % tire the light truck's wheels show excess 0.145-0.168 and a model correction worse
-#: than the linear one (1.01-1.40 x its NRMSE), the heavy truck's 0.03-0.135 and a better one
-#: (0.18-0.79 x); in the family the excess is 0.016-0.042 (benchmarks/model_correction.py,
-#: docs/model_correction.md). Another case's forces give ~1.
+#: error against the road follows that excess (with a progressive tire the model lacks: the
+#: corrected NRMSE 0.78-1.27 x the excess wherever it exceeds 0.06, 67 wheels,
+#: benchmarks/model_error.py), so past the linear correction's typical error (0.11-0.20 on the
+#: paper's cases) the linear correction is the better one: at +50 % tire the light truck's wheels
+#: show excess 0.145-0.168 and a model correction worse than the linear one (1.01-1.40 x its NRMSE),
+#: the heavy truck's 0.03-0.135 and a better one (0.18-0.79 x); at +25 % at most 0.117, always
+#: better; in the family at most 0.062 (paper cases and the generalization suite, README). Another
+#: case's forces give ~1.
 EXCESS_NRMSE_LIMIT = 0.14
 
 

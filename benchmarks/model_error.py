@@ -1,0 +1,92 @@
+"""The model correction's fallback measure against its outcome, from a ``model_correction.py`` run.
+
+::
+
+    python benchmarks/model_correction.py --suite generalization > run.txt
+    python benchmarks/model_error.py run.txt [more runs...]
+
+For every calibrated row of the runs' JSON lines (the last line of each file): the fit NRMSE per
+wheel (the calibrated model, pans following x_a, against the measured F_rig on the calibration
+windows), the load cells' share of it (their noise, :func:`correction.noise.noise_rms` of the
+measured force as the calibration reads it, over the force's std on the windows; the plant's rig
+test is run again for it, the same seed, so the same noise) and the model error beyond it,
+sqrt(fit^2 - noise^2) (:attr:`Calibration.excess_nrmse`, what the fallback,
+``differential.EXCESS_NRMSE_LIMIT``, reads); beside them the outcome against the road: the
+model correction's NRMSE over the linear floor and over the linear correction's NRMSE.
+
+Prints one line per wheel sorted by model error, then per plant the range of the model error,
+and where it exceeds 0.06 the ratio of the corrected NRMSE to it (how far the model error on the
+record predicts the correction's error against the road).
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+
+import model_correction as mcb  # noqa: E402
+from correction.noise import noise_rms  # noqa: E402
+from mjcf.names import CORNERS  # noqa: E402
+from scenarios.core.pool import run_jobs  # noqa: E402
+from scenarios.studies import scoring  # noqa: E402
+
+
+def measured(case, duration_s: float, plant: str, tire_ratio: float, noise_N: float):
+    """The plant's rig test again: (time, s; the measured force with the load cells' noise, N)."""
+    sc = mcb.plant_scenario(case, duration_s, plant, tire_ratio)
+    rig = mcb.plant_job(case, duration_s, plant, "rig", tire_ratio)
+    return rig.t_s, scoring.measured_force(rig, noise_N, sc.seed)
+
+
+def wheels(run: dict) -> list[dict]:
+    """Per wheel of every calibrated row of one run's JSON: fit, noise and model error (1), outcome."""
+    dur, ratio = run["duration_s"], run["tire_ratio"]
+    cases = {mcb.case_name(c): c for c in mcb.pick(run["suite"], None, dur)}
+    rows = [r for r in run["rows"] if r["calibration"]]
+    forces = run_jobs([(measured, (cases[r["case"]], dur, r["plant_key"], ratio, run["noise_N"])) for r in rows])
+    out = []
+    for r, (t, force) in zip(rows, forces):
+        cal = r["calibration"]
+        scored = np.zeros(t.size, bool)
+        for a, b in cal["windows_s"]:
+            scored |= (t >= a - 1e-9) & (t < b - 1e-9)
+        noise = noise_rms(force, 1.0 / (t[1] - t[0])) / force[scored].std(axis=0)
+        fit = np.asarray(cal["fit_nrmse"])
+        error = np.sqrt(np.maximum(fit ** 2 - noise ** 2, 0.0))
+        w = r["wheels"]
+        for i, c in enumerate(CORNERS):
+            model = w["model"][c] if "model" in w else float("nan")
+            out.append({"case": r["case"], "plant": r["plant_key"], "wheel": c, "fit": float(fit[i]),
+                        "noise": float(noise[i]), "error": float(error[i]), "model": model,
+                        "over_floor": model / w["floor"][c], "over_linear": model / w["linear"][c]})
+    return out
+
+
+def main(argv=None) -> int:
+    paths = (argv if argv is not None else sys.argv[1:])
+    if not paths:
+        raise SystemExit("give the output file(s) of benchmarks/model_correction.py")
+    rows = []
+    for p in paths:
+        rows += wheels(json.loads(pathlib.Path(p).read_text().strip().splitlines()[-1]))
+    for o in sorted(rows, key=lambda o: o["error"]):
+        print(f"{o['case'][:30]:30s} {o['plant']:5s} {o['wheel']}  fit {o['fit']:.3f}  noise {o['noise']:.3f}  "
+              f"model error {o['error']:.3f}  corrected / floor {o['over_floor']:.2f}  / linear {o['over_linear']:.2f}")
+    for plant in dict.fromkeys(o["plant"] for o in rows):
+        mine = [o for o in rows if o["plant"] == plant]
+        err = np.array([o["error"] for o in mine])
+        big = [o["model"] / o["error"] for o in mine if o["error"] > 0.06 and np.isfinite(o["model"])]
+        print(f"{plant}: {len(mine)} wheels, model error {err.min():.3f}-{err.max():.3f}"
+              + (f"; corrected NRMSE / model error {min(big):.2f}-{max(big):.2f} (median {np.median(big):.2f}) "
+                 f"on the {len(big)} wheels above 0.06" if big else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
