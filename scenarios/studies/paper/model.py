@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenarios.studies.model_correction.differential import correct_with_model
+from scenarios.studies.model_correction.differential import EXCESS_NRMSE_LIMIT, correct_with_model
 from scenarios.studies.model_correction.result import ModelCorrection
 from scenarios.studies.model_correction.score import score_correction
 
@@ -108,19 +108,23 @@ def model_table(scores) -> str:
     """Table 2's third method for the terminal and report.md: DLC and its error against the road,
     NRMSE beside the linear correction's, the calibration's fit, means over the wheels."""
     head = (f"{'case':28s} {'road':>7s} {'model-corr.':>11s} {'error':>7s} {'NRMSE model':>11s} "
-            f"{'linear':>7s} {'fit NRMSE':>9s} {'time s':>7s}")
+            f"{'linear':>7s} {'fit NRMSE':>9s} {'model err.':>10s} {'cab':>5s} {'time s':>7s}")
     lines = [head, "-" * len(head)]
     for s in scores:
         cal = s.correction.calibration
         fit = f"{np.mean(cal.fit_nrmse):9.3f}" if cal is not None else f"{'-':>9s}"
+        err = f"{max(cal.excess_nrmse):10.3f}" if cal is not None else f"{'-':>10s}"
+        cab = "-" if cal is None else ("fit" if "cab_mount_hz" in cal.names else "held")
         if s.used:
             f = s.figures
             lines.append(f"{s.case:28s} {np.mean(f['dlc_road']):7.4f} {np.mean(f['dlc']):11.4f} "
                          f"{100 * np.mean(f['dlc_error']):+6.1f}% {np.mean(f['nrmse']):11.3f} "
-                         f"{np.mean(s.linear_nrmse):7.3f} {fit} {s.correction.wall_time_s:7.0f}")
+                         f"{np.mean(s.linear_nrmse):7.3f} {fit} {err} {cab:>5s} {s.correction.wall_time_s:7.0f}")
         else:
             lines.append(f"{s.case:28s} linear correction kept: {s.reason}")
     lines.append("model-corr.: F_rig + F_model(x_ref) - F_model(x_a), the truck model calibrated on the rig record's own")
     lines.append("signals; DLC and its error against the road on the same samples; linear: the project's correction's NRMSE;")
-    lines.append("fit NRMSE: the calibrated model, pans following x_a, against the measured F_rig.")
+    lines.append("fit NRMSE: the calibrated model, pans following x_a, against the measured F_rig (mean of the wheels);")
+    lines.append("model err.: the worst wheel's fit NRMSE beyond the load cells' noise (the fallback's measure, limit "
+                 f"{EXCESS_NRMSE_LIMIT:g}); cab: held rigid or fitted on its mounts.")
     return "\n".join(lines)
