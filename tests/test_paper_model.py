@@ -41,6 +41,8 @@ def test_the_third_methods_table_shows_the_model_or_why_not():
     row = next(line for line in text.splitlines() if line.startswith(used.case))
     # means over the wheels: NRMSE 0.010, linear 0.1625 -> "0.163", fit 0.0375 -> "0.037" or "0.038"
     assert "0.010" in row and "0.163" in row and "+0.0%" in row
+    # no noise estimate in this calibration: the model error is the worst fit NRMSE itself, 0.050; the cab held
+    assert row.split()[-3:] == ["0.050", "held", "75"], row
     assert f"{kept.case:28s} linear correction kept: the calibrated model misses the force." in text
     assert used.used and not kept.used
 
