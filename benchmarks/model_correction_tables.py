@@ -47,9 +47,7 @@ def cab_cell(row: dict) -> str:
     cal = row.get("calibration")
     if cal is None:
         return "-"
-    if "cab_mount_hz" not in cal.names:
-        return "held"
-    return f"fitted {cal.fitted[cal.names.index('cab_mount_hz')]:.3g} Hz"
+    return "held" if cal.fitted_cab_hz is None else f"fitted {cal.fitted_cab_hz:.3g} Hz"
 
 
 def table(rows: list[dict]) -> str:

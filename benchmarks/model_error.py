@@ -7,10 +7,11 @@
 
 For every calibrated row of the runs' JSON lines (the last line of each file): the fit NRMSE per
 wheel (the calibrated model, pans following x_a, against the measured F_rig on the calibration
-windows), the load cells' share of it (their noise, :func:`correction.noise.noise_rms` of the
-measured force as the calibration reads it, over the force's std on the windows; the plant's rig
-test is run again for it, the same seed, so the same noise) and the model error beyond it,
-sqrt(fit^2 - noise^2) (:attr:`Calibration.excess_nrmse`, what the fallback,
+windows), the load cells' share of it (their noise over the force's std on the windows: the
+calibration's own ``noise_nrmse`` where the run recorded it; for runs made before it did, the
+plant's rig test is run again, the same seed so the same noise, and read as the calibration reads
+it, :func:`correction.noise.noise_rms`) and the model error beyond it, sqrt(fit^2 - noise^2)
+(:func:`~scenarios.studies.model_correction.result.model_error`, what the fallback,
 ``differential.EXCESS_NRMSE_LIMIT``, reads); beside them the outcome against the road: the
 model correction's NRMSE over the linear floor and over the linear correction's NRMSE.
 
@@ -35,6 +36,7 @@ from correction.noise import noise_rms  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
+from scenarios.studies.model_correction.result import model_error  # noqa: E402
 
 
 def measured(case, duration_s: float, plant: str, tire_ratio: float, noise_N: float):
@@ -44,21 +46,28 @@ def measured(case, duration_s: float, plant: str, tire_ratio: float, noise_N: fl
     return rig.t_s, scoring.measured_force(rig, noise_N, sc.seed)
 
 
+def read_noise(cal: dict, t, force) -> np.ndarray:
+    """The load cells' noise over the force's std on the calibration's windows, per wheel (1)."""
+    scored = np.zeros(t.size, bool)
+    for a, b in cal["windows_s"]:
+        scored |= (t >= a - 1e-9) & (t < b - 1e-9)
+    return noise_rms(force, 1.0 / (t[1] - t[0])) / force[scored].std(axis=0)
+
+
 def wheels(run: dict) -> list[dict]:
     """Per wheel of every calibrated row of one run's JSON: fit, noise and model error (1), outcome."""
     dur, ratio = run["duration_s"], run["tire_ratio"]
     cases = {mcb.case_name(c): c for c in mcb.pick(run["suite"], None, dur)}
     rows = [r for r in run["rows"] if r["calibration"]]
-    forces = run_jobs([(measured, (cases[r["case"]], dur, r["plant_key"], ratio, run["noise_N"])) for r in rows])
+    rerun = [r for r in rows if not r["calibration"].get("noise_nrmse")]  # recorded before noise_nrmse was
+    forces = run_jobs([(measured, (cases[r["case"]], dur, r["plant_key"], ratio, run["noise_N"])) for r in rerun])
+    noises = {id(r): read_noise(r["calibration"], t, force) for r, (t, force) in zip(rerun, forces)}
     out = []
-    for r, (t, force) in zip(rows, forces):
+    for r in rows:
         cal = r["calibration"]
-        scored = np.zeros(t.size, bool)
-        for a, b in cal["windows_s"]:
-            scored |= (t >= a - 1e-9) & (t < b - 1e-9)
-        noise = noise_rms(force, 1.0 / (t[1] - t[0])) / force[scored].std(axis=0)
-        fit = np.asarray(cal["fit_nrmse"])
-        error = np.sqrt(np.maximum(fit ** 2 - noise ** 2, 0.0))
+        noise = noises.get(id(r), cal.get("noise_nrmse"))
+        fit = cal["fit_nrmse"]
+        error = model_error(fit, noise)
         w = r["wheels"]
         for i, c in enumerate(CORNERS):
             model = w["model"][c] if "model" in w else float("nan")

@@ -101,8 +101,8 @@ def test_auto_fits_a_mounted_cab_and_holds_a_rigid_one(cab_hz):
                         windows=1, window_s=3.0, lead_s=2.0, max_nfev=4, workers=2)
     if cab_hz is None:
         assert cal.names == DEFAULT_NAMES and cal.cab_choice.startswith("cab held: "), cal.cab_choice
-        assert cal.fixed["cab_mount_hz"] is None
+        assert cal.fixed["cab_mount_hz"] is None and cal.fitted_cab_hz is None
     else:
         assert cal.cab_choice.startswith("cab fitted: "), cal.cab_choice
-        assert cal.values()["cab_mount_hz"] == pytest.approx(cab_hz, rel=0.05)
+        assert cal.values()["cab_mount_hz"] == pytest.approx(cab_hz, rel=0.05) == cal.fitted_cab_hz
     assert catalogue()["cab_mount_hz"] == 2.5 and FITTED_CAB == "fitted"

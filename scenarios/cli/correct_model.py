@@ -82,7 +82,7 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--cab", choices=("auto", "held", "fitted"), default=None,
                    help="with --model: the model's cab. auto (default): calibrate with the cab held and with its "
                         "mount frequency fitted (1-30 Hz), keep the fit that reproduces the forces clearly better "
-                        "(twice the CPU); held: the cab rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
+                        "(3-4 times the CPU of one); held: the cab rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
                         "always fit the mount (a smooth record may not pin it: see the README)")
     g.add_argument("--quiet", action="store_true", help="with --model: no progress lines on stderr")
 

@@ -14,10 +14,16 @@ import numpy as np
 
 from mjcf.build import TruckVariant
 
-__all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR"]
+__all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR", "model_error"]
 
 #: The two answers of :func:`scenarios.studies.model_correction.differential.correct_with_model`.
 MODEL, LINEAR = "model", "linear"
+
+
+def model_error(fit_nrmse, noise_nrmse) -> tuple:
+    """Per wheel: the fit NRMSE beyond the noise, sqrt(fit^2 - noise^2) (0 where the noise estimate
+    exceeds the fit), 1: independent errors add in power."""
+    return tuple(float(np.sqrt(max(f * f - n * n, 0.0))) for f, n in zip(fit_nrmse, noise_nrmse))
 
 
 @dataclass(frozen=True)
@@ -125,11 +131,14 @@ class Calibration:
 
     @property
     def excess_nrmse(self) -> tuple:
-        """Per wheel: the fit NRMSE beyond the load cells' noise, sqrt(fit^2 - noise^2) (1; the fit
-        NRMSE itself where the noise was not estimated): the model's own error on the record."""
-        if not self.noise_nrmse:
-            return tuple(self.fit_nrmse)
-        return tuple(float(np.sqrt(max(f * f - n * n, 0.0))) for f, n in zip(self.fit_nrmse, self.noise_nrmse))
+        """Per wheel: the fit NRMSE beyond the load cells' noise (:func:`model_error`; the fit NRMSE
+        itself where the noise was not estimated): the model's own error on the record, 1."""
+        return model_error(self.fit_nrmse, self.noise_nrmse) if self.noise_nrmse else tuple(self.fit_nrmse)
+
+    @property
+    def fitted_cab_hz(self) -> float | None:
+        """float, Hz: the cab's fitted mount frequency, or None where the cab was held (not fitted)."""
+        return self.fitted[self.names.index("cab_mount_hz")] if "cab_mount_hz" in self.names else None
 
     @property
     def worst_fit_nrmse(self) -> float:

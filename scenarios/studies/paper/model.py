@@ -114,7 +114,7 @@ def model_table(scores) -> str:
         cal = s.correction.calibration
         fit = f"{np.mean(cal.fit_nrmse):9.3f}" if cal is not None else f"{'-':>9s}"
         err = f"{max(cal.excess_nrmse):10.3f}" if cal is not None else f"{'-':>10s}"
-        cab = "-" if cal is None else ("fit" if "cab_mount_hz" in cal.names else "held")
+        cab = "-" if cal is None else ("held" if cal.fitted_cab_hz is None else "fit")
         if s.used:
             f = s.figures
             lines.append(f"{s.case:28s} {np.mean(f['dlc_road']):7.4f} {np.mean(f['dlc']):11.4f} "
