@@ -86,7 +86,7 @@ from scenarios.core.run import run  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.identify.compute import identify_rig  # noqa: E402
 from scenarios.studies.model_correction.cab_choice import AUTO, CAB_CHOICES, HELD  # noqa: E402
-from scenarios.studies.model_correction.calibrate import xml_nominal  # noqa: E402
+from scenarios.studies.model_correction.first_guess import xml_nominal  # noqa: E402
 from scenarios.studies.model_correction.differential import correct_with_model, settled_mask  # noqa: E402
 from scenarios.studies.model_correction.score import LOWPASS, MODE, band_rows  # noqa: E402
 from model_correction_tables import GOAL_S, goals, suite_table, summary, table  # noqa: E402

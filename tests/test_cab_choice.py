@@ -16,7 +16,8 @@ from scenarios.core.run import run
 from scenarios.studies import scoring
 from scenarios.studies.model_correction.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
                                                            check_cab, choose)
-from scenarios.studies.model_correction.calibrate import DEFAULT_NAMES, FITTED, catalogue, xml_nominal
+from scenarios.studies.model_correction.calibrate import DEFAULT_NAMES, FITTED
+from scenarios.studies.model_correction.first_guess import catalogue, xml_nominal
 from scenarios.studies.model_correction.result import Calibration
 
 

@@ -34,7 +34,8 @@ from correction.measured import read_channels
 from scenarios.cli.main import build_parser, main
 from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.core.run import run
-from scenarios.studies.model_correction.calibrate import MAX_NFEV, WINDOW_LEAD_S, WINDOW_S, WINDOWS, xml_nominal
+from scenarios.studies.model_correction.calibrate import MAX_NFEV, WINDOW_LEAD_S, WINDOW_S, WINDOWS
+from scenarios.studies.model_correction.first_guess import xml_nominal
 from scenarios.studies.model_correction.differential import START_S
 
 CORNERS = ("fl", "fr", "rl", "rr")

@@ -16,8 +16,8 @@ from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from scenarios.core.pool import run_jobs
 from scenarios.core.run import run
 from scenarios.studies import scoring
-from scenarios.studies.model_correction.calibrate import (CATALOGUE_CAB_MOUNT_HZ, DEFAULT_NAMES, FITTED, calibrate, catalogue,
-                                                           xml_nominal)
+from scenarios.studies.model_correction.calibrate import DEFAULT_NAMES, FITTED, calibrate
+from scenarios.studies.model_correction.first_guess import CATALOGUE_CAB_MOUNT_HZ, catalogue, xml_nominal
 from scenarios.studies.model_correction.differential import (EXCESS_NRMSE_LIMIT, correct_with_model,
                                                              differential_correction, settled_mask)
 from scenarios.studies.model_correction.model_runs import pan_motion_drive
@@ -179,7 +179,7 @@ def test_an_empty_truck_is_held_empty_not_refused():
     EMPTY_FRACTION of the empty truck's weight it is an empty truck, (0 kg, the XML's x), and the
     calibration holds it; a real payload (500 kg, the loads of the catalogue truck carrying it) is
     still estimated, to within 1 %, and a negative 500 kg is still refused."""
-    from scenarios.studies.model_correction.calibrate import EMPTY_FRACTION, static_guess
+    from scenarios.studies.model_correction.first_guess import EMPTY_FRACTION, static_guess
     from scenarios.studies.model_correction.model_runs import static_axle_loads
 
     sc = load_scenario(_paper("high_48"))

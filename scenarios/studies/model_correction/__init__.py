@@ -2,6 +2,7 @@
 
 * :mod:`.model_runs`: :func:`~.model_runs.model_forces`, the truck model's tire forces with its pans
   following a measured motion (x_ref or x_a, 1 kHz);
+* :mod:`.first_guess`: the first guess (payload from the static loads, a catalogue for the rest);
 * :mod:`.calibrate`: :func:`~.calibrate.calibrate`, the uncertain truck parameters fitted so the
   model, pans following x_a, reproduces F_rig (rig signals only), weighted by :mod:`.weighting`
   towards the frequencies the correction uses the model at;

@@ -38,7 +38,7 @@ class Calibration:
         Their SI units ("kg", "m", "N/m", "N s/m", "N", "Hz").
     initial : tuple of float
         The first guess, SI (payload and its position from the measured static loads, the rest
-        catalogue values: :func:`scenarios.studies.model_correction.calibrate.catalogue`).
+        catalogue values: :func:`scenarios.studies.model_correction.first_guess.catalogue`).
     fitted : tuple of float
         The fitted values, SI.
     sigma : tuple of float
