@@ -97,6 +97,8 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
                                "a tire whose stiffness more than quadruples is not one"),
     "tire_progressive_onset_m": (0.0, 0.1, "m", "a truck tire deflects 2-4 cm under its rated load; an onset beyond "
                                  "0.1 m (a fifth of the radius) is never reached by a tire that is not flat"),
+    "tire_progressive_spread_m": (0.0, 0.05, "m", "a tire stiffens over a few cm of its working deflection; wider "
+                                  "than 5 cm is beyond a truck tire's working range"),
     "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
                    "only cost time and memory; the defaults are 1e-4 s (road test) and 1e-3 s (rig test)"),
 }
@@ -178,11 +180,19 @@ class TruckVariant:
         (:func:`mjcf.names.tire_progressive_actuator`), F2 = ratio kt (d - onset) for a deflection
         d = R0 - L beyond the onset and 0 before it (its force range is [0, 1e7] N: unilateral),
         without damping; the tire force sensors (:func:`mjcf.names.tire_sensor`) then report the
-        sum of the tendon's elements. 0 to 3 (see :data:`BOUNDS`). A plant feature the calibrated
-        model family (a linear tire) lacks.
+        sum of the tendon's elements. 0 to 3 (see :data:`BOUNDS`). The calibrated model fits this
+        bilinear tire (ratio and onset); :attr:`tire_progressive_spread_m` makes one it cannot.
     tire_progressive_onset_m : float, m, optional
         Deflection at which the progressive element engages (default
         :data:`mjcf.tires.TIRE_PROGRESSIVE_ONSET_M`; only with ``tire_progressive_ratio``). 0 to 0.1 m.
+    tire_progressive_spread_m : float, m, optional
+        Deflection span, centred on the onset, over which the stiffness rises (only with
+        ``tire_progressive_ratio``): a tire's stiffness rises smoothly over its working deflection;
+        the model family's bilinear tire has one kink. ``None`` or 0: the one kink. s > 0: the ratio
+        is split over :data:`mjcf.tires.TIRE_PROGRESSIVE_STEPS` (5) equal elements of ratio kt / 5
+        at onsets evenly from onset - s/2 to onset + s/2, a piecewise-linear approximation of a
+        smooth stiffening. 0 to 0.05 m (see :data:`BOUNDS`), and onset - s/2 >= 0 m. A plant-only
+        feature: the calibrated model (ratio and onset fitted) cannot represent it.
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
@@ -206,6 +216,7 @@ class TruckVariant:
     cab_mass_kg: float | None = None
     tire_progressive_ratio: float | None = None
     tire_progressive_onset_m: float | None = None
+    tire_progressive_spread_m: float | None = None
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -230,6 +241,15 @@ class TruckVariant:
         if self.tire_progressive_onset_m is not None and self.tire_progressive_ratio is None:
             raise ValueError("vehicle.tire_progressive_onset_m only applies to a progressive tire: set "
                              "vehicle.tire_progressive_ratio too (without it the tire is linear)")
+        spread = self.tire_progressive_spread_m
+        if spread is not None and self.tire_progressive_ratio is None:
+            raise ValueError("vehicle.tire_progressive_spread_m only applies to a progressive tire: set "
+                             "vehicle.tire_progressive_ratio too (without it the tire is linear)")
+        onset = TIRE_PROGRESSIVE_ONSET_M if self.tire_progressive_onset_m is None else self.tire_progressive_onset_m
+        if spread is not None and onset - 0.5 * spread < 0:
+            raise ValueError(f"vehicle.tire_progressive_spread_m = {spread:g} m starts the stiffening below 0 m "
+                             f"of deflection (onset {onset:g} m - spread / 2): lower it or raise "
+                             "vehicle.tire_progressive_onset_m")
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
@@ -358,7 +378,7 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
         )
         if v.tire_progressive_ratio is not None:
             onset = TIRE_PROGRESSIVE_ONSET_M if v.tire_progressive_onset_m is None else v.tire_progressive_onset_m
-            add_progressive_tire(spec, corner, v.tire_progressive_ratio, onset)
+            add_progressive_tire(spec, corner, v.tire_progressive_ratio, onset, v.tire_progressive_spread_m)
         friction = v.spring_friction_front_N if front else v.spring_friction_rear_N
         if friction is not None:
             spec.tendon(names.spring_tendon(corner)).frictionloss = float(friction)

@@ -55,10 +55,14 @@ def tire_actuator(corner: str) -> str:
     return f"tire_{_check(corner)}"
 
 
-def tire_progressive_actuator(corner: str) -> str:
-    """The progressive tire's second force element on the tire tendon (N, compression positive);
-    only with ``TruckVariant.tire_progressive_ratio`` set."""
-    return f"tire_progressive_{_check(corner)}"
+def tire_progressive_actuator(corner: str, step: int = 0) -> str:
+    """The progressive tire's force element ``step`` (0-based) on the tire tendon (N, compression
+    positive); only with ``TruckVariant.tire_progressive_ratio`` set. Step 0 is the bilinear tire's
+    one element (``tire_progressive_<c>``); a spread stiffening (``TruckVariant.tire_progressive_spread_m``)
+    adds steps 1 to 4 (``tire_progressive_<c>_2`` ... ``_5``)."""
+    if isinstance(step, bool) or not isinstance(step, int) or step < 0:
+        raise ValueError(f"step must be an int >= 0, got {step!r}")
+    return f"tire_progressive_{_check(corner)}" + (f"_{step + 1}" if step else "")
 
 
 def tire_tendon(corner: str) -> str:

@@ -1,9 +1,12 @@
-"""The tire's force elements in a truck spec: the XML's affine tire and the progressive one.
+"""The tire's force elements in a truck spec: the XML's affine tire and the progressive ones.
 
 Each wheel station's tire is an affine actuator on a spatial tendon from the wheel centre to the
 pan top (``truck_rig.xml``): F = kt (R0 - L) - ct dL/dt, clamped to [0, 1e7] N. A progressive tire
 (``TruckVariant.tire_progressive_ratio``) adds a second affine element on the same tendon that
-engages beyond an onset deflection; :mod:`mjcf.physics` sums a tendon's elements.
+engages beyond an onset deflection (a bilinear tire, one kink: the calibrated model family's), or
+with ``TruckVariant.tire_progressive_spread_m`` :data:`TIRE_PROGRESSIVE_STEPS` elements engaging one
+after the other across the spread: a tire's stiffness rises smoothly over its working deflection; the
+model family's bilinear tire has one kink. :mod:`mjcf.physics` sums a tendon's elements.
 """
 
 from __future__ import annotations
@@ -12,13 +15,20 @@ import mujoco
 
 from mjcf import names
 
-__all__ = ["TIRE_PROGRESSIVE_ONSET_M", "set_tire", "tire_elements", "add_progressive_tire"]
+__all__ = ["TIRE_PROGRESSIVE_ONSET_M", "TIRE_PROGRESSIVE_STEPS", "set_tire", "tire_elements", "progressive_onsets",
+           "add_progressive_tire"]
 
 #: m: the tire deflection (R0 - L) beyond which the progressive element of
 #: ``TruckVariant.tire_progressive_ratio`` engages when ``tire_progressive_onset_m`` is not given:
 #: 2 cm, between the static deflections of the rear duals (1.6-2.2 cm) and of the steer tires
 #: (2.6-2.9 cm) on the paper's payloads, so that the dynamic deflection of every wheel crosses it.
 TIRE_PROGRESSIVE_ONSET_M = 0.02
+#: 1: the number of equal elements (each ratio / 5 kt) a spread progressive tire
+#: (``TruckVariant.tire_progressive_spread_m`` > 0) is split into, their onsets evenly from
+#: onset - spread / 2 to onset + spread / 2 (ends included): the stiffness rises in 5 equal steps
+#: from kt to (1 + ratio) kt, a piecewise-linear approximation of a smooth stiffening (steps of
+#: 0.5 cm over a 2 cm spread; more elements only cost actuators).
+TIRE_PROGRESSIVE_STEPS = 5
 
 
 def set_tire(spec: mujoco.MjSpec, corner: str, k: float | None, c: float | None, r0: float | None) -> None:
@@ -38,26 +48,46 @@ def set_tire(spec: mujoco.MjSpec, corner: str, k: float | None, c: float | None,
 
 
 def tire_elements(spec: mujoco.MjSpec, corner: str) -> list:
-    """The force elements on ``corner``'s tire tendon: the XML's tire, then the progressive one if any."""
-    extra = names.tire_progressive_actuator(corner)
-    return [spec.actuator(names.tire_actuator(corner))] + [a for a in spec.actuators if a.name == extra]
+    """The force elements on ``corner``'s tire tendon: the XML's tire, then every progressive element
+    (:func:`mjcf.names.tire_progressive_actuator`) in step order."""
+    extra = [spec.actuator(names.tire_progressive_actuator(corner, k)) for k in range(TIRE_PROGRESSIVE_STEPS)]
+    return [spec.actuator(names.tire_actuator(corner))] + [a for a in extra if a is not None]
 
 
-def add_progressive_tire(spec: mujoco.MjSpec, corner: str, ratio: float, onset_m: float) -> None:
-    """A second affine element on ``corner``'s tire tendon (see ``TruckVariant.tire_progressive_ratio``):
-    F2 = k2 (R0 - onset - L) clamped to [0, 1e7] N, k2 = ratio kt, no damping; the tire force sensor
-    becomes the tendon's total actuator force (``mjSENS_TENDONACTFRC``), the sum of both elements."""
+def progressive_onsets(onset_m: float, spread_m: float | None) -> list[float]:
+    """Onsets (m of deflection R0 - L) of the progressive elements: ``[onset_m]`` without a spread
+    (None or 0 m), else :data:`TIRE_PROGRESSIVE_STEPS` evenly from onset - spread / 2 to
+    onset + spread / 2, ends included."""
+    if not spread_m:
+        return [float(onset_m)]
+    n, s = TIRE_PROGRESSIVE_STEPS, float(spread_m)
+    return [float(onset_m) - 0.5 * s + k * s / (n - 1) for k in range(n)]
+
+
+def add_progressive_tire(spec: mujoco.MjSpec, corner: str, ratio: float, onset_m: float,
+                         spread_m: float | None = None) -> None:
+    """The progressive elements on ``corner``'s tire tendon (see ``TruckVariant.tire_progressive_ratio``).
+
+    Without a spread (``spread_m`` None or 0 m), one element: F2 = k2 (R0 - onset - L) clamped to
+    [0, 1e7] N, k2 = ratio kt, no damping (a bilinear tire, one kink). With a spread (m),
+    :data:`TIRE_PROGRESSIVE_STEPS` such elements, each k2 = ratio kt / 5, at the onsets of
+    :func:`progressive_onsets`: the stiffness rises in equal steps from kt to (1 + ratio) kt across
+    the spread, a piecewise-linear approximation of a tire's smooth stiffening. The tire force sensor
+    becomes, once, the tendon's total actuator force (``mjSENS_TENDONACTFRC``): the sum of the elements.
+    """
     tire = spec.actuator(names.tire_actuator(corner))
     kt = -float(tire.biasprm[1])
     r0 = float(tire.biasprm[0]) / kt
-    k2 = float(ratio) * kt
+    onsets = progressive_onsets(onset_m, spread_m)
+    k2 = float(ratio) * kt if len(onsets) == 1 else float(ratio) * kt / len(onsets)
     tendon = names.tire_tendon(corner)
-    spec.add_actuator(name=names.tire_progressive_actuator(corner), target=tendon,
-                      trntype=mujoco.mjtTrn.mjTRN_TENDON, gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-                      gainprm=[0.0] * 10, biastype=mujoco.mjtBias.mjBIAS_AFFINE,
-                      biasprm=[k2 * (r0 - float(onset_m)), -k2, 0.0] + [0.0] * 7,
-                      forcelimited=mujoco.mjtLimited.mjLIMITED_TRUE, forcerange=list(tire.forcerange),
-                      ctrllimited=mujoco.mjtLimited.mjLIMITED_FALSE)
+    for step, onset in enumerate(onsets):
+        spec.add_actuator(name=names.tire_progressive_actuator(corner, step), target=tendon,
+                          trntype=mujoco.mjtTrn.mjTRN_TENDON, gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+                          gainprm=[0.0] * 10, biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+                          biasprm=[k2 * (r0 - onset), -k2, 0.0] + [0.0] * 7,
+                          forcelimited=mujoco.mjtLimited.mjLIMITED_TRUE, forcerange=list(tire.forcerange),
+                          ctrllimited=mujoco.mjtLimited.mjLIMITED_FALSE)
     sensor = names.tire_sensor(corner)
     spec.delete(spec.sensor(sensor))
     spec.add_sensor(name=sensor, type=mujoco.mjtSensor.mjSENS_TENDONACTFRC, objtype=mujoco.mjtObj.mjOBJ_TENDON,

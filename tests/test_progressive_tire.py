@@ -1,12 +1,14 @@
-"""The progressive tire (``TruckVariant.tire_progressive_ratio``): the plant feature the calibrated
-model's linear tire lacks (issue 17, second round).
+"""The progressive tire (``TruckVariant.tire_progressive_ratio``, bilinear: one kink at the onset) and
+its spread stiffening (``TruckVariant.tire_progressive_spread_m``: 5 elements over a span of deflection),
+the plant feature the calibrated model's bilinear tire cannot represent (issue 17, second round).
 
 References, independent of the code under test: the XML compiled directly by MuJoCo (the model
 without the option); the tire's constants as truck_rig.xml's comment derives them (kt 0.9 MN/m per
 steer tire, 1.8 MN/m per dual pair, free radius R0 = 0.527 m of an 11R22.5, 1.054 m overall
 diameter), with which the second element's force is computed by hand, F2 = ratio kt (d - onset)
-for a deflection d = R0 - L beyond the onset and 0 before it; MuJoCo's own ``actuator_force`` of
-each element for the sums.
+for a deflection d = R0 - L beyond the onset and 0 before it (with a spread, the sum of 5 such
+elements of ratio kt / 5 at onsets written out by hand); MuJoCo's own ``actuator_force`` of each
+element for the sums.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import pytest
 
 from mjcf import names
 from mjcf.build import TruckVariant, build_model, build_spec, resource_path
-from mjcf.physics import RigIndex, static_equilibrium, tire_forces
+from mjcf.physics import RigIndex, static_equilibrium, tire_forces, tire_law
 from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import ScenarioError, parse_scenario
 from scenarios.core.rig import Rig
@@ -112,3 +114,103 @@ def test_the_mocap_pans_give_the_second_element_no_damping():
 def test_bad_progressive_tires_are_refused_naming_the_field(vehicle, field):
     with pytest.raises(ScenarioError, match=field):
         parse_scenario({**SHORT, "vehicle": vehicle})
+
+
+# The spread progressive tire (``TruckVariant.tire_progressive_spread_m``): the stiffening split over
+# 5 equal elements whose onsets are spread evenly over the span (ends included), computed by hand here.
+
+
+def test_no_spread_compiles_the_single_kink():
+    """Spread None and 0.0: the same compiled model, bit for bit, as the one-kink tire, whose one
+    element per corner is ratio kt (R0 - onset - L) with the XML's kt and R0 (by hand)."""
+    ratio, onset = 0.5, 0.02
+    one = build_model(TruckVariant(tire_progressive_ratio=ratio, tire_progressive_onset_m=onset))
+    xml = mujoco.MjModel.from_xml_path(str(resource_path("scene.xml")))
+    assert one.nu == xml.nu + 4
+    extra = _ids(one, mujoco.mjtObj.mjOBJ_ACTUATOR, names.tire_progressive_actuator)
+    np.testing.assert_allclose(one.actuator_biasprm[extra, :3],
+                               np.column_stack([ratio * KT * (R0 - onset), -ratio * KT, np.zeros(4)]), rtol=1e-12)
+    for spread in (None, 0.0):
+        built = build_model(TruckVariant(tire_progressive_ratio=ratio, tire_progressive_onset_m=onset,
+                                         tire_progressive_spread_m=spread))
+        for n in ("nu", "nsensor", "nsensordata", "ntendon"):
+            assert getattr(built, n) == getattr(one, n), n
+        for field in ("actuator_biasprm", "actuator_gainprm", "actuator_forcerange", "actuator_trnid",
+                      "actuator_trntype", "actuator_biastype", "sensor_type", "sensor_objid", "sensor_adr"):
+            assert np.array_equal(getattr(built, field), getattr(one, field)), field
+        assert [built.actuator(i).name for i in range(built.nu)] == [one.actuator(i).name for i in range(one.nu)]
+        assert all(mujoco.mj_name2id(built, mujoco.mjtObj.mjOBJ_ACTUATOR, f"tire_progressive_{c}_2") == -1
+                   for c in names.CORNERS)
+
+
+def test_spread_elements_force_against_a_hand_computation():
+    """Ratio 0.5, onset 0.02 m, spread 0.02 m: 5 elements of 0.1 kt at onsets 0.01, 0.015, 0.02,
+    0.025, 0.03 m (by hand: onset -/+ spread / 2 and 3 equal gaps between). Pans moved about the
+    static rest (velocities zero): the elements' sum is sum_i 0.1 kt max(d - o_i, 0); the tire force
+    sensor, ``tire_forces`` and ``tire_law`` report kt d plus it."""
+    ratio = 0.5
+    onsets = np.array([0.01, 0.015, 0.02, 0.025, 0.03])  # m, by hand
+    model = build_model(TruckVariant(tire_progressive_ratio=ratio, tire_progressive_onset_m=0.02,
+                                     tire_progressive_spread_m=0.02))
+    data = mujoco.MjData(model)
+    static_equilibrium(model, data)
+    idx = RigIndex.of(model)
+    tendon = _ids(model, mujoco.mjtObj.mjOBJ_TENDON, names.tire_tendon)
+    sensor = model.sensor_adr[_ids(model, mujoco.mjtObj.mjOBJ_SENSOR, names.tire_sensor)]
+    steps = np.array([[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, n)
+                       for n in ([f"tire_progressive_{c}"] + [f"tire_progressive_{c}_{k}" for k in range(2, 6)])]
+                      for c in names.CORNERS])  # (4, 5) by the names spelled by hand
+    assert np.all(steps >= 0)
+    q0 = data.qpos.copy()
+    seen = np.zeros((4, 3), dtype=bool)  # per corner: below the span, inside it, beyond it
+    for dz in np.linspace(-0.025, 0.025, 21):
+        data.qpos[:] = q0
+        data.qpos[idx.pan_qpos] += dz * np.array([1.0, -1.0, 1.0, -1.0])
+        mujoco.mj_forward(model, data)
+        d = R0 - data.ten_length[tendon]
+        each = ratio / 5 * KT[:, None] * np.maximum(d[:, None] - onsets[None, :], 0.0)
+        np.testing.assert_allclose(data.actuator_force[steps], each, rtol=1e-9, atol=1e-6)
+        hand = each.sum(axis=1)
+        total = np.clip(KT * d, 0.0, None) + hand
+        np.testing.assert_allclose(data.sensordata[sensor], total, rtol=1e-9, atol=1e-6)
+        np.testing.assert_allclose(tire_forces(model, data, idx), total, rtol=1e-9, atol=1e-6)
+        np.testing.assert_allclose(tire_law(model, idx, data.ten_length[tendon], np.zeros(4)), total,
+                                   rtol=1e-9, atol=1e-6)
+        seen |= np.column_stack([d < 0.01, (d > 0.01) & (d < 0.03), d > 0.03])
+    assert seen.all(), seen  # every corner below, inside and beyond the span
+
+
+def test_the_rig_index_finds_every_spread_element():
+    """20 extra elements, each corner 5 times in step order; with prescribed pans none has damping."""
+    variant = TruckVariant(tire_progressive_ratio=0.25, tire_progressive_spread_m=0.02)
+    model = build_model(variant)
+    idx = RigIndex.of(model)
+    assert idx.tire_extra.size == 20
+    assert np.array_equal(np.bincount(idx.tire_extra_corner), [5, 5, 5, 5])
+    by_name = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, names.tire_progressive_actuator(c, k))
+               for c in names.CORNERS for k in range(5)]
+    assert np.array_equal(idx.tire_extra, by_name) and np.array_equal(idx.tire_extra_corner, np.repeat(np.arange(4), 5))
+    assert names.tire_progressive_actuator("rl", 4) == "tire_progressive_rl_5"
+    assert sum(model.sensor(i).name.startswith("tire_force_") for i in range(model.nsensor)) == 4
+    mocap = build_spec(variant, pans="mocap").compile()
+    midx = RigIndex.of(mocap)
+    assert midx.tire_extra.size == 20 and np.all(mocap.actuator_gainprm[midx.tire_extra, 0] == 0.0)
+
+
+@pytest.mark.parametrize("vehicle,fix", [({"tire_progressive_spread_m": 0.01}, "set vehicle.tire_progressive_ratio"),
+                                         ({"tire_progressive_ratio": 0.5, "tire_progressive_spread_m": 0.06},
+                                          "outside 0 to 0.05 m"),
+                                         ({"tire_progressive_ratio": 0.5, "tire_progressive_spread_m": -0.01}, ">= 0"),
+                                         ({"tire_progressive_ratio": 0.5, "tire_progressive_onset_m": 0.005,
+                                           "tire_progressive_spread_m": 0.02},
+                                          "lower it or raise vehicle.tire_progressive_onset_m")])
+def test_bad_spreads_are_refused_naming_the_field(vehicle, fix):
+    with pytest.raises(ScenarioError, match="tire_progressive_spread_m") as err:
+        parse_scenario({**SHORT, "vehicle": vehicle})
+    assert fix in str(err.value)
+
+
+def test_a_spread_reaching_zero_deflection_is_accepted():
+    """onset - spread / 2 = 0 m exactly (0.01 - 0.02 / 2): the lowest element engages at contact."""
+    parse_scenario({**SHORT, "vehicle": {"tire_progressive_ratio": 0.5, "tire_progressive_onset_m": 0.01,
+                                         "tire_progressive_spread_m": 0.02}})
