@@ -1,7 +1,7 @@
 """benchmarks/model_correction.py's tables and goals, from its rows (one per case and plant).
 
 A row (``model_correction.analyse``) holds ``case``, ``plant`` (a readable name), ``plant_key``
-(rigid / cab / tire), ``mismatch`` ("off": the plant inside the calibrated model family, "on":
+(rigid / cab / tire / smooth), ``mismatch`` ("off": the plant inside the calibrated model family, "on":
 outside), ``method`` and ``reason`` (the model correction or the fallback to the linear one, and
 why), ``calibration`` (:class:`scenarios.studies.model_correction.result.Calibration` or None),
 ``truth`` (the plant's values of the fitted fields, SI), per-wheel figures under ``wheels``

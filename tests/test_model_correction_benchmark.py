@@ -16,7 +16,8 @@ from mjcf.names import CORNERS
 from scenarios.studies.model_correction.result import Calibration
 
 _PATH = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "model_correction.py"
-_NAMES = {"rigid": "rigid cab", "cab": "cab on 2 Hz mounts", "tire": "progressive tire +25 %"}
+_NAMES = {"rigid": "rigid cab", "cab": "cab on 2 Hz mounts", "tire": "progressive tire +25 %",
+          "smooth": "tire stiffening +50 % over 2 cm"}
 
 
 @pytest.fixture(scope="module")
@@ -53,13 +54,13 @@ def test_summary_counts_what_the_method_delivers(bench):
         _row("off", [0.1] * 4, [0.2] * 4, [0.05] * 4, [0.04, 0.06, 0.02, 0.01], [0.005, -0.02, 0.001, -0.009], 20.0),
         # cab with --cab auto: in the family, 0.5 x floor exactly on every wheel (<= 0.5 meets the goal)
         _row("off", [0.1] * 4, [0.2] * 4, [0.0] * 4, [0.05] * 4, [0.0] * 4, 25.0, plant="cab"),
-        # tire, model: 0.9, 1.2 x floor; the fallback row scores its linear correction (1.5 x floor)
+        # smooth tire, model: 0.9, 1.2 x floor; the fallback row scores its linear correction (1.5 x floor)
         _row("on", [0.1] * 4, [0.2] * 4, [0.0] * 4, [0.09, 0.12, 0.09, 0.09], [0.0, 0.03, 0.0, 0.0], 30.0,
-             plant="tire"),
-        _row("on", [0.1] * 4, [0.15] * 4, [0.008, -0.02, 0.0, 0.0], cpu=40.0, plant="tire", case="d"),
+             plant="smooth"),
+        _row("on", [0.1] * 4, [0.15] * 4, [0.008, -0.02, 0.0, 0.0], cpu=40.0, plant="smooth", case="d"),
     ]
     s = bench.summary(rows)
-    assert s["off"]["plants"] == ["rigid cab", "cab on 2 Hz mounts"] and s["on"]["plants"] == ["progressive tire +25 %"]
+    assert s["off"]["plants"] == ["rigid cab", "cab on 2 Hz mounts"] and s["on"]["plants"] == ["tire stiffening +50 % over 2 cm"]
     assert s["off"]["wheels"] == 8 and s["off"]["runs"] == 2
     assert s["off"]["floor_goal_share"] == 7 / 8 and s["off"]["dlc_within_1pct_share"] == 7 / 8
     assert s["off"]["fallbacks"] == 0 and s["off"]["worst_ratio"] == pytest.approx(0.6)
@@ -71,7 +72,7 @@ def test_summary_counts_what_the_method_delivers(bench):
     lines = bench.goals(rows, 30.0).splitlines()
     assert lines[0].startswith("- mismatch off (rigid cab, cab on 2 Hz mounts; 8 wheels, 0 of 2 runs fell back")
     assert "88% of wheels, NOT met" in lines[0]
-    assert lines[1].startswith("- mismatch on (progressive tire +25 %; 8 wheels, 1 of 2 runs fell back")
+    assert lines[1].startswith("- mismatch on (tire stiffening +50 % over 2 cm; 8 wheels, 1 of 2 runs fell back")
     only_off = bench.goals(rows[:1], 30.0).splitlines()
     assert only_off[1].startswith("- mismatch on: not run") and "100%" not in only_off[0]
 
@@ -92,10 +93,13 @@ def test_the_three_plants(bench):
     tire = bench.plant_scenario(empty, 20.0, "tire").vehicle
     assert tire.cab_mount_hz is None and tire.tire_progressive_ratio == 0.25 == bench.TIRE_RATIO
     assert bench.plant_variant(1000.0, "tire", 0.4).tire_progressive_ratio == 0.4
-    # the three differ only in the cab and the tire: the same catalogue offsets on the same payload
+    smooth = bench.plant_scenario(empty, 20.0, "smooth").vehicle
+    assert (smooth.tire_progressive_ratio, smooth.tire_progressive_spread_m, smooth.tire_progressive_onset_m) \
+        == (0.5, 0.02, None)  # 1 to 3 cm about the default onset, 2 cm
+    # the four differ only in the cab and the tire: the same catalogue offsets on the same payload
     same = ("payload_kg", "payload_x_m", *bench.PLANT_FACTORS)
     assert {k: getattr(cab, k) for k in same} == {k: getattr(tire, k) for k in same} \
-        == {k: getattr(rigid.vehicle, k) for k in same}
+        == {k: getattr(smooth, k) for k in same} == {k: getattr(rigid.vehicle, k) for k in same}
     (laden,) = bench.pick("generalization", ["gen00"], 20.0)
     assert bench.plant_scenario(laden, 20.0, "tire").vehicle.payload_kg == pytest.approx(0.95 * 4500.0)
     assert [bench.plant_name(p) for p in bench.PLANT_KEYS] == list(_NAMES.values())
@@ -105,10 +109,11 @@ def test_the_three_plants(bench):
 
 
 def test_mismatch_is_whether_the_plant_is_outside_the_calibrated_family(bench):
-    # the model family: a linear tire always; the cab rigid (held), fitted, or whichever fits better (auto)
-    expected = {"auto": {"rigid": "off", "cab": "off", "tire": "on"},
-                "held": {"rigid": "off", "cab": "on", "tire": "on"},
-                "fitted": {"rigid": "off", "cab": "off", "tire": "on"}}
+    # the model family: a bilinear tire (ratio and onset fitted) always, so the gradual stiffening is outside it;
+    # the cab rigid (held), fitted, or whichever fits better (auto)
+    expected = {"auto": {"rigid": "off", "cab": "off", "tire": "off", "smooth": "on"},
+                "held": {"rigid": "off", "cab": "on", "tire": "off", "smooth": "on"},
+                "fitted": {"rigid": "off", "cab": "off", "tire": "off", "smooth": "on"}}
     assert {c: {p: bench.mismatch(p, c) for p in bench.PLANT_KEYS} for c in expected} == expected
 
 
@@ -126,33 +131,33 @@ def test_suite_table_lists_the_plants_in_their_order(bench):
                  cal=_cal()),
             _row("off", [0.2] * 4, [0.3] * 4, [0.0] * 4, [0.08] * 4, [0.0, 0.0, -0.002, 0.001], 25.0, plant="cab",
                  cal=fitted),
-            _row("on", [0.3] * 4, [0.35] * 4, [0.012, -0.02, 0.0, 0.0], cpu=30.0, plant="tire")]
+            _row("on", [0.3] * 4, [0.35] * 4, [0.012, -0.02, 0.0, 0.0], cpu=30.0, plant="smooth")]
     lines = bench.suite_table(rows).splitlines()
     head = [c.strip() for c in lines[0].strip("|").split("|")]
-    assert head == ["case", "wheels", "linear floor, rigid / cab / tire", "linear correction, rigid / cab / tire",
-                    "model (x floor), rigid / cab / tire", "DLC error delivered, rigid / cab / tire",
-                    "cab, rigid / cab / tire", "CPU s, rigid / cab / tire", "fallback"]
+    assert head == ["case", "wheels", "linear floor, rigid / cab / smooth", "linear correction, rigid / cab / smooth",
+                    "model (x floor), rigid / cab / smooth", "DLC error delivered, rigid / cab / smooth",
+                    "cab, rigid / cab / smooth", "CPU s, rigid / cab / smooth", "fallback"]
     front = [c.strip() for c in lines[2].strip("|").split("|")]
     assert front == ["c", "front", "0.100 / 0.200 / 0.300", "0.200 / 0.300 / 0.350",
                      "0.040 (0.40 x) / 0.080 (0.40 x) / fallback", "-0.70% / +0.00% / -2.00%",
-                     "held / fitted 2.01 Hz / -", "20 / 25 / 30", "tire: fit."]
+                     "held / fitted 2.01 Hz / -", "20 / 25 / 30", "smooth: fit."]
     rear = [c.strip() for c in lines[3].strip("|").split("|")]
     assert rear[:6] == ["", "rear", "0.100 / 0.200 / 0.300", "0.200 / 0.300 / 0.350",
                         "0.020 (0.20 x) / 0.080 (0.40 x) / fallback", "+0.00% / -0.20% / +0.00%"]
     assert rear[6:] == ["", "", ""]
     assert lines[-1] == ("Plants: rigid, rigid cab (mismatch off); cab, cab on 2 Hz mounts (mismatch off); "
-                         "tire, progressive tire +25 % (mismatch on).")
-    # --plants tire rigid: that order, and a case without a plant's row shows "-"
+                         "smooth, tire stiffening +50 % over 2 cm (mismatch on).")
+    # --plants smooth rigid: that order, and a case without a plant's row shows "-"
     swapped = bench.suite_table([rows[2], rows[0], dict(rows[0], case="d")]).splitlines()
-    assert "linear floor, tire / rigid" in swapped[0]
+    assert "linear floor, smooth / rigid" in swapped[0]
     assert [c.strip() for c in swapped[4].strip("|").split("|")][2] == "- / 0.100"
 
 
 def test_paper_table_says_which_cab_the_calibration_chose(bench):
     chose = _cal(cab_choice="cab held: the cab fitted on 1 Hz mounts reproduces ..., but its fit did not converge.")
     rows = [_row("off", [0.1] * 4, [0.2] * 4, [0.0] * 4, [0.04] * 4, [0.0] * 4, cal=chose),
-            _row("on", [0.1] * 4, [0.2] * 4, [0.0] * 4, [0.09] * 4, [0.0] * 4, plant="tire", cal=_cal())]
+            _row("on", [0.1] * 4, [0.2] * 4, [0.0] * 4, [0.09] * 4, [0.0] * 4, plant="smooth", cal=_cal())]
     text = bench.table(rows)
     assert text.count("Cab held: the cab fitted on 1 Hz mounts") == 1 and "cab held:" not in text
-    assert "| rigid (off) | fl |" in text and "| tire (on) | mean |" in text
-    assert "tire, progressive tire +25 % (mismatch on): model correction" in text
+    assert "| rigid (off) | fl |" in text and "| smooth (on) | mean |" in text
+    assert "smooth, tire stiffening +50 % over 2 cm (mismatch on): model correction" in text

@@ -11,6 +11,17 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   motion puts straight through the tire;
 * ``spring_friction_front/rear_N``: the leaf springs' interleaf friction per axle, the truck's
   main nonlinearity (it locks the springs at small amplitude);
+* ``tire_progressive_ratio``, ``tire_progressive_onset_m``: the tires' stiffening, a bilinear tire
+  (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection, (1 + ratio) kt
+  beyond it); a pneumatic tire stiffens over its working deflection, and a model whose tire is
+  linear cannot follow it: on a plant with a +25 % stiffening at 2 cm the linear-tire model left 13
+  of 96 generalization wheels above the linear floor and the paper's light truck at +50 % fell back
+  to the linear correction (docs/model_correction.md). Fitted from a catalogue guess of +20 % at
+  2 cm (:mod:`~scenarios.studies.model_correction.first_guess`), searched additively (:data:`ADDITIVE`:
+  0-0.7 and 0-4 cm); a linear-tire truck fits the ratio to ~0, where the onset is not identifiable
+  and does not matter (paper case high 72, 30 s: ratio 7.5e-5). Measured on the same case, a plant
+  stiffening +50 % at 3 cm: ratio 0.495 and onset 3.00 cm fitted, every wheel 0.04-0.05 of the
+  linear floor, against 0.84-0.98 (front) with the onset held at 2 cm;
 * ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
   cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
   bounce and pitch that loads the front wheels. A model without it absorbed a plant's 2 Hz cab
@@ -66,16 +77,16 @@ from scenarios.studies.model_correction.result import Calibration
 from scenarios.studies.model_correction.uncertainty import uncertainties
 from scenarios.studies.model_correction.weighting import differential_kernel
 
-__all__ = ["FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "RANGES", "fit_windows", "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
+__all__ = ["FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES", "fit_windows", "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
 
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
-          "spring_friction_rear_N", "cab_mount_hz")
+          "spring_friction_rear_N", "tire_progressive_ratio", "tire_progressive_onset_m", "cab_mount_hz")
 UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
-         "cab_mount_hz": "Hz"}
+         "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "cab_mount_hz": "Hz"}
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
@@ -89,7 +100,13 @@ DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
 RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
           "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 4.0),
-          "spring_friction_rear_N": (0.05, 4.0), "cab_mount_hz": (0.4, 12.0)}
+          "spring_friction_rear_N": (0.05, 4.0), "tire_progressive_ratio": 0.5,
+          "tire_progressive_onset_m": 0.02, "cab_mount_hz": (0.4, 12.0)}
+#: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
+#: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
+#: :data:`mjcf.build.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
+#: ratio and onset, whose linear tire is ratio 0.
+ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m")
 #: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
 #: mount's frequency, whose effect on the wheel forces fades as 1 / f^2 towards a rigid cab (a
 #: frequency scale would crawl along that flat valley).
@@ -141,8 +158,8 @@ class _Problem:
     def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None):
         self.names, self.t, self.x_a, self.force, self.windows = names, t, x_a, force, windows
         self.base, self.fixed, self.executor, self.kernel = portable(base), fixed, executor, kernel
-        self.offset = np.array([guess[k] - RANGES[k] if k == "payload_x_m" else 0.0 for k in names])
-        self.scale = np.array([RANGES[k] if k == "payload_x_m" else guess[k] for k in names])
+        self.offset = np.array([guess[k] - RANGES[k] if k in ADDITIVE else 0.0 for k in names])
+        self.scale = np.array([RANGES[k] if k in ADDITIVE else guess[k] for k in names])
         self.compliance = np.array([k in COMPLIANCE for k in names])
         self.norm = np.concatenate([force[s:e] for _, s, e in windows]).std(axis=0)
         self.half = 0 if kernel is None else kernel.size // 2
@@ -268,6 +285,9 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     unknown = sorted(set(names) - set(FITTED))
     if unknown or not names:
         raise ScenarioError(f"names must be a non-empty subset of {', '.join(FITTED)}, got {', '.join(unknown) or 'none'}")
+    if "tire_progressive_onset_m" in names and "tire_progressive_ratio" not in names + tuple(fitted_guess or ()):
+        raise ScenarioError("tire_progressive_onset_m is the progressive tire's: fit tire_progressive_ratio too, or "
+                            "give its value in fitted_guess")
     t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
     x_a, force = np.asarray(x_a_m, float), np.asarray(force_N, float)
     kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
@@ -279,8 +299,9 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
             raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
                                 "name other fields to fit")
     guess = {"payload_kg": payload, "payload_x_m": x, **catalogue(), **(fitted_guess or {})}
-    if "cab_mount_hz" not in names and "cab_mount_hz" not in (fitted_guess or {}):
-        guess["cab_mount_hz"] = None  # held: the XML's rigid cab
+    for k in ("cab_mount_hz", "tire_progressive_ratio", "tire_progressive_onset_m"):  # held: rigid cab, linear tire
+        if k not in names and k not in (fitted_guess or {}):
+            guess[k] = None
     lower, upper = [], []
     fixed = {k: None if v is None else float(v) for k, v in guess.items() if k not in names}
     for k in names:
@@ -289,7 +310,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                                 "of names")
         lo, hi = BOUNDS.get(k, (-3.5, 3.5) if k == "payload_x_m" else (0.0, np.inf))[:2]
         r = RANGES[k]
-        a, b = (guess[k] - r, guess[k] + r) if k == "payload_x_m" else (guess[k] * r[0], guess[k] * r[1])
+        a, b = (guess[k] - r, guess[k] + r) if k in ADDITIVE else (guess[k] * r[0], guess[k] * r[1])
         lower.append(max(a, lo))
         upper.append(min(b, hi))
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:

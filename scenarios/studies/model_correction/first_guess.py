@@ -21,10 +21,11 @@ from mjcf import names as mjnames
 from mjcf.build import BOUNDS, TruckVariant, build_model
 from mjcf.names import CORNERS, FRONT
 from mjcf.physics import RigIndex, tire_stiffness
+from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.studies.model_correction.model_runs import static_axle_loads
 
-__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "EMPTY_FRACTION", "xml_nominal", "catalogue", "static_guess"]
+__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "xml_nominal", "catalogue", "static_guess"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
 #: lab's catalogue values are 10-30 % off the truck on its rig.
@@ -33,8 +34,12 @@ CATALOGUE_FACTORS = {"tire_stiffness_front_N_per_m": 0.85, "tire_stiffness_rear_
                      "spring_friction_front_N": 0.85, "spring_friction_rear_N": 1.15}
 #: Hz: the catalogue guess of the cab's mount frequency (the XML has a rigid cab, so there is no
 #: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (mjcf.build.BOUNDS);
-#: its search range (:data:`RANGES`) is 1-30 Hz.
+#: its search range (:data:`~scenarios.studies.model_correction.calibrate.RANGES`) is 1-30 Hz.
 CATALOGUE_CAB_MOUNT_HZ = 2.5
+#: 1: the catalogue guess of the progressive tire's extra stiffness beyond its onset
+#: (``TruckVariant.tire_progressive_ratio``; the XML's tire is linear, ratio 0): radial truck tires
+#: stiffen by some 10-30 % over their working deflection (mjcf/README.md), so the middle, 0.2.
+CATALOGUE_TIRE_RATIO = 0.2
 
 
 @functools.lru_cache(maxsize=1)
@@ -72,7 +77,8 @@ def xml_nominal() -> dict[str, float]:
 def catalogue() -> dict[str, float]:
     """The catalogue guess of the non-payload fields: :func:`xml_nominal` times :data:`CATALOGUE_FACTORS`."""
     nominal = xml_nominal()
-    return {**{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ}
+    return {**{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ,
+            "tire_progressive_ratio": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_m": TIRE_PROGRESSIVE_ONSET_M}
 
 
 #: An estimated payload within this fraction of the empty truck's weight (1) is an empty truck:
