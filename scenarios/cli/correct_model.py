@@ -14,8 +14,9 @@ holds the corner as a token, or ``--map``'s; converted to N); then
 F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
 (:func:`scenarios.studies.model_correction.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
-and its ``[vehicle]`` tire stiffness, tire damping and leaf friction, where given, are the
-calibration's first guesses instead of the catalogue values; the payload and its position always
+and its ``[vehicle]`` tire stiffness, tire damping, tire stiffening (``tire_progressive_ratio``,
+``tire_progressive_onset_m``) and leaf friction, where given, are the calibration's first guesses
+instead of the catalogue values; the payload and its position always
 start from the record's static loads. The cab (``--cab``): by default the model is calibrated
 twice, the cab held (rigid, or at ``[vehicle] cab_mount_hz`` if given) and the cab's mount
 frequency fitted (from that value or 2.5 Hz), and the clearly better fit is kept
@@ -56,11 +57,11 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--model", metavar="TRUCK.toml",
                    help="correct each wheel as F_rig + F_model(drive) - F_model(LVDT), the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
-                        "damping and leaf friction per axle, the cab's mount frequency where it fits clearly better "
-                        "(--cab); minutes of "
+                        "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
+                        "tire), the cab's mount frequency where it fits clearly better (--cab); minutes of "
                         "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "
                         "cab_mount_hz is the cab's mount (held, or the first guess of its fit), and its tire and "
-                        "leaf-friction values are only the "
+                        "leaf-friction values (tire_progressive_ratio and _onset_m included) are only the "
                         "starting guess (default: catalogue values; payload and position start from the record's "
                         "static loads). Needs --pairs and at least 6.5 s of record (the windows are spread over "
                         "it). Where the model does not reproduce the forces, the linear correction is used "
