@@ -125,7 +125,12 @@ WINDOWS, WINDOW_S, WINDOW_LEAD_S = 3, 4.0, 2.5
 #: Forward-difference step of each scaled parameter (1: 1 % of a positive field, 1 cm of payload x).
 FD_STEP = 0.01
 #: Most residual evaluations of the least squares (the Jacobians come on top, one per iteration).
-MAX_NFEV = 20
+#: 30: with the tire's stiffening fitted, a linear-tire truck whose front tires sit past the onset
+#: can crawl along the front stiffness / ratio valley (generalization case gen17, rigid plant,
+#: 30 s, cab held: not converged at 20, so the linear correction at 1.12 x the floor; converged
+#: after 21, 0.11-0.12 x); every other measured calibration converged within 20 (paper cases, 60 s,
+#: four plants; suite, 30 s, three plants), which the larger cap leaves unchanged.
+MAX_NFEV = 30
 #: Block of the robust uncertainty, s: longer than the fit residual's correlation (the truck's
 #: slowest modes, ~0.6 s period), short enough for a few dozen blocks in the windows.
 BLOCK_S = 0.5
