@@ -51,7 +51,8 @@ class Calibration:
         correlated in time; neither includes the bias a structural model error leaves.
     fixed : Mapping[str, float or None]
         Fields held at catalogue values (not identifiable from the record, or not asked for), SI;
-        None: the XML's (``cab_mount_hz`` None: the rigid cab).
+        None: the XML's (``cab_mount_hz`` None: the rigid cab; ``tire_progressive_ratio`` None:
+        the linear tire).
     fit_nrmse : tuple of float
         Per wheel (fl, fr, rl, rr): NRMSE (1, :func:`correction.dlc.nrmse`) of the fitted model's
         force, pans following the measured x_a, against the measured rig force, on the windows'
