@@ -82,6 +82,7 @@ from correction.filters import reference_filter  # noqa: E402
 from correction.floor import linear_floor  # noqa: E402
 from correction.pipeline import correct_forces  # noqa: E402
 from mjcf.names import CORNERS, REAR  # noqa: E402
+from mjcf.physics import tire_forces  # noqa: E402
 from scenarios.core.config import load_scenario, paper_scenarios  # noqa: E402
 from scenarios.core.drive import Drive  # noqa: E402
 from scenarios.core.files import to_json  # noqa: E402
@@ -258,7 +259,7 @@ def analyse_job(path: str, duration_s: float, kind: str, friction: bool, road, m
         fl = linear_floor(rig_N, road_band, ld, lg, coupled=coupled, rows=rows, folds=FOLDS)
         out[name], out[name + "_cv"] = fl.nrmse, fl.nrmse_cv
     data = rig_model.rest_state()
-    static = np.asarray(data.actuator_force[rig_model.index.tire_actuator], dtype=float)
+    static = tire_forces(rig_model.model, data, rig_model.index)  # every element on the tire tendon
     road_f, meas_f = np.asarray(road.signals["tire_force_N"]), np.asarray(measured.signals["tire_force_N"])
     out["liftoff_road"], out["liftoff_measured"] = _liftoff(road_f, static), _liftoff(meas_f, static)
     # the correction away from lift-off: rows farther than LIFTOFF_GUARD_S from any rear lift-off
