@@ -33,8 +33,8 @@ The model's cab (``--cab``, :func:`scenarios.studies.model_correction.cab_choice
 clearly better fit; ``held`` the rigid cab only; ``fitted`` the mount fitted only. The ``rigid``
 plant is in the model family under every mode (under ``fitted`` nearly: the mount range's stiff end,
 30 Hz), the ``cab`` plant under ``auto`` and ``fitted`` (out of it under ``held``), the ``tire``
-plant under all three, the ``smooth`` plant under none: a row's mismatch (:func:`mismatch`) is "on" where the plant is outside the
-family, "off" where inside.
+plant under all three, the ``smooth`` plant under none: a row's mismatch (:func:`mismatch`) is "on"
+where the plant is outside the family, "off" where inside.
 
 Per case and plant, in worker processes (:func:`scenarios.core.pool.run_jobs`, one pool over every
 case's runs): the road test (the reference, never seen by the correction), the rig test, and the
@@ -236,7 +236,7 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     ap.add_argument("--cab", choices=CAB_CHOICES, default=AUTO,
                     help="the model's cab: auto (default) calibrates it held rigid and with its mount frequency "
-                         "fitted and keeps the clearly better fit (twice the CPU); held: rigid only (the cab "
+                         "fitted and keeps the clearly better fit (3-4 times the CPU of one); held: rigid only (the cab "
                          "plant is then outside the model family); fitted: the mount frequency fitted only")
     ap.add_argument("--plants", nargs="+", choices=PLANT_KEYS, default=list(PLANT_KEYS),
                     help=f"the plant trucks, in this order (default all four): rigid (the XML's rigid cab), cab "

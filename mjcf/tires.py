@@ -79,7 +79,7 @@ def add_progressive_tire(spec: mujoco.MjSpec, corner: str, ratio: float, onset_m
     kt = -float(tire.biasprm[1])
     r0 = float(tire.biasprm[0]) / kt
     onsets = progressive_onsets(onset_m, spread_m)
-    k2 = float(ratio) * kt if len(onsets) == 1 else float(ratio) * kt / len(onsets)
+    k2 = float(ratio) * kt / len(onsets)  # the ratio shared equally by the elements
     tendon = names.tire_tendon(corner)
     for step, onset in enumerate(onsets):
         spec.add_actuator(name=names.tire_progressive_actuator(corner, step), target=tendon,

@@ -203,6 +203,9 @@ def test_the_onset_alone_is_refused_before_any_run(record):
     with pytest.raises(ScenarioError, match="tire_progressive_onset_m"):
         calibrate(record["t"], record["x_a"], record["F_rig"], base_scenario=record["sc"],
                   names=("payload_kg", "tire_progressive_onset_m"))
+    with pytest.raises(ScenarioError, match="tire_progressive_onset_m"):  # a held linear tire has no onset either
+        calibrate(record["t"], record["x_a"], record["F_rig"], base_scenario=record["sc"],
+                  names=("payload_kg", "tire_progressive_onset_m"), fitted_guess={"tire_progressive_ratio": None})
 
 
 def test_an_empty_truck_is_held_empty_not_refused():

@@ -270,7 +270,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     fitted_guess : dict, optional
         First guesses (SI) of fitted fields to use instead of the static-load and catalogue ones;
         for a field held (not in ``names``), the value it is held at, where ``cab_mount_hz: None``
-        holds the XML's rigid cab (the model family without the cab's mounts).
+        holds the XML's rigid cab (the model family without the cab's mounts) and
+        ``tire_progressive_ratio: None`` its linear tire.
     windows, window_s, lead_s : int, s, s
         See :func:`fit_windows`.
     workers : int, optional
@@ -296,7 +297,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     unknown = sorted(set(names) - set(FITTED))
     if unknown or not names:
         raise ScenarioError(f"names must be a non-empty subset of {', '.join(FITTED)}, got {', '.join(unknown) or 'none'}")
-    if "tire_progressive_onset_m" in names and "tire_progressive_ratio" not in names + tuple(fitted_guess or ()):
+    if "tire_progressive_onset_m" in names and "tire_progressive_ratio" not in names \
+            and (fitted_guess or {}).get("tire_progressive_ratio") is None:
         raise ScenarioError("tire_progressive_onset_m is the progressive tire's: fit tire_progressive_ratio too, or "
                             "give its value in fitted_guess")
     t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
