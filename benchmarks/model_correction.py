@@ -22,7 +22,7 @@ case's own payload, 0 kg included). Four plants (``--plants``, :data:`PLANT_KEYS
 * ``cab``: the same with its cab on its own mounts at :data:`CAB_HZ`;
 * ``tire``: the ``rigid`` plant with a bilinear progressive tire (``TruckVariant.tire_progressive_ratio``,
   ``--tire-ratio``, default :data:`TIRE_RATIO`, at the default onset, 2 cm): in the model family,
-  whose tire is bilinear with its ratio and onset fitted (it was not before: the earlier runs in
+  whose tire is bilinear with each axle's ratio and onset fitted (it was not before: the earlier runs in
   docs/model_correction.md are of a linear-tire family);
 * ``smooth``: the ``rigid`` plant with tires that stiffen gradually, by :data:`SMOOTH_RATIO` over
   :data:`SMOOTH_SPREAD_M` of deflection about 2 cm (``TruckVariant.tire_progressive_spread_m``, five
@@ -151,7 +151,7 @@ def plant_name(plant: str, tire_ratio: float = TIRE_RATIO) -> str:
 def mismatch(plant: str, cab: str) -> str:
     """ "on" where the plant lies outside the model family calibrated with cab mode ``cab``, "off" inside:
     the gradually stiffening tire always, the cab on its mounts only with the cab held rigid (the bilinear
-    progressive tire is in the family: its ratio and onset are fitted)."""
+    progressive tire is in the family: each axle's ratio and onset are fitted)."""
     return "on" if plant == "smooth" or (plant == "cab" and cab == HELD) else "off"
 
 

@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from mjcf import names
-from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M, add_progressive_tire, set_tire, tire_elements
+from mjcf.tires import add_progressive_tire, axle_progressive, check_progressive, set_tire, tire_elements
 
 __all__ = [
     "MODEL_FILE",
@@ -99,6 +99,8 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
                                  "0.1 m (a fifth of the radius) is never reached by a tire that is not flat"),
     "tire_progressive_spread_m": (0.0, 0.05, "m", "a tire stiffens over a few cm of its working deflection; wider "
                                   "than 5 cm is beyond a truck tire's working range"),
+    "tire_progressive_ratio_rear": (0.0, 3.0, "1", "as tire_progressive_ratio's"),
+    "tire_progressive_onset_rear_m": (0.0, 0.1, "m", "as tire_progressive_onset_m's"),
     "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
                    "only cost time and memory; the defaults are 1e-4 s (road test) and 1e-3 s (rig test)"),
 }
@@ -193,6 +195,10 @@ class TruckVariant:
         at onsets evenly from onset - s/2 to onset + s/2, a piecewise-linear approximation of a
         smooth stiffening. 0 to 0.05 m (see :data:`BOUNDS`), and onset - s/2 >= 0 m. A plant-only
         feature: the calibrated model (ratio and onset fitted) cannot represent it.
+    tire_progressive_ratio_rear, tire_progressive_onset_rear_m : float, 1 and m, optional
+        The rear tires' own ratio and onset (only with ``tire_progressive_ratio``, which then holds
+        for the front tires; ranges as theirs); None: the all-wheel value. A steer tire and a
+        rear dual differ in construction and load, and so in where and how much they stiffen.
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
@@ -217,6 +223,8 @@ class TruckVariant:
     tire_progressive_ratio: float | None = None
     tire_progressive_onset_m: float | None = None
     tire_progressive_spread_m: float | None = None
+    tire_progressive_ratio_rear: float | None = None
+    tire_progressive_onset_rear_m: float | None = None
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -238,18 +246,7 @@ class TruckVariant:
         if self.cab_mass_kg is not None and self.cab_mount_hz is None:
             raise ValueError("vehicle.cab_mass_kg only applies to a suspended cab: set vehicle.cab_mount_hz too "
                              "(without it the cab is part of the chassis' mass)")
-        if self.tire_progressive_onset_m is not None and self.tire_progressive_ratio is None:
-            raise ValueError("vehicle.tire_progressive_onset_m only applies to a progressive tire: set "
-                             "vehicle.tire_progressive_ratio too (without it the tire is linear)")
-        spread = self.tire_progressive_spread_m
-        if spread is not None and self.tire_progressive_ratio is None:
-            raise ValueError("vehicle.tire_progressive_spread_m only applies to a progressive tire: set "
-                             "vehicle.tire_progressive_ratio too (without it the tire is linear)")
-        onset = TIRE_PROGRESSIVE_ONSET_M if self.tire_progressive_onset_m is None else self.tire_progressive_onset_m
-        if spread is not None and onset - 0.5 * spread < 0:
-            raise ValueError(f"vehicle.tire_progressive_spread_m = {spread:g} m starts the stiffening below 0 m "
-                             f"of deflection (onset {onset:g} m - spread / 2): lower it or raise "
-                             "vehicle.tire_progressive_onset_m")
+        check_progressive(self)
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
@@ -376,9 +373,9 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
             v.tire_damping_front_Ns_per_m if front else v.tire_damping_rear_Ns_per_m,
             v.tire_free_radius_m,
         )
-        if v.tire_progressive_ratio is not None:
-            onset = TIRE_PROGRESSIVE_ONSET_M if v.tire_progressive_onset_m is None else v.tire_progressive_onset_m
-            add_progressive_tire(spec, corner, v.tire_progressive_ratio, onset, v.tire_progressive_spread_m)
+        stiffening = axle_progressive(v, front)
+        if stiffening is not None:
+            add_progressive_tire(spec, corner, *stiffening, v.tire_progressive_spread_m)
         friction = v.spring_friction_front_N if front else v.spring_friction_rear_N
         if friction is not None:
             spec.tendon(names.spring_tendon(corner)).frictionloss = float(friction)

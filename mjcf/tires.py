@@ -16,7 +16,7 @@ import mujoco
 from mjcf import names
 
 __all__ = ["TIRE_PROGRESSIVE_ONSET_M", "TIRE_PROGRESSIVE_STEPS", "set_tire", "tire_elements", "progressive_onsets",
-           "add_progressive_tire"]
+           "axle_progressive", "check_progressive", "add_progressive_tire"]
 
 #: m: the tire deflection (R0 - L) beyond which the progressive element of
 #: ``TruckVariant.tire_progressive_ratio`` engages when ``tire_progressive_onset_m`` is not given:
@@ -62,6 +62,45 @@ def progressive_onsets(onset_m: float, spread_m: float | None) -> list[float]:
         return [float(onset_m)]
     n, s = TIRE_PROGRESSIVE_STEPS, float(spread_m)
     return [float(onset_m) - 0.5 * s + k * s / (n - 1) for k in range(n)]
+
+
+def axle_progressive(variant, front: bool) -> tuple[float, float] | None:
+    """The stiffening (ratio, 1; onset, m) of one axle's tires in ``variant`` (a
+    :class:`mjcf.build.TruckVariant`), or None for linear tires. Every tire takes
+    ``tire_progressive_ratio`` and ``tire_progressive_onset_m`` (default
+    :data:`TIRE_PROGRESSIVE_ONSET_M`); the rear tires take ``tire_progressive_ratio_rear`` and
+    ``tire_progressive_onset_rear_m`` instead where those are given."""
+    if variant.tire_progressive_ratio is None:
+        return None
+    ratio, onset = variant.tire_progressive_ratio, variant.tire_progressive_onset_m
+    if not front:
+        ratio = ratio if variant.tire_progressive_ratio_rear is None else variant.tire_progressive_ratio_rear
+        onset = onset if variant.tire_progressive_onset_rear_m is None else variant.tire_progressive_onset_rear_m
+    return float(ratio), TIRE_PROGRESSIVE_ONSET_M if onset is None else float(onset)
+
+
+def check_progressive(variant) -> None:
+    """Refuse a progressive-tire field of ``variant`` that has no effect or starts the stiffening
+    below 0 m of deflection (ranges are checked with the other fields).
+
+    Raises
+    ------
+    ValueError
+        One sentence naming the field and the fix.
+    """
+    for name in ("tire_progressive_onset_m", "tire_progressive_spread_m", "tire_progressive_ratio_rear",
+                 "tire_progressive_onset_rear_m"):
+        if getattr(variant, name) is not None and variant.tire_progressive_ratio is None:
+            raise ValueError(f"vehicle.{name} only applies to a progressive tire: set vehicle.tire_progressive_ratio "
+                             "too (without it the tire is linear; 0 keeps the front tires linear)")
+    spread = variant.tire_progressive_spread_m
+    if spread is None:
+        return
+    for front, field in ((True, "tire_progressive_onset_m"), (False, "tire_progressive_onset_rear_m")):
+        onset = axle_progressive(variant, front)[1]
+        if onset - 0.5 * spread < 0:
+            raise ValueError(f"vehicle.tire_progressive_spread_m = {spread:g} m starts the stiffening below 0 m "
+                             f"of deflection (onset {onset:g} m - spread / 2): lower it or raise vehicle.{field}")
 
 
 def add_progressive_tire(spec: mujoco.MjSpec, corner: str, ratio: float, onset_m: float,

@@ -11,7 +11,8 @@ and the drives and LVDTs in mm. Independent references:
   "Beyond the linear floor": on the paper's cases the model-corrected DLC is within 0.1 % of the
   road's on every case);
 * the truck's own parameters (``xml_nominal``, the plant of the paper's cases), which the
-  calibration never sees either (it starts 15 % off them): README reports them recovered within
+  calibration never sees either (it starts 15 % off them; the tires' stiffness is pinned where they
+  work, at their static deflection): README reports them recovered within
   1.1 % with the plant in the model family;
 * the linear fallback against the two commands a lab would run by hand, ``rigsim identify
   --from-file`` then ``rigsim correct --actuators``.
@@ -31,6 +32,7 @@ import pytest
 
 from correction.dlc import dlc
 from correction.measured import read_channels
+from scenarios.cli.correct_model import cal_key
 from scenarios.cli.main import build_parser, main
 from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.core.run import run
@@ -41,6 +43,8 @@ from scenarios.studies.model_correction.differential import START_S
 CORNERS = ("fl", "fr", "rl", "rr")
 PAIRS = ",".join(f"{c}=Soll_{c.upper()}:Weg_{c.upper()}" for c in CORNERS)
 DURATION_S = 20.0
+#: m: the XML's tires' static deflection under this case's 3640 kg truck (mjcf/README.md, "Progressive tire").
+STATIC_DEFLECTION_M = {"front": 0.026, "rear": 0.016}
 
 
 def _write_csv(path, t, force_N, drive_m, lvdt_m) -> None:
@@ -98,10 +102,22 @@ def test_model_correction_end_to_end(record, tmp_path, capsys):
     error = [float(x.split()[1]) for x in meta["cal_model_error"].split(" (")[0].split(", ")]
     assert all(e < f for e, f in zip(error, fit)) and max(error) < 0.05  # most of the fit NRMSE is the noise
     truth = xml_nominal()
-    for name in ("tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m", "tire_damping_front_Ns_per_m",
-                 "tire_damping_rear_Ns_per_m", "spring_friction_front_N", "spring_friction_rear_N"):
-        fitted = float(meta[f"cal_{name}"].split()[0])
-        assert fitted == pytest.approx(truth[name], rel=0.02), name  # started 15 % off (CATALOGUE_FACTORS)
+
+    def fitted(name: str) -> float:
+        return float(meta[cal_key(name)].split()[0])
+
+    for name in ("tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
+                 "spring_friction_rear_N"):
+        assert fitted(name) == pytest.approx(truth[name], rel=0.02), name  # started 15 % off (CATALOGUE_FACTORS)
+    for axle, rear in (("front", ""), ("rear", "_rear")):
+        # The tire's stiffness where it works, at its static deflection (the model's bilinear tire: kt below
+        # the onset, kt (1 + ratio) beyond it): a tire that never leaves one branch pins only that branch's
+        # slope (this truck's front tires, 2.6 cm static against a 2 cm guess of the onset, fit kt 767 kN/m
+        # with ratio 0.17 from ~0 cm: 900 kN/m where they work, the XML's linear tire's).
+        kt, ratio = fitted(f"tire_stiffness_{axle}_N_per_m"), fitted(f"tire_progressive_ratio{rear}")
+        onset = fitted("tire_progressive_onset_m" if axle == "front" else "tire_progressive_onset_rear_m")
+        working = kt * (1.0 + ratio * (STATIC_DEFLECTION_M[axle] > onset))
+        assert working == pytest.approx(truth[f"tire_stiffness_{axle}_N_per_m"], rel=0.02), (axle, kt, ratio, onset)
     for i, c in enumerate(CORNERS):
         road = dlc(record["road_N"][settled, i])
         raw = dlc(record["raw_N"][settled, i]) / road - 1.0
@@ -223,3 +239,32 @@ def test_cab_is_refused_without_model(tmp_path, capsys):
     src.write_text("time_s,Fz_FL [N]\n0,1\n0.001,2\n")
     assert main(["correct", str(src), "--cab", "fitted", "-o", str(tmp_path / "out.csv"), "--actuator", str(src)]) == 2
     assert "--cab" in capsys.readouterr().err and not (tmp_path / "out.csv").exists()
+
+
+def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
+    """The metadata keys of every fitted field (``cal_key``) are written to an RPC III file and read
+    back: the format's header records hold a key of at most 32 bytes (correction/rpc3.py, as MTS's
+    RPC III layout), which ``cal_tire_progressive_onset_rear_m`` (33) would exceed; keys stay distinct."""
+    from correction.rpc3 import read_rpc3, write_rpc3
+    from scenarios.studies.model_correction.calibrate import FITTED, UNITS
+
+    meta = {cal_key(n): f"0 {UNITS[n]}" for n in FITTED}
+    assert len(meta) == len(FITTED) and cal_key("tire_progressive_onset_rear_m") == "cal_tire_prog_onset_rear_m"
+    write_rpc3(tmp_path / "keys.rsp", ["Fz_FL"], ["N"], np.zeros((1, 8)), 1e-3, extra=meta)
+    header = read_rpc3(tmp_path / "keys.rsp").header
+    assert all(header[k] == v for k, v in meta.items())
+
+
+def test_an_all_wheel_stiffening_in_truck_toml_is_the_rear_guess_too(tmp_path):
+    """TRUCK.toml's [vehicle] tire_progressive_ratio / _onset_m (all wheels) start both axles' fits;
+    a rear value given starts the rear's."""
+    from scenarios.cli.correct_model import _first_guess
+    from scenarios.core.config import parse_scenario
+
+    base = {"name": "truck", "speed_kmh": 72.0, "duration_s": 10.0, "road": {"roughness": "C"}}
+    every = parse_scenario({**base, "vehicle": {"tire_progressive_ratio": 0.3, "tire_progressive_onset_m": 0.025}})
+    guess, unused = _first_guess(every)
+    assert (guess["tire_progressive_ratio_rear"], guess["tire_progressive_onset_rear_m"]) == (0.3, 0.025)
+    own = parse_scenario({**base, "vehicle": {"tire_progressive_ratio": 0.3, "tire_progressive_ratio_rear": 0.1}})
+    guess, unused = _first_guess(own)
+    assert guess["tire_progressive_ratio_rear"] == 0.1 and "tire_progressive_onset_rear_m" not in guess

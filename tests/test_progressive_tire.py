@@ -214,3 +214,42 @@ def test_a_spread_reaching_zero_deflection_is_accepted():
     """onset - spread / 2 = 0 m exactly (0.01 - 0.02 / 2): the lowest element engages at contact."""
     parse_scenario({**SHORT, "vehicle": {"tire_progressive_ratio": 0.5, "tire_progressive_onset_m": 0.01,
                                          "tire_progressive_spread_m": 0.02}})
+
+
+# The rear tires' own stiffening (``TruckVariant.tire_progressive_ratio_rear``, ``_onset_rear_m``):
+# the rear corners' element takes them, the front corners' the all-wheel values.
+
+
+def test_rear_tires_take_their_own_stiffening():
+    """Ratio 0.5 at 2 cm, the rear's 0.25 at 1.5 cm: one element per corner, ratio kt (R0 - onset - L)
+    with the XML's kt and R0 and each axle's ratio and onset (by hand); the rear fields None compile
+    the all-wheel tire bit for bit, and a front ratio of 0 leaves the front tires linear."""
+    model = build_model(TruckVariant(tire_progressive_ratio=0.5, tire_progressive_onset_m=0.02,
+                                     tire_progressive_ratio_rear=0.25, tire_progressive_onset_rear_m=0.015))
+    extra = _ids(model, mujoco.mjtObj.mjOBJ_ACTUATOR, names.tire_progressive_actuator)
+    ratio, onset = np.array([0.5, 0.5, 0.25, 0.25]), np.array([0.02, 0.02, 0.015, 0.015])  # fl fr rl rr
+    np.testing.assert_allclose(model.actuator_biasprm[extra, :3],
+                               np.column_stack([ratio * KT * (R0 - onset), -ratio * KT, np.zeros(4)]), rtol=1e-12)
+    every = build_model(TruckVariant(tire_progressive_ratio=0.5, tire_progressive_onset_m=0.02))
+    same = build_model(TruckVariant(tire_progressive_ratio=0.5, tire_progressive_onset_m=0.02,
+                                    tire_progressive_ratio_rear=None, tire_progressive_onset_rear_m=None))
+    for field in ("actuator_biasprm", "actuator_gainprm", "actuator_forcerange", "sensor_type", "sensor_objid"):
+        assert np.array_equal(getattr(same, field), getattr(every, field)), field
+    rear_only = build_model(TruckVariant(tire_progressive_ratio=0.0, tire_progressive_ratio_rear=0.25))
+    extra = _ids(rear_only, mujoco.mjtObj.mjOBJ_ACTUATOR, names.tire_progressive_actuator)
+    assert np.array_equal(rear_only.actuator_biasprm[extra, 1], [-0.0, -0.0, -0.25 * KT[2], -0.25 * KT[3]])
+
+
+@pytest.mark.parametrize("vehicle,field,fix", [
+    ({"tire_progressive_ratio_rear": 0.25}, "tire_progressive_ratio_rear", "set vehicle.tire_progressive_ratio"),
+    ({"tire_progressive_onset_rear_m": 0.01}, "tire_progressive_onset_rear_m", "set vehicle.tire_progressive_ratio"),
+    ({"tire_progressive_ratio": 0.5, "tire_progressive_ratio_rear": 5.0}, "tire_progressive_ratio_rear",
+     "outside 0 to 3 1"),
+    ({"tire_progressive_ratio": 0.5, "tire_progressive_onset_rear_m": 0.2}, "tire_progressive_onset_rear_m",
+     "outside 0 to 0.1 m"),
+    ({"tire_progressive_ratio": 0.5, "tire_progressive_onset_rear_m": 0.005, "tire_progressive_spread_m": 0.02},
+     "tire_progressive_spread_m", "raise vehicle.tire_progressive_onset_rear_m")])
+def test_bad_rear_stiffening_is_refused_naming_the_field(vehicle, field, fix):
+    with pytest.raises(ScenarioError, match=field) as err:
+        parse_scenario({**SHORT, "vehicle": vehicle})
+    assert fix in str(err.value)

@@ -15,7 +15,8 @@ F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
 (:func:`scenarios.studies.model_correction.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
 and its ``[vehicle]`` tire stiffness, tire damping, tire stiffening (``tire_progressive_ratio``,
-``tire_progressive_onset_m``) and leaf friction, where given, are the calibration's first guesses
+``tire_progressive_onset_m``, and the rear tires' ``_ratio_rear`` / ``_onset_rear_m``, which
+default to the all-wheel values) and leaf friction, where given, are the calibration's first guesses
 instead of the catalogue values; the payload and its position always
 start from the record's static loads. The cab (``--cab``): by default the model is calibrated
 twice, the cab held (rigid, or at ``[vehicle] cab_mount_hz`` if given) and the cab's mount
@@ -41,7 +42,7 @@ from __future__ import annotations
 import sys
 import textwrap
 
-__all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "MODEL_OPTIONS"]
+__all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "MODEL_OPTIONS", "cal_key"]
 
 #: The options only ``--model`` reads: argparse dest -> option.
 MODEL_OPTIONS = {"pairs": "--pairs", "jobs": "--jobs", "max_evaluations": "--max-evaluations",
@@ -58,7 +59,7 @@ def add_model_arguments(parser) -> None:
                    help="correct each wheel as F_rig + F_model(drive) - F_model(LVDT), the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
                         "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
-                        "tire), the cab's mount frequency where it fits clearly better (--cab); minutes of "
+                        "tire per axle), the cab's mount frequency where it fits clearly better (--cab); minutes of "
                         "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "
                         "cab_mount_hz is the cab's mount (held, or the first guess of its fit), and its tire and "
                         "leaf-friction values (tire_progressive_ratio and _onset_m included) are only the "
@@ -219,7 +220,17 @@ def _first_guess(scenario) -> tuple[dict, list[str]]:
     given = {k: getattr(scenario.vehicle, k) for k in type(scenario.vehicle).field_names()
              if getattr(scenario.vehicle, k) is not None}
     guess = {k: float(v) for k, v in given.items() if k in FITTED and k not in FROM_STATIC_LOADS}
+    for every, rear in (("tire_progressive_ratio", "tire_progressive_ratio_rear"),
+                        ("tire_progressive_onset_m", "tire_progressive_onset_rear_m")):
+        if every in guess and rear not in guess:  # an all-wheel value is the rear tires' too
+            guess[rear] = guess[every]
     return guess, [k for k in given if k not in guess]
+
+
+def cal_key(name: str) -> str:
+    """The metadata key of the fitted field ``name``: ``cal_`` and the name, "progressive" shortened
+    to "prog" so that every key fits RPC III's 32 bytes (``cal_tire_prog_onset_rear_m``: 26)."""
+    return "cal_" + name.replace("progressive", "prog")
 
 
 def _calibration_meta(cal) -> dict[str, str]:
@@ -227,7 +238,7 @@ def _calibration_meta(cal) -> dict[str, str]:
     from mjcf.names import CORNERS
     from scenarios.studies.model_correction.differential import EXCESS_NRMSE_LIMIT
 
-    meta = {f"cal_{n}": f"{v:.6g} {u} +- {s:.2g} (robust {sr:.2g}; first guess {g:.6g})"
+    meta = {cal_key(n): f"{v:.6g} {u} +- {s:.2g} (robust {sr:.2g}; first guess {g:.6g})"
             for n, u, g, v, s, sr in zip(cal.names, cal.units, cal.initial, cal.fitted, cal.sigma, cal.sigma_robust)}
     meta["cal_fit_nrmse"] = ", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.fit_nrmse))
     meta["cal_model_error"] = (", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.excess_nrmse))
@@ -266,7 +277,7 @@ def _metadata(args, pairs, force_cols, mc_result, fallback_source: str | None) -
     if mc_result is None:
         from scenarios.studies.model_correction.calibrate import FITTED, UNITS
 
-        meta.update({f"cal_{n}": f"0 {UNITS[n]}" for n in FITTED})
+        meta.update({cal_key(n): f"0 {UNITS[n]}" for n in FITTED})
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})
         sentence("cal_cab", "x " * 150)
     elif cal is not None:

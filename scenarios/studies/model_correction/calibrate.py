@@ -11,9 +11,10 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   motion puts straight through the tire;
 * ``spring_friction_front/rear_N``: the leaf springs' interleaf friction per axle, the truck's
   main nonlinearity (it locks the springs at small amplitude);
-* ``tire_progressive_ratio``, ``tire_progressive_onset_m``: the tires' stiffening, a bilinear tire
-  (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection, (1 + ratio) kt
-  beyond it); a pneumatic tire stiffens over its working deflection, and a model whose tire is
+* ``tire_progressive_ratio``, ``tire_progressive_onset_m`` (front tires) and
+  ``tire_progressive_ratio_rear``, ``tire_progressive_onset_rear_m``: each axle's tire stiffening, a
+  bilinear tire (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection,
+  (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model whose tire is
   linear cannot follow it: on a plant with a +25 % stiffening at 2 cm the linear-tire model left 13
   of 96 generalization wheels above the linear floor and the paper's light truck at +50 % fell back
   to the linear correction (docs/model_correction.md). Fitted from a catalogue guess of +20 % at
@@ -43,10 +44,11 @@ motion, so neither can be identified from x_a and F_rig. Every fitted field came
 on the paper's cases (the 1-sigma of :class:`~scenarios.studies.model_correction.result.Calibration`
 are ~1 % or less, ``benchmarks/model_correction.py``), but for the onset of a tire that does not
 stiffen (ratio fitted to ~0: the onset then changes nothing, and its sigma says so). A tire whose
-front wheels never leave the stiff branch (the heavy truck, static deflection 2.9 cm) trades its
-front stiffness against the shared ratio: on the medium case with a +25 % tire at 2 cm the fit
-settled at ratio 0.58 at 2.5 cm, front stiffness -21 %, rear +22 %, and its rear wheels at 0.50-0.52
-of the linear floor (the light truck's: 0.25 at 2 cm recovered within 0.6 %).
+wheels never leave the stiff branch (the heavy truck's fronts, static deflection 2.9 cm) trades its
+stiffness against its ratio; that is why each axle has its own: with one ratio shared by both axles,
+the medium case with a +25 % tire at 2 cm settled at ratio 0.58 at 2.5 cm, front stiffness -21 %,
+rear +22 %, and its rear wheels at 0.50-0.52 of the linear floor; with a ratio per axle, the rear's
+0.247 at 2.00 cm was recovered and every wheel came to 0.04-0.11 of the floor (paper cases, 60 s).
 
 First guess: :mod:`scenarios.studies.model_correction.first_guess` (payload from the record's
 static loads, the rest a catalogue guess that never reads a plant).
@@ -88,11 +90,13 @@ __all__ = ["FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
-          "spring_friction_rear_N", "tire_progressive_ratio", "tire_progressive_onset_m", "cab_mount_hz")
+          "spring_friction_rear_N", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+          "tire_progressive_onset_rear_m", "cab_mount_hz")
 UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
-         "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "cab_mount_hz": "Hz"}
+         "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "tire_progressive_ratio_rear": "1",
+         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz"}
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
@@ -107,12 +111,14 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
           "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 4.0),
           "spring_friction_rear_N": (0.05, 4.0), "tire_progressive_ratio": 0.5,
-          "tire_progressive_onset_m": 0.02, "cab_mount_hz": (0.4, 12.0)}
+          "tire_progressive_onset_m": 0.02, "tire_progressive_ratio_rear": 0.5,
+          "tire_progressive_onset_rear_m": 0.02, "cab_mount_hz": (0.4, 12.0)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`mjcf.build.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
 #: ratio and onset, whose linear tire is ratio 0.
-ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m")
+ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+            "tire_progressive_onset_rear_m")
 #: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
 #: mount's frequency, whose effect on the wheel forces fades as 1 / f^2 towards a rigid cab (a
 #: frequency scale would crawl along that flat valley).
@@ -297,10 +303,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     unknown = sorted(set(names) - set(FITTED))
     if unknown or not names:
         raise ScenarioError(f"names must be a non-empty subset of {', '.join(FITTED)}, got {', '.join(unknown) or 'none'}")
-    if "tire_progressive_onset_m" in names and "tire_progressive_ratio" not in names \
-            and (fitted_guess or {}).get("tire_progressive_ratio") is None:
-        raise ScenarioError("tire_progressive_onset_m is the progressive tire's: fit tire_progressive_ratio too, or "
-                            "give its value in fitted_guess")
+    tire_only = [k for k in ("tire_progressive_onset_m", "tire_progressive_ratio_rear", "tire_progressive_onset_rear_m")
+                 if k in names]
+    if tire_only and "tire_progressive_ratio" not in names and (fitted_guess or {}).get("tire_progressive_ratio") is None:
+        raise ScenarioError(f"{tire_only[0]} is the progressive tire's: fit tire_progressive_ratio too, or give its "
+                            "value in fitted_guess")
     t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
     x_a, force = np.asarray(x_a_m, float), np.asarray(force_N, float)
     kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
@@ -312,7 +319,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
             raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
                                 "name other fields to fit")
     guess = {"payload_kg": payload, "payload_x_m": x, **catalogue(), **(fitted_guess or {})}
-    for k in ("cab_mount_hz", "tire_progressive_ratio", "tire_progressive_onset_m"):  # held: rigid cab, linear tire
+    for k in ("cab_mount_hz", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+              "tire_progressive_onset_rear_m"):  # held: rigid cab, linear tire
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper = [], []

@@ -78,7 +78,8 @@ def catalogue() -> dict[str, float]:
     """The catalogue guess of the non-payload fields: :func:`xml_nominal` times :data:`CATALOGUE_FACTORS`."""
     nominal = xml_nominal()
     return {**{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ,
-            "tire_progressive_ratio": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_m": TIRE_PROGRESSIVE_ONSET_M}
+            "tire_progressive_ratio": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_m": TIRE_PROGRESSIVE_ONSET_M,
+            "tire_progressive_ratio_rear": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_rear_m": TIRE_PROGRESSIVE_ONSET_M}
 
 
 #: An estimated payload within this fraction of the empty truck's weight (1) is an empty truck:
