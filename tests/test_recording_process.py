@@ -250,3 +250,18 @@ def test_no_recording_process_outlives_its_command(tmp_path, sig):
     else:
         assert parent.returncode == -signal.SIGKILL
         assert _wait_gone(child), f"recording process {child} outlived its killed parent"
+
+
+def test_the_recording_process_loads_no_simulator():
+    """What the child imports to write a recording (``scenarios.review.recording`` and rerun's
+    warm-up) loads neither MuJoCo nor numba nor scipy: it unpickles poses the run took and steps
+    nothing, and what it imports runs on the core beside the run (mujoco's import alone is ~0.2 s of CPU)."""
+    code = ("import sys\n"
+            "from scenarios.review.recording_process import _NoPandas\n"
+            "sys.meta_path.insert(0, _NoPandas)\n"
+            "from scenarios.review import recording\n"
+            "recording.warm_up()\n"
+            "print(sorted(m for m in ('mujoco', 'numba', 'scipy', 'pandas') if m in sys.modules))\n")
+    proc = subprocess.run([sys.executable, "-c", code], env=ENV, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.strip() == "[]"

@@ -8,21 +8,23 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import mujoco
 import numpy as np
+
+if TYPE_CHECKING:
+    import mujoco
 
 __all__ = ["DEFAULT_POSE_RATE_HZ", "Geoms", "PoseTrack", "PoseRecorder", "model_geoms", "drawn_bodies"]
 
 #: Video rate of the body poses, Hz (divides MuJoCo's 10 kHz; 60 s make 3000 frames).
 DEFAULT_POSE_RATE_HZ = 50.0
-_KINDS = {
-    int(mujoco.mjtGeom.mjGEOM_PLANE): "plane",
-    int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
-    int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule",
-    int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder",
-    int(mujoco.mjtGeom.mjGEOM_BOX): "box",
-}
+#: The drawable geom types by their ``mjtGeom`` name. MuJoCo is imported where a model is read
+#: (:func:`model_geoms`, :func:`drawn_bodies`), not by this module: the recording process
+#: (:mod:`scenarios.review.recording_process`) unpickles poses and never steps (0.19 s of CPU less
+#: beside the run).
+_KIND_NAMES = {"mjGEOM_PLANE": "plane", "mjGEOM_SPHERE": "sphere", "mjGEOM_CAPSULE": "capsule",
+               "mjGEOM_CYLINDER": "cylinder", "mjGEOM_BOX": "box"}
 
 
 @dataclass(frozen=True)
@@ -58,15 +60,18 @@ def model_geoms(model: mujoco.MjModel, groups: Sequence[int] = (0, 1, 2)) -> Geo
 
     Meshes and height fields are skipped (the truck model has none).
     """
+    import mujoco
+
+    kinds = {int(getattr(mujoco.mjtGeom, k)): v for k, v in _KIND_NAMES.items()}
     keep = [g for g in range(model.ngeom)
-            if int(model.geom_group[g]) in groups and int(model.geom_type[g]) in _KINDS]
+            if int(model.geom_group[g]) in groups and int(model.geom_type[g]) in kinds]
     rgba = model.geom_rgba[keep].copy()
     for i, g in enumerate(keep):
         if model.geom_matid[g] >= 0:
             rgba[i] = model.mat_rgba[model.geom_matid[g]]
     return Geoms(
         body=tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, int(model.geom_bodyid[g])) for g in keep),
-        kind=tuple(_KINDS[int(model.geom_type[g])] for g in keep),
+        kind=tuple(kinds[int(model.geom_type[g])] for g in keep),
         size_m=model.geom_size[keep].copy(),
         pos_m=model.geom_pos[keep].copy(),
         quat_wxyz=model.geom_quat[keep].copy(),
@@ -108,6 +113,8 @@ class PoseTrack:
 
 
 def drawn_bodies(model: mujoco.MjModel, geoms: Geoms) -> tuple[list[int], tuple[str, ...]]:
+    import mujoco
+
     names = tuple(dict.fromkeys(n for n in geoms.body if n != "world"))
     return [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names], names
 

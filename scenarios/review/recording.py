@@ -36,7 +36,6 @@ import uuid
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
 from mjcf.names import CORNERS, pan_body
@@ -57,6 +56,8 @@ def rest_track(result: RunResult, rate_hz: float = DEFAULT_POSE_RATE_HZ) -> Pose
     equilibrium; the pans move with the result's ``pan_m``, decimated to ``rate_hz``. The
     chassis and axles do not move: only a :class:`PoseRecorder` in the run can show that.
     """
+    import mujoco
+
     from mjcf.build import TruckVariant, build_model
     from mjcf.physics import static_equilibrium
 
