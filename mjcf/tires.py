@@ -91,8 +91,9 @@ def check_progressive(variant) -> None:
     for name in ("tire_progressive_onset_m", "tire_progressive_spread_m", "tire_progressive_ratio_rear",
                  "tire_progressive_onset_rear_m"):
         if getattr(variant, name) is not None and variant.tire_progressive_ratio is None:
+            rear = "; 0 keeps the front tires linear" if name.endswith(("_rear", "_rear_m")) else ""
             raise ValueError(f"vehicle.{name} only applies to a progressive tire: set vehicle.tire_progressive_ratio "
-                             "too (without it the tire is linear; 0 keeps the front tires linear)")
+                             f"too (without it the tire is linear{rear})")
     spread = variant.tire_progressive_spread_m
     if spread is None:
         return
