@@ -219,54 +219,62 @@ class _SigtermAsInterrupt:
     tells the two apart. Outside the main thread nothing is installed.
 
     A handler's exception can be lost: Python runs signal handlers between bytecodes, also inside
-    a ctypes callback, which prints the exception as "ignored" and goes on (numba loading its
-    cached callbacks through llvmlite's object-cache callback: a command terminated then ran its
-    whole 600 s run and exited 0, measured 2 times in 30 with SIGTERM 0.05-1.5 s after the start).
-    So the first SIGTERM also starts a thread that sends SIGTERM again every :data:`RESEND_S` until
-    the command has caught the interrupt (:meth:`acknowledge`) or the handler is removed
-    (:meth:`restore`); once acknowledged, the handler ignores late copies."""
+    a ctypes callback, which hands the exception to ``sys.unraisablehook`` ("Exception ignored")
+    and goes on (numba loading its cached callbacks through llvmlite's object-cache callback: a
+    command terminated then ran its whole 600 s run and exited 0, measured 2 times in 30 with
+    SIGTERM 0.05-1.5 s after the start). While installed, this also takes that hook: a lost
+    interrupt of its own is sent again, as SIGTERM after :data:`RESEND_S`, until one arrives in
+    code that lets it through (:meth:`acknowledge` or :meth:`restore` stop it; late copies are
+    ignored). An interrupt that was not lost is never repeated, so cleanup runs undisturbed."""
 
-    #: s between the copies of a SIGTERM whose interrupt has not been caught yet.
-    RESEND_S = 0.2
+    #: s before a lost interrupt's SIGTERM is sent again.
+    RESEND_S = 0.05
 
     def __init__(self) -> None:
         import signal
         import threading
 
         self.received, self._signal, self._previous = False, signal, None
-        self._caught, self._resender = threading.Event(), None
+        self._caught, self._hook = threading.Event(), None
         try:
             self._previous = (signal.signal(signal.SIGTERM, self._handle),)
         except ValueError:  # not the main thread
-            pass
+            return
+        self._hook = sys.unraisablehook
+        sys.unraisablehook = self._unraisable
 
     def _handle(self, signum, frame) -> None:
         if self._caught.is_set():  # a late copy: the interrupt is being handled already
             return
         self.received = True
-        if self._resender is None:
-            import os
-            import threading
-
-            def resend() -> None:
-                while not self._caught.wait(self.RESEND_S):
-                    os.kill(os.getpid(), self._signal.SIGTERM)
-
-            self._resender = threading.Thread(target=resend, name="rigsim-sigterm-resend", daemon=True)
-            self._resender.start()
         raise KeyboardInterrupt("terminated (SIGTERM)")
 
+    def _unraisable(self, unraisable) -> None:
+        """``sys.unraisablehook``: our interrupt, lost where exceptions cannot propagate: send it again."""
+        exc = unraisable.exc_value
+        if not (self.received and isinstance(exc, KeyboardInterrupt) and exc.args == ("terminated (SIGTERM)",)):
+            (self._hook or sys.__unraisablehook__)(unraisable)
+            return
+        import os
+        import threading
+
+        def resend() -> None:
+            if not self._caught.wait(self.RESEND_S):
+                os.kill(os.getpid(), self._signal.SIGTERM)
+
+        threading.Thread(target=resend, name="rigsim-sigterm-resend", daemon=True).start()
+
     def acknowledge(self) -> None:
-        """The interrupt was caught: stop sending copies (and ignore those on their way)."""
+        """The interrupt was caught: late copies are ignored and none is sent again."""
         self._caught.set()
-        if self._resender is not None:
-            self._resender.join()
 
     def restore(self) -> None:
         self.acknowledge()
         if self._previous is not None:
             self._signal.signal(self._signal.SIGTERM, self._previous[0] or self._signal.SIG_DFL)
             self._previous = None
+        if self._hook is not None:
+            sys.unraisablehook, self._hook = self._hook, None
 
 
 def main(argv: list[str] | None = None) -> int:
