@@ -76,7 +76,7 @@ def add_model_arguments(parser) -> None:
                    help="with --model: worker processes (default: all cores)")
     g.add_argument("--max-evaluations", type=int, default=None, metavar="N",
                    help="with --model: most evaluations of the fit's residual (scipy's max_nfev; each Jacobian "
-                        "adds one model run per fitted value and window) (default 30); a fit stopped by it has "
+                        "adds one model run per fitted value and window) (default 60); a fit stopped by it has "
                         "not converged and the linear correction is used")
     g.add_argument("--calibration-windows", type=int, default=None, metavar="N",
                    help="with --model: windows of the record the model is fitted on, each 2.5 s lead-in + 4 s "
