@@ -35,6 +35,7 @@ import functools
 import json
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -125,8 +126,6 @@ def breakdown(duration_s: float | None) -> dict:
         clock.stage("report", lambda: (render_report(result, case_files=False), to_json(result)))
     finally:
         rollout.rollout = original
-        import shutil
-
         shutil.rmtree(out, ignore_errors=True)
     return clock.s
 

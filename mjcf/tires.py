@@ -16,7 +16,7 @@ import mujoco
 from mjcf import names
 
 __all__ = ["TIRE_PROGRESSIVE_ONSET_M", "TIRE_PROGRESSIVE_STEPS", "set_tire", "tire_elements", "progressive_onsets",
-           "axle_progressive", "check_progressive", "add_progressive_tire"]
+           "REAR_FIELDS", "axle_progressive", "check_progressive", "add_progressive_tire"]
 
 #: m: the tire deflection (R0 - L) beyond which the progressive element of
 #: ``TruckVariant.tire_progressive_ratio`` engages when ``tire_progressive_onset_m`` is not given:
@@ -64,6 +64,12 @@ def progressive_onsets(onset_m: float, spread_m: float | None) -> list[float]:
     return [float(onset_m) - 0.5 * s + k * s / (n - 1) for k in range(n)]
 
 
+#: The rear tires' own field of each all-wheel stiffening field of ``TruckVariant`` (a rear field
+#: left None takes the all-wheel value: :func:`axle_progressive`).
+REAR_FIELDS = {"tire_progressive_ratio": "tire_progressive_ratio_rear",
+               "tire_progressive_onset_m": "tire_progressive_onset_rear_m"}
+
+
 def axle_progressive(variant, front: bool) -> tuple[float, float] | None:
     """The stiffening (ratio, 1; onset, m) of one axle's tires in ``variant`` (a
     :class:`mjcf.build.TruckVariant`), or None for linear tires. Every tire takes
@@ -88,10 +94,9 @@ def check_progressive(variant) -> None:
     ValueError
         One sentence naming the field and the fix.
     """
-    for name in ("tire_progressive_onset_m", "tire_progressive_spread_m", "tire_progressive_ratio_rear",
-                 "tire_progressive_onset_rear_m"):
+    for name in ("tire_progressive_onset_m", "tire_progressive_spread_m", *REAR_FIELDS.values()):
         if getattr(variant, name) is not None and variant.tire_progressive_ratio is None:
-            rear = "; 0 keeps the front tires linear" if name.endswith(("_rear", "_rear_m")) else ""
+            rear = "; 0 keeps the front tires linear" if name in REAR_FIELDS.values() else ""
             raise ValueError(f"vehicle.{name} only applies to a progressive tire: set vehicle.tire_progressive_ratio "
                              f"too (without it the tire is linear{rear})")
     spread = variant.tire_progressive_spread_m

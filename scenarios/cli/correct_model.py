@@ -220,8 +220,9 @@ def _first_guess(scenario) -> tuple[dict, list[str]]:
     given = {k: getattr(scenario.vehicle, k) for k in type(scenario.vehicle).field_names()
              if getattr(scenario.vehicle, k) is not None}
     guess = {k: float(v) for k, v in given.items() if k in FITTED and k not in FROM_STATIC_LOADS}
-    for every, rear in (("tire_progressive_ratio", "tire_progressive_ratio_rear"),
-                        ("tire_progressive_onset_m", "tire_progressive_onset_rear_m")):
+    from mjcf.tires import REAR_FIELDS
+
+    for every, rear in REAR_FIELDS.items():
         if every in guess and rear not in guess:  # an all-wheel value is the rear tires' too
             guess[rear] = guess[every]
     return guess, [k for k in given if k not in guess]

@@ -229,6 +229,8 @@ class _SigtermAsInterrupt:
 
     #: s before a lost interrupt's SIGTERM is sent again.
     RESEND_S = 0.05
+    #: The KeyboardInterrupt's message: how the unraisable hook knows its own interrupt.
+    MESSAGE = "terminated (SIGTERM)"
 
     def __init__(self) -> None:
         import signal
@@ -247,12 +249,12 @@ class _SigtermAsInterrupt:
         if self._caught.is_set():  # a late copy: the interrupt is being handled already
             return
         self.received = True
-        raise KeyboardInterrupt("terminated (SIGTERM)")
+        raise KeyboardInterrupt(self.MESSAGE)
 
     def _unraisable(self, unraisable) -> None:
         """``sys.unraisablehook``: our interrupt, lost where exceptions cannot propagate: send it again."""
         exc = unraisable.exc_value
-        if not (self.received and isinstance(exc, KeyboardInterrupt) and exc.args == ("terminated (SIGTERM)",)):
+        if not (self.received and isinstance(exc, KeyboardInterrupt) and exc.args == (self.MESSAGE,)):
             (self._hook or sys.__unraisablehook__)(unraisable)
             return
         import os

@@ -304,8 +304,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     unknown = sorted(set(names) - set(FITTED))
     if unknown or not names:
         raise ScenarioError(f"names must be a non-empty subset of {', '.join(FITTED)}, got {', '.join(unknown) or 'none'}")
-    tire_only = [k for k in ("tire_progressive_onset_m", "tire_progressive_ratio_rear", "tire_progressive_onset_rear_m")
-                 if k in names]
+    tire_only = [k for k in names if k.startswith("tire_progressive") and k != "tire_progressive_ratio"]
     if tire_only and "tire_progressive_ratio" not in names and (fitted_guess or {}).get("tire_progressive_ratio") is None:
         raise ScenarioError(f"{tire_only[0]} is the progressive tire's: fit tire_progressive_ratio too, or give its "
                             "value in fitted_guess")
@@ -320,8 +319,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
             raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
                                 "name other fields to fit")
     guess = {"payload_kg": payload, "payload_x_m": x, **catalogue(), **(fitted_guess or {})}
-    for k in ("cab_mount_hz", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
-              "tire_progressive_onset_rear_m"):  # held: rigid cab, linear tire
+    for k in [k for k in FITTED if k == "cab_mount_hz" or k.startswith("tire_progressive")]:  # held: rigid cab, linear tire
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper = [], []
