@@ -80,6 +80,7 @@ from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.studies.model_correction.first_guess import catalogue, static_guess
 from scenarios.studies.model_correction.model_runs import SETTLE_S, check_record, portable, window_job
+from scenarios.studies.model_correction.onset_load import ONSET_STIFFNESS, load_guess, load_range
 from scenarios.studies.model_correction.result import Calibration
 from scenarios.studies.model_correction.uncertainty import uncertainties
 from scenarios.studies.model_correction.weighting import differential_kernel
@@ -173,12 +174,17 @@ class _Problem:
     its first guess (the payload's x: offset by metres), but for the fields of :data:`COMPLIANCE`:
     theta = (guess / value)^2, the mount's compliance over the guess's."""
 
-    def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None):
+    def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None, loads=None):
         self.names, self.t, self.x_a, self.force, self.windows = names, t, x_a, force, windows
         self.base, self.fixed, self.executor, self.kernel = portable(base), fixed, executor, kernel
-        self.offset = np.array([guess[k] - RANGES[k] if k in ADDITIVE else 0.0 for k in names])
-        self.scale = np.array([RANGES[k] if k in ADDITIVE else guess[k] for k in names])
+        loads = loads or {}  # onset name: (first-guess load, span), N (onset_load)
+        start = {k: loads[k] if k in loads else (guess[k], RANGES[k]) for k in names if k in ADDITIVE}
+        self.offset = np.array([start[k][0] - start[k][1] if k in start else 0.0 for k in names])
+        self.scale = np.array([start[k][1] if k in start else guess[k] for k in names])
         self.compliance = np.array([k in COMPLIANCE for k in names])
+        # (onset's index, its kt's index or None, kt held): onset = load / kt
+        self.onsets = [(i, names.index(ONSET_STIFFNESS[k]) if ONSET_STIFFNESS[k] in names else None,
+                        fixed.get(ONSET_STIFFNESS[k])) for i, k in enumerate(names) if k in loads]
         self.norm = np.concatenate([force[s:e] for _, s, e in windows]).std(axis=0)
         self.half = 0 if kernel is None else kernel.size // 2
         self.evaluations, self.cache = 0, {}
@@ -189,14 +195,21 @@ class _Problem:
         out = self.offset + self.scale * theta
         c = self.compliance
         out[c] = self.scale[c] / np.sqrt(theta[c])
+        for i, j, kt in self.onsets:
+            out[i] /= out[j] if j is not None else kt
         return out
 
-    def slope(self, theta) -> np.ndarray:
-        """d field / d theta at ``theta`` (SI per 1)."""
+    def mapping(self, theta) -> np.ndarray:
+        """d field_i / d theta_j at ``theta`` (SI per 1, n x n): diagonal but for an onset's kt."""
         theta = np.asarray(theta, float)
         c = self.compliance
-        out = self.scale.copy()
-        out[c] = 0.5 * self.scale[c] * theta[c] ** -1.5
+        slope = self.scale.copy()
+        slope[c] = 0.5 * self.scale[c] * theta[c] ** -1.5
+        out, values = np.diag(slope), self.fields(theta)
+        for i, j, kt in self.onsets:
+            out[i, i] = self.scale[i] / (values[j] if j is not None else kt)
+            if j is not None:  # onset = load / kt
+                out[i, j] = -values[i] / values[j] * self.scale[j]
         return out
 
     def thetas(self, lower, upper) -> tuple[np.ndarray, np.ndarray]:
@@ -322,19 +335,25 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     for k in [k for k in FITTED if k == "cab_mount_hz" or k.startswith("tire_progressive")]:  # held: rigid cab, linear tire
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
-    lower, upper = [], []
+    lower, upper, loads = [], [], {}
     fixed = {k: None if v is None else float(v) for k, v in guess.items() if k not in names}
     for k in names:
         if guess[k] is None:
             raise ScenarioError(f"fitted_guess gives no value for {k}, which is fitted; give a number or leave it out "
                                 "of names")
-        lo, hi = BOUNDS.get(k, (-3.5, 3.5) if k == "payload_x_m" else (0.0, np.inf))[:2]
-        r = RANGES[k]
-        a, b = (guess[k] - r, guess[k] + r) if k in ADDITIVE else (guess[k] * r[0], guess[k] * r[1])
-        lower.append(max(a, lo))
-        upper.append(min(b, hi))
+        if k in ONSET_STIFFNESS:  # searched as the load where the tire stiffens (onset_load), N
+            kt = guess[ONSET_STIFFNESS[k]]
+            (a, b), load = load_range(force, wins, k), load_guess(force, wins, k, (fitted_guess or {}).get(k), kt)
+            loads[k], guess[k] = (load, max(b - a, 1.0)), load / kt
+        else:
+            lo, hi = BOUNDS.get(k, (-3.5, 3.5) if k == "payload_x_m" else (0.0, np.inf))[:2]
+            r = RANGES[k]
+            a, b = (guess[k] - r, guess[k] + r) if k in ADDITIVE else (guess[k] * r[0], guess[k] * r[1])
+            a, b = max(a, lo), min(b, hi)
+        lower.append(a)
+        upper.append(b)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
-        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel)
+        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads)
         lb, ub = prob.thetas(lower, upper)
         theta0 = np.ones(len(names))
         prob.fun(theta0)
@@ -342,8 +361,10 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, lb, ub), bounds=(lb, ub), method="trf",
                             x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
         f_opt, m_opt = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
-    sigma, robust = uncertainties(res.jac, f_opt, int(round(BLOCK_S * fs)))
-    fitted, slope = prob.fields(res.x), np.abs(prob.slope(res.x))
+    sigma, robust = uncertainties(res.jac, f_opt, int(round(BLOCK_S * fs)), prob.mapping(res.x))
+    fitted = prob.fields(res.x)
+    for i, j, kt in prob.onsets:  # an onset's range reported in metres, at the fitted kt
+        lower[i], upper[i] = (v / (fitted[j] if j is not None else kt) for v in (lower[i], upper[i]))
 
     def per_wheel(model_N):
         return tuple(float(v) for v in np.sqrt(np.mean(prob.plain(model_N) ** 2, axis=0)) / prob.norm)
@@ -352,8 +373,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
 
     return Calibration(names=names, units=tuple(UNITS[k] for k in names),
                        initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
-                       sigma=tuple(float(s) for s in sigma * slope),
-                       sigma_robust=tuple(float(s) for s in robust * slope), fixed=fixed, fit_nrmse=per_wheel(m_opt),
+                       sigma=tuple(float(s) for s in sigma), sigma_robust=tuple(float(s) for s in robust), fixed=fixed, fit_nrmse=per_wheel(m_opt),
                        initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
                        windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
                        evaluations=int(prob.evaluations), converged=bool(res.status > 0),

@@ -7,16 +7,20 @@ import numpy as np
 __all__ = ["uncertainties"]
 
 
-def uncertainties(jac, residual, block: int) -> tuple[np.ndarray, np.ndarray]:
-    """1-sigma of the fitted (scaled) parameters: formal, sqrt(diag((J^T J)^-1 s^2)) with s^2 the
-    residual variance on m - n degrees of freedom (white residual), and block-robust, the sandwich
+def uncertainties(jac, residual, block: int, mapping=None) -> tuple[np.ndarray, np.ndarray]:
+    """1-sigma of the fitted values: formal, from (J^T J)^-1 s^2 with s^2 the residual variance on
+    m - n degrees of freedom (white residual), and block-robust, from the sandwich
     (J^T J)^-1 (sum_b J_b^T r_b r_b^T J_b) (J^T J)^-1 over blocks of ``block`` samples (4 residual
-    rows each: one per wheel), which holds for a residual correlated over less than a block."""
+    rows each: one per wheel), which holds for a residual correlated over less than a block. Each
+    covariance of the fitted (scaled) parameters theta is carried to the values through
+    ``mapping``, d value_i / d theta_j (n x n; None: the identity, the sigmas of theta), as
+    M C M^T."""
     m, p = jac.shape
+    mat = np.eye(p) if mapping is None else np.asarray(mapping, float)
     bread = np.linalg.pinv(jac.T @ jac)
-    formal = np.diag(bread) * float(residual @ residual) / max(m - p, 1)
+    formal = bread * float(residual @ residual) / max(m - p, 1)
     labels = (np.arange(m) // 4) // max(int(block), 1)
     scores = np.zeros((int(labels[-1]) + 1, p))
     np.add.at(scores, labels, jac * residual[:, None])
-    robust = np.diag(bread @ (scores.T @ scores) @ bread)
-    return np.sqrt(np.clip(formal, 0.0, None)), np.sqrt(np.clip(robust, 0.0, None))
+    robust = bread @ (scores.T @ scores) @ bread
+    return tuple(np.sqrt(np.clip(np.diag(mat @ c @ mat.T), 0.0, None)) for c in (formal, robust))

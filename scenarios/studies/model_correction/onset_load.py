@@ -1,0 +1,54 @@
+"""The progressive tire's onset fitted as the wheel load where the tire stiffens, not as a deflection.
+
+The calibrated model's tire is bilinear (``TruckVariant.tire_progressive_ratio``): stiffness kt up
+to the onset deflection, (1 + ratio) kt beyond it, so the tire stiffens at the wheel load
+F_on = kt x onset. The calibration searches F_on (N) instead of the onset (m), within the loads
+its windows measure on that axle (:func:`load_range`), and hands MuJoCo onset = F_on / kt:
+
+* an onset whose load lies beyond every measured load changes no model force, so neither it nor
+  the ratio has a gradient, and a fit that wanders there stays there: the generalization suite's
+  gen00 and gen12 (30 s, a +25 % tire at 2 cm, rear static deflection 1.95 cm) started from the
+  catalogue's 2 cm at the catalogue's rear kt (2.07 MN/m: 41 kN, above the largest rear load of
+  36-38 kN), never moved the rear ratio, and ended linear at the range's top (4 cm), their rear
+  wheels at 0.51-0.56 of the linear floor (measured at commit 433f6e4);
+* a load range does not move when kt does: a bound in metres would;
+* every bilinear tire is still representable on the measured loads: one stiffening below the
+  smallest load is the same there as one at that load, one beyond the largest the same as a
+  linear tire.
+
+The first guess is the axle's median measured load, its static load, where the kink has
+measured loads on both sides; an onset given in metres (a lab's ``[vehicle]`` value) is taken at
+the first-guess kt, clipped into the range.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["ONSET_STIFFNESS", "ONSET_WHEELS", "load_range", "load_guess"]
+
+#: Each fitted onset and the linear stiffness whose load it is: the all-wheel onset is the front
+#: tires' (the rear take it too when their own is not given, at the front's load).
+ONSET_STIFFNESS = {"tire_progressive_onset_m": "tire_stiffness_front_N_per_m",
+                   "tire_progressive_onset_rear_m": "tire_stiffness_rear_N_per_m"}
+#: The record's columns (corners fl, fr, rl, rr) whose loads bound each onset.
+ONSET_WHEELS = {"tire_progressive_onset_m": (0, 1), "tire_progressive_onset_rear_m": (2, 3)}
+
+
+def load_range(force_N, windows, name: str) -> tuple[float, float]:
+    """(smallest, largest) measured load of onset ``name``'s wheels on the scored samples of
+    ``windows`` ((run start, scored start, end) sample triples), N."""
+    cols = list(ONSET_WHEELS[name])
+    loads = np.concatenate([np.asarray(force_N, float)[s:e, cols].ravel() for _, s, e in windows])
+    return float(loads.min()), float(loads.max())
+
+
+def load_guess(force_N, windows, name: str, onset_m: float | None, kt_N_per_m: float) -> float:
+    """First guess of the load at onset ``name``, N: ``onset_m`` (m) at ``kt_N_per_m`` (N/m)
+    clipped into :func:`load_range`, or without one (None) the wheels' median load."""
+    lo, hi = load_range(force_N, windows, name)
+    if onset_m is None:
+        cols = list(ONSET_WHEELS[name])
+        return float(np.median(np.concatenate([np.asarray(force_N, float)[s:e, cols].ravel()
+                                               for _, s, e in windows])))
+    return float(np.clip(onset_m * kt_N_per_m, lo, hi))
