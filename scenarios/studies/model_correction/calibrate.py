@@ -17,9 +17,12 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model whose tire is
   linear cannot follow it: on a plant with a +25 % stiffening at 2 cm the linear-tire model left 13
   of 96 generalization wheels above the linear floor and the paper's light truck at +50 % fell back
-  to the linear correction (docs/model_correction.md). Fitted from a catalogue guess of +20 % at
-  2 cm (:mod:`~scenarios.studies.model_correction.first_guess`), searched additively (:data:`ADDITIVE`:
-  0-0.7 and 0-4 cm); a linear-tire truck fits the ratio to ~0, where the onset is not identifiable
+  to the linear correction (docs/model_correction.md). The ratio from a catalogue guess of +20 %
+  (:mod:`~scenarios.studies.model_correction.first_guess`), searched additively (:data:`ADDITIVE`:
+  0-0.7); the onset as the wheel load where the tire stiffens, within the loads the windows
+  measure on its axle, from the axle's static load
+  (:mod:`~scenarios.studies.model_correction.onset_load`, which says why: an onset beyond every
+  measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0, where the onset is not identifiable
   and does not matter (paper case high 72, 30 s: ratio 7.5e-5). Measured on the same case, a plant
   stiffening +50 % at 3 cm: ratio 0.495 and onset 3.00 cm fitted, every wheel 0.04-0.05 of the
   linear floor, against 0.84-0.98 (front) with the onset held at 2 cm;
@@ -108,16 +111,17 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m":
 DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
 #: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.build.BOUNDS`.
+#: The onsets have none: their range is the loads measured on their axle (onset_load).
 RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
           "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 4.0),
           "spring_friction_rear_N": (0.05, 4.0), "tire_progressive_ratio": 0.5,
-          "tire_progressive_onset_m": 0.02, "tire_progressive_ratio_rear": 0.5,
-          "tire_progressive_onset_rear_m": 0.02, "cab_mount_hz": (0.4, 12.0)}
+          "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`mjcf.build.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
-#: ratio and onset, whose linear tire is ratio 0.
+#: ratio, whose linear tire is ratio 0; the onsets are searched as loads, N, their range and span
+#: the loads measured on their axle (:mod:`~scenarios.studies.model_correction.onset_load`).
 ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
             "tire_progressive_onset_rear_m")
 #: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
@@ -204,7 +208,7 @@ class _Problem:
         theta = np.asarray(theta, float)
         c = self.compliance
         slope = self.scale.copy()
-        slope[c] = 0.5 * self.scale[c] * theta[c] ** -1.5
+        slope[c] = -0.5 * self.scale[c] * theta[c] ** -1.5
         out, values = np.diag(slope), self.fields(theta)
         for i, j, kt in self.onsets:
             out[i, i] = self.scale[i] / (values[j] if j is not None else kt)

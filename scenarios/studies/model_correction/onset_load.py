@@ -18,7 +18,7 @@ its windows measure on that axle (:func:`load_range`), and hands MuJoCo onset = 
 
 The first guess is the axle's median measured load, its static load, where the kink has
 measured loads on both sides; an onset given in metres (a lab's ``[vehicle]`` value) is taken at
-the first-guess kt, clipped into the range.
+the first-guess kt where that load lies inside the range, and replaced by the median where not.
 """
 
 from __future__ import annotations
@@ -35,20 +35,23 @@ ONSET_STIFFNESS = {"tire_progressive_onset_m": "tire_stiffness_front_N_per_m",
 ONSET_WHEELS = {"tire_progressive_onset_m": (0, 1), "tire_progressive_onset_rear_m": (2, 3)}
 
 
+def _loads(force_N, windows, name: str) -> np.ndarray:
+    cols = list(ONSET_WHEELS[name])
+    return np.concatenate([np.asarray(force_N, float)[s:e, cols].ravel() for _, s, e in windows])
+
+
 def load_range(force_N, windows, name: str) -> tuple[float, float]:
     """(smallest, largest) measured load of onset ``name``'s wheels on the scored samples of
     ``windows`` ((run start, scored start, end) sample triples), N."""
-    cols = list(ONSET_WHEELS[name])
-    loads = np.concatenate([np.asarray(force_N, float)[s:e, cols].ravel() for _, s, e in windows])
+    loads = _loads(force_N, windows, name)
     return float(loads.min()), float(loads.max())
 
 
 def load_guess(force_N, windows, name: str, onset_m: float | None, kt_N_per_m: float) -> float:
-    """First guess of the load at onset ``name``, N: ``onset_m`` (m) at ``kt_N_per_m`` (N/m)
-    clipped into :func:`load_range`, or without one (None) the wheels' median load."""
-    lo, hi = load_range(force_N, windows, name)
-    if onset_m is None:
-        cols = list(ONSET_WHEELS[name])
-        return float(np.median(np.concatenate([np.asarray(force_N, float)[s:e, cols].ravel()
-                                               for _, s, e in windows])))
-    return float(np.clip(onset_m * kt_N_per_m, lo, hi))
+    """First guess of the load at onset ``name``, N: ``onset_m`` (m) at ``kt_N_per_m`` (N/m) where
+    that load lies strictly inside :func:`load_range`; otherwise (or None) the wheels' median load:
+    an onset at or beyond the measured loads would start the fit where its ratio has no gradient."""
+    loads = _loads(force_N, windows, name)
+    if onset_m is not None and loads.min() < onset_m * kt_N_per_m < loads.max():
+        return float(onset_m * kt_N_per_m)
+    return float(np.median(loads))

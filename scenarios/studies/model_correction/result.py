@@ -37,13 +37,15 @@ class Calibration:
     units : tuple of str
         Their SI units ("kg", "m", "N/m", "N s/m", "N", "Hz").
     initial : tuple of float
-        The first guess, SI (payload and its position from the measured static loads, the rest
-        catalogue values: :func:`scenarios.studies.model_correction.first_guess.catalogue`).
+        The first guess, SI (payload and its position from the measured static loads, a tire's
+        onset at its axle's static load (:mod:`scenarios.studies.model_correction.onset_load`), the
+        rest catalogue values: :func:`scenarios.studies.model_correction.first_guess.catalogue`).
     fitted : tuple of float
         The fitted values, SI.
     sigma : tuple of float
         1-sigma uncertainty of each fitted value, SI: the diagonal of (J^T J)^-1 s^2 at the optimum
-        (J the Jacobian of the residuals, s^2 their variance with m - n degrees of freedom). It
+        (J the Jacobian of the residuals, s^2 their variance with m - n degrees of freedom), carried
+        to the values through their derivatives (an onset, load / kt, through its kt too). It
         treats the residual as white: a lower bound where a model mismatch leaves a coloured one.
     sigma_robust : tuple of float
         1-sigma from the block-robust sandwich estimate (blocks of
@@ -75,7 +77,8 @@ class Calibration:
     bounds : tuple of (float, float)
         Each fitted field's search range, SI (its first guess times
         :data:`~scenarios.studies.model_correction.calibrate.RANGES`, clipped to
-        :data:`mjcf.build.BOUNDS`): a value at its edge was stopped there, not fitted.
+        :data:`mjcf.build.BOUNDS`; a tire's onset: the loads measured on its axle over the fitted
+        kt): a value at its edge was stopped there, not fitted.
     noise_nrmse : tuple of float
         Per wheel: the measured force's white noise (:func:`correction.noise.noise_rms`, read above
         the truck's band) over the same std as :attr:`fit_nrmse`, 1: the part of the fit NRMSE no
