@@ -16,7 +16,7 @@ import re
 import socket
 import tempfile
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "dead_writers_leftovers", "host_tag", "pid_running",
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "dead_writers_leftovers", "host_tag", "pid_running",
            "remove_stale_temp_files"]
 
 
@@ -80,34 +80,51 @@ def remove_stale_temp_files(path) -> list[pathlib.Path]:
     return removed
 
 
-def atomic_write_bytes(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename).
+@contextlib.contextmanager
+def atomic_path(path):
+    """A temporary file beside ``path`` for a writer that opens the file itself (a library's file
+    sink): leaving the block without error flushes it to disk and renames it onto ``path``; an
+    error (or an interrupt) removes it.
 
-    ``data`` is bytes, or an iterable of bytes written one after the other (a large file
-    streamed without being held whole in memory).
-
-    The temporary file is ``.{name}.{host}.{pid}.{random}.tmp``; one left by a writer that was
-    killed (its pid no longer runs on this host) is removed before writing
+    The temporary file is ``.{name}.{host}.{pid}.{random}.tmp``, created empty; one left by a
+    writer that was killed (its pid no longer runs on this host) is removed first
     (:func:`remove_stale_temp_files`).
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file.
     """
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_temp_files(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{host_tag()}.{os.getpid()}.", suffix=".tmp")
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as fh:
-            for part in ((data,) if isinstance(data, (bytes, bytearray, memoryview)) else data):
-                fh.write(part)
-            fh.flush()
-            os.fsync(fh.fileno())
+        yield pathlib.Path(tmp)
+        fd = os.open(tmp, os.O_RDWR)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
         os.chmod(tmp, 0o644)  # mkstemp creates 0600; results are meant to be shared
         os.replace(tmp, path)
     except BaseException:
-        try:
+        with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-        except FileNotFoundError:
-            pass
         raise
+
+
+def atomic_write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename:
+    :func:`atomic_path`).
+
+    ``data`` is bytes, or an iterable of bytes written one after the other (a large file
+    streamed without being held whole in memory).
+    """
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        for part in ((data,) if isinstance(data, (bytes, bytearray, memoryview)) else data):
+            fh.write(part)
 
 
 def atomic_write_text(path, text: str) -> None:

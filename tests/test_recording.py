@@ -242,6 +242,35 @@ def test_errors_leave_the_old_file_and_nothing_else(runs, tmp_path, n_cases):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.rrd"]
 
 
+@pytest.mark.parametrize("n_cases", [1, 2])
+def test_an_incomplete_recording_is_an_error_that_leaves_the_old_file(runs, tmp_path, monkeypatch, n_cases):
+    """rerun's file sink writes on its own thread and reports a failed write (a full disk) nowhere we
+    can catch: a file cut after the sink closed it, as a full disk would leave it, lacks the footer,
+    and write_recording refuses to put it in place."""
+    import rerun as rr
+
+    saved, save, disconnect = [], rr.RecordingStream.save, rr.RecordingStream.disconnect
+
+    def remember(self, file, *args, **kwargs):
+        saved.append(file)
+        return save(self, file, *args, **kwargs)
+
+    def cut(self):
+        disconnect(self)
+        os.truncate(saved[-1], os.path.getsize(saved[-1]) // 2)
+
+    monkeypatch.setattr(rr.RecordingStream, "save", remember)
+    monkeypatch.setattr(rr.RecordingStream, "disconnect", cut)
+    road, rig = runs
+    path = tmp_path / "out.rrd"
+    path.write_bytes(b"old")
+    results = [road, rig] if n_cases == 1 else [road, rig, dataclasses.replace(road, scenario_name="u")]
+    with pytest.raises(OSError, match="incomplete"):
+        write_recording(path, results)
+    assert path.read_bytes() == b"old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.rrd"]
+
+
 def test_a_run_without_recording_imports_no_rerun(tmp_path):
     toml = tmp_path / "s.toml"
     toml.write_text('name = "t"\nspeed_kmh = 72.0\nduration_s = 0.5\nlead_in_s = 0.5\nseed = 1\n'
@@ -274,6 +303,11 @@ def test_viewer_opened_only_when_asked(runs, tmp_path, monkeypatch):
 
 
 def test_warm_up_writes_nothing(tmp_path, monkeypatch):
+    """Nothing in the working folder, nothing left in the temporary one (where its file goes)."""
+    import tempfile
+
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
     warm_up()
-    assert list(tmp_path.iterdir()) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tmp"] and list((tmp_path / "tmp").iterdir()) == []

@@ -281,6 +281,23 @@ def test_a_killed_writers_temp_file_is_removed_by_the_next_write(tmp_path):
     assert remove_stale_temp_files(target) == []
 
 
+def test_a_file_written_by_a_library_is_put_in_place_whole_or_not_at_all(tmp_path):
+    """atomic_path: the temporary file the block wrote (as a library's file sink does) is renamed onto
+    the target, readable by all (0644); an error in the block removes it and keeps the old target."""
+    target = tmp_path / "rec.rrd"
+    target.write_bytes(b"old")
+    with pytest.raises(RuntimeError):
+        with atomic.atomic_path(target) as tmp:
+            tmp.write_bytes(b"half")
+            raise RuntimeError("the writer failed")
+    assert target.read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == ["rec.rrd"]
+    with atomic.atomic_path(target) as tmp:
+        assert tmp.parent == tmp_path and tmp.name.startswith(f".rec.rrd.{atomic.host_tag()}.{os.getpid()}.")
+        tmp.write_bytes(b"whole")
+    assert target.read_bytes() == b"whole" and (target.stat().st_mode & 0o777) == 0o644
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.rrd"]
+
+
 # ------------------------------------------------------------------- workers die with their parent
 def _alive(pid: int) -> bool:
     try:

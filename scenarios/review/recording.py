@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mjcf.names import CORNERS, pan_body
-from scenarios.core.files import atomic_write_bytes
+from correction.atomic import atomic_path
 from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, Geoms, PoseTrack, drawn_bodies, model_geoms
 from scenarios.core.results import RunResult
 
@@ -168,23 +168,33 @@ def write_recording(
 
     Notes
     -----
-    Each scenario is logged into a memory sink. One scenario's stream is the file; several
-    are merged by the ``rerun rrd merge`` of the pinned wheel's CLI, because an RRD stream ends
-    with a footer that indexes its own chunks and streams cannot be concatenated byte-wise.
+    Each scenario is logged through rerun's file sink into a temporary file beside ``path``
+    (:func:`correction.atomic.atomic_path`). One scenario's file is the recording; several are
+    merged by the ``rerun rrd merge`` of the pinned wheel's CLI, because an RRD stream ends with
+    a footer that indexes its own chunks and streams cannot be concatenated byte-wise.
     """
     path = pathlib.Path(path)
-    streams = _streams(_cases(results, poses, corrected, dlc_table), pose_rate_hz)
-    if len(streams) == 1:
-        atomic_write_bytes(path, streams[0])
-    else:
-        _merge_atomic(path, streams)
+    cases = _cases(results, poses, corrected, dlc_table)
+    with atomic_path(path) as tmp:
+        if len(cases) == 1:
+            _save(cases, pose_rate_hz, [tmp])
+        else:
+            _merge(cases, pose_rate_hz, tmp)
     if spawn:
         open_viewer(path)
     return path
 
 
-def _streams(cases: list[_Case], pose_rate_hz: float) -> list[bytes]:
-    """One RRD stream (bytes) per case, logged into memory sinks; the blueprint goes with the first."""
+#: How every complete RRD stream of the pinned rerun ends (its footer's magic, then its version).
+RRD_END = b"RRF2FOOT"
+
+
+def _save(cases: list[_Case], pose_rate_hz: float, files: Sequence[pathlib.Path]) -> None:
+    """Each case logged to its own RRD file (rerun's file sink, which encodes on its own thread
+    while the arrays are sent; a memory sink, whose bytes Python then writes, cost a 120 s rig run
+    (53 MB) about half as much again: ``benchmarks/recording_e2e.py`` measures the end-to-end
+    cost); the blueprint goes with the first. A file that does not end with rerun's footer
+    (:data:`RRD_END`: the sink failed, a full disk) raises ``OSError``."""
     import rerun as rr
 
     from scenarios.review import blueprint as bp
@@ -193,19 +203,22 @@ def _streams(cases: list[_Case], pose_rate_hz: float) -> list[bytes]:
     for case in cases:
         plots.update(dict.fromkeys(bp.case_series(case.runs, case.corrected)))
     layout = bp.review_blueprint(next(iter(cases[0].runs.values())).corners, tuple(plots))
-    streams = []
-    for i, case in enumerate(cases):
+    for i, (case, file) in enumerate(zip(cases, files, strict=True)):
         rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-        storage = rec.memory_recording().storage
+        rec.save(file)
         if i == 0:  # the blueprint belongs to the application: one for every case
             rec.send_blueprint(layout)
         first = next(iter(case.runs.values()))
         track = case.poses if case.poses is not None else rest_track(case.runs.get("rig", first), pose_rate_hz)
         bp.log_case(rec, case.name, case.runs, track=track, corrected=case.corrected, dlc_table=case.dlc_table)
         rec.flush()
-        streams.append(storage.concat_as_bytes())
+        rec.disconnect()  # writes the footer and closes the file
         del rec
-    return streams
+        with open(file, "rb") as fh:
+            fh.seek(0, os.SEEK_END)
+            fh.seek(max(0, fh.tell() - 4 * len(RRD_END)))
+            if RRD_END not in fh.read():
+                raise OSError(f"rerun left the recording of {case.name!r} incomplete (no footer); is the disk full?")
 
 
 def warm_up() -> None:
@@ -215,7 +228,8 @@ def warm_up() -> None:
     a 30 s rig run: 0.42 s against 0.18 s): on first use rerun's converters have pyarrow import
     pandas (which the recording process refuses) and rerun starts its logging machinery. A process
     that will write a recording later (:mod:`scenarios.review.recording_process`) calls this while
-    it waits, so that the write itself costs only its data (0.20 s against 0.18 s). Writes no file.
+    it waits, so that the write itself costs only its data (0.20 s against 0.18 s). Writes a
+    temporary file only.
     """
     t = np.array([0.0, 1e-3])
     zero = np.zeros((t.size, len(CORNERS)))
@@ -231,34 +245,31 @@ def warm_up() -> None:
     pos = np.zeros((t.size, len(bodies), 3))
     pos[:, :, 0] = [1.0, 1.0, -1.0, -1.0]  # front pans ahead of the rear ones (the road's wheelbase)
     quat = np.tile([1.0, 0.0, 0.0, 0.0], (t.size, len(bodies), 1))
-    _streams(_cases([result], {result.scenario_name: PoseTrack(t, bodies, pos, quat, geoms)}, None, "warm-up"), 50.0)
+    cases = _cases([result], {result.scenario_name: PoseTrack(t, bodies, pos, quat, geoms)}, None, "warm-up")
+    with tempfile.TemporaryDirectory(prefix="rigsim-warm-up.") as tmp:
+        _save(cases, 50.0, [pathlib.Path(tmp) / "warm-up.rrd"])
 
 
 def _rerun_cli() -> list[str]:
     return [sys.executable, "-m", "rerun_cli"]
 
 
-def _merge_atomic(path: pathlib.Path, streams: list[bytes]) -> None:
-    """Merge single-recording RRD streams into one file with ``rerun rrd merge`` (the CLI of
-    the pinned rerun-sdk wheel): RRD streams cannot be concatenated byte-wise, since each ends
-    with a footer indexing its own chunks. Temporary files live beside ``path``; an error
-    leaves nothing behind."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp_dir = pathlib.Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"))
+def _merge(cases: list[_Case], pose_rate_hz: float, out: pathlib.Path) -> None:
+    """Several cases as one file ``out``: each saved on its own (:func:`_save`), then merged by
+    ``rerun rrd merge`` (the CLI of the pinned rerun-sdk wheel): RRD streams cannot be concatenated
+    byte-wise, since each ends with a footer indexing its own chunks. The parts live in a
+    temporary folder beside ``out``, removed in any case."""
+    tmp_dir = pathlib.Path(tempfile.mkdtemp(dir=out.parent, prefix=f"{out.name}.", suffix=".parts"))
     try:
-        parts = []
-        for i, data in enumerate(streams):
-            parts.append(tmp_dir / f"case{i}.rrd")
-            parts[-1].write_bytes(data)
-        out = tmp_dir / "merged.rrd"
-        proc = subprocess.run([*_rerun_cli(), "rrd", "merge", *map(str, parts), "-o", str(out)],
+        parts = [tmp_dir / f"case{i}.rrd" for i in range(len(cases))]
+        _save(cases, pose_rate_hz, parts)
+        merged = tmp_dir / "merged.rrd"
+        proc = subprocess.run([*_rerun_cli(), "rrd", "merge", *map(str, parts), "-o", str(merged)],
                               stdin=subprocess.DEVNULL, capture_output=True, text=True)
-        if proc.returncode != 0 or not out.is_file():
+        if proc.returncode != 0 or not merged.is_file():
             tail = proc.stderr.strip().splitlines()[-1:] or ["no output"]
             raise RuntimeError(f"rerun rrd merge failed (exit {proc.returncode}): {tail[0]}")
-        with open(out, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.replace(out, path)
+        os.replace(merged, out)
     finally:
         shutil.rmtree(tmp_dir, ignore_errors=True)
 
