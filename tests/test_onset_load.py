@@ -84,3 +84,14 @@ def test_the_sigmas_go_through_the_mapping():
     cov = np.linalg.inv(jac.T @ jac) * (res @ res) / (400 - 2)
     assert formal[0] == pytest.approx(np.sqrt(cov[0, 0]))
     assert formal[1] == pytest.approx(np.sqrt(cov[0, 0] + cov[1, 1] - 2 * cov[0, 1]))
+
+
+def test_an_onset_stays_within_its_bounds_at_a_soft_kt():
+    """A large load over a kt at the bottom of its search range would put the onset past
+    mjcf.build.BOUNDS (0.1 m), which TruckVariant refuses: the fields stop it there."""
+    from mjcf.build import BOUNDS
+
+    names = ("tire_stiffness_front_N_per_m", FRONT)
+    prob = problem(names, {"tire_stiffness_front_N_per_m": 7.65e5, FRONT: 0.03}, {FRONT: (40e3, 10e3)})
+    assert prob.fields(np.array([0.3, 1.0]))[1] == BOUNDS[FRONT][1] == 0.1  # 40 kN / 230 kN/m = 0.17 m
+    assert prob.fields(np.array([1.0, 1.0]))[1] == pytest.approx(40e3 / 7.65e5)

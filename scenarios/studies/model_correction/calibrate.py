@@ -199,8 +199,8 @@ class _Problem:
         out = self.offset + self.scale * theta
         c = self.compliance
         out[c] = self.scale[c] / np.sqrt(theta[c])
-        for i, j, kt in self.onsets:
-            out[i] /= out[j] if j is not None else kt
+        for i, j, kt in self.onsets:  # a soft kt tried against a large load: kept within the field's bounds
+            out[i] = min(out[i] / (out[j] if j is not None else kt), BOUNDS[self.names[i]][1])
         return out
 
     def mapping(self, theta) -> np.ndarray:
