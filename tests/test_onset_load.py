@@ -95,3 +95,13 @@ def test_an_onset_stays_within_its_bounds_at_a_soft_kt():
     prob = problem(names, {"tire_stiffness_front_N_per_m": 7.65e5, FRONT: 0.03}, {FRONT: (40e3, 10e3)})
     assert prob.fields(np.array([0.3, 1.0]))[1] == BOUNDS[FRONT][1] == 0.1  # 40 kN / 230 kN/m = 0.17 m
     assert prob.fields(np.array([1.0, 1.0]))[1] == pytest.approx(40e3 / 7.65e5)
+
+
+def test_a_wheel_off_the_ground_bounds_the_onset_at_zero_load(record):
+    """A lifted wheel reads the load cells' noise about 0 N: no tire pulls, so the range starts at 0,
+    and an onset at 0 N is the XML's lower bound, 0 m."""
+    force, windows = record
+    force[12, 0] = -260.0
+    assert load_range(force, windows, FRONT) == (0.0, 30e3)
+    force[10:30, :2], force[50:70, :2] = -50.0, -40.0  # every front sample below 0
+    assert load_range(force, windows, FRONT) == (0.0, 0.0) and load_guess(force, windows, FRONT, None, 1e6) == 0.0

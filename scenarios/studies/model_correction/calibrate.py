@@ -200,7 +200,7 @@ class _Problem:
         c = self.compliance
         out[c] = self.scale[c] / np.sqrt(theta[c])
         for i, j, kt in self.onsets:  # a soft kt tried against a large load: kept within the field's bounds
-            out[i] = min(out[i] / (out[j] if j is not None else kt), BOUNDS[self.names[i]][1])
+            out[i] = np.clip(out[i] / (out[j] if j is not None else kt), *BOUNDS[self.names[i]][:2])
         return out
 
     def mapping(self, theta) -> np.ndarray:
@@ -348,7 +348,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         if k in ONSET_STIFFNESS:  # searched as the load where the tire stiffens (onset_load), N
             kt = guess[ONSET_STIFFNESS[k]]
             (a, b), load = load_range(force, wins, k), load_guess(force, wins, k, (fitted_guess or {}).get(k), kt)
-            loads[k], guess[k] = (load, max(b - a, 1.0)), load / kt
+            b = max(b, a + 1.0)  # a range, however narrow (least squares needs lower < upper)
+            loads[k], guess[k] = (load, b - a), load / kt
         else:
             lo, hi = BOUNDS.get(k, (-3.5, 3.5) if k == "payload_x_m" else (0.0, np.inf))[:2]
             r = RANGES[k]

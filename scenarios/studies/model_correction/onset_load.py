@@ -42,16 +42,18 @@ def _loads(force_N, windows, name: str) -> np.ndarray:
 
 def load_range(force_N, windows, name: str) -> tuple[float, float]:
     """(smallest, largest) measured load of onset ``name``'s wheels on the scored samples of
-    ``windows`` ((run start, scored start, end) sample triples), N."""
+    ``windows`` ((run start, scored start, end) sample triples), N; neither below 0: a wheel off
+    the ground reads 0 and the load cells' noise about it (generalization case gen03, an empty
+    truck on a class D road, went below 0 at the front, and its negative onset was refused)."""
     loads = _loads(force_N, windows, name)
-    return float(loads.min()), float(loads.max())
+    return max(float(loads.min()), 0.0), max(float(loads.max()), 0.0)
 
 
 def load_guess(force_N, windows, name: str, onset_m: float | None, kt_N_per_m: float) -> float:
     """First guess of the load at onset ``name``, N: ``onset_m`` (m) at ``kt_N_per_m`` (N/m) where
     that load lies strictly inside :func:`load_range`; otherwise (or None) the wheels' median load:
     an onset at or beyond the measured loads would start the fit where its ratio has no gradient."""
-    loads = _loads(force_N, windows, name)
-    if onset_m is not None and loads.min() < onset_m * kt_N_per_m < loads.max():
+    lo, hi = load_range(force_N, windows, name)
+    if onset_m is not None and lo < onset_m * kt_N_per_m < hi:
         return float(onset_m * kt_N_per_m)
-    return float(np.median(loads))
+    return float(np.clip(np.median(_loads(force_N, windows, name)), lo, hi))
