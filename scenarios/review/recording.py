@@ -191,10 +191,11 @@ RRD_END = b"RRF2FOOT"
 
 def _save(cases: list[_Case], pose_rate_hz: float, files: Sequence[pathlib.Path]) -> None:
     """Each case logged to its own RRD file (rerun's file sink, which encodes on its own thread
-    while the arrays are sent; a memory sink, whose bytes Python then writes, cost a 120 s rig run
-    (53 MB) about half as much again: ``benchmarks/recording_e2e.py`` measures the end-to-end
-    cost); the blueprint goes with the first. A file that does not end with rerun's footer
-    (:data:`RRD_END`: the sink failed, a full disk) raises ``OSError``."""
+    while the arrays are sent: a 120 s rig run's 53 MB took 0.29 s of CPU against 0.42-0.52 s
+    through a memory sink whose bytes Python then wrote, measured ad hoc on a shared machine;
+    ``benchmarks/recording_e2e.py`` measures the end-to-end cost); the blueprint goes with the
+    first. A file that does not end with rerun's footer (:data:`RRD_END`: the sink failed, a full
+    disk) raises ``OSError``."""
     import rerun as rr
 
     from scenarios.review import blueprint as bp
@@ -222,7 +223,7 @@ def _save(cases: list[_Case], pose_rate_hz: float, files: Sequence[pathlib.Path]
 
 
 def warm_up() -> None:
-    """Import rerun and do its first-use work once, on a two-sample recording kept in memory.
+    """Import rerun and do its first-use work once, on a two-sample recording in a temporary file.
 
     The first recording a process writes costs about 0.25 s more than the next ones (measured on
     a 30 s rig run: 0.42 s against 0.18 s): on first use rerun's converters have pyarrow import
