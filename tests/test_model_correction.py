@@ -251,6 +251,33 @@ def test_an_onset_given_beyond_the_measured_loads_starts_at_the_static_load():
     np.testing.assert_allclose(cal.fitted, (0.25, 0.022), rtol=0.03)
 
 
+def test_a_stiffening_beyond_every_measured_load_is_held_linear(monkeypatch):
+    """An onset fitted at the top of its load range leaves its ratio where the fit wandered (no measured
+    load lies beyond it); the calibration sets that ratio to 0 and says so. Forced here: the optimizer's
+    answer is moved to the onset's upper bound (the walk-through's front tires ended there by
+    themselves, ratio 0.70)."""
+    import scipy.optimize
+
+    real = scipy.optimize.least_squares
+
+    def to_the_top(fun, x0, *args, bounds, **kwargs):
+        res = real(fun, x0, *args, bounds=bounds, **{**kwargs, "max_nfev": 2})
+        res.x = np.array(res.x, float)
+        res.x[1] = bounds[1][1]  # names below: (ratio, onset)
+        return res
+
+    monkeypatch.setattr(scipy.optimize, "least_squares", to_the_top)
+    sc = plant_scenario()
+    road = run(sc, "road")
+    force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
+    names = ("tire_progressive_ratio", "tire_progressive_onset_m")
+    held = {k: getattr(sc.vehicle, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
+    cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names, fitted_guess=held,
+                    windows=1, window_s=3.0, lead_s=2.0, workers=2)
+    assert cal.fitted[0] == 0.0 and cal.fitted[1] == pytest.approx(cal.bounds[1][1])
+    assert "tire_progressive_ratio set to 0 (its onset lies beyond every measured load)" in cal.message
+
+
 def test_the_onset_alone_is_refused_before_any_run(record):
     with pytest.raises(ScenarioError, match="tire_progressive_onset_m"):
         calibrate(record["t"], record["x_a"], record["F_rig"], base_scenario=record["sc"],

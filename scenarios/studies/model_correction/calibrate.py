@@ -83,7 +83,7 @@ from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.studies.model_correction.first_guess import catalogue, static_guess
 from scenarios.studies.model_correction.model_runs import SETTLE_S, check_record, portable, window_job
-from scenarios.studies.model_correction.onset_load import ONSET_STIFFNESS, load_guess, load_range
+from scenarios.studies.model_correction.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
 from scenarios.studies.model_correction.result import Calibration
 from scenarios.studies.model_correction.uncertainty import uncertainties
 from scenarios.studies.model_correction.weighting import differential_kernel
@@ -367,7 +367,12 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                             x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
         f_opt, m_opt = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
     sigma, robust = uncertainties(res.jac, f_opt, int(round(BLOCK_S * fs)), prob.mapping(res.x))
-    fitted = prob.fields(res.x)
+    fitted, linear = prob.fields(res.x), []
+    for i, _, _ in prob.onsets:  # a stiffening beyond every measured load: the tire held linear (onset_load.TOP)
+        ratio = ONSET_RATIO[names[i]]
+        if ratio in names and ub[i] - res.x[i] <= TOP * (ub[i] - lb[i]) and fitted[names.index(ratio)] > 0.0:
+            fitted[names.index(ratio)] = 0.0
+            linear.append(ratio)
     for i, j, kt in prob.onsets:  # an onset's range reported in metres, at the fitted kt
         lower[i], upper[i] = (v / (fitted[j] if j is not None else kt) for v in (lower[i], upper[i]))
 
@@ -382,7 +387,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                        initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
                        windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
                        evaluations=int(prob.evaluations), converged=bool(res.status > 0),
-                       message=str(res.message), wall_time_s=round(time.perf_counter() - wall0, 3),
+                       message=str(res.message) + "".join(f"; {k} set to 0 (its onset lies beyond every measured load)"
+                                                          for k in linear), wall_time_s=round(time.perf_counter() - wall0, 3),
                        bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)),
                        noise_nrmse=tuple(float(v) for v in noise))
 

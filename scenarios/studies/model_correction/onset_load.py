@@ -25,12 +25,22 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ONSET_STIFFNESS", "ONSET_WHEELS", "load_range", "load_guess"]
+__all__ = ["ONSET_STIFFNESS", "ONSET_RATIO", "ONSET_WHEELS", "TOP", "load_range", "load_guess"]
 
 #: Each fitted onset and the linear stiffness whose load it is: the all-wheel onset is the front
 #: tires' (the rear take it too when their own is not given, at the front's load).
 ONSET_STIFFNESS = {"tire_progressive_onset_m": "tire_stiffness_front_N_per_m",
                    "tire_progressive_onset_rear_m": "tire_stiffness_rear_N_per_m"}
+#: Each onset's ratio.
+ONSET_RATIO = {"tire_progressive_onset_m": "tire_progressive_ratio",
+               "tire_progressive_onset_rear_m": "tire_progressive_ratio_rear"}
+#: An onset fitted within this fraction (1) of its load range's top has no measured load beyond it
+#: to show its ratio, which the fit leaves wherever it wandered: :func:`calibrate` sets that ratio
+#: to 0, a tire linear over every load the record shows, rather than extrapolate a stiffening it
+#: never saw to the larger loads of the drive (the walk-through's front tires, linear in truth, fit
+#: ratio 0.70 at 4.18 cm, past their largest load; their corrected DEL5 came out 28.90 kN against
+#: 28.28 kN with the tire linear there).
+TOP = 0.02
 #: The record's columns (corners fl, fr, rl, rr) whose loads bound each onset.
 ONSET_WHEELS = {"tire_progressive_onset_m": (0, 1), "tire_progressive_onset_rear_m": (2, 3)}
 

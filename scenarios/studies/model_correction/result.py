@@ -72,7 +72,8 @@ class Calibration:
     converged : bool
         The least squares met a tolerance (not its evaluation limit).
     message : str
-        The optimizer's word on how it stopped.
+        The optimizer's word on how it stopped, and any stiffening ratio set to 0 because its
+        onset lies beyond every measured load (:data:`~scenarios.studies.model_correction.onset_load.TOP`).
     wall_time_s : float, s
     bounds : tuple of (float, float)
         Each fitted field's search range, SI (its first guess times
