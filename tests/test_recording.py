@@ -199,6 +199,13 @@ def test_pose_recorder_called_at_the_output_rate_matches_every_step():
     np.testing.assert_array_equal(a.quat_wxyz[j], xquat[ids])
 
 
+def test_is_frame_picks_exactly_the_frame_steps():
+    """is_frame, arithmetic on the schedule, against the recorder's own list of frame steps."""
+    rec, _, t, _ = sine_poses(0.5, every=10)
+    every = np.arange(-5, t.size + 5)
+    np.testing.assert_array_equal(every[rec.is_frame(every)], rec.steps)
+
+
 def test_without_poses_the_pans_still_move(runs, tmp_path):
     road, _ = runs
     path = tmp_path / "road.rrd"

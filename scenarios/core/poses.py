@@ -167,6 +167,13 @@ class PoseRecorder:
         self._j = 0
         self._next = int(self.steps[0]) if self.steps.size else self._t_all.size
 
+    def is_frame(self, steps) -> np.ndarray:
+        """Which of the step indices ``steps`` take a frame (bool, their shape): :attr:`steps`,
+        told by arithmetic, so a caller that must compute the kinematics first (a rollout's
+        recorded states) does so for the frames only."""
+        s = np.asarray(steps, dtype=np.int64)
+        return (s >= self._k0) & (s < self._t_all.size) & ((s - self._k0) % self._decim == 0)
+
     def __call__(self, data: mujoco.MjData, k: int) -> None:
         """Record the poses if frame time has come at step ``k`` (call after ``mj_step``)."""
         if k < self._next:

@@ -215,21 +215,16 @@ class _Frames:
     def __init__(self, model, poses) -> None:
         self.model, self.poses = model, poses
         self.scratch = mujoco.MjData(model) if poses is not None else None
-        frames = np.asarray(poses.steps if poses is not None else (), dtype=np.int64)
-        # the frames' steps: first, first + every, ..., last (PoseRecorder.steps, an arange)
-        self.first, self.last = (int(frames[0]), int(frames[-1])) if frames.size else (0, -1)
-        self.every = int(frames[1] - frames[0]) if frames.size > 1 else 1
 
     def record(self, qpos: np.ndarray, steps: np.ndarray, mocap_z=None) -> None:
         """Record the frames among ``steps`` (their pre-step ``qpos`` rows); ``mocap_z``: (mocap
         ids, heights (rows, 4), m) of prescribed pans at those steps."""
-        s = np.asarray(steps, dtype=np.int64)
-        for r in np.flatnonzero((s >= self.first) & (s <= self.last) & ((s - self.first) % self.every == 0)):
+        for r in np.flatnonzero(self.poses.is_frame(steps)):
             self.scratch.qpos[:] = qpos[r]
             if mocap_z is not None:
                 self.scratch.mocap_pos[mocap_z[0], 2] = mocap_z[1][r]
             mujoco.mj_kinematics(self.model, self.scratch)
-            self.poses(self.scratch, int(s[r]))
+            self.poses(self.scratch, int(steps[r]))
 
 
 def _chunk_steps(watch: Watch) -> int:

@@ -368,12 +368,12 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         f_opt, m_opt = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
     sigma, robust = uncertainties(res.jac, f_opt, int(round(BLOCK_S * fs)), prob.mapping(res.x))
     fitted, linear = prob.fields(res.x), []
-    for i, _, _ in prob.onsets:  # a stiffening beyond every measured load: the tire held linear (onset_load.TOP)
-        ratio = ONSET_RATIO[names[i]]
+    for i, j, kt in prob.onsets:
+        ratio = ONSET_RATIO[names[i]]  # a stiffening beyond every measured load: the tire held linear (TOP)
         if ratio in names and ub[i] - res.x[i] <= TOP * (ub[i] - lb[i]) and fitted[names.index(ratio)] > 0.0:
             fitted[names.index(ratio)] = 0.0
             linear.append(ratio)
-    for i, j, kt in prob.onsets:  # an onset's range reported in metres, at the fitted kt
+        # the onset's range reported in metres, at the fitted kt
         lower[i], upper[i] = (v / (fitted[j] if j is not None else kt) for v in (lower[i], upper[i]))
 
     def per_wheel(model_N):

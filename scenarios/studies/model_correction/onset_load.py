@@ -39,7 +39,7 @@ ONSET_RATIO = {"tire_progressive_onset_m": "tire_progressive_ratio",
 #: to 0, a tire linear over every load the record shows, rather than extrapolate a stiffening it
 #: never saw to the larger loads of the drive (the walk-through's front tires, linear in truth, fit
 #: ratio 0.70 at 4.18 cm, past their largest load; their corrected DEL5 came out 28.90 kN against
-#: 28.28 kN with the tire linear there).
+#: 28.38 kN with the ratio set to 0).
 TOP = 0.02
 #: The record's columns (corners fl, fr, rl, rr) whose loads bound each onset.
 ONSET_WHEELS = {"tire_progressive_onset_m": (0, 1), "tire_progressive_onset_rear_m": (2, 3)}
@@ -50,20 +50,24 @@ def _loads(force_N, windows, name: str) -> np.ndarray:
     return np.concatenate([np.asarray(force_N, float)[s:e, cols].ravel() for _, s, e in windows])
 
 
+def _range(loads: np.ndarray) -> tuple[float, float]:
+    return max(float(loads.min()), 0.0), max(float(loads.max()), 0.0)
+
+
 def load_range(force_N, windows, name: str) -> tuple[float, float]:
     """(smallest, largest) measured load of onset ``name``'s wheels on the scored samples of
     ``windows`` ((run start, scored start, end) sample triples), N; neither below 0: a wheel off
     the ground reads 0 and the load cells' noise about it (generalization case gen03, an empty
     truck on a class D road, went below 0 at the front, and its negative onset was refused)."""
-    loads = _loads(force_N, windows, name)
-    return max(float(loads.min()), 0.0), max(float(loads.max()), 0.0)
+    return _range(_loads(force_N, windows, name))
 
 
 def load_guess(force_N, windows, name: str, onset_m: float | None, kt_N_per_m: float) -> float:
     """First guess of the load at onset ``name``, N: ``onset_m`` (m) at ``kt_N_per_m`` (N/m) where
     that load lies strictly inside :func:`load_range`; otherwise (or None) the wheels' median load:
     an onset at or beyond the measured loads would start the fit where its ratio has no gradient."""
-    lo, hi = load_range(force_N, windows, name)
+    loads = _loads(force_N, windows, name)
+    lo, hi = _range(loads)
     if onset_m is not None and lo < onset_m * kt_N_per_m < hi:
         return float(onset_m * kt_N_per_m)
-    return float(np.clip(np.median(_loads(force_N, windows, name)), lo, hi))
+    return float(np.clip(np.median(loads), lo, hi))
