@@ -1,4 +1,4 @@
-"""Outputs whole or absent (issue 15): :mod:`scenarios.core.outputs` and every command that writes
+"""Outputs whole or absent: :mod:`scenarios.core.outputs` and every command that writes
 a folder.
 
 The context manager: refusals before any work (empty path, a file in the folder's place, a previous
@@ -29,15 +29,28 @@ import scenarios.studies.validate.runs  # noqa: F401
 from correction.atomic import host_tag
 from scenarios.cli.main import main
 from scenarios.core.config import ScenarioError
-from scenarios.core.outputs import check_output_file, remove_stale_staging, staged_output
+from scenarios.core.outputs import MARKER, check_output_file, remove_stale_staging, staged_output
 
 SCENARIO = 'name = "o"\nspeed_kmh = 72.0\nduration_s = 1.0\nseed = 5\nlead_in_s = 0.5\n[road]\nroughness = "high"\n'
 
 
 def _listing(folder: pathlib.Path) -> dict[str, str]:
-    """Every file under ``folder`` (hidden ones too) -> sha256 of its bytes."""
+    """Every file under ``folder`` (hidden ones too, rigsim's marker left out) -> sha256 of its bytes."""
     return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(folder.rglob("*")) if p.is_file()}
+            for p in sorted(folder.rglob("*")) if p.is_file() and p.name != MARKER}
+
+
+def _names(folder: pathlib.Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.name != MARKER)
+
+
+def _previous(target: pathlib.Path, files: dict[str, str]) -> None:
+    """A previous result of rigsim in ``target``: ``files`` (relative path -> text) written through
+    :func:`staged_output`, so that the folder carries rigsim's marker."""
+    with staged_output(target) as stage:
+        for rel, text in files.items():
+            (stage.path / rel).parent.mkdir(parents=True, exist_ok=True)
+            (stage.path / rel).write_text(text)
 
 
 def _no_staging(folder: pathlib.Path) -> bool:
@@ -82,9 +95,7 @@ def test_a_file_in_the_folders_place_is_refused_even_with_force(tmp_path):
 
 def test_a_previous_result_is_refused_without_force_and_replaced_with_it(tmp_path):
     target = tmp_path / "out"
-    (target / "sub").mkdir(parents=True)
-    (target / "a.txt").write_text("old a")
-    (target / "sub" / "b.txt").write_text("old b")
+    _previous(target, {"a.txt": "old a", "sub/b.txt": "old b"})
     with pytest.raises(ScenarioError) as err:
         with staged_output(target):
             pytest.fail("the block ran")
@@ -95,7 +106,7 @@ def test_a_previous_result_is_refused_without_force_and_replaced_with_it(tmp_pat
         assert stage.path.parent == tmp_path and stage.path.name == f".out.{host_tag()}.{os.getpid()}.partial"
         assert (target / "a.txt").exists()  # the old result stays until the work is done
         (stage.path / "new.txt").write_text("new")
-    assert sorted(p.name for p in target.iterdir()) == ["new.txt"]  # no stale file beside the new one
+    assert _names(target) == ["new.txt"]  # no stale file of the old result beside the new one
     assert _no_staging(tmp_path)
 
 
@@ -164,8 +175,7 @@ def test_an_error_or_interrupt_leaves_nothing(tmp_path, exc):
 @pytest.mark.parametrize("exc", [RuntimeError("boom"), KeyboardInterrupt()])
 def test_force_keeps_the_old_result_when_the_work_fails(tmp_path, exc):
     target = tmp_path / "out"
-    target.mkdir()
-    (target / "result.json").write_text("old")
+    _previous(target, {"result.json": "old"})
     before = _listing(target)
     with pytest.raises(type(exc)):
         with staged_output(target, force=True) as stage:
@@ -176,8 +186,7 @@ def test_force_keeps_the_old_result_when_the_work_fails(tmp_path, exc):
 
 def test_a_failed_rename_puts_the_old_result_back(tmp_path, monkeypatch):
     target = tmp_path / "out"
-    target.mkdir()
-    (target / "r").write_text("old")
+    _previous(target, {"r": "old"})
     real = os.rename
 
     def rename(src, dst):
@@ -295,13 +304,18 @@ def test_a_second_run_into_the_same_folder_is_refused_and_force_replaces(tmp_pat
     assert _listing(out) == first
     monkeypatch.undo()
 
-    (out / "stale.txt").write_text("from an older version")
+    (out / "notes.txt").write_text("the user's, added after the run")  # --force never deletes it
     other = tmp_path / "other.toml"
     other.write_text(SCENARIO.replace("seed = 5", "seed = 6"))
+    assert main(["run", str(other), "--out", str(out), "--quiet", "--force"]) == 2
+    assert _one_line(capsys.readouterr().err) == (f"rigsim: error: --out {out} holds notes.txt that rigsim did not "
+                                                  "write there; move it out of the folder or name another folder")
+    assert _listing(out) == {**first, "notes.txt": _listing(out)["notes.txt"]}
+    (out / "notes.txt").unlink()
     assert main(["run", str(other), "--out", str(out), "--quiet", "--force"]) == 0
     assert f"wrote {out / 'result.json'}" in capsys.readouterr().out
     now = _listing(out)
-    assert set(now) == {"result.json", "timeseries.csv", "timings.json"}  # the stale file is gone
+    assert set(now) == {"result.json", "timeseries.csv", "timings.json"}
     assert now["timeseries.csv"] != first["timeseries.csv"]  # replaced by the new run's
     assert _no_staging(tmp_path)
 
@@ -498,7 +512,7 @@ def test_a_study_writes_its_folder_in_one_piece_and_names_the_final_paths(name, 
     out = tmp_path / "out"
     assert main([name, *argv, "--out", str(out), "--quiet"]) == 0
     printed = capsys.readouterr().out
-    assert sorted(p.name for p in out.iterdir()) == sorted(files)
+    assert _names(out) == sorted(files)
     shown = {"paper": "report.md", "validate": "report.md", "identify": "actuators.toml", "iterate": "drive.csv"}
     assert str(out / shown[name]) in printed and ".partial" not in printed
     assert _no_staging(tmp_path)
@@ -507,10 +521,13 @@ def test_a_study_writes_its_folder_in_one_piece_and_names_the_final_paths(name, 
     assert main([name, *argv, "--out", str(out), "--quiet"]) == 2
     assert "already holds a previous result" in _one_line(capsys.readouterr().err)
     assert _listing(out) == first
-    # --force replaces it (a stale file goes with the old result)
-    (out / "stale.txt").write_text("x")
+    # --force replaces it, but never a file rigsim did not write there
+    (out / "notes.txt").write_text("x")
+    assert main([name, *argv, "--out", str(out), "--quiet", "--force"]) == 2
+    assert "holds notes.txt that rigsim did not write there" in _one_line(capsys.readouterr().err)
+    (out / "notes.txt").unlink()
     assert main([name, *argv, "--out", str(out), "--quiet", "--force"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(files) and _no_staging(tmp_path)
+    assert _names(out) == sorted(files) and _no_staging(tmp_path)
 
 
 @pytest.mark.parametrize("name", STUDIES)
@@ -521,8 +538,7 @@ def test_a_failing_study_leaves_nothing_and_force_keeps_the_old_result(name, tmp
     with pytest.raises(RuntimeError):
         main([name, *argv, "--out", str(out), "--quiet"])
     assert not (tmp_path / "deeper").exists()
-    out.mkdir(parents=True)
-    (out / "old.json").write_text("old")
+    _previous(out, {"old.json": "old"})
     with pytest.raises(RuntimeError):
         main([name, *argv, "--out", str(out), "--quiet", "--force"])
     assert _listing(out) == {"old.json": hashlib.sha256(b"old").hexdigest()} and _no_staging(out.parent)

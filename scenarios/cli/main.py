@@ -107,6 +107,11 @@ def _cmd_run(args) -> int:
                             f"{1.0 / rate:g} s")
     if args.view and args.rrd is None:
         raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
+    from scenarios.core.cost import check_disk, run_cost
+
+    cost = run_cost(args.mode, scenario.lead_in_s + scenario.duration_s,
+                    int(scenario.duration_s * rate) + 1, args.format)
+    check_disk(cost, args.out)
     if args.rrd is not None:  # checked with --out before the run: both are written, or neither
         check_output_file(args.rrd, "--rrd", force=args.force, folder=args.out)
         if os.path.exists(args.rrd) and os.path.samefile(args.rrd, args.scenario):
@@ -114,8 +119,11 @@ def _cmd_run(args) -> int:
     # --rrd: a child process imports rerun and writes the recording (scenarios.review.recording_process);
     # it starts before the simulation's imports, so that its own overlap them and the run
     recording = RecordingProcess() if args.rrd is not None else contextlib.nullcontext()
+    if cost.long and not args.quiet:
+        print(f"rigsim: {cost.sentence(f'a {scenario.duration_s:g} s {args.mode} run')}", file=sys.stderr,
+              flush=True)
     try:
-        with staged_output(args.out, force=args.force) as stage, recording as recorder:
+        with staged_output(args.out, force=args.force, inputs=scenario.input_files) as stage, recording as recorder:
             from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
             from scenarios.core.run import run
 

@@ -128,6 +128,19 @@ class Scenario:
         """Speed in m/s."""
         return self.speed_kmh / 3.6
 
+    @property
+    def profile_path(self) -> pathlib.Path | None:
+        """The measured road profile file (``road.profile_csv``, relative to :attr:`source`), or None."""
+        if self.road.profile_csv is None:
+            return None
+        base = self.source.parent if self.source is not None else None
+        return pathlib.Path(self.road.profile_csv) if base is None else base / self.road.profile_csv
+
+    @property
+    def input_files(self) -> tuple[pathlib.Path, ...]:
+        """The files this scenario was read from: the scenario file and its road profile, if any."""
+        return tuple(p for p in (self.source, self.profile_path) if p is not None)
+
 
 _TOP_KEYS = {"name", "description", "speed_kmh", "duration_s", "seed", "lead_in_s", "output_rate_hz", "road", "vehicle", "actuator"}
 _ROAD_KEYS = {f.name for f in dataclasses.fields(RoadConfig)}

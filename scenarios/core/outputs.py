@@ -6,7 +6,13 @@ each), yields a staging folder ``.{name}.{host}.{pid}.partial`` beside the targe
 command writes everything, and renames it onto the target when the work succeeds; on any error or
 interrupt the staging folder is removed and the target is as before. Staging folders left by
 killed runs of this host are removed by the next command writing the same target (or named in a
-warning). :func:`check_output_file` checks a single output file (``--rrd``, ``rigsim correct
+warning).
+
+A folder rigsim wrote carries a marker file, :data:`MARKER`, listing every entry the command put
+there. ``--force`` replaces a folder only when it carries the marker and holds nothing the marker
+does not list: a folder rigsim did not write, or one where something was added since, is refused
+with one sentence, ``--force`` or not. An output folder may never be, or contain, an input file
+of the command, the working folder or the home folder. :func:`check_output_file` checks a single output file (``--rrd``, ``rigsim correct
 -o``) before any work. Files inside the staging folder are still written by
 :func:`correction.atomic.atomic_write_bytes`.
 """
@@ -22,10 +28,13 @@ import sys
 
 from correction.atomic import dead_writers_leftovers, host_tag
 from scenarios.core.config import ScenarioError
-
-__all__ = ["Staging", "check_output_file", "check_output_folder", "remove_stale_staging", "staged_output"]
+from scenarios.core.ownership import (MARKER, check_not_over, check_owned, count_files, entries, plural,
+                                       read_marker, write_marker)
 
 _KINDS = ("partial", "old")  # staging folders, and previous results moved aside by --force
+
+__all__ = ["MARKER", "Staging", "check_output_file", "check_output_folder", "claim_output_folder", "remove_stale_staging",
+           "staged_output"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -62,10 +71,6 @@ def _inside(p, folder) -> pathlib.Path | None:
         return None
 
 
-def _plural(n: int, word: str) -> str:
-    return f"{n} {word}{'' if n == 1 else 's'}"
-
-
 def _warn(text: str) -> None:
     print(f"rigsim: warning: {text}", file=sys.stderr, flush=True)
 
@@ -100,11 +105,6 @@ def remove_stale_staging(target) -> list[pathlib.Path]:
     return removed
 
 
-def _count_files(folder: pathlib.Path) -> int:
-    n = sum(len(files) for _, _, files in os.walk(folder))
-    return n or sum(1 for _ in folder.iterdir())
-
-
 def _writable_ancestor(path: pathlib.Path, option: str, text: str) -> pathlib.Path:
     """The nearest existing folder above ``path`` (where it will be created); refused if a file."""
     above = path.parent
@@ -117,8 +117,8 @@ def _writable_ancestor(path: pathlib.Path, option: str, text: str) -> pathlib.Pa
 
 def check_output_folder(target, option: str = "--out") -> pathlib.Path:
     """Refuse, before any work, an output folder that cannot be one: an empty path, the root, a
-    file in its place, a file among its parents, a parent folder without write permission. An
-    existing folder is accepted (``rigsim sweep`` resumes into it). Returns the absolute path.
+    file in its place, a file among its parents, a symbolic link to nothing, a parent folder without
+    write permission. An existing folder is accepted (``rigsim sweep`` resumes into it). Returns the absolute path.
 
     Raises
     ------
@@ -131,6 +131,9 @@ def check_output_folder(target, option: str = "--out") -> pathlib.Path:
     path = pathlib.Path(os.path.abspath(text))
     if path.parent == path:
         raise ScenarioError(f"{option} {text} is the root folder; name an output folder")
+    if os.path.islink(path) and not path.exists():
+        raise ScenarioError(f"{option} {text} is a symbolic link to {os.readlink(path)}, which does not exist; "
+                            "create that folder or name another one")
     if path.exists() and not path.is_dir():
         raise ScenarioError(f"{option} {text} exists and is not a folder; name a new folder")
     above = _writable_ancestor(path, option, text)
@@ -141,17 +144,44 @@ def check_output_folder(target, option: str = "--out") -> pathlib.Path:
     return path
 
 
-def _check_target(target, force: bool, option: str) -> pathlib.Path:
+def _check_target(target, force: bool, option: str, inputs=()) -> pathlib.Path:
     path = check_output_folder(target, option)
     text = os.fspath(target)
-    if path.is_dir() and not force:
+    check_not_over(path, text, option, inputs)
+    check_owned(path, text, option, force)
+    return path
+
+
+def claim_output_folder(target, *, written_by: str, option: str = "--out", inputs=(),
+                        create: bool = False) -> pathlib.Path:
+    """Check, or with ``create`` make, a folder that a command keeps adding to (``rigsim sweep``).
+
+    Accepted: a new or empty folder, or one whose marker names no entries (a folder of such a
+    command). Refused (:class:`ScenarioError`, one sentence): what :func:`check_output_folder`
+    refuses, a folder that is or contains an input, the working or the home folder, a folder that
+    holds anything else. With ``create`` the folder (and its parents) is made and marked.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder (absolute).
+    """
+    path = check_output_folder(target, option)
+    text = os.fspath(target)
+    check_not_over(path, text, option, inputs)
+    marker = read_marker(path) if path.is_dir() else None
+    if marker is None or marker["entries"] is not None:
         try:
-            n = _count_files(path)
-        except OSError as exc:
-            raise ScenarioError(f"{option} {text} cannot be read ({exc.strerror}); name another folder") from None
-        if n:
-            raise ScenarioError(f"{option} {text} already holds a previous result ({_plural(n, 'file')}); choose "
-                                "another folder or give --force to replace it")
+            check_owned(path, text, option, force=False)
+        except ScenarioError:
+            if marker is None and path.is_dir() and entries(path):
+                raise ScenarioError(f"{option} {text} holds {plural(count_files(path), 'file')} that "
+                                    f"{written_by} did not write; name a new or empty folder") from None
+            raise
+    if create:
+        path.mkdir(parents=True, exist_ok=True)
+        if marker is None:
+            write_marker(path, None, written_by)
     return path
 
 
@@ -177,14 +207,17 @@ def _holds_anything(path: pathlib.Path) -> bool:
 
 
 def _publish(staging: pathlib.Path, target: pathlib.Path, shown: str, option: str, force: bool) -> None:
-    """Rename ``staging`` onto ``target``; with ``force`` a previous result is moved aside first,
-    removed after, and put back if the rename fails (the target is never left missing)."""
+    """Mark ``staging`` and rename it onto ``target``; with ``force`` a previous result (checked
+    again: it holds only what rigsim wrote) is moved aside first, removed after, and put back if the
+    rename fails (the target is never left missing)."""
+    write_marker(staging, sorted(entries(staging)), "rigsim")
     if not _holds_anything(target):
         os.replace(staging, target)  # a missing target, or an empty folder (POSIX replaces it)
         return
     if not force:
         raise ScenarioError(f"{option} {shown} was filled by another program while this command ran; nothing "
                             "was written, run it again with another folder")
+    check_owned(target, shown, option, force)  # another program may have added to it while this one ran
     aside = target.parent / f".{target.name}.{host_tag()}.{os.getpid()}.old"
     os.rename(target, aside)
     try:
@@ -199,20 +232,25 @@ def _publish(staging: pathlib.Path, target: pathlib.Path, shown: str, option: st
 
 
 @contextlib.contextmanager
-def staged_output(target, *, force: bool = False, option: str = "--out"):
+def staged_output(target, *, force: bool = False, option: str = "--out", inputs=()):
     """Build an output folder in a staging folder beside it; rename it onto ``target`` on success.
 
     Parameters
     ----------
     target : str or os.PathLike
         The output folder. Refused (:class:`ScenarioError`, one sentence, before any work): an empty
-        or blank path, the root folder, a path that exists and is not a folder, a folder that
-        already holds anything unless ``force``, a parent that cannot be created or written.
+        or blank path, the root folder, a path that exists and is not a folder, a symbolic link to
+        nothing, a folder that is or contains an input, the working or the home folder, a folder
+        that holds anything rigsim did not write there (see :data:`MARKER`), a previous result
+        unless ``force``, a parent that cannot be created or written.
     force : bool
-        Replace a previous result: on success the old folder is moved aside, the new one renamed in
-        and the old one removed; if the work fails, the old result stays as it was.
+        Replace a previous result of rigsim: on success the old folder is moved aside, the new one
+        renamed in and the old one removed; if the work fails, the old result stays as it was.
     option : str
         The command-line option named in the messages (``--out``).
+    inputs : sequence of str or os.PathLike
+        The files the command reads: the output folder may not be or contain one (None entries are
+        skipped).
 
     Yields
     ------
@@ -228,7 +266,7 @@ def staged_output(target, *, force: bool = False, option: str = "--out"):
     are cleaned first (:func:`remove_stale_staging`).
     """
     shown = os.fspath(target)
-    path = _check_target(target, force, option)
+    path = _check_target(target, force, option, inputs)
     remove_stale_staging(path)
     staging = path.parent / f".{path.name}.{host_tag()}.{os.getpid()}.partial"
     created: list[pathlib.Path] = []
@@ -275,8 +313,8 @@ def check_output_file(path, option: str, *, force: bool = False, folder=None) ->
     Raises
     ------
     ScenarioError
-        An empty or blank path, a folder, the ``--out`` folder itself, an existing file without
-        ``force``, or a parent folder that cannot be created or written (one sentence).
+        An empty or blank path, a folder, a path ending in ``/``, the ``--out`` folder itself, an
+        existing file without ``force``, or a parent folder that cannot be created or written (one sentence).
     """
     text = os.fspath(path)
     if not text.strip():
@@ -286,6 +324,8 @@ def check_output_file(path, option: str, *, force: bool = False, folder=None) ->
         raise ScenarioError(f"{option} {text} is the --out folder; name a file (inside it or elsewhere)")
     if p.is_dir():
         raise ScenarioError(f"{option} {text} is a folder; name a file")
+    if text.endswith(("/", os.sep)):
+        raise ScenarioError(f"{option} {text} ends in '/', which names a folder; name a file (without the '/')")
     if os.path.lexists(p) and not force:
         raise ScenarioError(f"{option} {text} already exists; choose another file or give --force to replace it")
     parent = _writable_ancestor(p, option, text)

@@ -205,10 +205,8 @@ def _road_profile(scenario, length_m: float) -> Profile:
 
     rc = scenario.road
     if rc.profile_csv is not None:
-        base = scenario.source.parent if scenario.source is not None else None
-        path = rc.profile_csv if base is None else base / rc.profile_csv
         try:
-            return read_profile_csv(path)
+            return read_profile_csv(scenario.profile_path)
         except ProfileError as exc:
             raise ScenarioError(f"road.profile_csv: {exc}") from None
     band = {"waviness": rc.waviness, "tracks": rc.tracks, "n_min_cyc_per_m": rc.n_min_cyc_per_m,
@@ -261,6 +259,7 @@ def road_source(scenario, *, dt_s: float, wheelbase_m: float, half_stroke_m: flo
         profile = highpass(profile, scenario.road.cuton_wavelength_m)
         start = float(profile.x_m[0]) + margin + wheelbase_m + START_MARGIN_M
         fs = 1.0 / dt_s
+        _check_band(scenario, profile.band_max_cyc_per_m, fs)
         source = RoadDrive(profile, v, wheelbase_m, start, fs, int(round(total_s * fs)) + 1,
                            lead_in_s=scenario.lead_in_s)
     except ScenarioError:
@@ -272,6 +271,24 @@ def road_source(scenario, *, dt_s: float, wheelbase_m: float, half_stroke_m: flo
     except ValueError as exc:
         raise ScenarioError(str(exc)) from None
     return source
+
+
+def _check_band(scenario, nmax: float, fs: float) -> None:
+    """Refuse, naming the scenario's keys, a speed at which the road's band reaches above half the
+    drive's rate (``1 / vehicle.timestep_s``): the sampled drive would alias."""
+    from scenarios.core.config import ScenarioError
+
+    v = scenario.speed_mps
+    if v * nmax <= fs / 2 * (1 + 1e-9):
+        return
+    measured = scenario.road.profile_csv is not None
+    band = f"the measured profile's band (up to {nmax:.4g} cycle/m)" if measured else \
+        f"road.n_max_cyc_per_m = {nmax:g} cycle/m"
+    narrower = "" if measured else f"lower road.n_max_cyc_per_m to at most {fs / 2 / v:.4g} cycle/m, "
+    raise ScenarioError(
+        f"speed_kmh = {scenario.speed_kmh:g} km/h carries {band} to {v * nmax:.4g} Hz, above half the drive's "
+        f"rate 1 / vehicle.timestep_s = {fs:g} Hz; lower speed_kmh to at most {fs / 2 / nmax * 3.6:.4g} km/h, "
+        f"{narrower}or give vehicle.timestep_s at most {1 / (2 * v * nmax):.3g} s")
 
 
 def road_drive(scenario, *, dt_s: float, wheelbase_m: float, half_stroke_m: float) -> Drive:

@@ -71,7 +71,8 @@ def cmd_identify(args) -> int:
         from scenarios.studies.identify.recorded import parse_pairs
 
         parse_pairs(args.pairs)  # the syntax of --pairs before anything is written
-    with staged_output(args.out, force=getattr(args, "force", False)) as stage:
+    inputs = (args.from_file, *(scenario.input_files if scenario is not None else ()))
+    with staged_output(args.out, force=getattr(args, "force", False), inputs=inputs) as stage:
         if args.from_file is not None:
             from scenarios.studies.identify.recorded import identify_recorded
 

@@ -74,7 +74,7 @@ def cmd_iterate(args) -> int:
         scenario = dataclasses.replace(scenario, duration_s=float(args.duration_s))
     check_options(args.target, duration_s=scenario.duration_s, **_options(args))  # the file's duration too
     say = None if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
-    with staged_output(args.out, force=getattr(args, "force", False)) as stage:
+    with staged_output(args.out, force=getattr(args, "force", False), inputs=scenario.input_files) as stage:
         result = iterate_scenario(scenario, args.target, say=say, **_options(args))
         paths = {k: stage.final(p) for k, p in write_files(result, stage.path).items()}
     print(comparison_table(result))

@@ -83,7 +83,7 @@ def cmd_paper(args) -> int:
                   f"({r.info['wall_time_s']:.1f} s)", file=sys.stderr)
 
     noise_N = NOISE_N if args.noise_N is None else args.noise_N
-    with staged_output(args.out, force=getattr(args, "force", False)) as stage:
+    with staged_output(args.out, force=getattr(args, "force", False), inputs=paths) as stage:
         # Each run's files are written by the worker that ran it, each case's figures by the worker
         # that scores it, while the other runs go on; the rest once every case is in.
         result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,

@@ -43,9 +43,10 @@ def cmd_sweep(args) -> int:
         worker_count(args.workers)
     except ValueError:
         raise ScenarioError(f"--jobs must be a whole number >= 1, got {args.workers}") from None
-    from scenarios.core.outputs import check_output_folder
+    from scenarios.core.outputs import claim_output_folder
 
-    check_output_folder(args.out)  # an existing folder is resumed into; anything else is refused now
+    # a new, empty or earlier sweep's folder is resumed into; anything else is refused now
+    claim_output_folder(args.out, written_by="rigsim sweep", inputs=(args.grid,))
     grid = load_grid(args.grid)  # every case validated before anything starts
     out = pathlib.Path(args.out)
     quiet = getattr(args, "quiet", False)
@@ -59,6 +60,7 @@ def cmd_sweep(args) -> int:
               f"({grid.settings.method.description}; noise {grid.settings.noise_N:g} N rms)", file=sys.stderr)
     try:
         with executor_cm as executor:
+            claim_output_folder(args.out, written_by="rigsim sweep", inputs=(args.grid,), create=True)
             outcome = run_sweep(grid, out, executor, resume=not args.no_resume, progress=not quiet,
                                 executor_label=label)
     except KeyboardInterrupt as exc:
