@@ -102,14 +102,18 @@ def _read_rpc(path, time_col, channels) -> MeasuredChannels:
         raise MeasuredDataError(f"RPC III file {str(path)!r} has no time column (DELTA_T gives the time); leave "
                                 "time_col out")
     r = read_rpc3(path)
-    dup = sorted({n for n in r.names if r.names.count(n) > 1})
-    if dup:
+    index = {n: k for k, n in enumerate(r.names)}  # one pass: a file may hold many channels
+    if len(index) != len(r.names):
+        from collections import Counter
+
+        dup = sorted(n for n, times in Counter(r.names).items() if times > 1)
         raise MeasuredDataError(f"channel {dup[0]!r} appears more than once in {str(path)!r} (DESC.CHAN_n); "
                                 "rename one in RPC")
     chosen = list(r.names) if channels is None else channels
-    missing = [c for c in chosen if c not in r.names]
+    missing = [c for c in chosen if c not in index]
     if missing:
-        raise MeasuredDataError(f"channel {missing[0]!r} is not in {str(path)!r}; its channels are {', '.join(r.names)}")
+        listed = ", ".join(r.names[:20]) + (f" and {len(r.names) - 20} more" if len(r.names) > 20 else "")
+        raise MeasuredDataError(f"channel {missing[0]!r} is not in {str(path)!r}; its channels are {listed}")
     if len(set(chosen)) != len(chosen):
         raise MeasuredDataError(f"channels {chosen!r} name a channel twice; name each once")
     n = r.data.shape[1]
@@ -117,7 +121,7 @@ def _read_rpc(path, time_col, channels) -> MeasuredChannels:
         raise MeasuredDataError(f"RPC III file {str(path)!r} has {n} samples; at least two are needed")
     data, units, src = {}, {}, {}
     for c in chosen:
-        k = r.names.index(c)
+        k = index[c]
         data[c], units[c], src[c] = to_si(c, r.data[k], r.units[k], path, what="channel")
     meta = {k: v for k, v in r.header.items() if not is_structural(k)}
     return make_channels(time_s=r.start_s + np.arange(n) * r.dt_s, data=data, units=units, source_units=src,
