@@ -180,29 +180,57 @@ class CorrectionFilter:
         return mask
 
 
-def _tail_time(h: np.ndarray, fs: float, tol: float, tail_extra: float = 0.0) -> float:
-    """Time (s) after which ``sum |h[n:]|`` (plus ``tail_extra``) is at most ``tol``."""
-    tail = np.cumsum(np.abs(h)[::-1])[::-1] + tail_extra
+#: Most samples of the impulse responses that give the transients' lengths (32 MiB each; the
+#: zero-phase kernel's transforms take a few times that). Past them the responses' tails are the
+#: slowest pole's geometric series: a slow pole at a high sampling rate costs no more memory.
+MAX_RESPONSE_SAMPLES = 2**22
+
+
+def _tail_time(h: np.ndarray, fs: float, tol: float, slow: float | None = None) -> float:
+    """Time (s) after which ``sum |h[n:]|`` plus the tail beyond ``h`` is at most ``tol``.
+
+    The tail beyond ``h`` (given ``slow``) is the slowest pole's geometric series (decay rate
+    ``slow``, 1/s, from ``|h[-1]|``); where it alone still exceeds ``tol``, the time is extended
+    along it: ``len(h) / fs + ln(tail / tol) / slow``.
+    """
+    beyond = 0.0 if slow is None else abs(float(h[-1])) / (1.0 - math.exp(-slow / fs))
+    if beyond > tol:
+        return h.size / fs + math.log(beyond / tol) / slow
+    tail = np.cumsum(np.abs(h)[::-1])[::-1] + beyond
     idx = np.flatnonzero(tail > tol)
     return 0.0 if idx.size == 0 else float(idx[-1] + 1) / fs
 
 
 def transient_lengths(filt: CorrectionFilter, tol: float) -> tuple[float, tuple[float, float]]:
-    """Causal settling time and zero-phase start/end margins (s), from the impulse responses."""
+    """Causal settling time and zero-phase start/end margins (s), from the impulse responses over
+    a horizon of 20 time constants of the slowest pole (2 to 600 s).
+
+    At most :data:`MAX_RESPONSE_SAMPLES` samples of each response are computed; where the horizon
+    needs more, the tails beyond them are the slowest pole's geometric series
+    (:func:`_tail_time`), and the zero-phase kernel's positive tail, which its circular window
+    then wraps onto the negative times, is taken out of them as that series.
+    """
     fs = filt.fs
     slow = float(np.min(-filt.poles.real))  # slowest decay rate, 1/s (> 0: checked stable)
     horizon_s = min(max(20.0 / slow, 2.0), 600.0)
-    n = int(min(math.ceil(horizon_s * fs), 20_000_000))
+    n = int(min(math.ceil(horizon_s * fs), MAX_RESPONSE_SAMPLES))
+    capped = math.ceil(horizon_s * fs) > n
     imp = np.zeros(n)
     imp[0] = 1.0
     h = signal.sosfilt(filt.sos, imp)
-    # geometric estimate of what lies beyond the horizon (the slowest pole's tail)
-    beyond = abs(h[-1]) / (1.0 - math.exp(-slow / fs))
-    settle = _tail_time(h, fs, tol, beyond)
+    del imp
+    settle = _tail_time(h, fs, tol, slow)
+    del h
     # zero-phase kernel: inverse FFT of T_a^-1 |T_F| over a circular window of 2 n samples
     m = 2 * n
     f = np.fft.rfftfreq(m, 1.0 / fs)
     k = np.fft.irfft(filt.zero_phase_response(f), m)  # (a Nyquist bin's imaginary part is ignored)
-    start = _tail_time(k[:n], fs, tol)  # positive times: what the start of a record lacks
-    end = _tail_time(k[n:][::-1], fs, tol)  # negative times: what the end lacks
+    del f
+    start = _tail_time(k[:n], fs, tol, slow)  # positive times (T_a^-1's poles): what the start of a record lacks
+    negative = k[n:]
+    if capped:  # the positive tail past n samples lies on k[n:]: its geometric continuation out
+        ratio = k[n - 1] / k[n - 2] if k[n - 2] != 0 else 0.0
+        ratio = ratio if 0.0 < ratio < 1.0 else math.exp(-slow / fs)
+        negative = negative - k[n - 1] * ratio ** np.arange(1, n + 1)
+    end = _tail_time(negative[::-1], fs, tol)  # negative times (T_F's mirror, fast): what the end lacks
     return settle, (start, end)
