@@ -18,32 +18,63 @@ seconds from their first value) or the one named by ``time_col``; else the wavef
 ``unit_string`` property. ``metadata``: file properties as they are, group properties as
 ``group.key``. The writer puts one group ``measured`` with a ``time`` channel and waveform
 properties on each channel, metadata as file properties.
+
+The file is checked first (a regular file that fits in memory, not empty:
+:func:`correction.measured_core.open_input`); both libraries are then called behind one boundary
+(:func:`correction.lab_boundary.library_call`): nothing of theirs reaches the console, a file cut
+short is refused, and any exception of theirs is one sentence naming the file.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import os
+import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 
 import numpy as np
 
-from correction.measured_core import MeasuredDataError, is_time_name, make_channels, to_si, uniform_rate
+from correction.lab_boundary import library_call, said
+from correction.measured_core import MeasuredDataError, is_time_name, make_channels, open_input, to_si, uniform_rate
 
 __all__ = ["read_mdf", "write_mdf", "read_tdms", "write_tdms", "need"]
 
 
+#: Peak memory of nptdms reading a file (it reads every channel), bytes per byte of the file
+#: (2.2 measured on a 72 MB file). asammdf maps the file and reads only the channels asked for.
+_TDMS_MEMORY_PER_BYTE = 3.0
+
+
 def need(module: str, ext: str, verb: str = "reading"):
     """Import an optional package of the ``lab`` extra, or one sentence naming the extra."""
+    fix = 'pip install -e ".[lab]"'
     try:
-        return importlib.import_module(module)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return importlib.import_module(module)
     except ImportError:
-        raise MeasuredDataError(f"{verb} {ext} files needs the 'lab' extra: pip install -e \".[lab]\"") from None
+        raise MeasuredDataError(f"{verb} {ext} files needs the 'lab' extra: {fix}") from None
+    except Exception as exc:  # an install that imports but breaks (a mismatched numpy...)
+        raise MeasuredDataError(f"{verb} {ext} files needs the 'lab' extra, and importing {module} failed "
+                                f"({said(exc, '')}): reinstall it: {fix}") from None
 
 
-def _at(i: int) -> str:
-    return f"sample {i}"
+def _checked(path, kind: str, memory_per_byte: float | None):
+    """``path`` opened (:func:`open_input`: a regular file that fits in memory), or refused when empty."""
+    fh = open_input(path, memory_per_byte)
+    if os.fstat(fh.fileno()).st_size == 0:
+        fh.close()
+        raise MeasuredDataError(f"{kind} file {str(path)!r} is empty (0 bytes); export it again from the recorder")
+    return fh
+
+
+def _rate(t: np.ndarray, name: str, path) -> float:
+    """The sampling rate (Hz) of time ``t`` (s) named ``name``; a refusal names the file."""
+    if t.size < 2:
+        raise MeasuredDataError(f"time {name!r} of {str(path)!r} has {t.size} samples; at least two are needed")
+    return uniform_rate(t, name, lambda i: f"sample {i} of {str(path)!r}")
 
 
 def _time_si(name: str, t, unit: str, path) -> np.ndarray:
@@ -113,63 +144,92 @@ def _hd_metadata(comment: str) -> dict[str, str]:
 
 
 def read_mdf(path, *, time_col=None, channels=None):
-    """Channels of an MDF4 file on their common uniform time base, in SI."""
+    """Channels of an MDF4 file on their common uniform time base, in SI.
+
+    The path is checked first (:func:`_checked`), then given to asammdf, which maps the file (and
+    copies an unfinalised one to finalise it); everything it does is behind
+    :func:`correction.lab_boundary.library_call`.
+    """
     asammdf = need("asammdf", ".mf4")
-    if not os.path.exists(path):
-        raise MeasuredDataError(f"input file {str(path)!r} does not exist")
-    try:
+    _checked(path, "MDF", None).close()
+    with library_call("MDF", "an MDF4 file", "asammdf", path):
         mdf = asammdf.MDF(str(path))
-    except Exception as exc:  # the library's own errors vary by version
-        raise MeasuredDataError(f"cannot read MDF file {str(path)!r}: {exc}") from None
-    with mdf:
-        where: dict[str, list[tuple[int, int]]] = {}
-        masters = {}
-        for g, grp in enumerate(mdf.groups):
-            m = mdf.masters_db.get(g)
-            if m is not None:
-                masters[g] = grp.channels[m]
-            for i, ch in enumerate(grp.channels):
-                if i != m:
-                    where.setdefault(ch.name, []).append((g, i))
-        if time_col is not None and time_col not in {c.name for c in masters.values()}:
-            raise MeasuredDataError(f"time_col {time_col!r} is not a master channel of {str(path)!r}; MDF4 time is "
-                                    "the channel group's master (leave time_col out)")
-        sigs = {}
-        for name, places in where.items():
-            if channels is not None and name not in channels:
-                continue
-            if len(places) > 1:
-                if channels is None and not any(_numeric(mdf.get(group=g, index=i)) for g, i in places):
-                    continue
-                raise MeasuredDataError(f"channel {name!r} appears in {len(places)} channel groups of "
-                                        f"{str(path)!r}; export it once")
-            sig = mdf.get(group=places[0][0], index=places[0][1])
-            if _numeric(sig):
-                sigs[name] = (sig, places[0][0])
-        names = _pick(list(sigs), channels, path, list(where))
-        if not names:
-            raise MeasuredDataError(f"MDF file {str(path)!r} has no numeric channel to read")
-        times = {}
-        for n in names:
-            sig, g = sigs[n]
-            unit = masters[g].unit if g in masters else "s"
-            times[n] = _time_si(masters[g].name if g in masters else "time", sig.timestamps, unit, path)
-        t = _common_time(times, path)
-        fs = uniform_rate(t, masters[sigs[names[0]][1]].name if sigs[names[0]][1] in masters else "time", _at)
-        data, units, src = {}, {}, {}
-        meta = _hd_metadata(mdf.header.comment or "")
         try:
-            meta["start_time"] = mdf.header.start_time.isoformat()
-        except (AttributeError, ValueError):
-            pass
-        for n in names:
-            sig = sigs[n][0]
-            data[n], units[n], src[n] = to_si(n, sig.samples, sig.unit, path, what="channel")
-            if (sig.comment or "").strip():
-                meta[f"{n}.comment"] = sig.comment.strip()
-        tname = masters[sigs[names[0]][1]].name if sigs[names[0]][1] in masters else "time"
-    return make_channels(time_s=t, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta, path=path,
-                         fmt="mdf4", time_name=tname or "time")
+            found = _mdf_channels(mdf, path, time_col, channels)
+        finally:
+            with contextlib.suppress(Exception):
+                mdf.close()
+    return make_channels(**found, path=path, fmt="mdf4")
+
+
+def _mdf_channels(mdf, path, time_col, channels) -> dict:
+    """The arguments of :func:`make_channels` (but the path and format) read from an open MDF."""
+    where: dict[str, list[tuple[int, int]]] = {}
+    masters = {}
+    for g, grp in enumerate(mdf.groups):
+        m = mdf.masters_db.get(g)
+        if m is not None:
+            masters[g] = grp.channels[m]
+        for i, ch in enumerate(grp.channels):
+            if i != m:
+                where.setdefault(ch.name, []).append((g, i))
+    if time_col is not None and time_col not in {c.name for c in masters.values()}:
+        raise MeasuredDataError(f"time_col {time_col!r} is not a master channel of {str(path)!r}; MDF4 time is "
+                                "the channel group's master (leave time_col out)")
+    sigs = {}
+    for name, places in where.items():
+        if channels is not None and name not in channels:
+            continue
+        if len(places) > 1:
+            if channels is None and not any(_numeric(_get(mdf, g, i, path)) for g, i in places):
+                continue
+            raise MeasuredDataError(f"channel {name!r} appears in {len(places)} channel groups of "
+                                    f"{str(path)!r}; export it once")
+        sig = _get(mdf, places[0][0], places[0][1], path)
+        if _numeric(sig):
+            sigs[name] = (sig, places[0][0])
+    names = _pick(list(sigs), channels, path, list(where))
+    if not names:
+        raise MeasuredDataError(f"MDF file {str(path)!r} has no numeric channel to read")
+    times = {}
+    for n in names:
+        sig, g = sigs[n]
+        unit = masters[g].unit if g in masters else "s"
+        times[n] = _time_si(masters[g].name if g in masters else "time", sig.timestamps, unit, path)
+    t = _common_time(times, path)
+    fs = _rate(t, masters[sigs[names[0]][1]].name if sigs[names[0]][1] in masters else "time", path)
+    data, units, src = {}, {}, {}
+    meta = _hd_metadata(mdf.header.comment or "")
+    try:
+        meta["start_time"] = mdf.header.start_time.isoformat()
+    except (AttributeError, ValueError):
+        pass
+    for n in names:
+        sig = sigs[n][0]
+        data[n], units[n], src[n] = to_si(n, sig.samples, sig.unit, path, what="channel")
+        if (sig.comment or "").strip():
+            meta[f"{n}.comment"] = sig.comment.strip()
+    tname = masters[sigs[names[0]][1]].name if sigs[names[0]][1] in masters else "time"
+    return dict(time_s=t, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta, time_name=tname or "time")
+
+
+def _get(mdf, g: int, i: int, path):
+    """``mdf.get`` of channel ``i`` of group ``g``, once the bytes it and its master take are seen to
+    lie in the group's record: asammdf's C code copies them without looking (a damaged byte
+    offset would read past the data and crash the process)."""
+    grp = mdf.groups[g]
+    record = getattr(grp.channel_group, "samples_byte_nr", None)
+    for k in {i, mdf.masters_db.get(g, i)}:
+        ch = grp.channels[k]
+        try:
+            end = ch.byte_offset + (ch.bit_offset + ch.bit_count + 7) // 8
+        except (AttributeError, TypeError):  # an MDF 3 block: another layout
+            continue
+        if record is not None and ch.channel_type not in (3, 6) and end > record:  # 3, 6: virtual, no bytes
+            raise MeasuredDataError(f"channel {ch.name!r} of {str(path)!r} lies outside its record (it ends at byte "
+                                    f"{end}, the record has {record}): the file is damaged; export it again from "
+                                    "the recorder")
+    return mdf.get(group=g, index=i)
 
 
 def _numeric(sig) -> bool:
@@ -202,15 +262,23 @@ def write_mdf(dest: str, time_s: np.ndarray, data: Mapping, units: Mapping, meta
 # ---------------------------------------------------------------- TDMS
 
 def read_tdms(path, *, time_col=None, channels=None):
-    """Channels of a TDMS file on one uniform time axis, in SI."""
+    """Channels of a TDMS file on one uniform time axis, in SI.
+
+    nptdms reads the file opened and checked here (:func:`_checked`: no second open by path, no
+    ``.tdms_index`` beside it), behind :func:`correction.lab_boundary.library_call`.
+    """
     nptdms = need("nptdms", ".tdms")
-    if not os.path.exists(path):
-        raise MeasuredDataError(f"input file {str(path)!r} does not exist")
-    try:
-        f = nptdms.TdmsFile.read(str(path))
-    except Exception as exc:  # the library's own errors vary by version
-        raise MeasuredDataError(f"cannot read TDMS file {str(path)!r}: {exc}") from None
+    with _checked(path, "TDMS", _TDMS_MEMORY_PER_BYTE) as fh, library_call("TDMS", "a TDMS file", "nptdms", path):
+        found = _tdms_channels(nptdms.TdmsFile.read(fh), path, time_col, channels)
+    return make_channels(**found, path=path, fmt="tdms")
+
+
+def _tdms_channels(f, path, time_col, channels) -> dict:
+    """The arguments of :func:`make_channels` (but the path and format) from a TDMS file read."""
     entries = [(g.name, ch) for g in f.groups() for ch in g.channels()]
+    if not entries:
+        raise MeasuredDataError(f"TDMS file {str(path)!r} holds no channel: it is cut short or not a TDMS file; "
+                                "export it again from the recorder")
     count: dict[str, int] = {}
     for _, ch in entries:
         count[ch.name] = count.get(ch.name, 0) + 1
@@ -244,7 +312,7 @@ def read_tdms(path, *, time_col=None, channels=None):
                 raise MeasuredDataError(f"channel {n!r} of {str(path)!r} has no time: no time channel and no "
                                         "waveform properties (wf_increment); name one with time_col") from None
         t = _common_time(times, path)
-    fs = uniform_rate(t, tname, _at)
+    fs = _rate(t, tname, path)
     data, units, src = {}, {}, {}
     for n in names:
         data[n], units[n], src[n] = to_si(n, named[n][:], named[n].properties.get("unit_string"), path,
@@ -252,8 +320,7 @@ def read_tdms(path, *, time_col=None, channels=None):
     meta = {str(k): str(v) for k, v in f.properties.items()}
     for g in f.groups():
         meta.update({f"{g.name}.{k}": str(v) for k, v in g.properties.items()})
-    return make_channels(time_s=t, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta, path=path,
-                         fmt="tdms", time_name=tname)
+    return dict(time_s=t, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta, time_name=tname)
 
 
 def _tdms_time(ch, path) -> np.ndarray:

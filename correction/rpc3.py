@@ -252,7 +252,7 @@ def read_rpc3(path) -> Rpc3Data:
         :data:`MAX_DELTA_T_S`] s, a START_TIME whose times float64 cannot tell apart (see
         :data:`TIME_RESOLUTION`), a zero or non-finite SCALE.CHAN_n, a NaN or infinite sample.
     """
-    raw = read_bytes(path)
+    raw = read_bytes(path, memory_per_byte=9.0)  # 8.9 measured: the bytes, int16 to float64, scaled
     head = _header(raw, path)
     fmt = head["FORMAT"].upper()
     order = {"BINARY": "<", "BINARY_IEEE_LITTLE_END": "<", "BINARY_IEEE_BIG_END": ">"}.get(fmt)

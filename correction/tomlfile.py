@@ -4,11 +4,12 @@ Every user file the project reads is TOML, and every reader wants the same three
 parsed or refused in one sentence that names it, no key it does not know (a typo must not be
 ignored silently), and numbers that are numbers, finite and in range. This module does them
 once, for any layer: it lives in :mod:`correction`, the lowest layer that reads user files, and
-imports nothing of the project, so the correction toolkit works on its own and the scenarios
-can build on it.
+imports nothing of the project but :mod:`correction.atomic` (how a file is opened, read and
+written), so the correction toolkit works on its own and the scenarios can build on it.
 
-* :func:`read_toml`: path -> dict, or one sentence: missing file, a directory, unreadable or
-  not UTF-8, invalid TOML (with tomllib's line and column);
+* :func:`read_toml`: path -> dict, or one sentence: missing file, a directory, a named pipe or
+  a device, a file over 16 MiB, unreadable or not UTF-8, invalid TOML (with tomllib's line and
+  column);
 * :func:`check_keys`: refuse an unknown key, naming the closest valid one
   (``difflib.get_close_matches``, cutoff 0.5) or else listing the valid keys;
 * :func:`number`: a TOML value as a finite float within optional bounds;
@@ -34,13 +35,21 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["read_toml", "check_keys", "number", "toml_text", "write_toml"]
+__all__ = ["MAX_TOML_BYTES", "read_toml", "check_keys", "number", "toml_text", "write_toml"]
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+#: The largest TOML file read, bytes: the project's files (scenarios, grids, actuator files) are
+#: a few KiB; a file this large is the wrong file.
+MAX_TOML_BYTES = 16 * 2**20
 
 
-def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = ValueError) -> dict:
+def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = ValueError, *,
+              max_bytes: int = MAX_TOML_BYTES) -> dict:
     """Read and parse a TOML file (UTF-8), refusing any problem in one sentence.
+
+    The file must be a regular file of at most ``max_bytes``: a named pipe, a device (``/dev/zero``)
+    or a socket is refused without waiting on it (:func:`correction.atomic.open_regular`), a file
+    larger than any TOML file the project reads without reading it.
 
     Parameters
     ----------
@@ -51,30 +60,32 @@ def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = Value
         ``"actuator file"``.
     error : type of Exception
         The class raised (called with the message as its only argument).
+    max_bytes : int
+        The largest file read, bytes (:data:`MAX_TOML_BYTES`).
 
     Returns
     -------
     dict
-        The parsed document (``tomllib.loads``).
+        The parsed document (``tomllib.loads``; line ends ``\\r\\n`` and ``\\r`` read as ``\\n``).
 
     Raises
     ------
     error
         ``"{what} 'PATH' does not exist"``; ``"{what} 'PATH' is a directory, not a TOML file"``;
+        ``"{what} 'PATH' is a named pipe (FIFO), not a TOML file; ..."`` (a device, a socket alike);
+        ``"{what} 'PATH' is 20 MiB, more than the 16 MiB a TOML file may have; ..."``;
         ``"cannot read {what} 'PATH': <reason>"`` (permissions, not UTF-8, ...);
         ``"{what} 'PATH' is not valid TOML: <tomllib's message with line and column>"``.
     """
+    from .atomic import read_regular, size_text
+
     p = pathlib.Path(path)
     name = repr(str(p))
+    raw = read_regular(p, what, max_bytes=max_bytes, error=error, expected="a TOML file",
+                       too_large=f", more than the {size_text(max_bytes)} a TOML file may have; check the path")
     try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise error(f"{what} {name} does not exist") from None
-    except IsADirectoryError:
-        raise error(f"{what} {name} is a directory, not a TOML file") from None
-    except (OSError, ValueError) as exc:  # ValueError: UnicodeDecodeError, a NUL byte in the path
-        if isinstance(exc, PermissionError) and p.is_dir():  # Windows reports a directory so
-            raise error(f"{what} {name} is a directory, not a TOML file") from None
+        text = raw.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")
+    except UnicodeDecodeError as exc:
         raise error(f"cannot read {what} {name}: {_one_line(exc)}") from None
     try:
         return tomllib.loads(text)

@@ -8,7 +8,6 @@ files) give, written out here. The property test feeds a few hundred random byte
 from __future__ import annotations
 
 import math
-import pathlib
 
 import numpy as np
 import pytest
@@ -59,10 +58,12 @@ def test_a_file_that_is_not_utf8_cannot_be_read(tmp_path):
 
 
 def _refuse_reading(monkeypatch):
-    """Make every read fail as an unreadable file does (root reads files whatever their mode)."""
-    def read_text(self, *args, **kwargs):
-        raise PermissionError(13, "Permission denied", str(self))
-    monkeypatch.setattr(pathlib.Path, "read_text", read_text)
+    """Make every open fail as an unreadable file does (root reads files whatever their mode)."""
+    import os
+
+    def refuse(path, *args, **kwargs):
+        raise PermissionError(13, "Permission denied", os.fspath(path))
+    monkeypatch.setattr(os, "open", refuse)
 
 
 def test_an_unreadable_file_says_why(tmp_path, monkeypatch):

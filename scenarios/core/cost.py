@@ -14,6 +14,7 @@ import os
 import shutil
 from dataclasses import dataclass
 
+from correction.atomic import size_text
 from scenarios.core.config import ScenarioError
 
 __all__ = ["RunCost", "run_cost", "check_disk", "LONG_RUN_S", "LARGE_FILES_BYTES"]
@@ -52,20 +53,13 @@ class RunCost:
 
     def sentence(self, what: str) -> str:
         """``"a 3600 s rig run: about 2 min of computing and 1.2 GiB of files (...)"``."""
-        return (f"{what}: about {_duration(self.seconds)} of computing and {_size(self.file_bytes)} of files "
+        return (f"{what}: about {_duration(self.seconds)} of computing and {size_text(self.file_bytes)} of files "
                 f"({self.rows:,} rows x {self.columns} columns)")
 
     @property
     def long(self) -> bool:
         """Worth announcing before it starts."""
         return self.seconds > LONG_RUN_S or self.file_bytes > LARGE_FILES_BYTES
-
-
-def _size(n: float) -> str:
-    for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("kiB", 2**10)):
-        if n >= scale:
-            return f"{n / scale:.3g} {unit}"
-    return f"{n:.0f} B"
 
 
 def _duration(s: float) -> str:
@@ -103,6 +97,6 @@ def check_disk(cost: RunCost, folder, option: str = "--out") -> None:
     except OSError:
         return
     if cost.file_bytes * 1.1 > free:
-        raise ScenarioError(f"{option} {os.fspath(folder)}: the run would write about {_size(cost.file_bytes)} but "
-                            f"{where} has {_size(free)} free; free some space, shorten duration_s, lower "
+        raise ScenarioError(f"{option} {os.fspath(folder)}: the run would write about {size_text(cost.file_bytes)} but "
+                            f"{where} has {size_text(free)} free; free some space, shorten duration_s, lower "
                             "output_rate_hz or write --format rsp")

@@ -10,8 +10,8 @@ at once (glibc's malloc otherwise keeps much of it in the process).
 
 from __future__ import annotations
 
-import os
 
+from correction.atomic import available_memory_bytes, size_text
 from scenarios.core.config import ScenarioError
 
 __all__ = ["BASE_BYTES", "BYTES_PER_STEP", "BYTES_PER_OUTPUT", "MMAP_THRESHOLD_BYTES", "available_memory_bytes",
@@ -29,25 +29,6 @@ BYTES_PER_OUTPUT = 512
 #: What a run takes whatever its length, bytes: the rest state, the stability linearization and
 #: the rollout's chunk buffers (~2.5 MB measured in rig mode), rounded up.
 BASE_BYTES = 3 * 2**20
-
-
-def available_memory_bytes() -> int | None:
-    """int, bytes: the machine's available memory (psutil if installed, else the free pages of
-    ``os.sysconf``); None where neither can tell."""
-    try:
-        import psutil
-    except ImportError:
-        psutil = None
-    if psutil is not None:
-        return int(psutil.virtual_memory().available)
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
-def _size(n_bytes: float) -> str:
-    return f"{n_bytes / 2**30:.3g} GiB" if n_bytes >= 2**30 else f"{n_bytes / 2**20:.3g} MiB"
 
 
 def check_memory(steps: float, outputs: float, what: str, fix: str) -> None:
@@ -74,8 +55,8 @@ def check_memory(steps: float, outputs: float, what: str, fix: str) -> None:
     avail = available_memory_bytes()
     if avail is None or need <= 0.5 * avail:
         return
-    raise ScenarioError(f"{what}, about {_size(need)} of memory for the drive and records, above the limit of "
-                        f"{_size(0.5 * avail)} (half of the {_size(avail)} available); {fix}")
+    raise ScenarioError(f"{what}, about {size_text(need)} of memory for the drive and records, above the limit of "
+                        f"{size_text(0.5 * avail)} (half of the {size_text(avail)} available); {fix}")
 
 
 #: Allocations from this size up get pages of their own, given back to the system when freed
