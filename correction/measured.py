@@ -7,7 +7,8 @@ without a simulator. The format follows the file's extension:
 extension              format     how
 =====================  =========  ===================================================
 .csv .txt .dat         ``csv``    :mod:`correction.measured_csv` (delimiter, decimal mark,
-                                  preamble, units row, units in headers: sniffed)
+                                  thousands separator, preamble, units row, units
+                                  in headers: sniffed; streamed)
 .rsp .drv .tim .rpc    ``rpc3``   :mod:`correction.rpc3` (MTS RPC III, own code)
 .mf4 .mdf              ``mdf4``   ``asammdf`` (the ``lab`` extra), :mod:`correction.measured_lab`
 .tdms                  ``tdms``   ``nptdms`` (the ``lab`` extra), :mod:`correction.measured_lab`
@@ -54,7 +55,8 @@ def format_of(path, formats: Mapping = READ_FORMATS) -> str:
     return formats[ext]
 
 
-def read_channels(path, *, time_col: str | None = None, channels=None) -> MeasuredChannels:
+def read_channels(path, *, time_col: str | None = None, channels=None, decimal: str | None = None,
+                  thousands: str | None = None) -> MeasuredChannels:
     """Read the channels of a measured file, in SI, on its uniform time axis.
 
     Parameters
@@ -67,8 +69,14 @@ def read_channels(path, *, time_col: str | None = None, channels=None) -> Measur
         :data:`TIME_KEYS`). RPC III files have no time column (DELTA_T gives the time).
     channels : sequence of str, optional
         Channels to read, in this order (names without unit decoration; a CSV header as written
-        is accepted too). Default: every numeric channel (CSV: every column with a number in it;
-        text columns are ignored).
+        is accepted too). Default: every numeric channel (CSV: every column with a number in its
+        first lines; text columns are ignored).
+    decimal : {".", ","}, optional
+        Text files: the decimal mark; default: decided by the fields of the columns read, an
+        ambiguous file refused (:mod:`correction.measured_numbers`). Other formats: leave it out.
+    thousands : {"none", ",", ".", "'", "space"}, optional
+        Text files: the one thousands separator (``"space"``: a space, U+00A0 or U+202F;
+        ``","`` implies ``decimal="."``, ``"."`` implies ``decimal=","``); default: detected.
 
     Returns
     -------
@@ -84,9 +92,12 @@ def read_channels(path, *, time_col: str | None = None, channels=None) -> Measur
         channels = [channels]
     channels = None if channels is None else list(channels)
     if fmt == "csv":
-        from correction.measured_csv import channels_from_table, read_table
+        from correction.measured_csv import read_csv_channels
 
-        return channels_from_table(read_table(path), path, time_col=time_col, channels=channels)[0]
+        return read_csv_channels(path, time_col=time_col, channels=channels, decimal=decimal, thousands=thousands)
+    if decimal is not None or thousands is not None:
+        raise MeasuredDataError(f"{str(path)!r} is a {fmt} file, which stores numbers, not text; leave the decimal "
+                                "mark and thousands separator (--decimal, --thousands) out")
     if fmt == "rpc3":
         return _read_rpc(path, time_col, channels)
     from correction import measured_lab

@@ -5,14 +5,15 @@
     rigsim correct IN (--actuator ACT.toml | --actuators ACTS.toml [--map fl=CH,...]
                    | --identify DRIVE_CH,DISP_CH) -o OUT [--force] [--time-col NAME]
                    [--lowpass paper|regularized] [--mode causal|zerophase] [--columns A,B]
-                   [--transient drop|mark|keep]
+                   [--transient drop|mark|keep] [--decimal .|,] [--thousands none|,|.|'|space]
     rigsim correct IN --model TRUCK.toml --pairs fl=DRIVE:LVDT,... -o OUT [--map fl=CH,...] ...
 
 ``IN`` is read by :func:`correction.measured.read_channels` (any CSV dialect, RPC III, MDF4, TDMS),
 its channels named as the reader returns them (``Fz_FL`` for a header ``Fz_FL [kN]``) and in SI,
-so a force in kN is corrected in N. Without ``--columns``/``--map`` every numeric channel is read
-and the force channels (unit N, kN... or none) are the candidates; with them only the named
-channels are read. A chosen channel that is not a force is refused. ``T_a`` comes from
+so a force in kN is corrected in N; ``--decimal`` and ``--thousands`` say how a text file writes
+its numbers when they leave it ambiguous. Without ``--columns``/``--map`` every numeric channel
+is read and the force channels (unit N, kN... or none) are the candidates; with them only the
+named channels are read. A chosen channel that is not a force is refused. ``T_a`` comes from
 ``--actuator`` (one actuator file, :mod:`correction.actuator_file`, for every channel),
 ``--actuators`` (one ``T_a`` per corner; a corner corrects the channel whose name holds the
 corner as a token, ``tire_force_fl_N`` or ``Fz_FL``, case-insensitive, or the one ``--map``
@@ -40,6 +41,7 @@ from __future__ import annotations
 import argparse
 
 from scenarios.cli.correct_channels import parse_options, plan_channels, read_input
+from scenarios.studies.identify.recorded import add_number_format
 from scenarios.cli.correct_output import (check_out_file, fit_metadata, linear_correction,
                                           linear_metadata, output_units, probe_output, rigsim_version,
                                           write_corrected)
@@ -65,6 +67,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c.add_argument("input", metavar="IN", help="measured file (.csv/.txt/.dat in any dialect, RPC III .rsp/.drv/.tim, "
                    ".mf4, .tdms) on a uniform time axis; units converted to SI (kN -> N, mm -> m)")
     c.add_argument("--time-col", metavar="NAME", help="the time column (default: the one named time, t, zeit...)")
+    add_number_format(c)
     c.add_argument("--actuator", metavar="ACT.toml",
                    help="actuator file for every channel: [transfer_function] num, den (descending powers of s) "
                         "or [parameters] (eq. 4)")

@@ -14,11 +14,15 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["FORCE_UNITS", "LENGTH_UNITS", "split_columns", "names_corner", "map_items", "check_map", "auto_map",
-           "parse_options", "read_input", "unit_text", "plan_channels"]
+__all__ = ["FORCE_UNITS", "LENGTH_UNITS", "split_columns",
+           "names_corner", "map_items", "check_map", "auto_map", "parse_options", "read_input", "unit_text",
+           "plan_channels"]
 
 #: SI units of forces, lengths as the reader returns them ("": none given, taken as SI).
 FORCE_UNITS, LENGTH_UNITS = ("N", ""), ("m", "")
+
+#: ``--decimal`` and ``--thousands`` choices: :data:`correction.measured_numbers.DECIMALS` and
+#: ``THOUSANDS`` (not imported here, to keep the parser light).
 
 #: Whose corners ``--map`` and the name tokens are matched against, in the linear correction's messages.
 ACTUATOR_FILE = "the actuator file"
@@ -120,7 +124,8 @@ def read_input(args, asked, items, id_cols):
     if asked is not None or items is not None:
         wanted = list(dict.fromkeys((asked or []) + [c for _, c in items or []] + list(id_cols)))
     try:
-        mc = read_channels(args.input, time_col=args.time_col, channels=wanted)
+        mc = read_channels(args.input, time_col=args.time_col, channels=wanted, decimal=args.decimal,
+                           thousands=args.thousands)
     except MeasuredDataError as exc:
         raise _error(str(exc)) from None
     alias = dict(zip(wanted, mc.names)) if wanted is not None else {}

@@ -18,6 +18,8 @@ __all__ = ["add_parser", "cmd_identify"]
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim identify``."""
+    from scenarios.studies.identify.recorded import add_number_format
+
     p = subparsers.add_parser(
         "identify", help="identify T_a per corner: random drives on the simulated rig, or a recorded file")
     p.add_argument("scenario", nargs="?", help="scenario TOML file (the truck on the simulated rig)")
@@ -33,6 +35,7 @@ def add_parser(subparsers) -> None:
                         "without their [unit]; lengths in m, mm... (converted to m)")
     p.add_argument("--time-col", default=None, metavar="NAME",
                    help="with --from-file: the time column (default: the one named time, t, zeit...)")
+    add_number_format(p)
     p.add_argument("--force", action="store_true", help="replace a previous result in --out")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_identify)
@@ -41,6 +44,9 @@ def add_parser(subparsers) -> None:
 def _check(args):
     from scenarios.core.config import ScenarioError
 
+    if (getattr(args, "decimal", None) or getattr(args, "thousands", None)) and args.from_file is None:
+        raise ScenarioError("--decimal and --thousands go with --from-file; a simulated identification reads no "
+                            "text")
     if (args.scenario is None) == (args.from_file is None):
         raise ScenarioError("give either a SCENARIO.toml (the simulated rig) or --from-file REC.csv, exactly one")
     if args.from_file is not None and not args.pairs:
@@ -76,7 +82,8 @@ def cmd_identify(args) -> int:
         if args.from_file is not None:
             from scenarios.studies.identify.recorded import identify_recorded
 
-            ident = identify_recorded(args.from_file, args.pairs, time_col=args.time_col)
+            ident = identify_recorded(args.from_file, args.pairs, time_col=args.time_col,
+                                      decimal=getattr(args, "decimal", None), thousands=getattr(args, "thousands", None))
             title = pathlib.Path(args.from_file).name
         else:
             from correction.actuator_fit import ActuatorFitError

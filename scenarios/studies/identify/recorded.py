@@ -18,9 +18,21 @@ import numpy as np
 
 from correction.actuator_fit import ActuatorFitError, fit_actuator
 from correction.measured import MeasuredDataError, read_channels
+from correction.measured_numbers import DECIMALS, THOUSANDS
 from scenarios.core.config import ScenarioError
 
-__all__ = ["RecordedIdentification", "parse_pairs", "identify_recorded"]
+__all__ = ["RecordedIdentification", "add_number_format", "parse_pairs", "identify_recorded"]
+
+
+def add_number_format(parser) -> None:
+    """Add ``--decimal`` and ``--thousands`` (how a text input writes its numbers) to ``parser``."""
+    parser.add_argument("--decimal", choices=DECIMALS, default=None,
+                        help="text input: the decimal mark, . or , (default: decided by the numbers of the columns "
+                             "read; a file they leave ambiguous, such as one with only 21,988, is refused)")
+    parser.add_argument("--thousands", choices=tuple(THOUSANDS), default=None,
+                        help="text input: the one thousands separator: none, ',', '.', \"'\" or space (a space, "
+                             "U+00A0 or U+202F); ',' implies --decimal . and '.' implies --decimal , (default: "
+                             "detected)")
 
 
 @dataclass(frozen=True)
@@ -70,7 +82,8 @@ def parse_pairs(text: str) -> dict[str, tuple[str, str]]:
     return out
 
 
-def identify_recorded(path, pairs_text: str, time_col: str | None = None) -> RecordedIdentification:
+def identify_recorded(path, pairs_text: str, time_col: str | None = None, *, decimal: str | None = None,
+                      thousands: str | None = None) -> RecordedIdentification:
     """Fit T_a for each ``corner=DRIVE:LVDT`` pair of the recorded file ``path``.
 
     Parameters
@@ -83,6 +96,8 @@ def identify_recorded(path, pairs_text: str, time_col: str | None = None) -> Rec
         header ``Weg_FL [mm]``).
     time_col : str, optional
         The time column (default: the one with a time name).
+    decimal, thousands : str, optional
+        A text file's decimal mark and thousands separator (``read_channels``); default: detected.
 
     Raises
     ------
@@ -92,7 +107,7 @@ def identify_recorded(path, pairs_text: str, time_col: str | None = None) -> Rec
     pairs = parse_pairs(pairs_text)
     wanted = list(dict.fromkeys(c for cols in pairs.values() for c in cols))
     try:
-        mc = read_channels(path, time_col=time_col, channels=wanted)
+        mc = read_channels(path, time_col=time_col, channels=wanted, decimal=decimal, thousands=thousands)
     except MeasuredDataError as exc:
         raise ScenarioError(str(exc)) from None
     name = dict(zip(wanted, mc.names))  # as asked -> as read (a CSV header may match by case)
