@@ -5,13 +5,15 @@ cores or on a Dask cluster, with nothing lost.
 
     rigsim sweep GRID.toml --out DIR [--scheduler tcp://HOST:PORT] [--workers N] [--no-resume]
 
-The package: :mod:`~scenarios.studies.sweep.grid` (the grid file) and
-:mod:`~scenarios.studies.sweep.settings` (its evaluation keys), :mod:`~scenarios.studies.sweep.case`
-(one case: road and rig runs scored by :func:`scenarios.studies.scoring.score_pair`, by default
-with the paper study's ``best`` method and noise), :mod:`~scenarios.studies.sweep.executors`
-(local process pool or Dask), :mod:`~scenarios.studies.sweep.store` (case files, ``results.csv``,
-``sweep.json``), :mod:`~scenarios.studies.sweep.run` (running and resuming),
-:mod:`~scenarios.studies.sweep.plot` (``summary.png``). This module is the argparse adapter.
+The package: :mod:`~scenarios.studies.sweep.grid` (the grid file), :mod:`~scenarios.studies.sweep.axes`
+(its axes and the cap on cases) and :mod:`~scenarios.studies.sweep.settings` (its evaluation keys),
+:mod:`~scenarios.studies.sweep.case` (one case: road and rig runs scored by
+:func:`scenarios.studies.scoring.score_pair`, by default with the paper study's ``best`` method
+and noise), :mod:`~scenarios.studies.sweep.executors` (local process pool or Dask) and
+:mod:`~scenarios.studies.sweep.scheduler` (``--scheduler`` checked and reached within deadlines),
+:mod:`~scenarios.studies.sweep.store` (case files, ``results.csv``, ``sweep.json``),
+:mod:`~scenarios.studies.sweep.run` (running and resuming), :mod:`~scenarios.studies.sweep.plot`
+(``summary.png``). This module is the argparse adapter.
 
 Outputs in ``DIR``: ``cases/<case_id>.json`` (one per finished case, written as it finishes),
 ``results.csv`` (one row per finished case, sorted by case id), ``summary.png`` (DLC against
@@ -34,6 +36,7 @@ def cmd_sweep(args) -> int:
     from scenarios.studies.sweep.executors import dask_executor
     from scenarios.studies.sweep.grid import load_grid
     from scenarios.studies.sweep.run import SUMMARY_FILE, SweepOutcome, run_sweep
+    from scenarios.studies.sweep.scheduler import check_address
     from scenarios.studies.sweep.store import CASES_DIR
 
     if args.scheduler is not None and args.workers is not None:
@@ -43,6 +46,7 @@ def cmd_sweep(args) -> int:
         worker_count(args.workers)
     except ValueError:
         raise ScenarioError(f"--jobs must be a whole number >= 1, got {args.workers}") from None
+    scheduler = None if args.scheduler is None else check_address(args.scheduler)  # before the grid is read
     from scenarios.core.outputs import claim_output_folder
 
     # a new, empty or earlier sweep's folder is resumed into; anything else is refused now
@@ -50,8 +54,8 @@ def cmd_sweep(args) -> int:
     grid = load_grid(args.grid)  # every case validated before anything starts
     out = pathlib.Path(args.out)
     quiet = getattr(args, "quiet", False)
-    if args.scheduler is not None:
-        executor_cm, label = dask_executor(args.scheduler), f"dask {args.scheduler}"
+    if scheduler is not None:
+        executor_cm, label = dask_executor(scheduler), f"dask {scheduler}"
     else:
         n = worker_count(args.workers, len(grid.cases))
         executor_cm, label = local_executor(n), f"local process pool, {n} worker{'s' if n > 1 else ''}"

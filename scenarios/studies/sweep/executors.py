@@ -13,8 +13,8 @@ import concurrent.futures as cf
 import contextlib
 from collections.abc import Iterator
 
-from scenarios.core.config import ScenarioError
 from scenarios.core.pool import local_executor
+from scenarios.studies.sweep.scheduler import connect
 
 __all__ = ["dask_executor", "local_executor"]
 
@@ -23,42 +23,28 @@ __all__ = ["dask_executor", "local_executor"]
 def dask_executor(address: str) -> Iterator[cf.Executor]:
     """The ``concurrent.futures`` executor of a Dask distributed cluster at ``address``.
 
+    The connection is :func:`scenarios.studies.sweep.scheduler.connect`'s: the address checked,
+    the scheduler and its workers questioned, each step within a deadline. On an exception
+    (Ctrl-C included) the cases not finished are cancelled on the cluster before it propagates.
+
     Raises
     ------
     ScenarioError
-        If distributed is not installed, the scheduler cannot be reached, it has no workers, or a
-        worker runs more than one thread (MuJoCo's callbacks are process-global).
+        One sentence naming ``--scheduler``: distributed is not installed, the address is
+        refused, the scheduler cannot be reached or does not answer as one, it has no workers,
+        or a worker runs more than one thread (MuJoCo's callbacks are process-global).
     """
+    client = connect(address)
     try:
-        import distributed
-    except ImportError:
-        raise ScenarioError("--scheduler needs the 'distributed' package; pip install "
-                            "'dask[distributed]'") from None
-    try:
-        client = distributed.Client(address, timeout="10s")
-    except (OSError, TimeoutError) as exc:
-        raise ScenarioError(f"cannot connect to the Dask scheduler at {address}: {exc}") from None
-    try:
-        nthreads = client.nthreads()  # {worker address: threads}
-        if not nthreads:
-            try:
-                client.wait_for_workers(1, timeout=30)
-            except TimeoutError:
-                raise ScenarioError(f"the Dask scheduler at {address} has no workers (waited 30 s)") from None
-            nthreads = client.nthreads()
-        threaded = {w: n for w, n in nthreads.items() if n != 1}
-        if threaded:
-            w, n = next(iter(threaded.items()))
-            raise ScenarioError(
-                f"Dask worker {w} runs {n} threads; MuJoCo's callbacks are process-global, so start the "
-                "workers with one thread each (dask worker tcp://HOST:PORT --nthreads 1 --nworkers N)")
         executor = client.get_executor()
         try:
             yield executor
         except BaseException:
-            executor.shutdown(wait=False)
+            executor.shutdown(wait=False)  # cancels the cluster's tasks of this sweep
             raise
         else:
             executor.shutdown(wait=True)
     finally:
-        client.close()
+        # Everything is written by now: a scheduler that does not acknowledge the goodbye changes nothing.
+        with contextlib.suppress(Exception):
+            client.close()

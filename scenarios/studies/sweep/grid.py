@@ -32,8 +32,11 @@ axis of the product (every explicit case is combined with every point of the axe
 alone is the list. A key may not be both an axis and a key of an explicit case. Setting one of
 ``road.roughness``, ``road.gd_n0_m3``, ``road.profile_csv`` replaces the base's choice among them.
 
-Every case is validated with :func:`scenarios.core.config.parse_scenario` before anything runs; an
-unknown axis name or an invalid value is a :class:`~scenarios.core.config.ScenarioError` naming it.
+The axes and explicit cases are read by :func:`scenarios.studies.sweep.axes.read_axes`, which
+refuses a grid of more than :data:`MAX_CASES` cases from the lengths of its lists, before any
+value is looked at. Every case is then validated with :func:`scenarios.core.config.parse_scenario`
+before anything runs; an unknown axis name or an invalid value is a
+:class:`~scenarios.core.config.ScenarioError` naming it.
 Each case gets a stable id from its own values (keys sorted, so the order of the axes in the file
 does not matter), e.g. ``road.roughness=high__speed_kmh=72__vehicle.payload_kg=3640``.
 """
@@ -41,11 +44,9 @@ does not matter), e.g. ``road.roughness=high__speed_kmh=72__vehicle.payload_kg=3
 from __future__ import annotations
 
 import copy
-import dataclasses
 import hashlib
 import itertools
 import json
-import math
 import pathlib
 import re
 from collections.abc import Mapping
@@ -54,7 +55,8 @@ from types import MappingProxyType
 from typing import Any
 
 from correction.tomlfile import check_keys, read_toml
-from scenarios.core.config import RoadConfig, Scenario, ScenarioError, parse_scenario
+from scenarios.core.config import Scenario, ScenarioError, parse_scenario
+from scenarios.studies.sweep.axes import MAX_CASES, axis_keys, format_value, read_axes
 from scenarios.studies.sweep.settings import SETTING_KEYS, EvalSettings, parse_settings
 from scenarios.studies.scoring import MIN_SCORED_S, shortest_scorable_s
 
@@ -69,11 +71,6 @@ _SWEEP_KEYS = {"name", "base", *SETTING_KEYS}
 _GRID_KEYS = {"sweep", "base", "axes", "cases"}
 _ROAD_CHOICE = ("roughness", "gd_n0_m3", "profile_csv")
 _MAX_ID = 180  # characters; longer ids end in a hash (file names stay below common limits)
-
-#: Most cases a grid may have. Each case is two runs (tens of core-seconds for a 60 s case) and
-#: a validated scenario in memory (~2 kB); 10 000 cases are days of a cluster's time, more is
-#: almost surely an axis given too many values (a million cases took 1.9 GB just to validate).
-MAX_CASES = 10_000
 
 
 @dataclass(frozen=True)
@@ -134,75 +131,9 @@ class SweepGrid:
         return tuple(k for k, _ in self.axes)
 
 
-def axis_keys() -> dict[str, tuple[str, ...]]:
-    """The keys a grid may sweep: ``{"": top-level, "road": ..., "vehicle": ..., "actuator": ...}``."""
-    from hydraulics.params import ActuatorParams
-    from mjcf.build import TruckVariant
-
-    top = tuple(f.name for f in dataclasses.fields(Scenario) if f.name not in
-                ("name", "source", "road", "vehicle", "actuator"))
-    return {
-        "": top,
-        "road": tuple(f.name for f in dataclasses.fields(RoadConfig)),
-        "vehicle": tuple(f.name for f in dataclasses.fields(TruckVariant)),
-        "actuator": tuple(f.name for f in dataclasses.fields(ActuatorParams)),
-    }
-
-
-def format_value(value: Any) -> str:
-    """A value as it appears in case ids and CSV cells: integral floats without ".0", else repr."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, float):
-        if value.is_integer() and abs(value) < 1e16:
-            return str(int(value))
-        return repr(value)
-    return str(value)
-
-
-class _UnknownKey(Exception):
-    """A key :func:`correction.tomlfile.check_keys` refused (its close-match hint is reused)."""
-
-
-def _check_key(key: str, where: str) -> None:
-    """Refuse a swept key that is not a scenario key, suggesting the closest one."""
-    valid = axis_keys()
-    everything = [*valid[""], *(f"{t}.{n}" for t in ("road", "vehicle", "actuator") for n in valid[t])]
-    if key in everything:
-        return
-    # A unit suffix left out ("speed" for "speed_kmh") first, else the closest key.
-    hint = next((f"; did you mean {k!r}?" for k in everything if k.startswith(key + "_")), "")
-    if not hint:
-        try:
-            check_keys({key: None}, everything, "", error=_UnknownKey)
-        except _UnknownKey as exc:
-            _, found, match = str(exc).rpartition("; did you mean ")
-            hint = found + match if found else \
-                "; sweep a top-level key (speed_kmh, seed...) or road.*, vehicle.*, actuator.*"
-    if key in ("name", "description"):
-        hint = "; each case's name is made from the base's name and the case id"
-    raise ScenarioError(f"{where} {key} is not a scenario key{hint}")
-
-
 def _refuse(where: str):
     """The ``error`` of :mod:`correction.tomlfile` checks: a ScenarioError prefixed by ``where``."""
     return lambda message: ScenarioError(f"{where}{message}")
-
-
-def _flatten(table: Mapping, prefix: str = "") -> dict[str, Any]:
-    """``{"vehicle": {"payload_kg": x}}`` -> ``{"vehicle.payload_kg": x}`` (TOML dotted keys)."""
-    out: dict[str, Any] = {}
-    for k, v in table.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, Mapping):
-            out.update(_flatten(v, key + "."))
-        else:
-            out[key] = v
-    return out
-
-
-def _scalar(value: Any) -> bool:
-    return isinstance(value, (bool, int, float, str))
 
 
 def _apply(base: Mapping, values: Mapping[str, Any]) -> dict:
@@ -316,39 +247,7 @@ def parse_grid(doc: Mapping, *, source: pathlib.Path | None = None) -> SweepGrid
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9._-]+", name):
         raise ScenarioError(f"{where}sweep.name must be letters, digits, '.', '_' or '-', got {name!r}")
 
-    axes_table = doc.get("axes", {})
-    if not isinstance(axes_table, Mapping):
-        raise ScenarioError(f"{where}[axes] must be a table of lists")
-    axes: list[tuple[str, tuple]] = []
-    for key, values in _flatten(axes_table).items():
-        _check_key(key, f"{where}axis")
-        if not isinstance(values, list) or not values:
-            raise ScenarioError(f"{where}axis {key} must be a non-empty list of values, got {values!r}")
-        for v in values:
-            if not _scalar(v):
-                raise ScenarioError(f"{where}axis {key} has a value that is not a number or string: {v!r}")
-        seen = [format_value(v) for v in values]
-        dup = next((s for s in seen if seen.count(s) > 1), None)
-        if dup is not None:
-            shown = dup if dup and dup.isprintable() and dup.strip() == dup else repr(dup)  # one line, visible
-            raise ScenarioError(f"{where}axis {key} lists the value {shown} twice")
-        axes.append((key, tuple(values)))
-
-    cases_list = doc.get("cases", None)
-    explicit: list[dict[str, Any]] = []
-    if cases_list is not None:
-        if not isinstance(cases_list, list) or not cases_list or not all(isinstance(c, Mapping) for c in cases_list):
-            raise ScenarioError(f"{where}[[cases]] must be a non-empty array of tables of overrides")
-        axis_names = {k for k, _ in axes}
-        for i, table in enumerate(cases_list, 1):
-            flat = _flatten(table)
-            for key, value in flat.items():
-                _check_key(key, f"{where}key of case {i}:")
-                if key in axis_names:
-                    raise ScenarioError(f"{where}{key} is both an axis and a key of case {i}; keep one of them")
-                if not _scalar(value):
-                    raise ScenarioError(f"{where}case {i}: {key} must be a number or string, got {value!r}")
-            explicit.append(flat)
+    axes, explicit = read_axes(doc.get("axes", {}), doc.get("cases", None), where)  # the cap checked first
     if not axes and not explicit:
         explicit = [{}]  # a sweep of one case: the base
 
@@ -360,13 +259,6 @@ def parse_grid(doc: Mapping, *, source: pathlib.Path | None = None) -> SweepGrid
     all_axes = tuple(axes) + tuple(
         (k, tuple({format_value(f[k]): f[k] for f in explicit if k in f}.values())) for k in extra_keys)
 
-    sizes = [len(vals) for _, vals in axes] + ([len(explicit)] if explicit else [])
-    n_cases = math.prod(sizes)
-    if n_cases > MAX_CASES:
-        product = " x ".join([*(f"{len(vals)} {k}" for k, vals in axes),
-                              *([f"{len(explicit)} [[cases]]"] if cases_list is not None else [])])
-        raise ScenarioError(f"{where}the grid has {n_cases} cases ({product}), more than the cap of {MAX_CASES}; "
-                            "split it into several grids or give the axes fewer values")
     cases: list[Case] = []
     ids: dict[str, dict] = {}
     for point in itertools.product(*[[(k, v) for v in vals] for k, vals in axes]):

@@ -140,7 +140,8 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
     executor : concurrent.futures.Executor
         Where the cases run (:func:`scenarios.core.pool.local_executor`,
         :func:`scenarios.studies.sweep.executors.dask_executor` or any executor whose workers run
-        one case per process at a time).
+        one case per process at a time). After Ctrl-C its cases not started are left to its
+        owner to cancel (those two do it as the interrupt leaves their ``with`` block).
     resume : bool
         Skip cases with a matching case file (default). False runs every case again.
     progress : bool
@@ -195,9 +196,13 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
             if on_record is not None:
                 on_record(case.case_id, record)
     except KeyboardInterrupt:
+        # The cases not started are left to the executor's owner, which stops it as the interrupt
+        # leaves its with block (local_executor, dask_executor). Cancelling a process pool's
+        # futures from this thread races the pool's manager thread: when the workers are then
+        # terminated it fails every future it still holds, and one cancelled here makes it
+        # raise InvalidStateError (CPython 3.11; upstream gh-107219), a traceback after the
+        # command's last line.
         interrupted = True
-        for fut in futures:
-            fut.cancel()
     finally:
         bar.close()
         wall = time.perf_counter() - wall0
