@@ -12,8 +12,8 @@ from __future__ import annotations
 import json
 import os
 import pathlib
-import stat
 
+from correction.atomic import read_regular
 from scenarios.core.config import ScenarioError
 
 __all__ = ["MARKER", "check_not_over", "check_owned", "count_files", "entries", "plural", "read_marker",
@@ -51,14 +51,9 @@ def entries(folder: pathlib.Path) -> set[str]:
 def read_marker(folder: pathlib.Path) -> dict | None:
     """The marker of ``folder`` as ``{"entries": list or None}``, or None when it has none, or one
     that is not a small regular file of the expected form (then the folder is not rigsim's)."""
-    path = folder / MARKER
     try:
-        st = os.lstat(path)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > _MARKER_MAX_BYTES:
-            return None
-        with open(path, encoding="utf-8") as fh:
-            doc = json.load(fh)
-    except (OSError, ValueError):
+        doc = json.loads(read_regular(folder / MARKER, "marker", max_bytes=_MARKER_MAX_BYTES))
+    except (OSError, ValueError):  # none, not a small regular file, not JSON: not rigsim's
         return None
     listed = doc.get("entries", ()) if isinstance(doc, dict) else ()
     if listed is not None and not (isinstance(listed, list) and all(isinstance(e, str) for e in listed)):

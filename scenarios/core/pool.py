@@ -147,8 +147,14 @@ def run_jobs(jobs: Sequence[tuple[Callable, tuple]], *, workers: int | None = No
                 results[i] = fut.result()
                 if on_done is not None:
                     on_done(i, results[i])
-        except BaseException:
-            for fut in futures:
-                fut.cancel()
+        except BaseException as exc:
+            # A pool of our own is stopped by local_executor as the exception leaves it (its futures
+            # cancelled, its workers terminated); cancelling them here as well races the pool's
+            # manager thread, which then raises InvalidStateError after the command's last line
+            # (CPython 3.11, gh-107219). Another's executor: the jobs not started are cancelled,
+            # unless an interrupt is on its way to the owner, who stops it.
+            if executor is not None and not isinstance(exc, KeyboardInterrupt):
+                for fut in futures:
+                    fut.cancel()
             raise
         return results

@@ -9,11 +9,14 @@ high-pass that keeps a drive inside the actuator stroke. Only numpy and scipy ar
 from __future__ import annotations
 
 import csv
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from scipy import signal
+
+from correction.atomic import open_regular
 
 __all__ = ["ProfileError", "Profile", "write_profile_csv", "read_profile_csv", "envelope", "highpass",
            "check_positive", "readonly_copy"]
@@ -160,10 +163,9 @@ def read_profile_csv(path) -> Profile:
         On any bad input, naming the file, the line and column, and the fix.
     """
     p = Path(path)
-    if not p.is_file():
-        raise ProfileError(f"road profile file '{p}' does not exist; check the path.")
     try:
-        with p.open(newline="") as fh:
+        with io.TextIOWrapper(open_regular(p, "road profile file", error=ProfileError, expected="a CSV file"),
+                              newline="") as fh:
             rows = [(i, r) for i, r in enumerate(csv.reader(fh), 1) if any(c.strip() for c in r)]
     except (UnicodeDecodeError, csv.Error) as exc:
         raise ProfileError(f"'{p}' is not a readable text CSV ({exc}); "
