@@ -129,7 +129,7 @@ def test_separators_are_refused_for_binary_formats(tmp_path):
 def test_the_cli_choices_are_the_readers():
     import argparse
 
-    from scenarios.studies.identify.recorded import add_number_format
+    from scenarios.studies.identify.command import add_number_format
 
     parser = argparse.ArgumentParser()
     add_number_format(parser)

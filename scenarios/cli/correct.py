@@ -41,7 +41,7 @@ from __future__ import annotations
 import argparse
 
 from scenarios.cli.correct_channels import parse_options, plan_channels, read_input
-from scenarios.studies.identify.recorded import add_number_format
+from scenarios.studies.identify.command import add_number_format
 from scenarios.cli.correct_output import (check_out_file, fit_metadata, linear_correction,
                                           linear_metadata, output_units, probe_output, rigsim_version,
                                           write_corrected)

@@ -13,13 +13,24 @@ from __future__ import annotations
 import math
 import pathlib
 
-__all__ = ["add_parser", "cmd_identify"]
+__all__ = ["add_number_format", "add_parser", "cmd_identify"]
+
+
+def add_number_format(parser) -> None:
+    """Add ``--decimal`` and ``--thousands`` (how a text input writes its numbers) to ``parser``."""
+    from correction.measured_numbers import DECIMALS, THOUSANDS
+
+    parser.add_argument("--decimal", choices=DECIMALS, default=None,
+                        help="text input: the decimal mark, . or , (default: decided by the numbers of the columns "
+                             "read; a file they leave ambiguous, such as one with only 21,988, is refused)")
+    parser.add_argument("--thousands", choices=tuple(THOUSANDS), default=None,
+                        help="text input: the one thousands separator: none, ',', '.', \"'\" or space (a space, "
+                             "U+00A0 or U+202F); ',' implies --decimal . and '.' implies --decimal , (default: "
+                             "detected)")
 
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim identify``."""
-    from scenarios.studies.identify.recorded import add_number_format
-
     p = subparsers.add_parser(
         "identify", help="identify T_a per corner: random drives on the simulated rig, or a recorded file")
     p.add_argument("scenario", nargs="?", help="scenario TOML file (the truck on the simulated rig)")

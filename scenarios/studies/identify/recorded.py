@@ -18,21 +18,10 @@ import numpy as np
 
 from correction.actuator_fit import ActuatorFitError, fit_actuator
 from correction.measured import MeasuredDataError, read_channels
-from correction.measured_numbers import DECIMALS, THOUSANDS
 from scenarios.core.config import ScenarioError
 
-__all__ = ["RecordedIdentification", "add_number_format", "parse_pairs", "identify_recorded"]
+__all__ = ["RecordedIdentification", "parse_pairs", "identify_recorded"]
 
-
-def add_number_format(parser) -> None:
-    """Add ``--decimal`` and ``--thousands`` (how a text input writes its numbers) to ``parser``."""
-    parser.add_argument("--decimal", choices=DECIMALS, default=None,
-                        help="text input: the decimal mark, . or , (default: decided by the numbers of the columns "
-                             "read; a file they leave ambiguous, such as one with only 21,988, is refused)")
-    parser.add_argument("--thousands", choices=tuple(THOUSANDS), default=None,
-                        help="text input: the one thousands separator: none, ',', '.', \"'\" or space (a space, "
-                             "U+00A0 or U+202F); ',' implies --decimal . and '.' implies --decimal , (default: "
-                             "detected)")
 
 
 @dataclass(frozen=True)
