@@ -11,7 +11,7 @@ drive's rms), the correction of the measured rig force (100 N rms load-cell nois
 project's method, scored by the one scoring of the studies (:func:`scenarios.studies.scoring.
 score_pair`): the corrected DLC against the road DLC on the same settled samples, per wheel,
 and the NRMSE against the road force through the same 30 Hz band limit. Beside it, the linear
-floor (:func:`correction.floor.linear_floor`: the least-squares per-wheel FIR fitted on the road
+floor (:func:`correction.output.floor.linear_floor`: the least-squares per-wheel FIR fitted on the road
 force itself, two-sided, +-0.15 s): a diagnostic, never used to correct.
 
 Prints a markdown table and one JSON line: the fractions of wheels within 2 % and within 1 % of
@@ -35,7 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from correction.floor import linear_floor  # noqa: E402
+from correction.output.floor import linear_floor  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.config import parse_scenario  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402

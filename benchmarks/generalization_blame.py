@@ -57,10 +57,10 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 from generalization import GOAL_MOST_PCT, case_documents  # noqa: E402
 from nrmse_decomposition import LOWPASS, MODE, ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 
-from correction.apply import band_limit, correct_zero_phase  # noqa: E402
-from correction.dlc import dlc  # noqa: E402
-from correction.filters import reference_filter  # noqa: E402
-from correction.pipeline import correct_forces  # noqa: E402
+from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
+from correction.metrics.dlc import dlc  # noqa: E402
+from correction.output.filters import reference_filter  # noqa: E402
+from correction.output.pipeline import correct_forces  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.config import parse_scenario  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402

@@ -4,7 +4,7 @@ Every configuration (integrator, time step) is compared with explicit Euler at 2
 reference) on the three goals of issue 14, and costed:
 
 1. rig DLC: rig-mode runs of the paper's three cases (``--dlc-s``, default 20 s each after the
-   2 s lead-in), the DLC of each wheel's tire force (:func:`correction.dlc.dlc`), its relative
+   2 s lead-in), the DLC of each wheel's tire force (:func:`correction.metrics.dlc.dlc`), its relative
    error against the reference's (%): goal within 0.1 %. The road drive is made at each step
    and is the same signal at the common instants (checked).
 2. identified FRF: the identification of ``rigsim identify`` on the first paper case
@@ -59,8 +59,8 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from generalization import case_documents  # noqa: E402
-from correction.dlc import dlc  # noqa: E402
-from correction.identify import h1_estimate  # noqa: E402
+from correction.metrics.dlc import dlc  # noqa: E402
+from correction.identification.identify import h1_estimate  # noqa: E402
 from hydraulics.bridge import hydraulic_callbacks  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.config import load_scenario, paper_scenarios, parse_scenario  # noqa: E402

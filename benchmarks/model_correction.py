@@ -28,7 +28,7 @@ case's own payload, 0 kg included). Four plants (``--plants``, :data:`PLANT_KEYS
   :data:`SMOOTH_SPREAD_M` of deflection about 2 cm (``TruckVariant.tire_progressive_spread_m``, five
   steps), which the family's one-kink tire cannot represent: the structural mismatch.
 
-The model's cab (``--cab``, :func:`scenarios.studies.model_correction.cab_choice.calibrate_cab`):
+The model's cab (``--cab``, :func:`scenarios.records.model.cab_choice.calibrate_cab`):
 ``auto`` (default) calibrates the cab held rigid and the cab's mount frequency fitted and keeps the
 clearly better fit; ``held`` the rigid cab only; ``fitted`` the mount fitted only. The ``rigid``
 plant is in the model family under every mode (under ``fitted`` nearly: the mount range's stiff end,
@@ -41,12 +41,12 @@ case's runs): the road test (the reference, never seen by the correction), the r
 rig's identification before the test (for the project's linear correction). Then, one case and
 plant after the other in this process (the calibration starts its own pool of ``--workers``: pools
 do not nest), the model correction of the measured rig force
-(100 N rms load-cell noise on), :func:`scenarios.studies.model_correction.differential.correct_with_model`:
+(100 N rms load-cell noise on), :func:`scenarios.records.model.differential.correct_with_model`:
 calibration from x_a and F_rig only (first guess from the static loads and catalogue values, never
 the plant's), then F_rig + F_model(x_ref) - F_model(x_a). Scored per wheel on the samples where
 every method has settled (the model's start-up, the linear correction's filter transients, the
 band limit's): NRMSE against the road force through the 30 Hz band limit, and DLC against the road
-DLC; beside them the linear floor (:func:`correction.floor.linear_floor`, per wheel, taps -50..400
+DLC; beside them the linear floor (:func:`correction.output.floor.linear_floor`, per wheel, taps -50..400
 as ``benchmarks/nrmse_decomposition.py``, in-sample) and the project's linear correction
 (:func:`scenarios.studies.scoring.score_pair`, method ``best``).
 
@@ -79,9 +79,9 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from generalization import case_documents  # noqa: E402
 from nrmse_decomposition import pick_cases  # noqa: E402
-from correction.apply import band_limit  # noqa: E402
-from correction.dlc import dlc, nrmse  # noqa: E402
-from correction.floor import linear_floor  # noqa: E402
+from correction.output.apply import band_limit  # noqa: E402
+from correction.metrics.dlc import dlc, nrmse  # noqa: E402
+from correction.output.floor import linear_floor  # noqa: E402
 from mjcf.build import TruckVariant  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.config import load_scenario, parse_scenario  # noqa: E402
@@ -91,10 +91,10 @@ from scenarios.core.rig import Rig  # noqa: E402
 from scenarios.core.run import run  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.identify.compute import identify_rig  # noqa: E402
-from scenarios.studies.model_correction.cab_choice import AUTO, CAB_CHOICES, HELD  # noqa: E402
-from scenarios.studies.model_correction.first_guess import xml_nominal  # noqa: E402
-from scenarios.studies.model_correction.differential import correct_with_model, settled_mask  # noqa: E402
-from scenarios.studies.model_correction.score import LOWPASS, MODE, band_rows  # noqa: E402
+from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES, HELD  # noqa: E402
+from scenarios.records.model.first_guess import xml_nominal  # noqa: E402
+from scenarios.records.model.differential import correct_with_model, settled_mask  # noqa: E402
+from scenarios.records.model.score import LOWPASS, MODE, band_rows  # noqa: E402
 from model_correction_tables import GOAL_S, goals, suite_table, summary, table  # noqa: E402
 
 #: The plant against the XML's nominal truck: factors (payload: of the case's payload).

@@ -3,7 +3,7 @@
 A row (``model_correction.analyse``) holds ``case``, ``plant`` (a readable name), ``plant_key``
 (rigid / cab / tire / smooth), ``mismatch`` ("off": the plant inside the calibrated model family, "on":
 outside), ``method`` and ``reason`` (the model correction or the fallback to the linear one, and
-why), ``calibration`` (:class:`scenarios.studies.model_correction.result.Calibration` or None),
+why), ``calibration`` (:class:`scenarios.records.model.result.Calibration` or None),
 ``truth`` (the plant's values of the fitted fields, SI), per-wheel figures under ``wheels``
 (``floor``, ``linear``, ``linear_dlc_error``, ``rig``, and ``model``, ``model_dlc_error`` unless it
 fell back; NRMSE and DLC errors, 1), their ``mean``, ``scored_s`` (s), ``cpu_s`` and ``wall_s``

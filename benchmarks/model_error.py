@@ -10,8 +10,8 @@ wheel (the calibrated model, pans following x_a, against the measured F_rig on t
 windows), the load cells' share of it (their noise over the force's std on the windows: the
 calibration's own ``noise_nrmse`` where the run recorded it; for runs made before it did, the
 plant's rig test is run again, the same seed so the same noise, and read as the calibration reads
-it, :func:`correction.noise.noise_rms`) and the model error beyond it, sqrt(fit^2 - noise^2)
-(:func:`~scenarios.studies.model_correction.result.model_error`, what the fallback,
+it, :func:`correction.identification.noise.noise_rms`) and the model error beyond it, sqrt(fit^2 - noise^2)
+(:func:`~scenarios.records.model.result.model_error`, what the fallback,
 ``differential.EXCESS_NRMSE_LIMIT``, reads); beside them the outcome against the road: the
 model correction's NRMSE over the linear floor and over the linear correction's NRMSE.
 
@@ -32,11 +32,11 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 import model_correction as mcb  # noqa: E402
-from correction.noise import noise_rms  # noqa: E402
+from correction.identification.noise import noise_rms  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
-from scenarios.studies.model_correction.result import model_error  # noqa: E402
+from scenarios.records.model.result import model_error  # noqa: E402
 
 
 def measured(case, duration_s: float, plant: str, tire_ratio: float, noise_N: float):

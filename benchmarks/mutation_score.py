@@ -2,7 +2,7 @@
 
 ::
 
-    python benchmarks/mutation_score.py [--modules correction/dlc.py ...] [--timeout 120]
+    python benchmarks/mutation_score.py [--modules correction/metrics/dlc.py ...] [--timeout 120]
 
 Runs cosmic-ray (``pip install cosmic-ray``; chosen because it is maintained, mutates any module
 with the full set of operator, comparison, constant and boolean mutations, and runs an
@@ -32,9 +32,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 #: Module -> the tests that claim to cover it (the command run against each mutant).
 TARGETS = {
-    "correction/dlc.py": ["tests/test_dlc.py", "tests/test_damage.py"],
-    "correction/eq4.py": ["tests/test_transfer.py", "tests/test_correction.py"],
-    "correction/rainflow_damage.py": ["tests/test_rainflow_fast.py", "tests/test_damage.py"],
+    "correction/metrics/dlc.py": ["tests/test_dlc.py", "tests/test_damage.py"],
+    "correction/output/eq4.py": ["tests/test_transfer.py", "tests/test_correction.py"],
+    "correction/metrics/rainflow_damage.py": ["tests/test_rainflow_fast.py", "tests/test_damage.py"],
     "hydraulics/model.py": ["tests/test_hydraulics_laws.py", "tests/test_hydraulics_model.py"],
     "scenarios/studies/scoring.py": ["tests/test_scoring.py"],
 }

@@ -28,7 +28,7 @@ and for every configuration, on the correction's settled samples:
   linear rows the exact inverse of the pans' T_a);
 * ``floor_per_wheel``, ``floor_4x4``: NRMSE of the best affine FIR filter (taps ``-lead .. lag``)
   fitted by least squares from the measured rig force(s) to the band-limited road force
-  (:func:`correction.floor.linear_floor`): the floor of any per-wheel / 4 x 4 linear correction of
+  (:func:`correction.output.floor.linear_floor`): the floor of any per-wheel / 4 x 4 linear correction of
   that length; in-sample (a lower bound: the fit also fits part of the residual, much more so
   when the residual is narrow-band, as lift-off bursts are) and ``_cv``, out-of-fold over
   :data:`FOLDS` contiguous folds (what such a filter does on samples it was not fitted on);
@@ -51,7 +51,7 @@ The ``_half`` / ``_double`` columns of every run repeat that check. Where the er
 linear rows without friction) the FIR's missing tail shows: the exact inverse then scores below
 the FIR "floor", so read the floor as a floor only where it lies below the corrections.
 
-NRMSE = rms(x - road_band) / std(road_band) (:func:`correction.dlc.nrmse`), road_band = the road
+NRMSE = rms(x - road_band) / std(road_band) (:func:`correction.metrics.dlc.nrmse`), road_band = the road
 force through ``band_limit(road, fs, "regularized", "zerophase")``; means over the four wheels.
 Prints a markdown table, one row per case and configuration, then one JSON line with every
 number (per wheel too). Nothing here corrects anything in the project: the floor is a diagnostic.
@@ -76,11 +76,11 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from correction.apply import band_limit, correct_zero_phase  # noqa: E402
-from correction.dlc import nrmse  # noqa: E402
-from correction.filters import reference_filter  # noqa: E402
-from correction.floor import linear_floor  # noqa: E402
-from correction.pipeline import correct_forces  # noqa: E402
+from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
+from correction.metrics.dlc import nrmse  # noqa: E402
+from correction.output.filters import reference_filter  # noqa: E402
+from correction.output.floor import linear_floor  # noqa: E402
+from correction.output.pipeline import correct_forces  # noqa: E402
 from mjcf.names import CORNERS, REAR  # noqa: E402
 from mjcf.physics import tire_forces  # noqa: E402
 from scenarios.core.config import load_scenario, paper_scenarios  # noqa: E402
@@ -149,8 +149,8 @@ def run_job(path: str, duration_s: float, kind: str, friction: bool):
 class ExactLinearCorrection:
     """Zero-phase correction by a linear T_a given as a frequency response: ``|T_F| / T_a(f)``.
 
-    Duck-types what :func:`correction.apply.correct_zero_phase` needs of a
-    :class:`~correction.correction_filter.CorrectionFilter` (``fs``, ``zero_phase_response``,
+    Duck-types what :func:`correction.output.apply.correct_zero_phase` needs of a
+    :class:`~correction.output.correction_filter.CorrectionFilter` (``fs``, ``zero_phase_response``,
     ``transient_samples``); its margins come from its own kernel at ``tolerance``.
 
     Parameters

@@ -37,8 +37,8 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-from correction.apply import correct  # noqa: E402
-from correction.filters import reference_filter  # noqa: E402
+from correction.output.apply import correct  # noqa: E402
+from correction.output.filters import reference_filter  # noqa: E402
 from scenarios.core.config import parse_scenario  # noqa: E402
 from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, PoseRecorder  # noqa: E402
 from scenarios.review.recording import write_recording  # noqa: E402

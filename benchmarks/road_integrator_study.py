@@ -16,9 +16,9 @@ that commit's road ``Rig.run``: checked on 3 s of paper case 1 when this study w
 "Euler 1e-4 s" goes through rollout and is not that loop: its pans hold the mid-step values.
 
 1. road DLC: the paper's three cases (``--dlc-s``, default 20 s after the 2 s lead-in), the DLC
-   of each wheel's force (:func:`correction.dlc.dlc`), its error (%) against Euler at 2.5e-5 s
+   of each wheel's force (:func:`correction.metrics.dlc.dlc`), its error (%) against Euler at 2.5e-5 s
    (the issue's reference; goal within 0.1 %) and against RK4 at 1e-4 s (a second, higher-order
-   reference); the wheel-force NRMSE (:func:`correction.dlc.nrmse`) against each at the common
+   reference); the wheel-force NRMSE (:func:`correction.metrics.dlc.nrmse`) against each at the common
    output instants. Beside them, against the Euler reference: the raw sensor force (what MuJoCo
    applied over the step: the pan at mid-step, moving at its mean velocity; the rollout's
    sensors and controls captured in the same run), which the reconstruction replaces, and that
@@ -62,7 +62,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
 from generalization import case_documents  # noqa: E402
 from integrator_study import INTEGRATORS, paper_case, scenario_at  # noqa: E402
-from correction.dlc import dlc, nrmse  # noqa: E402
+from correction.metrics.dlc import dlc, nrmse  # noqa: E402
 from mjcf.build import build_spec  # noqa: E402
 from mjcf.names import CORNERS, pan_joint  # noqa: E402
 from mjcf.physics import RigIndex, static_equilibrium, tire_law  # noqa: E402

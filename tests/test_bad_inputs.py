@@ -396,7 +396,7 @@ def _listing(root: pathlib.Path) -> dict[str, str]:
 
 def _import_everything() -> None:
     """Import every module of the project before anything is patched: a module imported for the
-    first time while a function is replaced (``from correction.actuator_fit import fit_actuator``)
+    first time while a function is replaced (``from correction.identification.actuator_fit import fit_actuator``)
     would keep the replacement after the test."""
     import importlib
     import pkgutil
@@ -421,7 +421,7 @@ def workdir(tmp_path_factory):
 @pytest.fixture(autouse=True)
 def no_work(workdir, monkeypatch):
     """Everything that would be work fails the test if it is reached."""
-    import correction.actuator_fit
+    import correction.identification.actuator_fit
     import scenarios.core.pool
     import scenarios.studies.paper.compute
     import scenarios.studies.sweep.run
@@ -438,7 +438,7 @@ def no_work(workdir, monkeypatch):
     monkeypatch.setattr(scenarios.studies.validate.compute, "validate", work("the validation"))
     monkeypatch.setattr(scenarios.core.pool, "local_executor", work("a process pool"))
     monkeypatch.setattr(scenarios.studies.sweep.run, "run_sweep", work("the sweep"))
-    monkeypatch.setattr(correction.actuator_fit, "fit_actuator", work("the actuator fit"))
+    monkeypatch.setattr(correction.identification.actuator_fit, "fit_actuator", work("the actuator fit"))
 
 
 def _one_error(err: str, from_argparse: bool) -> None:

@@ -42,7 +42,7 @@ def _one_line(err: str) -> str:
 def no_work(monkeypatch):
     """The simulation and the recorded identification fail the test if they start."""
     from scenarios.core import run as run_module
-    from scenarios.studies.identify import recorded
+    from scenarios.records import recorded
 
     monkeypatch.setattr(run_module, "run", lambda *a, **k: pytest.fail("the run started"))
     monkeypatch.setattr(recorded, "identify_recorded", lambda *a, **k: pytest.fail("the identification started"))

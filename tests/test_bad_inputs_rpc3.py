@@ -21,8 +21,8 @@ import time
 import numpy as np
 import pytest
 
-from correction.measured import MeasuredDataError, read_channels
-from correction.rpc3 import MAX_DELTA_T_S, MIN_DELTA_T_S, read_rpc3, write_rpc3
+from correction.io.measured import MeasuredDataError, read_channels
+from correction.io.rpc3 import MAX_DELTA_T_S, MIN_DELTA_T_S, read_rpc3, write_rpc3
 
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings
@@ -95,7 +95,7 @@ def refused(path, *fragments, reader=read_channels) -> str:
 _CHILD = textwrap.dedent("""
     import json, resource, sys, time, tracemalloc
     resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))  # a regression fails, not the machine
-    from correction.measured import MeasuredDataError, read_channels
+    from correction.io.measured import MeasuredDataError, read_channels
     tracemalloc.start()
     t0 = time.perf_counter()
     try:

@@ -1,4 +1,4 @@
-"""Whether the model's cab is held or fitted (scenarios/studies/model_correction/cab_choice.py).
+"""Whether the model's cab is held or fitted (scenarios/records/model/cab_choice.py).
 
 The rule (:func:`choose`) on hand-made calibrations, then :func:`calibrate_cab` on two short road
 records (pans following the road exactly, load-cell noise on): a truck with its cab on 2 Hz mounts
@@ -14,11 +14,11 @@ import pytest
 from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from scenarios.core.run import run
 from scenarios.studies import scoring
-from scenarios.studies.model_correction.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
+from scenarios.records.model.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
                                                            check_cab, choose)
-from scenarios.studies.model_correction.calibrate import DEFAULT_NAMES, FITTED
-from scenarios.studies.model_correction.first_guess import catalogue, xml_nominal
-from scenarios.studies.model_correction.result import Calibration
+from scenarios.records.model.calibrate import DEFAULT_NAMES, FITTED
+from scenarios.records.model.first_guess import catalogue, xml_nominal
+from scenarios.records.model.result import Calibration
 
 
 def _cal(names, fitted, fit_nrmse, *, converged=True, bounds=None) -> Calibration:

@@ -30,15 +30,15 @@ from importlib.metadata import version
 import numpy as np
 import pytest
 
-from correction.dlc import dlc
-from correction.measured import read_channels
+from correction.metrics.dlc import dlc
+from correction.io.measured import read_channels
 from scenarios.cli.correct_model import cal_key
 from scenarios.cli.main import build_parser, main
 from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.core.run import run
-from scenarios.studies.model_correction.calibrate import MAX_NFEV, WINDOW_LEAD_S, WINDOW_S, WINDOWS
-from scenarios.studies.model_correction.first_guess import xml_nominal
-from scenarios.studies.model_correction.differential import START_S
+from scenarios.records.model.calibrate import MAX_NFEV, WINDOW_LEAD_S, WINDOW_S, WINDOWS
+from scenarios.records.model.first_guess import xml_nominal
+from scenarios.records.model.differential import START_S
 
 CORNERS = ("fl", "fr", "rl", "rr")
 PAIRS = ",".join(f"{c}=Soll_{c.upper()}:Weg_{c.upper()}" for c in CORNERS)
@@ -243,10 +243,10 @@ def test_cab_is_refused_without_model(tmp_path, capsys):
 
 def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
     """The metadata keys of every fitted field (``cal_key``) are written to an RPC III file and read
-    back: the format's header records hold a key of at most 32 bytes (correction/rpc3.py, as MTS's
+    back: the format's header records hold a key of at most 32 bytes (correction/io/rpc3.py, as MTS's
     RPC III layout), which ``cal_tire_progressive_onset_rear_m`` (33) would exceed; keys stay distinct."""
-    from correction.rpc3 import read_rpc3, write_rpc3
-    from scenarios.studies.model_correction.calibrate import FITTED, UNITS
+    from correction.io.rpc3 import read_rpc3, write_rpc3
+    from scenarios.records.model.calibrate import FITTED, UNITS
 
     meta = {cal_key(n): f"0 {UNITS[n]}" for n in FITTED}
     assert len(meta) == len(FITTED) and cal_key("tire_progressive_onset_rear_m") == "cal_tire_prog_onset_rear_m"

@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.actuator_file import ActuatorFileError, parse_actuator, read_actuator_file
-from correction.apply import StreamingCorrector, band_limit, correct, correct_causal, correct_zero_phase
-from correction.eq4 import eq4_coefficients_from
-from correction.filters import actuator_coefficients, design_correction
-from correction.lowpass import paper_lowpass, regularized_lowpass
+from correction.io.actuator_file import ActuatorFileError, parse_actuator, read_actuator_file
+from correction.output.apply import StreamingCorrector, band_limit, correct, correct_causal, correct_zero_phase
+from correction.output.eq4 import eq4_coefficients_from
+from correction.output.filters import actuator_coefficients, design_correction
+from correction.output.lowpass import paper_lowpass, regularized_lowpass
 
 STATIC_N = 30.0e3  # a truck wheel's static load, N
 

@@ -1,4 +1,4 @@
-"""The least-squares FIR "linear floor" (correction/floor.py) against analytic cases.
+"""The least-squares FIR "linear floor" (correction/output/floor.py) against analytic cases.
 
 References: a record passed through a known two-sided FIR (numpy.convolve, independent of
 the fit's own filtering) plus white noise of known rms must be recovered with taps within
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.floor import fir_filter, fir_fit, linear_floor
+from correction.output.floor import fir_filter, fir_fit, linear_floor
 
 
 def _through(x, taps, lead):

@@ -12,7 +12,7 @@ import pathlib
 import numpy as np
 import pytest
 
-from correction.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
+from correction.output.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
 from hydraulics import (STATE_NAMES, ActuatorParams, actuator_derivatives, actuator_force,
                         check_design_station, check_stable, eq4_parameters, equilibrium_activation,
                         events, linearization, loop_matrices, pack, unpack)
@@ -339,7 +339,7 @@ def test_eq4_parameters_feed_the_one_formula(kt, load, mass, ti):
 
 
 def test_tire_stiffness_is_checked_by_the_formula_only():
-    # One rule (correction.eq4): tire_N_per_m >= 0; eq4_parameters passes the value through.
+    # One rule (correction.output.eq4): tire_N_per_m >= 0; eq4_parameters passes the value through.
     with pytest.raises(ValueError, match="tire_N_per_m must be >= 0"):
         eq4_coefficients_from(**eq4_parameters(default(), -1.0))
 

@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from correction.eq4 import eq4_coefficients_from
+from correction.output.eq4 import eq4_coefficients_from
 from hydraulics import (ActuatorParams, check_design_station, check_stable, eq4_parameters,
                         equilibrium_activation, events)
 from hydraulics.bridge import (LayoutError, _find_offsets, _layout, _verify_offsets, activation_slice,

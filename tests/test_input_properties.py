@@ -16,7 +16,7 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from correction.actuator_file import (ActuatorFileError, parse_actuator, read_actuators_file,  # noqa: E402
+from correction.io.actuator_file import (ActuatorFileError, parse_actuator, read_actuators_file,  # noqa: E402
                                       write_actuators_file)
 from mjcf.names import CORNERS  # noqa: E402
 from scenarios.core.config import ScenarioError, parse_scenario  # noqa: E402

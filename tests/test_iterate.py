@@ -1,4 +1,4 @@
-"""correction.iterate: iterative drive-file correction (RPC-style / Moran) on a linear simulated rig.
+"""correction.input.iterate: iterative drive-file correction (RPC-style / Moran) on a linear simulated rig.
 
 The "rig" here is linear and known exactly: per wheel the paper's eq. 4 (coefficients from the
 independent implementation hydraulics.linearization.eq4_coefficients at DYNTRAC's default
@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.convergence import IterationStabilityError, error_map_spectral_radius, nrmse
-from correction.frf import FRF, identify_frf, inverse_frf
-from correction.iterate import iterate_drive
-from correction.eq4 import eq4_coefficients_from
+from correction.input.convergence import IterationStabilityError, error_map_spectral_radius, nrmse
+from correction.input.frf import FRF, identify_frf, inverse_frf
+from correction.input.iterate import iterate_drive
+from correction.output.eq4 import eq4_coefficients_from
 from hydraulics import ActuatorParams, eq4_parameters
 
 FS = 500.0  # Hz: eq. 4's poles are at 0.15, 13.5 and 69 Hz; a 30 Hz band needs little more
@@ -286,7 +286,7 @@ def test_rigsim_iterate_end_to_end_on_the_simulated_rig(tmp_path, capsys):
     assert np.abs(drive[:, 1:]).max() <= 0.076  # within DYNTRAC's half stroke
     # the same drive as an RPC III drive file: int16, so within half a step (max|x| / 32752 / 2) of
     # the CSV's numbers (themselves written to 10 significant digits)
-    from correction.measured import read_channels
+    from correction.io.measured import read_channels
 
     drv = read_channels(out / "drive.drv")
     assert drv.names == ("drive_fl", "drive_fr", "drive_rl", "drive_rr") and set(drv.units.values()) == {"m"}

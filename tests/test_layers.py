@@ -6,8 +6,9 @@ in a module, including imports inside functions):
 - hydraulics/ may read mjcf but not scenarios or correction; only hydraulics/bridge.py
   imports mujoco;
 - mjcf/ imports none of the other three;
-- inside scenarios/, the floors: core imports no study, review or command line; studies import
-  core (and review only to write a recording); review imports core; only cli sits on top;
+- inside scenarios/, the floors: core imports nothing above it; records (correcting a rig's
+  records: the API, the model correction, the recorded identification) imports core; review
+  imports core; studies import core, records and review; only cli sits on top;
 - only scenarios/review/recording.py and scenarios/review/blueprint.py import rerun;
 - no import circle between any two modules of the project, and no module over 420 lines.
 """
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import ast
 import pathlib
+import sys
 
 import pytest
 
@@ -118,9 +120,10 @@ def test_package_imports_respect_the_layers(package):
 #: scenarios' floors: what each sub-package may import of the others.
 SCENARIO_FLOORS = {
     "scenarios.core": set(),
+    "scenarios.records": {"scenarios.core"},
     "scenarios.review": {"scenarios.core"},
-    "scenarios.studies": {"scenarios.core", "scenarios.review"},
-    "scenarios.cli": {"scenarios.core", "scenarios.review", "scenarios.studies"},
+    "scenarios.studies": {"scenarios.core", "scenarios.records", "scenarios.review"},
+    "scenarios.cli": {"scenarios.core", "scenarios.records", "scenarios.review", "scenarios.studies"},
 }
 
 
@@ -162,6 +165,14 @@ def test_no_private_names_imported_across_modules():
                     offenders += [f"{path.relative_to(ROOT)}: {a.name}" for a in node.names
                                   if a.name.startswith("_") and a.name != "__version__"]
     assert not offenders, offenders
+
+
+def test_the_floors_checker_can_fail(monkeypatch):
+    """A record module that imported a study would be refused."""
+    graph = {"scenarios.records.api": {"scenarios.studies.scoring"}, "scenarios.studies.scoring": set()}
+    monkeypatch.setattr(sys.modules[__name__], "_project_graph", lambda: graph)
+    with pytest.raises(AssertionError, match="scenarios.records.api .scenarios.records. imports"):
+        test_scenarios_floors()
 
 
 def test_only_the_bridge_imports_mujoco_in_hydraulics():

@@ -16,13 +16,13 @@ from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from scenarios.core.pool import run_jobs
 from scenarios.core.run import run
 from scenarios.studies import scoring
-from scenarios.studies.model_correction.calibrate import DEFAULT_NAMES, FITTED, calibrate
-from scenarios.studies.model_correction.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
+from scenarios.records.model.calibrate import DEFAULT_NAMES, FITTED, calibrate
+from scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                             xml_nominal)
-from scenarios.studies.model_correction.differential import (EXCESS_NRMSE_LIMIT, correct_with_model,
+from scenarios.records.model.differential import (EXCESS_NRMSE_LIMIT, correct_with_model,
                                                              differential_correction, settled_mask)
-from scenarios.studies.model_correction.model_runs import pan_motion_drive
-from scenarios.studies.model_correction.score import score_correction
+from scenarios.records.model.model_runs import pan_motion_drive
+from scenarios.records.model.score import score_correction
 
 DURATION_S = 8.0
 
@@ -180,7 +180,7 @@ def test_calibration_recovers_a_progressive_tire():
     """As for the cab: the road test of the medium case's plant with tires that stiffen by 40 % beyond 3 cm
     of deflection (``TruckVariant.tire_progressive_ratio``, ``tire_progressive_onset_m``), 100 N of noise;
     the ratio and onset fitted from the catalogue's +20 % at the front wheels' static load (the onset's
-    first guess, :mod:`scenarios.studies.model_correction.onset_load`: 2.66 cm), the other fields held at
+    first guess, :mod:`scenarios.records.model.onset_load`: 2.66 cm), the other fields held at
     the plant's: both recovered within 3 % from one 3 s window (measured 0.3954 and 3.000 cm; stopped at
     4 residual evaluations the ratio was still at 0.25, at 6 at 0.38), and the fit NRMSE falls by more
     than half (0.34-0.44 to 0.05-0.06, the noise's share)."""
@@ -296,8 +296,8 @@ def test_an_empty_truck_is_held_empty_not_refused():
     EMPTY_FRACTION of the empty truck's weight it is an empty truck, (0 kg, the XML's x), and the
     calibration holds it; a real payload (500 kg, the loads of the catalogue truck carrying it) is
     still estimated, to within 1 %, and a negative 500 kg is still refused."""
-    from scenarios.studies.model_correction.first_guess import EMPTY_FRACTION, static_guess
-    from scenarios.studies.model_correction.model_runs import static_axle_loads
+    from scenarios.records.model.first_guess import EMPTY_FRACTION, static_guess
+    from scenarios.records.model.model_runs import static_axle_loads
 
     sc = load_scenario(_paper("high_48"))
     empty = static_axle_loads(TruckVariant(payload_kg=0.0, **catalogue()), sc)
@@ -322,7 +322,7 @@ def test_a_twisted_first_pose_starts_on_its_plane_and_twists_in():
     at rest at both ends), so the run's forces are finite and every wheel stays loaded."""
     from mjcf.physics import EquilibriumError
     from scenarios.core.rig import Rig
-    from scenarios.studies.model_correction.model_runs import model_forces, pan_motion_drive, planar_part
+    from scenarios.records.model.model_runs import model_forces, pan_motion_drive, planar_part
 
     sc = load_scenario(_paper("high_48"))
     rig = Rig(sc, hydraulic=False)
@@ -349,7 +349,7 @@ def test_formal_uncertainties_are_the_least_squares_standard_errors():
     sqrt(s^2 (X^T X)^-1) with s^2 = RSS / (m - p) (e.g. Montgomery & Peck, Introduction to Linear
     Regression Analysis, eq. 2.14); with a white residual the block-robust one agrees to sampling
     error, and a residual correlated over a block makes the robust one larger."""
-    from scenarios.studies.model_correction.uncertainty import uncertainties
+    from scenarios.records.model.uncertainty import uncertainties
 
     rng = np.random.default_rng(7)
     x = np.linspace(0.0, 1.0, 4000)

@@ -13,7 +13,7 @@ import pathlib
 import pytest
 
 from mjcf.names import CORNERS
-from scenarios.studies.model_correction.result import Calibration
+from scenarios.records.model.result import Calibration
 
 _PATH = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "model_correction.py"
 _NAMES = {"rigid": "rigid cab", "cab": "cab on 2 Hz mounts", "tire": "progressive tire +25 %",

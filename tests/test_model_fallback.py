@@ -11,8 +11,8 @@ import math
 
 import pytest
 
-from scenarios.studies.model_correction.differential import EXCESS_NRMSE_LIMIT, fallback_reason
-from scenarios.studies.model_correction.result import Calibration
+from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, fallback_reason
+from scenarios.records.model.result import Calibration
 
 
 def _cal(fit, noise=(), converged=True) -> Calibration:

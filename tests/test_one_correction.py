@@ -1,5 +1,5 @@
 """One correction for users and studies: ``rigsim identify`` + ``rigsim correct`` on a study's case
-give the numbers the studies score (scenarios/studies/scoring.py, correction/pipeline.py).
+give the numbers the studies score (scenarios/studies/scoring.py, correction/output/pipeline.py).
 
 Reference: the study's own corrected forces (score_pair, the paper study's "best" method); the
 user's path goes through files only (the run's timeseries.csv, the actuators file written by
@@ -87,7 +87,7 @@ def test_identify_then_correct_gives_the_studys_corrected_forces(case, capsys):
 def test_paper_method_through_the_command_matches_the_study(case, tmp_path):
     """eq. 4 with the paper's low-pass, causal: the study's T_a written as an actuators file and
     applied by ``rigsim correct`` give the study's corrected forces."""
-    from correction.actuator_file import write_actuators_file
+    from correction.io.actuator_file import write_actuators_file
     from scenarios.studies.scoring import PAPER
 
     d, _, s, road, rig = case

@@ -1,4 +1,4 @@
-"""The progressive tire's onset searched as a wheel load (scenarios.studies.model_correction.onset_load).
+"""The progressive tire's onset searched as a wheel load (scenarios.records.model.onset_load).
 
 Pinned by hand: loads built so that their smallest, largest and median values are known, and the
 field mapping's derivatives against central differences of the fields themselves."""
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.studies.model_correction.calibrate import _Problem
-from scenarios.studies.model_correction.onset_load import ONSET_STIFFNESS, load_guess, load_range
-from scenarios.studies.model_correction.uncertainty import uncertainties
+from scenarios.records.model.calibrate import _Problem
+from scenarios.records.model.onset_load import ONSET_STIFFNESS, load_guess, load_range
+from scenarios.records.model.uncertainty import uncertainties
 
 FRONT, REAR = "tire_progressive_onset_m", "tire_progressive_onset_rear_m"
 

@@ -26,7 +26,7 @@ import scenarios.studies.iterate.compute  # noqa: F401
 import scenarios.studies.paper.compute  # noqa: F401
 import scenarios.studies.validate.compute  # noqa: F401
 import scenarios.studies.validate.runs  # noqa: F401
-from correction.atomic import host_tag
+from correction.io.atomic import host_tag
 from scenarios.cli.main import main
 from scenarios.core.config import ScenarioError
 from scenarios.core.outputs import MARKER, check_output_file, remove_stale_staging, staged_output
@@ -478,7 +478,7 @@ class _FakeIdent:
 
 
 def _fake_identify(monkeypatch, fail, scenario):
-    from correction import actuator_file
+    from correction.io import actuator_file
     from scenarios.studies.identify import compute, report
 
     def identify_rig(*a, **k):

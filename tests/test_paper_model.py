@@ -8,7 +8,7 @@ import json
 import numpy as np
 
 from scenarios.core.files import to_json
-from scenarios.studies.model_correction.result import LINEAR, MODEL, Calibration, ModelCorrection
+from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 from scenarios.studies.paper.model import ModelScore, model_table
 
 

@@ -25,7 +25,7 @@ import pytest
 
 from mjcf.build import BOUNDS, TruckVariant, build_model
 from scenarios.cli.main import main
-from correction import atomic
+from correction.io import atomic
 from scenarios.core import memory
 from scenarios.core.config import ScenarioError, parse_scenario
 from scenarios.core.files import atomic_write_bytes, remove_stale_temp_files
@@ -201,8 +201,8 @@ def test_paper_minimum_duration_leaves_the_paper_method_time_to_score(capsys):
     for each paper case, and 9.9 s is refused before any work."""
     import argparse
 
-    from correction.eq4 import eq4_coefficients_from
-    from correction.pipeline import correct_forces
+    from correction.output.eq4 import eq4_coefficients_from
+    from correction.output.pipeline import correct_forces
     from hydraulics.linearization import eq4_parameters
     from scenarios.core.config import load_scenario, paper_scenarios
     from scenarios.core.rig import Rig

@@ -19,8 +19,8 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from correction.damage import stress_factor
-from correction.dlc import BLOCK_ROWS, column_sum, dlc, force_statistics
+from correction.metrics.damage import stress_factor
+from correction.metrics.dlc import BLOCK_ROWS, column_sum, dlc, force_statistics
 from scenarios.core.memory import MMAP_THRESHOLD_BYTES
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

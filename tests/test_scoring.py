@@ -20,17 +20,17 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from correction.dlc import dlc, nrmse
-from correction.apply import band_limit, correct
-from correction.filters import design_correction, reference_filter
-from correction.transfer import apply_transfer_function
+from correction.metrics.dlc import dlc, nrmse
+from correction.output.apply import band_limit, correct
+from correction.output.filters import design_correction, reference_filter
+from correction.output.transfer import apply_transfer_function
 from mjcf.build import TruckVariant
 from scenarios.core.config import parse_scenario
 from scenarios.core.rig import Rig, actuator_params
 from scenarios.studies.identify.compute import identify_rig
-from correction.damage import damage_equivalent_load, stress_factor
-from correction.eq4 import eq4_coefficients_from
-from correction.pipeline import correct_forces
+from correction.metrics.damage import damage_equivalent_load, stress_factor
+from correction.output.eq4 import eq4_coefficients_from
+from correction.output.pipeline import correct_forces
 from hydraulics.linearization import eq4_parameters
 from hydraulics.params import ActuatorParams
 from scenarios.core.config import ScenarioError
@@ -259,7 +259,7 @@ def test_eq4_rig_corrected_with_eq4_and_the_papers_filter_gives_the_road_force()
     doc = dict(DOC, road={"gd_n0_m3": 1e-6})
     scenario = parse_scenario(doc)
     params = actuator_params(scenario)
-    from correction.eq4 import eq4_coefficients_from
+    from correction.output.eq4 import eq4_coefficients_from
     from hydraulics.linearization import eq4_parameters
 
     num, den = eq4_coefficients_from(**eq4_parameters(params, 1.2e6, 25e3))
@@ -379,7 +379,7 @@ def test_each_method_is_scored_on_exactly_its_own_settled_samples(road_rig, iden
 def test_papers_method_uses_eq4_at_the_static_actuator_load(road_rig):
     """eq. 4 is linearized at each wheel's static actuator load: the mean measured tire force
     plus the pan's weight (the pan's free-body balance at rest), with the rig's pan mass."""
-    from correction.eq4 import eq4_coefficients_from
+    from correction.output.eq4 import eq4_coefficients_from
     from hydraulics.linearization import eq4_parameters
 
     s, road, rig = road_rig

@@ -1,7 +1,7 @@
 """A run's time series in the formats test labs read: CSV, ASAM MDF4, NI TDMS, MTS RPC III.
 
 Each file ``rigsim run --format`` writes is read back by the toolkit's reader of measured data
-(:func:`correction.measured.read_channels`) and compared with the run's own arrays: MDF4 and TDMS
+(:func:`correction.io.measured.read_channels`) and compared with the run's own arrays: MDF4 and TDMS
 carry float64 exactly, CSV to its 10 significant digits, RPC III to its int16 quantization (half
 a step of the channel's full scale / 32767, the format's definition: MTS RPC III file format; its SCALE
 header is text, so the step is known to ~1e-5).
@@ -14,7 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from correction.measured import read_channels
+from correction.io.measured import read_channels
 from scenarios.core.config import ScenarioError, parse_scenario
 from scenarios.core.results import TIMESERIES_FORMATS, check_timeseries_format, write_run
 from scenarios.core.run import run

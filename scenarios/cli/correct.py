@@ -8,20 +8,20 @@
                    [--transient drop|mark|keep] [--decimal .|,] [--thousands none|,|.|'|space]
     rigsim correct IN --model TRUCK.toml --pairs fl=DRIVE:LVDT,... -o OUT [--map fl=CH,...] ...
 
-``IN`` is read by :func:`correction.measured.read_channels` (any CSV dialect, RPC III, MDF4, TDMS),
+``IN`` is read by :func:`correction.io.measured.read_channels` (any CSV dialect, RPC III, MDF4, TDMS),
 its channels named as the reader returns them (``Fz_FL`` for a header ``Fz_FL [kN]``) and in SI,
 so a force in kN is corrected in N; ``--decimal`` and ``--thousands`` say how a text file writes
 its numbers when they leave it ambiguous. Without ``--columns``/``--map`` every numeric channel
 is read and the force channels (unit N, kN... or none) are the candidates; with them only the
 named channels are read. A chosen channel that is not a force is refused. ``T_a`` comes from
-``--actuator`` (one actuator file, :mod:`correction.actuator_file`, for every channel),
+``--actuator`` (one actuator file, :mod:`correction.io.actuator_file`, for every channel),
 ``--actuators`` (one ``T_a`` per corner; a corner corrects the channel whose name holds the
 corner as a token, ``tire_force_fl_N`` or ``Fz_FL``, case-insensitive, or the one ``--map``
 gives) or ``--identify`` (the drive and pan displacement channels of the same file, fitted by
-:func:`correction.actuator_fit.fit_actuator`). The one correction is
-:func:`correction.pipeline.correct_forces`.
+:func:`correction.identification.actuator_fit.fit_actuator`). The one correction is
+:func:`correction.output.pipeline.correct_forces`.
 
-``OUT`` is written by :func:`correction.measured.write_channels` in its extension's format: the
+``OUT`` is written by :func:`correction.io.measured.write_channels` in its extension's format: the
 time (s) and ``<channel>_corrected`` in N (and ``settled``, 0/1, with ``--transient mark``;
 ``drop``, the default, leaves out the correction's transients, ``keep`` keeps them), with
 metadata on how it was made (input, T_a source, low-pass, mode, settling tolerance, rigsim
@@ -32,17 +32,17 @@ or an existing file without ``--force``, is refused before any work.
 
 ``--model TRUCK.toml --pairs fl=DRIVE:LVDT,...`` corrects instead by a truck model calibrated on
 the file's own drive, LVDT and force channels (:mod:`scenarios.cli.correct_model`); the shared
-parts are :mod:`scenarios.cli.correct_channels` (which channels) and
-:mod:`scenarios.cli.correct_output` (checks, the linear correction, the file and the table).
+parts are :mod:`scenarios.records.channels` (which channels) and
+:mod:`scenarios.records.output` (checks, the linear correction, the file and the table).
 """
 
 from __future__ import annotations
 
 import argparse
 
-from scenarios.cli.correct_channels import parse_options, plan_channels, read_input
+from scenarios.records.channels import parse_options, plan_channels, read_input
 from scenarios.studies.identify.command import add_number_format
-from scenarios.cli.correct_output import (check_out_file, fit_metadata, linear_correction,
+from scenarios.records.output import (check_out_file, fit_metadata, linear_correction,
                                           linear_metadata, output_units, probe_output, rigsim_version,
                                           write_corrected)
 
@@ -100,7 +100,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _read_actuators(args):
-    from correction.actuator_file import read_actuator_file, read_actuators_file
+    from correction.io.actuator_file import read_actuator_file, read_actuators_file
 
     given = [o for o in ("actuator", "actuators", "identify") if getattr(args, o) is not None]
     if len(given) != 1:
@@ -137,7 +137,7 @@ def cmd_correct(args) -> int:
     correct_model.refuse_model_options(args)
     import numpy as np
 
-    from correction.actuator_fit import fit_actuator
+    from correction.identification.actuator_fit import fit_actuator
 
     inputs = [args.input, args.actuator, args.actuators]
     check_out_file(args.out, inputs, args.force)

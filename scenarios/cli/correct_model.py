@@ -12,7 +12,7 @@ corner the drive x_ref and the LVDT x_a (``--pairs``, the syntax of ``rigsim ide
 --from-file``; lengths, converted to m) and the wheel force F_rig (the force channel whose name
 holds the corner as a token, or ``--map``'s; converted to N); then
 F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
-(:func:`scenarios.studies.model_correction.differential.correct_with_model`). ``TRUCK.toml`` is a
+(:func:`scenarios.records.model.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
 and its ``[vehicle]`` tire stiffness, tire damping, tire stiffening (``tire_progressive_ratio``,
 ``tire_progressive_onset_m``, and the rear tires' ``_ratio_rear`` / ``_onset_rear_m``, which
@@ -21,17 +21,17 @@ instead of the catalogue values; the payload and its position always
 start from the record's static loads. The cab (``--cab``): by default the model is calibrated
 twice, the cab held (rigid, or at ``[vehicle] cab_mount_hz`` if given) and the cab's mount
 frequency fitted (from that value or 2.5 Hz), and the clearly better fit is kept
-(:func:`scenarios.studies.model_correction.cab_choice.calibrate_cab`); ``--cab held`` or
+(:func:`scenarios.records.model.cab_choice.calibrate_cab`); ``--cab held`` or
 ``--cab fitted`` calibrates once. Every fitted value is only a starting guess.
 
 Where the model cannot be trusted on this record (it does not reproduce F_rig, or its calibration
 did not converge or could not run) the linear correction is used instead, with ``--actuator`` /
 ``--actuators`` if given, else T_a identified per corner from the ``--pairs`` channels
-(:func:`scenarios.studies.identify.recorded.identify_recorded`), and the reason is printed and
+(:func:`scenarios.records.recorded.identify_recorded`), and the reason is printed and
 written to the output's metadata. ``OUT`` is the linear path's file
-(:func:`scenarios.cli.correct_output.write_corrected`): ``<channel>_corrected`` in N (``settled``
+(:func:`scenarios.records.output.write_corrected`): ``<channel>_corrected`` in N (``settled``
 with ``--transient mark``; the model runs' first
-:data:`~scenarios.studies.model_correction.differential.START_S` are not settled), with metadata:
+:data:`~scenarios.records.model.differential.START_S` are not settled), with metadata:
 the method (and why), the calibration (fitted values with units and 1-sigma, fit NRMSE per
 wheel), the scenario file and the rigsim version. Every refusal comes before any work, as one
 :class:`scenarios.core.config.ScenarioError` sentence. Imports nothing heavy at module level.
@@ -106,8 +106,8 @@ def _check_options(args):
     """(pairs corner -> (drive, LVDT) in corner order, windows, max_nfev, workers); flags only."""
     from mjcf.names import CORNERS
     from scenarios.core.pool import worker_count
-    from scenarios.studies.identify.recorded import parse_pairs
-    from scenarios.studies.model_correction.calibrate import MAX_NFEV, WINDOWS
+    from scenarios.records.recorded import parse_pairs
+    from scenarios.records.model.calibrate import MAX_NFEV, WINDOWS
 
     if args.identify is not None:
         raise _error("--identify fits one T_a for the linear correction; with --model the fallback identifies each "
@@ -139,7 +139,7 @@ def _check_options(args):
 
 def _fallback_file(args):
     """The linear fallback's T_a from --actuator / --actuators (one, or one per corner), or None."""
-    from correction.actuator_file import read_actuator_file, read_actuators_file
+    from correction.io.actuator_file import read_actuator_file, read_actuators_file
     from mjcf.names import CORNERS
 
     try:
@@ -161,7 +161,7 @@ def _check_pairs(args, mc, pairs) -> None:
     """Each --pairs channel: in the file, not the time, a length, varying and finite."""
     import numpy as np
 
-    from scenarios.cli.correct_channels import LENGTH_UNITS, unit_text
+    from scenarios.records.channels import LENGTH_UNITS, unit_text
 
     names = list(mc.names)
     for corner, cols in pairs.items():
@@ -183,9 +183,9 @@ def _plan(args, pairs, windows: int):
     import numpy as np
 
     from mjcf.names import CORNERS
-    from scenarios.cli.correct_channels import parse_options, plan_channels, read_input
+    from scenarios.records.channels import parse_options, plan_channels, read_input
     from scenarios.core.config import ScenarioError, load_scenario
-    from scenarios.studies.model_correction.calibrate import WINDOW_LEAD_S, WINDOW_S, fit_windows
+    from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, fit_windows
 
     scenario = load_scenario(args.model)
     asked, items, _ = parse_options(args)
@@ -215,7 +215,7 @@ def _plan(args, pairs, windows: int):
 
 def _first_guess(scenario) -> tuple[dict, list[str]]:
     """(fitted fields' first guesses from TRUCK.toml's [vehicle], its other given fields: not used)."""
-    from scenarios.studies.model_correction.calibrate import FITTED
+    from scenarios.records.model.calibrate import FITTED
 
     given = {k: getattr(scenario.vehicle, k) for k in type(scenario.vehicle).field_names()
              if getattr(scenario.vehicle, k) is not None}
@@ -237,7 +237,7 @@ def cal_key(name: str) -> str:
 def _calibration_meta(cal) -> dict[str, str]:
     """The calibration in metadata: one key per fitted value (unit, 1-sigma, first guess), fit NRMSE per wheel."""
     from mjcf.names import CORNERS
-    from scenarios.studies.model_correction.differential import EXCESS_NRMSE_LIMIT
+    from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT
 
     meta = {cal_key(n): f"{v:.6g} {u} +- {s:.2g} (robust {sr:.2g}; first guess {g:.6g})"
             for n, u, g, v, s, sr in zip(cal.names, cal.units, cal.initial, cal.fitted, cal.sigma, cal.sigma_robust)}
@@ -251,9 +251,9 @@ def _calibration_meta(cal) -> dict[str, str]:
 
 def _metadata(args, pairs, force_cols, mc_result, fallback_source: str | None) -> dict[str, str]:
     """How the output was made; ``mc_result`` the ModelCorrection (None: every key, for the probe)."""
-    from correction.measured import format_of
-    from scenarios.cli.correct_output import fit_metadata, linear_metadata, rigsim_version
-    from scenarios.studies.model_correction.differential import START_S
+    from correction.io.measured import format_of
+    from scenarios.records.output import fit_metadata, linear_metadata, rigsim_version
+    from scenarios.records.model.differential import START_S
 
     method = "probe" if mc_result is None else mc_result.method
     meta = {"made_by": "rigsim correct --model", "rigsim_version": rigsim_version(), "input": str(args.input),
@@ -276,7 +276,7 @@ def _metadata(args, pairs, force_cols, mc_result, fallback_source: str | None) -
         meta.update({"ta_source": fallback_source or "x", **linear_metadata(args)})
     cal = None if mc_result is None else mc_result.calibration
     if mc_result is None:
-        from scenarios.studies.model_correction.calibrate import FITTED, UNITS
+        from scenarios.records.model.calibrate import FITTED, UNITS
 
         meta.update({cal_key(n): f"0 {UNITS[n]}" for n in FITTED})
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})
@@ -295,7 +295,7 @@ def _say(args, line: str) -> None:
 
 def cmd_correct_model(args) -> int:
     """Run ``rigsim correct --model``; returns 0, raises ScenarioError (one sentence) for bad input."""
-    from scenarios.cli.correct_output import (check_out_file, linear_correction, output_units, probe_output,
+    from scenarios.records.output import (check_out_file, linear_correction, output_units, probe_output,
                                               write_corrected)
 
     inputs = [args.input, args.model, args.actuator, args.actuators]
@@ -305,9 +305,9 @@ def cmd_correct_model(args) -> int:
     probe_output(args.out, output_units(force_cols, args.transient), _metadata(args, pairs, force_cols, None, None))
     guess, unused = _first_guess(scenario)
 
-    from scenarios.studies.model_correction.cab_choice import AUTO
-    from scenarios.studies.model_correction.calibrate import WINDOW_LEAD_S, WINDOW_S
-    from scenarios.studies.model_correction.differential import correct_with_model
+    from scenarios.records.model.cab_choice import AUTO
+    from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S
+    from scenarios.records.model.differential import correct_with_model
 
     fs, forces = mc.fs_hz, mc.array(force_cols)
     if unused:
@@ -334,7 +334,7 @@ def cmd_correct_model(args) -> int:
         if fallback_tas is not None:
             tas, source = fallback_tas, f"from {str(args.actuator or args.actuators)!r}"
         else:
-            from scenarios.studies.identify.recorded import identify_recorded
+            from scenarios.records.recorded import identify_recorded
 
             _say(args, "the model is not used; identifying T_a per corner from --pairs for the linear correction")
             fits = identify_recorded(args.input, args.pairs, time_col=args.time_col).fits

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from correction.tomlfile import check_keys, number, read_toml
+from correction.io.tomlfile import check_keys, number, read_toml
 from mjcf.build import TruckVariant
 
 __all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios"]

@@ -14,7 +14,7 @@ import os
 import shutil
 from dataclasses import dataclass
 
-from correction.atomic import size_text
+from correction.io.atomic import size_text
 from scenarios.core.config import ScenarioError
 
 __all__ = ["RunCost", "run_cost", "check_disk", "LONG_RUN_S", "LARGE_FILES_BYTES"]

@@ -11,7 +11,7 @@ at once (glibc's malloc otherwise keeps much of it in the process).
 from __future__ import annotations
 
 
-from correction.atomic import available_memory_bytes, size_text
+from correction.io.atomic import available_memory_bytes, size_text
 from scenarios.core.config import ScenarioError
 
 __all__ = ["BASE_BYTES", "BYTES_PER_STEP", "BYTES_PER_OUTPUT", "MMAP_THRESHOLD_BYTES", "available_memory_bytes",

@@ -14,7 +14,7 @@ does not list: a folder rigsim did not write, or one where something was added s
 with one sentence, ``--force`` or not. An output folder may never be, or contain, an input file
 of the command, the working folder or the home folder. :func:`check_output_file` checks a single output file (``--rrd``, ``rigsim correct
 -o``) before any work. Files inside the staging folder are still written by
-:func:`correction.atomic.atomic_write_bytes`.
+:func:`correction.io.atomic.atomic_write_bytes`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import pathlib
 import shutil
 import sys
 
-from correction.atomic import dead_writers_leftovers, host_tag
+from correction.io.atomic import dead_writers_leftovers, host_tag
 from scenarios.core.config import ScenarioError
 from scenarios.core.ownership import (MARKER, check_not_over, check_owned, count_files, entries, plural,
                                        read_marker, write_marker)

@@ -13,7 +13,7 @@ import json
 import os
 import pathlib
 
-from correction.atomic import read_regular
+from correction.io.atomic import read_regular
 from scenarios.core.config import ScenarioError
 
 __all__ = ["MARKER", "check_not_over", "check_owned", "count_files", "entries", "plural", "read_marker",

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from correction.transfer import state_space_frequency_response
+from correction.output.transfer import state_space_frequency_response
 
 __all__ = ["PlantLinearization", "fine_factor", "simulate"]
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
-from correction.atomic import open_regular
+from correction.io.atomic import open_regular
 
 __all__ = ["ProfileError", "Profile", "write_profile_csv", "read_profile_csv", "envelope", "highpass",
            "check_positive", "readonly_copy"]

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from correction.dlc import force_statistics
+from correction.metrics.dlc import force_statistics
 from scenarios.core.files import atomic_write_bytes, atomic_write_text, to_json
 from mjcf.names import CORNERS
 
@@ -93,8 +93,8 @@ class RunResult:
     def table(self) -> str:
         """The per-wheel table for the terminal and the recording: mean, std and DLC of the tire
         force, its stress factor E[(F/F_static)^4] (pavements) and damage-equivalent load (m = 5,
-        1 Hz; components), from :mod:`correction.damage`."""
-        from correction.damage import damage_equivalent_load, stress_factor
+        1 Hz; components), from :mod:`correction.metrics.damage`."""
+        from correction.metrics.damage import damage_equivalent_load, stress_factor
 
         f = np.asarray(self.signals["tire_force_N"], dtype=float)
         sf = np.atleast_1d(stress_factor(f))
@@ -160,7 +160,7 @@ def csv_parts(result: RunResult):
 
 #: ``timeseries.<ext>`` formats of a run (``rigsim run --format``): name -> extension. CSV for
 #: people who open files in a spreadsheet; the binary ones are written by the toolkit's one writer
-#: of measured data (:func:`correction.measured.write_channels`), in the formats test labs already
+#: of measured data (:func:`correction.io.measured.write_channels`), in the formats test labs already
 #: read: ASAM MDF4 (``mf4``: float64, the standard of vehicle DAQ, read by asammdf, MATLAB's
 #: mdfRead, CANape, DIAdem), NI TDMS (``tdms``) and MTS RPC III (``rsp``: int16 per channel, as
 #: the rig controllers store it: quantized to 1/32767 of each channel's range). MDF4 and TDMS
@@ -175,7 +175,7 @@ def check_timeseries_format(fmt: str) -> None:
     if fmt not in TIMESERIES_FORMATS:
         raise ScenarioError(f"--format must be one of {', '.join(TIMESERIES_FORMATS)}, got {fmt!r}")
     if fmt in ("mf4", "tdms"):
-        from correction import measured_lab
+        from correction.io import measured_lab
 
         try:
             measured_lab.need("asammdf" if fmt == "mf4" else "nptdms", TIMESERIES_FORMATS[fmt], "writing")
@@ -234,7 +234,7 @@ def write_run(result: RunResult, out_dir, *, fmt: str = "csv") -> dict[str, path
     if fmt == "csv":
         atomic_write_bytes(paths["timeseries"], csv_parts(result))
     else:
-        from correction.measured import write_channels
+        from correction.io.measured import write_channels
 
         write_channels(paths["timeseries"], _channels(result), overwrite=True)
     atomic_write_text(paths["result"], js)

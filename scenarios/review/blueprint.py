@@ -23,7 +23,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from correction.dlc import force_statistics
+from correction.metrics.dlc import force_statistics
 from mjcf.names import pan_body
 
 __all__ = ["COLORS", "PLOTS", "case_series", "log_case", "road_lines", "xyzw", "series_lines", "geom_shapes",

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mjcf.names import CORNERS, pan_body
-from correction.atomic import atomic_path
+from correction.io.atomic import atomic_path
 from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, Geoms, PoseTrack, drawn_bodies, model_geoms
 from scenarios.core.results import RunResult
 
@@ -169,7 +169,7 @@ def write_recording(
     Notes
     -----
     Each scenario is logged through rerun's file sink into a temporary file beside ``path``
-    (:func:`correction.atomic.atomic_path`). One scenario's file is the recording; several are
+    (:func:`correction.io.atomic.atomic_path`). One scenario's file is the recording; several are
     merged by the ``rerun rrd merge`` of the pinned wheel's CLI, because an RRD stream ends with
     a footer that indexes its own chunks and streams cannot be concatenated byte-wise.
     """

@@ -12,7 +12,7 @@ its own files at once (the record of a 30 s rig run with its poses pickles to 7 
 time to copy them into ``multiprocessing.shared_memory``, which needs the resource tracker's
 bookkeeping in both processes as well). The child writes the .rrd with
 :func:`scenarios.review.recording.write_recording` (the code a single process runs) to a
-temporary file beside the target, named as :mod:`correction.atomic` names its temporary files
+temporary file beside the target, named as :mod:`correction.io.atomic` names its temporary files
 (``.{name}.{host}.{parent pid}.{random}.tmp``: a killed parent's is removed by the next write of
 the same file); :meth:`RecordingProcess.commit` waits for the child and renames that file into
 place. The parent never imports rerun.
@@ -43,7 +43,7 @@ import uuid
 from collections.abc import Sequence
 from multiprocessing.connection import Connection
 
-from correction.atomic import host_tag
+from correction.io.atomic import host_tag
 
 __all__ = ["RecordingError", "RecordingProcess", "serve"]
 
@@ -178,7 +178,7 @@ class RecordingProcess:
         if self._conn is None or self._sender is not None:
             raise RuntimeError("submit() once, inside the with block")
         self._path = pathlib.Path(path)
-        # named as correction.atomic names temporary files: a killed parent's is removed by the next write
+        # named as correction.io.atomic names temporary files: a killed parent's is removed by the next write
         self._tmp = self._path.parent / f".{self._path.name}.{host_tag()}.{os.getpid()}.{uuid.uuid4().hex}.tmp"
         job = (str(self._tmp), list(results), dlc_table)
 

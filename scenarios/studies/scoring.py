@@ -8,7 +8,7 @@ Per wheel: the road-test force (what the truck does on the road), the force meas
 rig (the simulated load cell plus white measurement noise, as a real load cell has), and the
 rig force corrected by each :class:`Method`:
 
-- ``paper``: the paper's method. T_a(s) from eq. 4 (:func:`correction.eq4.eq4_coefficients_from`)
+- ``paper``: the paper's method. T_a(s) from eq. 4 (:func:`correction.output.eq4.eq4_coefficients_from`)
   with Merritt's coefficients linearized at the wheel's static actuator load (mean measured tire
   force plus the pan's weight, :func:`hydraulics.linearization.eq4_parameters`), the station's
   tire stiffness and the rig's pan mass; inverted times the paper's low-pass T_F (16 and 24 Hz,
@@ -16,14 +16,14 @@ rig force corrected by each :class:`Method`:
 - ``best``: this project's method. T_a identified per corner as a lab characterizes its rig
   before a test (:func:`scenarios.studies.identify.compute.identify_rig`: independent random
   drives on the four posts at the test drive's rms, the one fitting policy of
-  :mod:`correction.actuator_fit`; no hydraulic parameters needed), inverted under the
+  :mod:`correction.identification.actuator_fit`; no hydraulic parameters needed), inverted under the
   regularized low-pass (6th-order Butterworth at 30 Hz), applied offline zero-phase.
 
-Both are applied by the one correction function, :func:`correction.pipeline.correct_forces`,
+Both are applied by the one correction function, :func:`correction.output.pipeline.correct_forces`,
 which ``rigsim correct`` also uses: the same data give the same numbers.
 
 Each corrected force is compared with the road force through the same band limit (a correction
-cannot restore what its low-pass removes): DLC and NRMSE (:mod:`correction.dlc`) on the samples
+cannot restore what its low-pass removes): DLC and NRMSE (:mod:`correction.metrics.dlc`) on the samples
 where that method's correction filters and its band-limit filter have all settled (the union
 of their transients is left out); the corrected DLC is compared with the unfiltered road DLC on
 those same samples (``dlc_road_settled``). The road and rig DLCs of the test as a lab reports
@@ -37,22 +37,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.apply import band_limit
-from correction.damage import damage_equivalent_load, stress_factor
-from correction.dlc import dlc, nrmse
-from correction.eq4 import eq4_coefficients_from
-from correction.pipeline import SETTLING_TOLERANCE, correct_forces
+from correction.output.apply import band_limit
+from correction.metrics.damage import damage_equivalent_load, stress_factor
+from correction.metrics.dlc import dlc, nrmse
+from correction.output.eq4 import eq4_coefficients_from
+from correction.output.pipeline import SETTLING_TOLERANCE, correct_forces
 from hydraulics.linearization import eq4_parameters
 from hydraulics.params import GRAVITY_M_S2
 from scenarios.core.config import ScenarioError
+from scenarios.records.methods import BEST, METHODS, NOISE_N, PAPER, Method, method_named
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "MIN_DURATION_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
            "PairScore", "score_pair", "SETTLING_TOLERANCE", "check_noise", "measured_force", "shortest_scorable_s"]
-
-#: Default rms of the white measurement noise added to the rig's wheel forces, N. A strain-gauge
-#: load cell rated for the 156 kN actuator force resolves ~0.05 % of its range (~80 N);
-#: 100 N rms at 1 kHz is that, rounded up.
-NOISE_N = 100.0
 
 #: Fewer settled seconds than this cannot give a meaningful DLC, s.
 MIN_SCORED_S = 0.25
@@ -60,53 +56,6 @@ MIN_SCORED_S = 0.25
 #: The shortest scenario a study scores (``rigsim paper --duration-s``, a sweep's cases), s: the
 #: correction's zero-phase start-up and end transients alone take ~4 s of the record.
 MIN_DURATION_S = 10.0
-
-
-@dataclass(frozen=True)
-class Method:
-    """How a correction is made.
-
-    Attributes
-    ----------
-    name : str
-    actuator : {"eq4", "identified"}
-        Where T_a comes from: eq. 4 from the actuator parameters, or identified per wheel from
-        the rig run's drive and pan displacement.
-    lowpass : {"paper", "regularized"}
-        The low-pass T_F (:mod:`correction.lowpass`).
-    mode : {"causal", "zerophase"}
-        How the filter is applied (:func:`correction.apply.correct`).
-    description : str
-    """
-
-    name: str
-    actuator: str
-    lowpass: str
-    mode: str
-    description: str = ""
-
-    def __post_init__(self) -> None:
-        for field, value, allowed in (("actuator", self.actuator, ("eq4", "identified")),
-                                      ("lowpass", self.lowpass, ("paper", "regularized")),
-                                      ("mode", self.mode, ("causal", "zerophase"))):
-            if value not in allowed:
-                raise ScenarioError(f"correction {field} must be one of {', '.join(allowed)}, got {value!r}")
-
-
-PAPER = Method("paper", "eq4", "paper", "causal",
-               "eq. 4 from the actuator parameters at each wheel's static load, paper's low-pass (16/24 Hz), causal")
-BEST = Method("best", "identified", "regularized", "zerophase",
-              "T_a identified per corner from independent random drives at the test drive's rms (rigsim identify), "
-              "30 Hz 6th-order Butterworth, zero-phase")
-METHODS = (PAPER, BEST)
-
-
-def method_named(actuator: str, lowpass: str, mode: str) -> Method:
-    """The :class:`Method` with these settings: ``paper`` or ``best`` when it is one of them."""
-    for m in METHODS:
-        if (m.actuator, m.lowpass, m.mode) == (actuator, lowpass, mode):
-            return m
-    return Method("custom", actuator, lowpass, mode, f"T_a {actuator}, low-pass {lowpass}, {mode}")
 
 
 @dataclass(frozen=True)
@@ -212,10 +161,10 @@ class PairScore:
 
 def shortest_scorable_s(rate_hz: float, method: Method) -> float:
     """A record shorter than this cannot be scored by ``method`` whatever its T_a, s: the band
-    limit's own transients (:func:`correction.filters.reference_filter` at
+    limit's own transients (:func:`correction.output.filters.reference_filter` at
     :data:`SETTLING_TOLERANCE`, start and end) plus :data:`MIN_SCORED_S`. A necessary condition,
     checked before any run (the correction's transients, known once T_a is, come on top)."""
-    from correction.filters import reference_filter
+    from correction.output.filters import reference_filter
 
     head, tail = reference_filter(rate_hz, method.lowpass,
                                   settling_tolerance=SETTLING_TOLERANCE).transient_samples(method.mode)
@@ -238,7 +187,7 @@ def measured_force(rig, noise_N: float, seed: int) -> np.ndarray:
     return clean + noise_N * np.random.default_rng((int(seed), 8)).standard_normal(clean.shape)
 
 
-#: The damage figures every score carries (:mod:`correction.damage`): the dynamic load stress
+#: The damage figures every score carries (:mod:`correction.metrics.damage`): the dynamic load stress
 #: factor E[(F/F_static)^4] (pavements: the fourth-power law) and the damage-equivalent load for
 #: a Woehler exponent of 5 at one equivalent cycle per second (components), of the road, the
 #: measured rig and the corrected force on the same settled samples.

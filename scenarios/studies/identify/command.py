@@ -3,7 +3,7 @@
 On the simulated rig (``rigsim identify SCENARIO.toml --out DIR``) or from a recorded file of
 drive and LVDT channels of a real rig (``rigsim identify --from-file REC --pairs
 fl=DRIVE:LVDT,... [--time-col NAME] --out DIR``; REC in any format that
-:func:`correction.measured.read_channels` reads, lengths converted to m). Writes
+:func:`correction.io.measured.read_channels` reads, lengths converted to m). Writes
 ``DIR/actuators.toml`` (one T_a per corner, the file ``rigsim correct --actuators`` reads),
 ``DIR/identification.json`` (fit diagnostics) and ``DIR/bode.png`` (data against fit).
 """
@@ -18,7 +18,7 @@ __all__ = ["add_number_format", "add_parser", "cmd_identify"]
 
 def add_number_format(parser) -> None:
     """Add ``--decimal`` and ``--thousands`` (how a text input writes its numbers) to ``parser``."""
-    from correction.measured_numbers import DECIMALS, THOUSANDS
+    from correction.io.measured_numbers import DECIMALS, THOUSANDS
 
     parser.add_argument("--decimal", choices=DECIMALS, default=None,
                         help="text input: the decimal mark, . or , (default: decided by the numbers of the columns "
@@ -74,7 +74,7 @@ def _check(args):
 
 
 def cmd_identify(args) -> int:
-    from correction.actuator_file import write_actuators_file
+    from correction.io.actuator_file import write_actuators_file
     from scenarios.core.config import ScenarioError, load_scenario
     from scenarios.core.drive import IDENT_SEED
     from scenarios.core.files import atomic_write_bytes, to_json
@@ -85,19 +85,19 @@ def cmd_identify(args) -> int:
     seed = IDENT_SEED if args.seed is None else int(args.seed)
     scenario = load_scenario(args.scenario) if args.scenario is not None else None
     if args.from_file is not None:
-        from scenarios.studies.identify.recorded import parse_pairs
+        from scenarios.records.recorded import parse_pairs
 
         parse_pairs(args.pairs)  # the syntax of --pairs before anything is written
     inputs = (args.from_file, *(scenario.input_files if scenario is not None else ()))
     with staged_output(args.out, force=getattr(args, "force", False), inputs=inputs) as stage:
         if args.from_file is not None:
-            from scenarios.studies.identify.recorded import identify_recorded
+            from scenarios.records.recorded import identify_recorded
 
             ident = identify_recorded(args.from_file, args.pairs, time_col=args.time_col,
                                       decimal=getattr(args, "decimal", None), thousands=getattr(args, "thousands", None))
             title = pathlib.Path(args.from_file).name
         else:
-            from correction.actuator_fit import ActuatorFitError
+            from correction.identification.actuator_fit import ActuatorFitError
             from scenarios.studies.identify.compute import identify_rig
 
             if not args.quiet:

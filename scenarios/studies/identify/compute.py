@@ -3,7 +3,7 @@
 With the truck on the pans, the four actuators are driven by independent band-limited random
 drives at the test drive's rms in the band the correction uses (:func:`matched_drive`). The multi-input H1 estimate separates each post's own path from what the other posts
 do (the test drive cannot: front and rear are the same profile delayed, coherence ~0.997), and
-each corner's diagonal path is fitted by :func:`correction.actuator_fit.fit_frequency_response`
+each corner's diagonal path is fitted by :func:`correction.identification.actuator_fit.fit_frequency_response`
 (the one fitting policy of the project: stable, minimum phase, T_a(0) = 1, orders by held-out
 error). ``rigsim identify`` writes the result as an actuators file that ``rigsim correct`` reads;
 the studies (paper, sweep, iterate) correct with it.
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.actuator_fit import fit_frequency_response
-from correction.identify import h1_estimate
+from correction.identification.actuator_fit import fit_frequency_response
+from correction.identification.identify import h1_estimate
 from mjcf.names import CORNERS
 from scenarios.core.drive import IDENT_SEED, Drive, identification_drive
 from scenarios.core.rig import Rig
@@ -144,7 +144,7 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
 
     Raises
     ------
-    correction.actuator_fit.ActuatorFitError
+    correction.identification.actuator_fit.ActuatorFitError
         If the record cannot support a fit (one sentence naming the band).
     SimulationError
         A MuJoCo warning during the run.

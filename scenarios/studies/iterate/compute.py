@@ -10,8 +10,8 @@ Sequence of :func:`iterate_scenario` (every rig run is :meth:`scenarios.core.rig
 2. identification run: four independent broadband drives
    (:func:`scenarios.core.drive.identification_drive`, from t = 0), the first
    :data:`IDENT_SKIP_S` left out, the H1 FRF matrix drive -> pan displacement (``displacement``)
-   or drive -> tire force (``force``), :func:`correction.frf.identify_frf`;
-3. the iteration :func:`correction.iterate.iterate_drive` on the analysed record (t >= 0, the
+   or drive -> tire force (``force``), :func:`correction.input.frf.identify_frf`;
+3. the iteration :func:`correction.input.iterate.iterate_drive` on the analysed record (t >= 0, the
    output rate; the lead-in's fade-in stays as it is, the update is tapered to zero at both
    ends), starting from the road profile: Moran's target (pan = profile) or the RPC-style target
    (tire force = the road run's tire force); the drive may not leave the actuator's half stroke;
@@ -23,8 +23,8 @@ iterated drive, output-corrected) is scored on the same samples: outside the ite
 tapers at both ends (where the iterated drive fades back to the original one) and where the
 ``best`` method's correction filters and its band-limit filter have settled on the original rig
 run (``score.methods["best"].settled``). DLC
-(std / mean, :func:`correction.dlc.dlc`) and NRMSE against the unfiltered road force
-(:func:`correction.dlc.nrmse`) are per wheel, then averaged over the four wheels. Rig forces are
+(std / mean, :func:`correction.metrics.dlc.dlc`) and NRMSE against the unfiltered road force
+(:func:`correction.metrics.dlc.nrmse`) are per wheel, then averaged over the four wheels. Rig forces are
 the measured ones (:func:`scenarios.studies.scoring.measured_force`: plus the load-cell noise of
 the scenario's seed; the same noise realisation for the original and the iterated run). If the
 output correction cannot be made, the table has no ``output_corrected`` row and the samples
@@ -40,10 +40,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.convergence import IterationStabilityError
-from correction.dlc import dlc, nrmse
-from correction.frf import FRF, identify_frf
-from correction.iterate import IterationResult, iterate_drive
+from correction.input.convergence import IterationStabilityError
+from correction.metrics.dlc import dlc, nrmse
+from correction.input.frf import FRF, identify_frf
+from correction.input.iterate import IterationResult, iterate_drive
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive, identification_drive
 from scenarios.core.results import RunResult
@@ -103,9 +103,9 @@ class IterateResult:
     ----------
     scenario_name : str
     target : {"displacement", "force"}
-    iteration : correction.iterate.IterationResult
+    iteration : correction.input.iterate.IterationResult
         Error per step; ``drive`` (m, (n, 4), at the output rate, t >= 0) is the best drive.
-    frf : correction.frf.FRF
+    frf : correction.input.frf.FRF
         Identified drive -> pan (m/m) or drive -> tire force (N/m) matrix.
     band_hz : (float, float), Hz
         Band of the drive update.

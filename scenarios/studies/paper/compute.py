@@ -76,7 +76,7 @@ class PaperCase:
         """Spatial repeatability for pavements (Cole & Cebon): the correlation coefficient of the
         road's spatial load profile (force on a ``dx_m`` grid along the road, the speed known) with
         the measured rig's and the corrected one's, per wheel, on the best method's settled samples."""
-        from correction.damage import spatial_correlation, spatial_profile
+        from correction.metrics.damage import spatial_correlation, spatial_profile
 
         best = self.score.methods["best"]
         s = best.settled

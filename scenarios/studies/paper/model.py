@@ -4,7 +4,7 @@ For each case, after its road and rig runs and the project's linear correction: 
 calibrated on the rig record's own signals (drive x_ref, LVDT x_a and the measured force F_rig
 with its load-cell noise; never the road run, never the plant's parameters) and the record is
 corrected differentially, F_rig + F_model(x_ref) - F_model(x_a)
-(:func:`scenarios.studies.model_correction.differential.correct_with_model`). Where the model cannot
+(:func:`scenarios.records.model.differential.correct_with_model`). Where the model cannot
 be trusted the case keeps the linear correction and says why in one sentence. Scored like the other
 methods against the road force: DLC on the unfiltered force, NRMSE against the band-limited one,
 on the samples where both the model's start-up and the linear method's filters have settled.
@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenarios.studies.model_correction.differential import EXCESS_NRMSE_LIMIT, correct_with_model
-from scenarios.studies.model_correction.result import ModelCorrection
-from scenarios.studies.model_correction.score import score_correction
+from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, correct_with_model
+from scenarios.records.model.result import ModelCorrection
+from scenarios.records.model.score import score_correction
 
 __all__ = ["ModelScore", "model_scores", "model_table"]
 

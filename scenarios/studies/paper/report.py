@@ -93,7 +93,7 @@ def _damage_figure(name: str, case) -> bytes:
     import matplotlib.pyplot as plt
     from matplotlib.ticker import LogLocator
 
-    from correction.damage import rainflow_cycles
+    from correction.metrics.damage import rainflow_cycles
 
     best = case.score.methods["best"]
     s = best.settled
@@ -186,7 +186,7 @@ def _report_md(rows, table: str, figures: list[str], damage_table: str = "") -> 
         "Two forces with the same DLC can do different damage: the peaks weigh more. The stress",
         "factor E[(F/F_static)^4] is the fourth-power law's measure of pavement wear; the",
         "damage-equivalent load (Woehler exponent 5, one cycle per second) is the constant load range",
-        "that does the rainflow-counted fatigue damage of the record (correction/damage.py).",
+        "that does the rainflow-counted fatigue damage of the record (correction/metrics/damage.py).",
         "",
         "```",
         damage_table,

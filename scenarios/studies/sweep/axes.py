@@ -16,7 +16,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from correction.tomlfile import check_keys
+from correction.io.tomlfile import check_keys
 from scenarios.core.config import RoadConfig, Scenario, ScenarioError
 
 __all__ = ["MAX_CASES", "axis_keys", "check_key", "flatten", "format_value", "read_axes"]
@@ -62,7 +62,7 @@ def format_value(value: Any) -> str:
 
 
 class _UnknownKey(Exception):
-    """A key :func:`correction.tomlfile.check_keys` refused (its close-match hint is reused)."""
+    """A key :func:`correction.io.tomlfile.check_keys` refused (its close-match hint is reused)."""
 
 
 def check_key(key: str, where: str) -> None:

@@ -58,7 +58,7 @@ class CaseResult:
         band-limited road force, on the settled samples.
     stress_factor_road, stress_factor_rig, stress_factor_corrected : float, 1
         Dynamic load stress factor E[(F/F_static)^4] of the road, measured rig and corrected
-        forces on the settled samples (pavement damage, fourth-power law; correction.damage).
+        forces on the settled samples (pavement damage, fourth-power law; correction.metrics.damage).
     del_road_N, del_rig_N, del_corrected_N : float, N
         Damage-equivalent load range (Woehler exponent 5, one cycle per second) of the same.
     scored_s : float, s

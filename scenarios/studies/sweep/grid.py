@@ -54,7 +54,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from correction.tomlfile import check_keys, read_toml
+from correction.io.tomlfile import check_keys, read_toml
 from scenarios.core.config import Scenario, ScenarioError, parse_scenario
 from scenarios.studies.sweep.axes import MAX_CASES, axis_keys, format_value, read_axes
 from scenarios.studies.sweep.settings import SETTING_KEYS, EvalSettings, parse_settings
@@ -132,7 +132,7 @@ class SweepGrid:
 
 
 def _refuse(where: str):
-    """The ``error`` of :mod:`correction.tomlfile` checks: a ScenarioError prefixed by ``where``."""
+    """The ``error`` of :mod:`correction.io.tomlfile` checks: a ScenarioError prefixed by ``where``."""
     return lambda message: ScenarioError(f"{where}{message}")
 
 

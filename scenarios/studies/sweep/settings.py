@@ -24,7 +24,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from correction.tomlfile import number
+from correction.io.tomlfile import number
 from scenarios.core.config import ScenarioError
 from scenarios.studies.scoring import NOISE_N, SETTLING_TOLERANCE, Method, method_named
 

@@ -3,14 +3,14 @@
 Three routes to the actuator transfer function ``T_a = X_a / X_p`` (drive signal x_ref of
 ``hyd_<c>`` to pan displacement, qpos of ``pan_<c>_z``) of the truck on the DYNTRAC rig:
 
-1. **analytic**: the paper's eq. 4 (:func:`correction.transfer.eq4_transfer_function`) with
+1. **analytic**: the paper's eq. 4 (:func:`correction.output.transfer.eq4_transfer_function`) with
    Merritt's Kq, Kc from :func:`hydraulics.linearization` at each wheel station's static load
    and that station's tire stiffness;
 2. **numerical**: the whole closed-loop MuJoCo plant (truck, pans, four hydraulic actuators,
    all states) linearized at static rest (:meth:`scenarios.core.rig.Rig.linearize`, leaf-spring
    dry friction off), ``H(f) = C (exp(j 2 pi f dt) I - A)^-1 B``, all 4 x 4 paths;
 3. **identified**: the nonlinear rig driven by independent road-like random drives on all four
-   wheels, the MIMO H1 estimate with its coherence (:mod:`correction.identify`) and a fitted
+   wheels, the MIMO H1 estimate with its coherence (:mod:`correction.identification.identify`) and a fitted
    stable rational transfer function per wheel.
 
 Then the paper's Figure 7 (step responses, nonlinear against linear) and Table 1 (DLC of the

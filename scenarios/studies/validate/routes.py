@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from correction.identify import fit_rational, h1_estimate
-from correction.transfer import (apply_transfer_function, bandwidth_hz, describe_roots, eq4_transfer_function,
+from correction.identification.identify import fit_rational, h1_estimate
+from correction.output.transfer import (apply_transfer_function, bandwidth_hz, describe_roots, eq4_transfer_function,
                                  frequency_response_hz, state_space_frequency_response, transfer_bandwidth_hz)
 from hydraulics.linearization import linearization
 from hydraulics.loop import loop_matrices
@@ -61,7 +61,7 @@ def nanmax(values) -> float:
 
 
 def roots_json(r) -> list[dict]:
-    """Roots (rad/s) as :func:`correction.transfer.describe_roots` dicts rounded to 6 digits."""
+    """Roots (rad/s) as :func:`correction.output.transfer.describe_roots` dicts rounded to 6 digits."""
     return [{k: round(v, 6) for k, v in d.items()} for d in describe_roots(r)]
 
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from correction.transfer import bandwidth_hz, transfer_bandwidth_hz
+from correction.output.transfer import bandwidth_hz, transfer_bandwidth_hz
 from hydraulics.params import ActuatorParams
 from mjcf.names import CORNERS
 from scenarios.core.drive import IDENT_SEED

@@ -1,0 +1,343 @@
+"""The one identification of ``T_a = X_a / X_p``: a usable actuator transfer function from rig data.
+
+A lab that does not know its hydraulic parameters can still correct: the H1 estimate of the
+drive-to-pan frequency response (:func:`correction.identification.identify.h1_estimate`) is fitted with a
+stable rational function (:func:`correction.identification.identify.fit_rational`, Sanathanan-Koerner) and made
+usable as an inverse. Every caller (``rigsim correct --identify``, ``rigsim identify``, the
+studies' ``identified`` method) uses this one policy:
+
+* **weights** ``sqrt(coh / (1 - coh)) / |H|``: the inverse standard deviation of the H1
+  estimate, relative to its level, so the fit minimises the relative error and trusts the
+  coherent points first (``coh`` clipped to [0, 0.999]);
+* **static gain**: three points ``H = 1`` at 1, 2 and 5 % of the frequency resolution, with the
+  largest weight, pin ``T_a(0)`` (an actuator with integral action follows its drive at steady
+  state); the result is then scaled so that ``T_a(0) = 1`` exactly;
+* **orders** chosen by held-out error (the rules and their constants live in
+  :mod:`correction.identification.actuator_fit_rules`): each candidate of ``CANDIDATE_ORDERS`` ((1, 4), (2, 5),
+  (2, 6), (3, 6), (4, 7)) is fitted on the even-indexed frequency points of the band, made usable
+  (below), and scored on the odd-indexed ones (relative rms error on the coherent points,
+  ``held_out_error``); the smallest error wins unless a candidate of lower total order is within
+  ``ORDER_TOLERANCE`` (5 %) of it; the chosen orders are then fitted on all points. Scoring the
+  usable fit keeps a fit that fakes the spool's lag with a right-half-plane zero (which the
+  reflection turns into a lead) from winning. If no usable fit comes within
+  ``NON_MINIMUM_PHASE_RATIO`` (2) of the best raw fit, the data themselves are not minimum phase
+  (a delay, a right-half-plane zero; no usable ``T_a`` has their phase): the orders are then
+  chosen, by the same rule, on the usable fits' magnitude error, so ``T_a`` is the
+  minimum-phase counterpart of the data (same magnitude) (``choose_orders``);
+* **usable by construction** (``usable_actuator``): right-half-plane poles (done by
+  ``fit_rational``) and zeros are reflected into the left half-plane (``r -> -conj(r)``, which
+  keeps ``|T_a|``), so the fit is stable and minimum phase; slow pole-zero pairs, which the data
+  do not locate (only the gain step between ``T_a(0)`` and the first bins), are removed when
+  they nearly cancel (a zero below twice the frequency resolution with a pole within
+  ``CANCEL_GAP``, 1 %, of it) or else, when entirely below half the lowest fitted frequency,
+  moved up to it with their ratio kept (a shorter transient of the inverse);
+* **refusal** only for data that cannot support a fit: fewer than :data:`MIN_COHERENT_FRACTION`
+  (70 %) of the points in :data:`COHERENCE_BAND_HZ` (1-30 Hz, clipped to the fitted band) with
+  coherence at or above ``coherence_min`` raises :class:`ActuatorFitError`. A fit whose error is
+  poor in some band is not refused; it is reported (:attr:`ActuatorFit.band_errors`).
+
+Frequencies at the interface are in Hz; ``s`` (and poles and zeros) in rad/s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+
+from correction.identification.actuator_fit_rules import (CANDIDATE_ORDERS, ActuatorFitError, choose_orders, held_out_error,
+                                 rational_response, usable_actuator)
+from correction.identification.identify import fit_rational, h1_estimate
+from correction.output.transfer import describe_roots, transfer_bandwidth_hz
+
+__all__ = ["ActuatorFitError", "ActuatorFit", "fit_frequency_response", "fit_actuator", "default_nperseg",
+           "MIN_COHERENT_FRACTION", "COHERENCE_BAND_HZ", "REPORT_BANDS_HZ"]
+
+#: Least fraction of the points in :data:`COHERENCE_BAND_HZ` with coherence >= coherence_min, 1.
+MIN_COHERENT_FRACTION = 0.7
+#: Band whose coherence decides whether the data support a fit, Hz (clipped to the fitted band).
+COHERENCE_BAND_HZ = (1.0, 30.0)
+#: Bands of :attr:`ActuatorFit.band_errors`, Hz (clipped to the fitted band).
+REPORT_BANDS_HZ = ((0.1, 1.0), (1.0, 10.0), (10.0, 30.0), (30.0, 60.0))
+#: Anchors ``H = 1`` at these fractions of the frequency resolution, 1.
+_ANCHORS = (0.01, 0.02, 0.05)
+#: Segments of the H1 estimate that a record needs for a usable coherence, 1.
+_SEGMENTS = 16
+
+
+@dataclass(frozen=True)
+class ActuatorFit:
+    """An identified actuator transfer function ``T_a(s) = X_a / X_p`` and how well it fits.
+
+    Attributes
+    ----------
+    num, den : numpy.ndarray
+        ``T_a``'s coefficients in descending powers of s (s in rad/s): stable, minimum phase,
+        ``num[-1] / den[-1] == 1`` exactly (``num[-1] == den[-1] == 1``).
+    orders : (int, int)
+        The chosen (numerator, denominator) orders of the fit (before clean-up; ``num`` and
+        ``den`` may be shorter when a slow pole-zero pair was removed).
+    f_hz : numpy.ndarray, Hz
+        Frequencies of the estimate that was fitted.
+    h : numpy.ndarray of complex, 1 (m/m)
+        The estimate (H1) at ``f_hz``.
+    coherence : numpy.ndarray, 1
+        Its coherence at ``f_hz`` (NaN where the drive has no power).
+    band_hz : (float, float), Hz
+        The fitted band.
+    held_out_error : float, 1
+        Relative rms error of the chosen orders' fit on the held-out (odd-indexed) frequency
+        points with coherence >= ``coherence_min`` (:func:`held_out_error`).
+    band_errors : Mapping[str, dict]
+        Per band of :data:`REPORT_BANDS_HZ` clipped to ``band_hz`` (keys like ``"1-10 Hz"``):
+        ``max_db`` (dB) and ``max_deg`` (deg), the largest magnitude and phase error of the
+        fit against the estimate at the points with coherence >= ``coherence_min`` (NaN if
+        none), ``coherence_min`` (1), the least coherence in the band, and ``points`` (count).
+    bandwidth_hz : float, Hz
+        -3 dB bandwidth of the fit (NaN if it never falls 3 dB below ``T_a(0)`` by 10 kHz).
+    non_minimum_phase : bool
+        True when no usable (minimum-phase) fit came within :data:`~correction.identification.actuator_fit_rules.NON_MINIMUM_PHASE_RATIO` of
+        the best raw fit on the held-out points: the data's phase lags more than their magnitude
+        implies (a delay, a right-half-plane zero), so the orders were chosen on the usable fits'
+        magnitude error and ``T_a`` is the minimum-phase counterpart (same magnitude, less lag).
+    candidates : Mapping[str, dict]
+        Per candidate ``"n/d"``, held-out errors (1; NaN for one that could not be fitted):
+        ``held_out_error`` (the usable fit's), ``model_error`` (the raw fit's, before the
+        clean-up) and ``magnitude_error`` (the usable fit's magnitude alone).
+    """
+
+    num: np.ndarray
+    den: np.ndarray
+    orders: tuple[int, int]
+    f_hz: np.ndarray
+    h: np.ndarray
+    coherence: np.ndarray
+    band_hz: tuple[float, float]
+    held_out_error: float
+    band_errors: Mapping[str, dict]
+    bandwidth_hz: float
+    non_minimum_phase: bool = False
+    candidates: Mapping[str, dict] = field(default_factory=dict)
+
+    def poles(self) -> np.ndarray:
+        """Poles of ``T_a``, rad/s."""
+        return np.roots(self.den)
+
+    def zeros(self) -> np.ndarray:
+        """Zeros of ``T_a``, rad/s."""
+        return np.roots(self.num)
+
+    def frequency_response(self, f_hz) -> np.ndarray:
+        """Complex ``T_a(j 2 pi f)`` at ``f_hz`` (Hz), 1 (m/m)."""
+        s = 2j * np.pi * np.asarray(f_hz, dtype=float)
+        return np.polyval(self.num, s) / np.polyval(self.den, s)
+
+    def as_tf(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(num, den)``, descending powers of s (s in rad/s): what the correction takes."""
+        return self.num.copy(), self.den.copy()
+
+    def to_dict(self) -> dict:
+        """JSON-ready diagnostics (no estimate arrays): coefficients, roots, errors, bandwidth."""
+        return {"num": self.num.tolist(), "den": self.den.tolist(), "orders": list(self.orders),
+                "band_hz": list(self.band_hz), "held_out_error": self.held_out_error,
+                "bandwidth_hz": self.bandwidth_hz, "band_errors": {k: dict(v) for k, v in self.band_errors.items()},
+                "non_minimum_phase": self.non_minimum_phase,
+                "candidates": {k: dict(v) for k, v in self.candidates.items()},
+                "poles": describe_roots(self.poles()), "zeros": describe_roots(self.zeros())}
+
+
+def _band_label(lo: float, hi: float) -> str:
+    return f"{lo:.3g}-{hi:.3g} Hz"
+
+
+def _band_errors(num, den, f, h, coh, band, coherence_min) -> dict:
+    out = {}
+    for lo, hi in REPORT_BANDS_HZ:
+        lo, hi = max(lo, band[0]), min(hi, band[1])
+        sel = (f >= lo) & (f <= hi)
+        if hi <= lo or not sel.any():
+            continue
+        good = sel & (coh >= coherence_min)
+        ratio = rational_response(num, den, f[good]) / h[good]
+        out[_band_label(lo, hi)] = {
+            "max_db": float(np.max(np.abs(20.0 * np.log10(np.abs(ratio))))) if good.any() else math.nan,
+            "max_deg": float(np.max(np.abs(np.degrees(np.angle(ratio))))) if good.any() else math.nan,
+            "coherence_min": float(np.min(coh[sel])),
+            "points": int(np.count_nonzero(sel)),
+        }
+    return out
+
+
+def _check_coherence(f, coh, band, coherence_min, resolution) -> None:
+    lo, hi = max(COHERENCE_BAND_HZ[0], band[0]), min(COHERENCE_BAND_HZ[1], band[1])
+    if hi <= lo:
+        lo, hi = band
+    sel = (f >= lo) & (f <= hi)
+    frac = float(np.mean(coh[sel] >= coherence_min)) if sel.any() else 0.0
+    if frac < MIN_COHERENT_FRACTION:
+        need_s = 10.0 * math.ceil((_SEGMENTS + 1) / 2.0 / resolution / 10.0)
+        raise ActuatorFitError(
+            f"the drive-to-displacement coherence is >= {coherence_min:g} at only {frac:.0%} of the points in "
+            f"{_band_label(lo, hi)} ({MIN_COHERENT_FRACTION:.0%} needed); record at least {need_s:.0f} s of "
+            "independent random drive on every post with an rms near the test drive's")
+
+
+def _fit(f, h, w, orders, resolution, anchor_weight):
+    """The raw stable fit (anchored) and its usable counterpart, both as (num, den)."""
+    fa = resolution * np.array(_ANCHORS)
+    ff = np.concatenate([fa, f])
+    hh = np.concatenate([np.ones(fa.size, dtype=complex), h])
+    ww = np.concatenate([np.full(fa.size, anchor_weight), w])
+    tf = fit_rational(ff, hh, orders[0], orders[1], weight=ww)
+    raw = np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])
+    return raw, usable_actuator(*raw, resolution, float(f[0]))
+
+
+def _score(f, h, w, trusted, orders, resolution, anchor_weight) -> dict:
+    """Held-out errors of one candidate: fitted on the even points, scored on the odd ones."""
+    even, odd = slice(0, None, 2), slice(1, None, 2)
+    try:
+        raw, usable = _fit(f[even], h[even], w[even], orders, resolution, anchor_weight)
+    except (ValueError, np.linalg.LinAlgError):
+        return {"held_out_error": math.nan, "model_error": math.nan, "magnitude_error": math.nan}
+    return {"held_out_error": held_out_error(*usable, f[odd], h[odd], trusted[odd]),
+            "model_error": held_out_error(*raw, f[odd], h[odd], trusted[odd]),
+            "magnitude_error": held_out_error(*usable, f[odd], h[odd], trusted[odd], magnitude_only=True)}
+
+
+def _check_orders(orders) -> tuple[int, int]:
+    try:
+        nb, na = (int(o) for o in orders)
+        if (nb, na) != tuple(orders):
+            raise TypeError
+    except (TypeError, ValueError):
+        raise ValueError(f"orders must be two integers (numerator, denominator), got {orders!r}") from None
+    if not (na >= 1 and 0 <= nb <= na):
+        raise ValueError(f"orders must satisfy 0 <= numerator <= denominator >= 1, got {orders!r}")
+    return nb, na
+
+
+def fit_frequency_response(f_hz, h, coherence, *, band_hz=(0.1, 60.0), orders=None,
+                           coherence_min: float = 0.9) -> ActuatorFit:
+    """Fit a usable ``T_a`` to a measured frequency response (see the module notes for the policy).
+
+    Parameters
+    ----------
+    f_hz : array_like, Hz
+        Frequencies of the estimate, increasing, evenly spaced (e.g. an H1 estimate's).
+    h : array_like of complex, 1 (m/m)
+        The drive-to-pan-displacement response at ``f_hz``.
+    coherence : array_like, 1
+        Its coherence (NaN counts as 0).
+    band_hz : (float, float), Hz
+        Band fitted (default 0.1-60 Hz).
+    orders : (int, int), optional
+        Force these (numerator, denominator) orders instead of choosing among
+        :data:`~correction.identification.actuator_fit_rules.CANDIDATE_ORDERS` by held-out error.
+    coherence_min : float, 1
+        Coherence from which a point is trusted (refusal rule, errors).
+
+    Returns
+    -------
+    ActuatorFit
+
+    Raises
+    ------
+    ActuatorFitError
+        Too little coherence in 1-30 Hz (one sentence naming the band and what to record).
+    ValueError
+        Mismatched or non-finite inputs, a bad band, bad orders, or too few points in the band.
+    """
+    f = np.asarray(f_hz, dtype=float).ravel()
+    hv = np.asarray(h, dtype=complex).ravel()
+    coh = np.nan_to_num(np.asarray(coherence, dtype=float).ravel(), nan=0.0)
+    if not (f.shape == hv.shape == coh.shape) or f.size < 4:
+        raise ValueError("f_hz, h and coherence must be 1-D of the same length (at least 4 points)")
+    if not np.all(np.isfinite(f)) or np.any(np.diff(f) <= 0):
+        raise ValueError("f_hz must be finite and increasing (Hz)")
+    try:
+        band = (float(band_hz[0]), float(band_hz[1]))
+    except (TypeError, ValueError, IndexError):
+        raise ValueError(f"band_hz must be two frequencies (low, high) in Hz, got {band_hz!r}") from None
+    if not (0 <= band[0] < band[1] and math.isfinite(band[1])):
+        raise ValueError(f"band_hz must satisfy 0 <= low < high (Hz), got {band_hz!r}")
+    if not 0 < coherence_min < 1:
+        raise ValueError(f"coherence_min must lie in (0, 1), got {coherence_min!r}")
+    forced = None if orders is None else _check_orders(orders)
+    resolution = float(np.median(np.diff(f)))
+    in_band = (f >= band[0]) & (f <= band[1]) & (f > 0) & np.isfinite(hv) & (np.abs(hv) > 0)
+    _check_coherence(f, coh, band, coherence_min, resolution)
+    fb, hb, cb = f[in_band], hv[in_band], coh[in_band]
+    c = np.clip(cb, 0.0, 0.999)
+    w = np.sqrt(c / (1.0 - c)) / np.abs(hb)
+    anchor_weight = float(np.max(w)) if np.any(w > 0) else 1.0
+    trusted = cb >= coherence_min
+    todo = CANDIDATE_ORDERS if forced is None else (forced,)
+    scores = {o: _score(fb, hb, w, trusted, o, resolution, anchor_weight) for o in todo}
+    if not any(math.isfinite(v["held_out_error"]) for v in scores.values()):
+        raise ActuatorFitError(f"no fit of orders {', '.join(f'{a}/{b}' for a, b in todo)} could be made from the "
+                               f"{fb.size} points in {_band_label(*band)}; record a longer drive on every post")
+    chosen, non_minimum_phase = choose_orders(scores)
+    _, (num, den) = _fit(fb, hb, w, chosen, resolution, anchor_weight)
+    bandwidth = transfer_bandwidth_hz(control.tf(num, den))
+    return ActuatorFit(num=num, den=den, orders=tuple(chosen), f_hz=f, h=hv, coherence=coh, band_hz=band,
+                       held_out_error=float(scores[chosen]["held_out_error"]),
+                       band_errors=_band_errors(num, den, fb, hb, cb, band, coherence_min),
+                       bandwidth_hz=float(bandwidth), non_minimum_phase=non_minimum_phase,
+                       candidates={f"{a}/{b}": v for (a, b), v in scores.items()})
+
+
+def default_nperseg(n: int, fs: float) -> int:
+    """Welch segment length for ``n`` samples at ``fs`` (Hz): about 8 s, at least 8 segments, >= 256."""
+    return int(min(2 ** round(math.log2(8.0 * fs)), max(256, n // 8), n))
+
+
+def fit_actuator(drive_m, displacement_m, fs: float, *, band_hz=(0.1, 60.0), orders=None,
+                 coherence_min: float = 0.9, nperseg: int | None = None) -> ActuatorFit:
+    """Identify ``T_a = X_a / X_p`` from a drive record and the measured pan displacement.
+
+    Parameters
+    ----------
+    drive_m : array_like, m
+        The drive ``x_p`` sent to one actuator, shape (n,) (independent random drive is best).
+    displacement_m : array_like, m
+        That actuator's measured pan displacement ``x_a``, sampled with ``drive_m``.
+    fs : float, Hz
+        Sampling rate.
+    band_hz : (float, float), Hz
+        Band fitted (default 0.1-60 Hz; the top is clipped to 0.45 fs).
+    orders : (int, int), optional
+        Force these orders (default: chosen by held-out error).
+    coherence_min : float, 1
+        Coherence from which a point is trusted.
+    nperseg : int, optional
+        Welch segment length (default :func:`default_nperseg`: about 8 s, at least 8 segments).
+
+    Returns
+    -------
+    ActuatorFit
+
+    Raises
+    ------
+    ActuatorFitError
+        Too little coherence (one sentence naming the band and what to record).
+    ValueError
+        Records of different lengths, non-finite samples, a record too short.
+    """
+    u = np.asarray(drive_m, dtype=float)
+    y = np.asarray(displacement_m, dtype=float)
+    if u.ndim != 1 or y.shape != u.shape:
+        raise ValueError(f"drive_m and displacement_m must be 1-D of the same length, got {u.shape} and {y.shape}")
+    if not (isinstance(fs, (int, float, np.integer, np.floating)) and math.isfinite(fs) and fs > 0):
+        raise ValueError(f"fs must be a positive sampling rate in Hz, got {fs!r}")
+    if nperseg is None:
+        nperseg = default_nperseg(u.size, float(fs))
+    f, h, coh = h1_estimate(u, y, float(fs), nperseg)
+    try:
+        band = (float(band_hz[0]), min(float(band_hz[1]), 0.45 * float(fs)))
+    except (TypeError, ValueError, IndexError):
+        raise ValueError(f"band_hz must be two frequencies (low, high) in Hz, got {band_hz!r}") from None
+    return fit_frequency_response(f, h, coh, band_hz=band, orders=orders, coherence_min=coherence_min)

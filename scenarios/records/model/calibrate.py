@@ -1,0 +1,394 @@
+"""Calibrating the truck model from the rig's own signals (x_a and F_rig), never the road run.
+
+What is fitted, and why (:data:`FITTED`): the fields of :class:`mjcf.build.TruckVariant` that a
+lab does not know to better than ~10-30 % and that change the wheel forces:
+
+* ``payload_kg``, ``payload_x_m``: the ballast's mass and its position along the truck set the
+  static loads and the body's bounce and pitch; the first guess comes from the measured static
+  loads (:func:`~scenarios.records.model.first_guess.static_guess`), the fit refines them;
+* ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
+  right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
+  motion puts straight through the tire;
+* ``spring_friction_front/rear_N``: the leaf springs' interleaf friction per axle, the truck's
+  main nonlinearity (it locks the springs at small amplitude);
+* ``tire_progressive_ratio``, ``tire_progressive_onset_m`` (front tires) and
+  ``tire_progressive_ratio_rear``, ``tire_progressive_onset_rear_m``: each axle's tire stiffening, a
+  bilinear tire (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection,
+  (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model whose tire is
+  linear cannot follow it: on a plant with a +25 % stiffening at 2 cm the linear-tire model left 13
+  of 96 generalization wheels above the linear floor and the paper's light truck at +50 % fell back
+  to the linear correction (docs/model_correction.md). The ratio from a catalogue guess of +20 %
+  (:mod:`~scenarios.records.model.first_guess`), searched additively (:data:`ADDITIVE`:
+  0-0.7); the onset as the wheel load where the tire stiffens, within the loads the windows
+  measure on its axle, from the axle's static load
+  (:mod:`~scenarios.records.model.onset_load`, which says why: an onset beyond every
+  measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0, where the onset is not identifiable
+  and does not matter (paper case high 72, 30 s: ratio 7.5e-5). Measured on the same case, a plant
+  stiffening +50 % at 3 cm: ratio 0.495 and onset 3.00 cm fitted, every wheel 0.04-0.05 of the
+  linear floor, against 0.84-0.98 (front) with the onset held at 2 cm;
+* ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
+  cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
+  bounce and pitch that loads the front wheels. A model without it absorbed a plant's 2 Hz cab
+  into front leaf friction (+10 to +23 %) and missed the front wheels' road DLC by 1-2.5 %; with
+  it fitted, the same plant's front wheels came to 0.07-0.09 of the linear floor (paper cases,
+  60 s). Fitted through its compliance (:data:`COMPLIANCE`), 1-30 Hz from a 2.5 Hz guess; on the
+  paper's rough roads a rigid cab fits to the top, 30 Hz, at no loss, but on a smooth road at low
+  speed the fit can wander to the bottom and spoil the front wheels (:data:`DEFAULT_NAMES`), which
+  is why it is not fitted by default. The cab's mass is never fitted: it is locally identifiable
+  on a suspended cab (its Jacobian column's collinearity with the others 0.27, the tire damping's
+  0.21-0.28) but not on a rigid one, and a plant's cab 20 % lighter than the model's costs the
+  front wheels 0.22 of the floor instead of 0.10.
+
+Not fitted: the chassis (5.2 t, its CoM and inertia), the axles' masses, the cab's mass (the
+model's :data:`mjcf.build.CAB_MASS_KG`) and the leaf springs' rate and viscous damping are held at
+their catalogue (XML) values; the tire free radius only moves
+the static ride height, and the pan mass does not enter a tire force whose pans follow a given
+motion, so neither can be identified from x_a and F_rig. Every fitted field came out identifiable
+on the paper's cases (the 1-sigma of :class:`~scenarios.records.model.result.Calibration`
+are ~1 % or less, ``benchmarks/model_correction.py``), but for the onset of a tire that does not
+stiffen (ratio fitted to ~0: the onset then changes nothing, and its sigma says so). A tire whose
+wheels never leave the stiff branch (the heavy truck's fronts, static deflection 2.9 cm) trades its
+stiffness against its ratio; that is why each axle has its own: with one ratio shared by both axles,
+the medium case with a +25 % tire at 2 cm settled at ratio 0.58 at 2.5 cm, front stiffness -21 %,
+rear +22 %, and its rear wheels at 0.50-0.52 of the linear floor; with a ratio per axle, the rear's
+0.247 at 2.00 cm was recovered and every wheel came to 0.04-0.11 of the floor (paper cases, 60 s).
+
+First guess: :mod:`scenarios.records.model.first_guess` (payload from the record's
+static loads, the rest a catalogue guess that never reads a plant).
+
+The fit: ``scipy.optimize.least_squares`` (trust-region reflective, bounded) of the residual
+(F_model(x_a) - F_rig) / std(F_rig) per wheel over a few windows of the record (each run starts
+from rest with a lead-in of measured x_a before its scored span, so the unknown truck state at
+the window's start has decayed). Given the drive x_ref, the residual is weighted towards the
+frequencies where the pans miss the drive (:mod:`scenarios.records.model.weighting`):
+what the differential correction takes from the model. With the plant in the model family it
+changes nothing; with a structural mismatch it keeps the mismatch from bending the parameters
+where the correction needs them (medium case, cab mode on, 20 s: front tire stiffness +4.4 %
+-> +0.7 %, friction +10.7 % -> +5.6 %, corrected NRMSE front 0.129 / 0.141 -> 0.119 / 0.133). The leaves' dry friction is MuJoCo's ``frictionloss``, a soft
+constraint (smoothed), so the forces are smooth in the parameters and a forward-difference
+Jacobian (step :data:`FD_STEP` of each scaled parameter) works; its perturbed runs go to the
+worker pool (:func:`scenarios.core.pool.run_jobs`) together, one model run per window and variant.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+
+import numpy as np
+
+from correction.identification.noise import noise_rms
+from mjcf.build import BOUNDS, TruckVariant
+from scenarios.core.config import Scenario, ScenarioError
+from scenarios.core.pool import local_executor, run_jobs
+from scenarios.records.model.first_guess import catalogue, static_guess
+from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
+from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
+from scenarios.records.model.result import Calibration
+from scenarios.records.model.uncertainty import uncertainties
+from scenarios.records.model.weighting import differential_kernel
+
+__all__ = ["FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES", "fit_windows", "calibrate",
+           "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
+
+#: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
+FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
+          "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
+          "spring_friction_rear_N", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+          "tire_progressive_onset_rear_m", "cab_mount_hz")
+UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
+         "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
+         "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
+         "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "tire_progressive_ratio_rear": "1",
+         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz"}
+#: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
+#: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
+#: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
+#: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, measured at commit
+#: d95a96c where the cab was fitted by default: 1.0 Hz, front wheels 1.36 of the linear floor against
+#: 0.19 with the cab held rigid; the paper's rougher cases fit a rigid cab to the top, 30 Hz, and
+#: lose nothing).
+DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
+#: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
+#: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.build.BOUNDS`.
+#: The onsets have none: their range is the loads measured on their axle (onset_load).
+RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
+          "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
+          "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 4.0),
+          "spring_friction_rear_N": (0.05, 4.0), "tire_progressive_ratio": 0.5,
+          "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0)}
+#: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
+#: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
+#: :data:`mjcf.build.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
+#: ratio, whose linear tire is ratio 0; the onsets are searched as loads, N, their range and span
+#: the loads measured on their axle (:mod:`~scenarios.records.model.onset_load`).
+ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+            "tire_progressive_onset_rear_m")
+#: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
+#: mount's frequency, whose effect on the wheel forces fades as 1 / f^2 towards a rigid cab (a
+#: frequency scale would crawl along that flat valley).
+COMPLIANCE = ("cab_mount_hz",)
+#: Windows of the record fitted: how many, scored seconds each, measured lead-in before each (s).
+#: The lead-in: a model run started at rest on a moving truck's record carries the start's state
+#: error for ~3 s (leaf friction makes it slow: at 2.5 s it is down to ~10 % of the fit's residual
+#: on the medium case), so 2.5 s is run and not scored.
+WINDOWS, WINDOW_S, WINDOW_LEAD_S = 3, 4.0, 2.5
+#: Forward-difference step of each scaled parameter (1: 1 % of a positive field, 1 cm of payload x).
+FD_STEP = 0.01
+#: Most residual evaluations of the least squares (the Jacobians come on top, one per iteration).
+#: 60: with each axle's stiffening fitted (12 values), two of the suite's 72 calibrations (30 s, cab
+#: held) stopped unconverged at the former 30 and fell back to the linear correction: gen17's
+#: rigid plant (its front tires sit past any onset, kt and ratio crawl along their valley) and
+#: gen04's gradual stiffening; at 60 both converged (0.07-0.09 x and 0.10 x the floor, DLC within
+#: 0.24 %). A cap changes nothing for a fit that converges below it (the same trajectory), so the
+#: other 70 and the paper's 12 stand as measured.
+MAX_NFEV = 60
+#: Block of the robust uncertainty, s: longer than the fit residual's correlation (the truck's
+#: slowest modes, ~0.6 s period), short enough for a few dozen blocks in the windows.
+BLOCK_S = 0.5
+
+
+
+
+def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
+                lead_s: float = WINDOW_LEAD_S) -> list[tuple[int, int, int]]:
+    """``n`` windows spread evenly over the record: (first run sample, first scored sample, end).
+
+    Raises
+    ------
+    ScenarioError
+        A record shorter than one lead-in plus one scored window.
+    """
+    t = np.asarray(t_s, dtype=float)
+    fs = 1.0 / (t[1] - t[0])
+    lead, span = int(round(lead_s * fs)), int(round(scored_s * fs))
+    if t.size < lead + span:
+        raise ScenarioError(f"the record ({t.size / fs:g} s) is shorter than a calibration window "
+                            f"({lead_s:g} s lead-in + {scored_s:g} s); record at least {lead_s + scored_s:g} s")
+    starts = np.linspace(lead, t.size - span, n).round().astype(int)
+    return [(int(s - lead), int(s), int(s + span)) for s in starts]
+
+
+class _Problem:
+    """The least-squares problem in scaled parameters theta (1 at the first guess).
+
+    Residual: per window, (F_model - F_rig) through the weighting ``kernel`` (zero-phase FIR,
+    none: unweighted) on the scored samples, less the kernel's half-length at the end; each wheel
+    divided by the std of its measured force on the scored samples. Each theta is the field over
+    its first guess (the payload's x: offset by metres), but for the fields of :data:`COMPLIANCE`:
+    theta = (guess / value)^2, the mount's compliance over the guess's."""
+
+    def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None, loads=None):
+        self.names, self.t, self.x_a, self.force, self.windows = names, t, x_a, force, windows
+        self.base, self.fixed, self.executor, self.kernel = portable(base), fixed, executor, kernel
+        loads = loads or {}  # onset name: (first-guess load, span), N (onset_load)
+        start = {k: loads[k] if k in loads else (guess[k], RANGES[k]) for k in names if k in ADDITIVE}
+        self.offset = np.array([start[k][0] - start[k][1] if k in start else 0.0 for k in names])
+        self.scale = np.array([start[k][1] if k in start else guess[k] for k in names])
+        self.compliance = np.array([k in COMPLIANCE for k in names])
+        # (onset's index, its kt's index or None, kt held): onset = load / kt
+        self.onsets = [(i, names.index(ONSET_STIFFNESS[k]) if ONSET_STIFFNESS[k] in names else None,
+                        fixed.get(ONSET_STIFFNESS[k])) for i, k in enumerate(names) if k in loads]
+        self.norm = np.concatenate([force[s:e] for _, s, e in windows]).std(axis=0)
+        self.half = 0 if kernel is None else kernel.size // 2
+        self.evaluations, self.cache = 0, {}
+
+    def fields(self, theta) -> np.ndarray:
+        """The fields' values (SI) of ``theta``."""
+        theta = np.asarray(theta, float)
+        out = self.offset + self.scale * theta
+        c = self.compliance
+        out[c] = self.scale[c] / np.sqrt(theta[c])
+        for i, j, kt in self.onsets:  # a soft kt tried against a large load: kept within the field's bounds
+            out[i] = np.clip(out[i] / (out[j] if j is not None else kt), *BOUNDS[self.names[i]][:2])
+        return out
+
+    def mapping(self, theta) -> np.ndarray:
+        """d field_i / d theta_j at ``theta`` (SI per 1, n x n): diagonal but for an onset's kt."""
+        theta = np.asarray(theta, float)
+        c = self.compliance
+        slope = self.scale.copy()
+        slope[c] = -0.5 * self.scale[c] * theta[c] ** -1.5
+        out, values = np.diag(slope), self.fields(theta)
+        for i, j, kt in self.onsets:
+            out[i, i] = self.scale[i] / (values[j] if j is not None else kt)
+            if j is not None:  # onset = load / kt
+                out[i, j] = -values[i] / values[j] * self.scale[j]
+        return out
+
+    def thetas(self, lower, upper) -> tuple[np.ndarray, np.ndarray]:
+        """The bounds on theta of fields bounded by ``lower`` and ``upper`` (SI)."""
+        lo, hi = (np.array(lower, float) - self.offset) / self.scale, (np.array(upper, float) - self.offset) / self.scale
+        c = self.compliance
+        lo[c], hi[c] = (self.scale[c] / np.array(upper, float)[c]) ** 2, (self.scale[c] / np.array(lower, float)[c]) ** 2
+        return lo, hi
+
+    def values(self, theta) -> dict[str, float]:
+        return dict(zip(self.names, self.fields(theta).tolist()))
+
+    def variant(self, theta) -> TruckVariant:
+        return TruckVariant(**self.fixed, **self.values(theta))
+
+    def model(self, thetas) -> list[list[np.ndarray]]:
+        """The model's force on each window (lead-in included), per theta."""
+        jobs = [(window_job, (self.variant(th), self.t[a:e], self.x_a[a:e], self.base, SETTLE_S))
+                for th in thetas for a, _, e in self.windows]
+        out = run_jobs(jobs, executor=self.executor)
+        self.evaluations += len(thetas)
+        w = len(self.windows)
+        return [out[i * w:(i + 1) * w] for i in range(len(thetas))]
+
+    def plain(self, model_N) -> np.ndarray:
+        """Unweighted residual (scored samples x 4), N."""
+        return np.concatenate([m[s - a:] - self.force[s:e] for m, (a, s, e) in zip(model_N, self.windows)])
+
+    def residual(self, model_N) -> np.ndarray:
+        if self.kernel is None:
+            return (self.plain(model_N) / self.norm).ravel()
+        from scipy.signal import fftconvolve
+
+        parts = []
+        for m, (a, s, e) in zip(model_N, self.windows):
+            err = fftconvolve(m - self.force[a:e], self.kernel[:, None], mode="same", axes=0)
+            parts.append(err[s - a:e - a - self.half])
+        return (np.concatenate(parts) / self.norm).ravel()
+
+    def fun(self, theta) -> np.ndarray:
+        key = tuple(np.asarray(theta, float))
+        if key not in self.cache:
+            m = self.model([theta])[0]
+            self.cache = {key: (self.residual(m), m)}
+        return self.cache[key][0]
+
+    def jac(self, theta, lower, upper) -> np.ndarray:
+        theta = np.asarray(theta, float)
+        f0 = self.fun(theta)
+        steps = np.where(theta + FD_STEP <= upper, FD_STEP, -FD_STEP)
+        thetas = [theta + h * np.eye(theta.size)[i] for i, h in enumerate(steps)]
+        return np.column_stack([(self.residual(m) - f0) / h for m, h in zip(self.model(thetas), steps)])
+
+
+def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, names=DEFAULT_NAMES,
+              fitted_guess: dict | None = None,
+              windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
+              workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None) -> Calibration:
+    """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
+
+    Parameters
+    ----------
+    t_s : array_like, s, (n,)
+        The record's time axis (uniform, 1 kHz).
+    x_a_m : array_like, m, (n, 4)
+        Measured pan displacement (LVDTs), corners fl, fr, rl, rr.
+    force_N : array_like, N, (n, 4)
+        Measured wheel force (load cells, with their noise).
+    base_scenario : Scenario
+        The rig (actuator stroke) and output rate; its truck is never used.
+    x_ref_m : array_like, m, (n, 4), optional
+        The drive: given, the residual is weighted by where the differential correction uses the
+        model (:mod:`scenarios.records.model.weighting`); None: unweighted.
+    names : sequence of str
+        The fields to fit (default :data:`DEFAULT_NAMES`); the others of :data:`FITTED` are held at
+        their first guess (:attr:`Calibration.fixed`), the cab mount rigid (None) unless
+        ``fitted_guess`` gives it.
+    fitted_guess : dict, optional
+        First guesses (SI) of fitted fields to use instead of the static-load and catalogue ones;
+        for a field held (not in ``names``), the value it is held at, where ``cab_mount_hz: None``
+        holds the XML's rigid cab (the model family without the cab's mounts) and
+        ``tire_progressive_ratio: None`` its linear tire.
+    windows, window_s, lead_s : int, s, s
+        See :func:`fit_windows`.
+    workers : int, optional
+        Worker processes (default: all cores).
+    max_nfev : int
+        Most residual evaluations.
+    executor : concurrent.futures.Executor, optional
+        A running pool to use instead of starting one.
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    ScenarioError
+        A bad record or static loads that imply no truck (before any model run).
+    """
+    from scipy.optimize import least_squares
+
+    wall0 = time.perf_counter()
+    names = tuple(names)
+    unknown = sorted(set(names) - set(FITTED))
+    if unknown or not names:
+        raise ScenarioError(f"names must be a non-empty subset of {', '.join(FITTED)}, got {', '.join(unknown) or 'none'}")
+    tire_only = [k for k in names if k.startswith("tire_progressive") and k != "tire_progressive_ratio"]
+    if tire_only and "tire_progressive_ratio" not in names and (fitted_guess or {}).get("tire_progressive_ratio") is None:
+        raise ScenarioError(f"{tire_only[0]} is the progressive tire's: fit tire_progressive_ratio too, or give its "
+                            "value in fitted_guess")
+    t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
+    x_a, force = np.asarray(x_a_m, float), np.asarray(force_N, float)
+    kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
+    wins = fit_windows(t, windows, window_s, lead_s)
+    payload, x = static_guess(force, base_scenario)
+    if payload == 0.0 and "payload_kg" not in (fitted_guess or {}):  # an empty truck: nothing to fit there
+        names = tuple(k for k in names if k not in ("payload_kg", "payload_x_m"))
+        if not names:
+            raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
+                                "name other fields to fit")
+    guess = {"payload_kg": payload, "payload_x_m": x, **catalogue(), **(fitted_guess or {})}
+    for k in [k for k in FITTED if k == "cab_mount_hz" or k.startswith("tire_progressive")]:  # held: rigid cab, linear tire
+        if k not in names and k not in (fitted_guess or {}):
+            guess[k] = None
+    lower, upper, loads = [], [], {}
+    fixed = {k: None if v is None else float(v) for k, v in guess.items() if k not in names}
+    for k in names:
+        if guess[k] is None:
+            raise ScenarioError(f"fitted_guess gives no value for {k}, which is fitted; give a number or leave it out "
+                                "of names")
+        if k in ONSET_STIFFNESS:  # searched as the load where the tire stiffens (onset_load), N
+            kt = guess[ONSET_STIFFNESS[k]]
+            (a, b), load = load_range(force, wins, k), load_guess(force, wins, k, (fitted_guess or {}).get(k), kt)
+            b = max(b, a + 1.0)  # a range, however narrow (least squares needs lower < upper)
+            loads[k], guess[k] = (load, b - a), load / kt
+        else:
+            lo, hi = BOUNDS.get(k, (-3.5, 3.5) if k == "payload_x_m" else (0.0, np.inf))[:2]
+            r = RANGES[k]
+            a, b = (guess[k] - r, guess[k] + r) if k in ADDITIVE else (guess[k] * r[0], guess[k] * r[1])
+            a, b = max(a, lo), min(b, hi)
+        lower.append(a)
+        upper.append(b)
+    with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
+        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads)
+        lb, ub = prob.thetas(lower, upper)
+        theta0 = np.ones(len(names))
+        prob.fun(theta0)
+        m_init = prob.cache[tuple(theta0)][1]
+        res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, lb, ub), bounds=(lb, ub), method="trf",
+                            x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
+        f_opt, m_opt = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
+    sigma, robust = uncertainties(res.jac, f_opt, int(round(BLOCK_S * fs)), prob.mapping(res.x))
+    fitted, linear = prob.fields(res.x), []
+    for i, j, kt in prob.onsets:
+        ratio = ONSET_RATIO[names[i]]  # a stiffening beyond every measured load: the tire held linear (TOP)
+        if ratio in names and ub[i] - res.x[i] <= TOP * (ub[i] - lb[i]) and fitted[names.index(ratio)] > 0.0:
+            fitted[names.index(ratio)] = 0.0
+            linear.append(ratio)
+        # the onset's range reported in metres, at the fitted kt
+        lower[i], upper[i] = (v / (fitted[j] if j is not None else kt) for v in (lower[i], upper[i]))
+
+    def per_wheel(model_N):
+        return tuple(float(v) for v in np.sqrt(np.mean(prob.plain(model_N) ** 2, axis=0)) / prob.norm)
+
+    noise = noise_rms(force, fs) / prob.norm  # the load cells' share of the fit NRMSE (whole record)
+
+    return Calibration(names=names, units=tuple(UNITS[k] for k in names),
+                       initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
+                       sigma=tuple(float(s) for s in sigma), sigma_robust=tuple(float(s) for s in robust), fixed=fixed, fit_nrmse=per_wheel(m_opt),
+                       initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
+                       windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
+                       evaluations=int(prob.evaluations), converged=bool(res.status > 0),
+                       message=str(res.message) + "".join(f"; {k} set to 0 (its onset lies beyond every measured load)"
+                                                          for k in linear), wall_time_s=round(time.perf_counter() - wall0, 3),
+                       bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)),
+                       noise_nrmse=tuple(float(v) for v in noise))
+

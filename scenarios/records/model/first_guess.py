@@ -1,0 +1,124 @@
+"""The calibration's first guess: the payload from the record's static loads, the rest from a catalogue.
+
+First guess: payload and its x from the measured static loads (the record's mean wheel forces:
+the weight split, since the dynamic forces average out) on the catalogue truck; everything else
+at :func:`catalogue`, a catalogue guess: the XML's nominal values times fixed factors (0.85 or
+1.15) and a 2.5 Hz cab mount (:data:`CATALOGUE_CAB_MOUNT_HZ`), documented as such so that the fit always has work to do and never starts from a plant's
+true values.
+
+The payload's guess is the only one taken from the record; every other field starts from
+:func:`catalogue`, which never reads a plant.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from hydraulics.params import GRAVITY_M_S2
+from mjcf import names as mjnames
+from mjcf.build import BOUNDS, TruckVariant, build_model
+from mjcf.names import CORNERS, FRONT
+from mjcf.physics import RigIndex, tire_stiffness
+from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
+from scenarios.core.config import Scenario, ScenarioError
+from scenarios.records.model.model_runs import static_axle_loads
+
+__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "xml_nominal", "catalogue", "static_guess"]
+
+#: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
+#: lab's catalogue values are 10-30 % off the truck on its rig.
+CATALOGUE_FACTORS = {"tire_stiffness_front_N_per_m": 0.85, "tire_stiffness_rear_N_per_m": 1.15,
+                     "tire_damping_front_Ns_per_m": 1.15, "tire_damping_rear_Ns_per_m": 0.85,
+                     "spring_friction_front_N": 0.85, "spring_friction_rear_N": 1.15}
+#: Hz: the catalogue guess of the cab's mount frequency (the XML has a rigid cab, so there is no
+#: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (mjcf.build.BOUNDS);
+#: its search range (:data:`~scenarios.records.model.calibrate.RANGES`) is 1-30 Hz.
+CATALOGUE_CAB_MOUNT_HZ = 2.5
+#: 1: the catalogue guess of the progressive tire's extra stiffness beyond its onset
+#: (``TruckVariant.tire_progressive_ratio``; the XML's tire is linear, ratio 0): radial truck tires
+#: stiffen by some 10-30 % over their working deflection (mjcf/README.md), so the middle, 0.2.
+CATALOGUE_TIRE_RATIO = 0.2
+
+
+@functools.lru_cache(maxsize=1)
+def _nominal() -> tuple[dict, tuple[float, float]]:
+    """(the fitted fields' values, (front, rear) axle x in the chassis frame, m) of the compiled
+    nominal model, compiled once per process."""
+    import mujoco
+
+    model = build_model(TruckVariant())
+    idx = RigIndex.of(model)
+    f, r = CORNERS.index(FRONT[0]), CORNERS.index("rl")
+    stiffness = tire_stiffness(model, idx)
+    damping = -model.actuator_biasprm[idx.tire_actuator, 2]
+
+    def body(name: str) -> int:
+        return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+
+    ten = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, mjnames.spring_tendon(c)) for c in CORNERS]
+    payload = body("payload")
+    values = {"payload_kg": float(model.body_mass[payload]),
+              "payload_x_m": float(model.body_pos[payload, 0]),
+              "tire_stiffness_front_N_per_m": float(stiffness[f]), "tire_stiffness_rear_N_per_m": float(stiffness[r]),
+              "tire_damping_front_Ns_per_m": float(damping[f]), "tire_damping_rear_Ns_per_m": float(damping[r]),
+              "spring_friction_front_N": float(model.tendon_frictionloss[ten[f]]),
+              "spring_friction_rear_N": float(model.tendon_frictionloss[ten[r]])}
+    axles = tuple(float(model.body_pos[body(mjnames.axle_body(c)), 0]) for c in (CORNERS[f], CORNERS[r]))
+    return values, axles
+
+
+def xml_nominal() -> dict[str, float]:
+    """The fitted fields' values in ``truck_rig.xml`` (SI), read from the compiled nominal model."""
+    return dict(_nominal()[0])
+
+
+def catalogue() -> dict[str, float]:
+    """The catalogue guess of the non-payload fields: :func:`xml_nominal` times :data:`CATALOGUE_FACTORS`."""
+    nominal = xml_nominal()
+    return {**{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ,
+            "tire_progressive_ratio": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_m": TIRE_PROGRESSIVE_ONSET_M,
+            "tire_progressive_ratio_rear": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_rear_m": TIRE_PROGRESSIVE_ONSET_M}
+
+
+#: An estimated payload within this fraction of the empty truck's weight (1) is an empty truck:
+#: the mean wheel loads of an empty truck put its payload a few kg either side of zero (the
+#: catalogue's axle and cab masses are not the plant's exactly), where its position is meaningless
+#: (measured on the generalization suite's four empty trucks: -11 to -6 kg, x -4.3 to -10.8 m).
+EMPTY_FRACTION = 0.01
+
+
+def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
+    """Payload (kg) and its x (m, chassis frame) from the measured static loads.
+
+    The record's mean wheel force is the static load (the dynamic forces average out over the
+    record); the catalogue truck without payload gives its own static loads; the difference is
+    the payload's weight, and the front axle's share of it places it between the axles. A payload
+    within :data:`EMPTY_FRACTION` of the empty truck's weight is an empty truck: (0, the XML's x),
+    which :func:`calibrate` holds instead of fitting.
+
+    Raises
+    ------
+    ScenarioError
+        Measured loads that imply no payload on the truck (one sentence).
+    """
+    f = np.asarray(force_N, dtype=float).mean(axis=0)
+    cat = catalogue()
+    empty = static_axle_loads(TruckVariant(payload_kg=0.0, **cat), base_scenario)
+    front = np.array([c in FRONT for c in CORNERS])
+    d_total = float(f.sum() - empty.sum())
+    d_front = float(f[front].sum() - empty[front].sum())
+    payload = d_total / GRAVITY_M_S2
+    if abs(payload) <= EMPTY_FRACTION * empty.sum() / GRAVITY_M_S2:
+        return 0.0, float(xml_nominal()["payload_x_m"])
+    lo, hi = BOUNDS["payload_kg"][:2]
+    if not (lo < payload <= hi) or d_total <= 0:
+        raise ScenarioError(f"the measured mean wheel loads ({f.sum() / 1e3:.1f} kN in all) imply a payload of "
+                            f"{payload:.0f} kg, outside {lo:g} to {hi:g} kg: check the force channels' scale and sign")
+    x_f, x_r = _nominal()[1]  # the axles' positions in the chassis frame
+    x = x_r + (x_f - x_r) * d_front / d_total
+    if abs(x) > 3.5:
+        raise ScenarioError(f"the measured front/rear load split puts the payload at x = {x:.2f} m, off the truck "
+                            "(-3.5 to 3.5 m): check which force channels are front and rear")
+    return float(payload), float(x)

@@ -1,0 +1,214 @@
+"""Result objects of the model correction: a calibration and a correction (or its fallback).
+
+Both are frozen dataclasses whose fields are plain numbers, strings, tuples, mappings and numpy
+arrays, so :func:`scenarios.core.files.to_json` / ``write_json`` write them as they are
+(:meth:`ModelCorrection.to_dict` leaves the time series out of the JSON).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mjcf.build import TruckVariant
+
+__all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR", "model_error"]
+
+#: The two answers of :func:`scenarios.records.model.differential.correct_with_model`.
+MODEL, LINEAR = "model", "linear"
+
+
+def model_error(fit_nrmse, noise_nrmse) -> tuple:
+    """Per wheel: the fit NRMSE beyond the noise, sqrt(fit^2 - noise^2) (0 where the noise estimate
+    exceeds the fit), 1: independent errors add in power."""
+    return tuple(float(np.sqrt(max(f * f - n * n, 0.0))) for f, n in zip(fit_nrmse, noise_nrmse))
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The truck model fitted to a rig record (:func:`scenarios.records.model.calibrate.calibrate`).
+
+    Attributes
+    ----------
+    names : tuple of str
+        The fitted :class:`mjcf.build.TruckVariant` fields.
+    units : tuple of str
+        Their SI units ("kg", "m", "N/m", "N s/m", "N", "Hz").
+    initial : tuple of float
+        The first guess, SI (payload and its position from the measured static loads, a tire's
+        onset at its axle's static load (:mod:`scenarios.records.model.onset_load`), the
+        rest catalogue values: :func:`scenarios.records.model.first_guess.catalogue`).
+    fitted : tuple of float
+        The fitted values, SI.
+    sigma : tuple of float
+        1-sigma uncertainty of each fitted value, SI: the diagonal of (J^T J)^-1 s^2 at the optimum
+        (J the Jacobian of the residuals, s^2 their variance with m - n degrees of freedom), carried
+        to the values through their derivatives (an onset, load / kt, through its kt too). It
+        treats the residual as white: a lower bound where a model mismatch leaves a coloured one.
+    sigma_robust : tuple of float
+        1-sigma from the block-robust sandwich estimate (blocks of
+        :data:`~scenarios.records.model.calibrate.BLOCK_S`), which allows a residual
+        correlated in time; neither includes the bias a structural model error leaves.
+    fixed : Mapping[str, float or None]
+        Fields held at catalogue values (not identifiable from the record, or not asked for), SI;
+        None: the XML's (``cab_mount_hz`` None: the rigid cab; ``tire_progressive_ratio`` None:
+        the linear tire).
+    fit_nrmse : tuple of float
+        Per wheel (fl, fr, rl, rr): NRMSE (1, :func:`correction.metrics.dlc.nrmse`) of the fitted model's
+        force, pans following the measured x_a, against the measured rig force, on the windows'
+        scored samples (the load cells' noise included).
+    initial_nrmse : tuple of float
+        The same for the first guess.
+    windows_s : tuple of (float, float)
+        Scored span of each window, s on the record's time axis (each run starts its lead-in
+        before it).
+    weighted : bool
+        The residual was weighted towards where the correction uses the model
+        (:mod:`scenarios.records.model.weighting`); :attr:`fit_nrmse` is unweighted.
+    evaluations : int
+        Truck variants run (each on every window), the Jacobians' perturbed ones included.
+    converged : bool
+        The least squares met a tolerance (not its evaluation limit).
+    message : str
+        The optimizer's word on how it stopped, and any stiffening ratio set to 0 because its
+        onset lies beyond every measured load (:data:`~scenarios.records.model.onset_load.TOP`).
+    wall_time_s : float, s
+    bounds : tuple of (float, float)
+        Each fitted field's search range, SI (its first guess times
+        :data:`~scenarios.records.model.calibrate.RANGES`, clipped to
+        :data:`mjcf.build.BOUNDS`; a tire's onset: the loads measured on its axle over the fitted
+        kt): a value at its edge was stopped there, not fitted.
+    noise_nrmse : tuple of float
+        Per wheel: the measured force's white noise (:func:`correction.identification.noise.noise_rms`, read above
+        the truck's band) over the same std as :attr:`fit_nrmse`, 1: the part of the fit NRMSE no
+        model can remove; () when not estimated.
+    cab_choice : str
+        Where the calibration chose whether to fit the cab's mount
+        (:func:`scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
+        and why; "" otherwise.
+    """
+
+    names: tuple
+    units: tuple
+    initial: tuple
+    fitted: tuple
+    sigma: tuple
+    sigma_robust: tuple
+    fixed: Mapping
+    fit_nrmse: tuple
+    initial_nrmse: tuple
+    windows_s: tuple
+    weighted: bool
+    evaluations: int
+    converged: bool
+    message: str
+    wall_time_s: float
+    bounds: tuple = ()
+    cab_choice: str = ""
+    noise_nrmse: tuple = ()
+
+    def values(self) -> dict[str, float]:
+        """The whole model truck: fitted and fixed fields, SI."""
+        out = dict(self.fixed)
+        out.update(zip(self.names, self.fitted))
+        return out
+
+    def variant(self) -> TruckVariant:
+        """The fitted truck as a :class:`mjcf.build.TruckVariant`."""
+        return TruckVariant(**self.values())
+
+    def at_edge(self, name: str, fraction: float = 0.02) -> bool:
+        """Whether fitted field ``name`` ended within ``fraction`` (1) of an end of its search range
+        (:attr:`bounds`), relative to that end's magnitude (to the range's width for an end at 0);
+        False without bounds."""
+        if not self.bounds:
+            return False
+        i = self.names.index(name)
+        lo, hi = self.bounds[i]
+        v = self.fitted[i]
+
+        def tol(end: float) -> float:
+            return fraction * (abs(end) if end != 0 else hi - lo)
+
+        return bool(v - lo <= tol(lo) or hi - v <= tol(hi))
+
+    @property
+    def excess_nrmse(self) -> tuple:
+        """Per wheel: the fit NRMSE beyond the load cells' noise (:func:`model_error`; the fit NRMSE
+        itself where the noise was not estimated): the model's own error on the record, 1."""
+        return model_error(self.fit_nrmse, self.noise_nrmse) if self.noise_nrmse else tuple(self.fit_nrmse)
+
+    @property
+    def fitted_cab_hz(self) -> float | None:
+        """float, Hz: the cab's fitted mount frequency, or None where the cab was held (not fitted)."""
+        return self.fitted[self.names.index("cab_mount_hz")] if "cab_mount_hz" in self.names else None
+
+    @property
+    def worst_fit_nrmse(self) -> float:
+        """float, 1: the largest per-wheel :attr:`fit_nrmse`."""
+        return float(max(self.fit_nrmse))
+
+    def table(self, truth: Mapping | None = None) -> str:
+        """Markdown table of the fit: guess, fitted +- 1 sigma, and (given) the true values."""
+        head = "| parameter | unit | first guess | fitted +- 1 sigma (robust) |" + (" plant (truth) | error |" if truth else "")
+        lines = [head, "|" + " --- |" * (6 if truth else 4)]
+        for name, unit, g, v, s, sr in zip(self.names, self.units, self.initial, self.fitted, self.sigma,
+                                           self.sigma_robust):
+            row = f"| {name} | {unit} | {g:.5g} | {v:.5g} +- {s:.2g} ({sr:.2g}) |"
+            if truth:
+                tv = truth.get(name)
+                if tv is None:
+                    row += " - | - |"
+                elif name == "payload_x_m":
+                    row += f" {tv:.5g} | {v - tv:+.3f} m |"
+                else:
+                    row += f" {tv:.5g} | {(v / tv - 1) if tv else float('nan'):+.1%} |"
+            lines.append(row)
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class ModelCorrection:
+    """The outcome of correcting a rig record by the calibrated truck model, or why not.
+
+    Attributes
+    ----------
+    method : {"model", "linear"}
+        "model": :attr:`corrected_N` holds F_rig + F_model(x_ref) - F_model(x_a); "linear": the
+        model cannot be trusted on this record and the linear correction is to be used.
+    reason : str
+        With "linear": one sentence saying why; "" otherwise.
+    calibration : Calibration or None
+        None when the calibration could not even start (e.g. the static loads imply no truck).
+    corrected_N : numpy.ndarray or None, N, (n, 4)
+        The corrected wheel forces on the record's time axis (unfiltered; method "model" only).
+    settled : numpy.ndarray of bool or None, (n,)
+        Samples after the model runs' start-up transient (:data:`~scenarios.records.model.differential.START_S`).
+    wall_time_s : float, s
+        Calibration plus correction.
+    timings : Mapping[str, float]
+        Wall time of each stage, s.
+    """
+
+    method: str
+    reason: str
+    calibration: Calibration | None
+    corrected_N: np.ndarray | None = None
+    settled: np.ndarray | None = None
+    wall_time_s: float = 0.0
+    timings: Mapping = field(default_factory=dict)
+
+    @property
+    def use_linear(self) -> bool:
+        """True: fall back to the linear correction (:attr:`reason` says why)."""
+        return self.method == LINEAR
+
+    def to_dict(self) -> dict:
+        """Everything but the time series (for JSON)."""
+        settled_s = None
+        if self.settled is not None:
+            settled_s = int(np.count_nonzero(self.settled))
+        return {"method": self.method, "reason": self.reason, "calibration": self.calibration,
+                "settled_samples": settled_s, "wall_time_s": self.wall_time_s, "timings": dict(self.timings)}

@@ -1,0 +1,51 @@
+"""Judging a corrected wheel force against the road force, as the project's scoring does.
+
+NRMSE (:func:`correction.metrics.dlc.nrmse`) of the corrected force against the road force, both through
+the project's band limit (``band_limit(., fs, "regularized", "zerophase")``: the 30 Hz
+6th-order Butterworth, zero-phase, of the ``best`` method, as ``benchmarks/nrmse_decomposition.py``
+does), on the samples where that band limit has settled (at
+:data:`scenarios.studies.scoring.SETTLING_TOLERANCE`) and the caller's rows; DLC of the unfiltered
+corrected force against the unfiltered road force's on the same samples (the model correction
+needs no low-pass, so it is judged on the whole force).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from correction.output.apply import band_limit
+from correction.metrics.dlc import dlc, nrmse
+from correction.output.filters import reference_filter
+from correction.output.pipeline import SETTLING_TOLERANCE
+from scenarios.records.methods import BEST
+
+__all__ = ["LOWPASS", "MODE", "band_rows", "score_correction"]
+
+LOWPASS, MODE = BEST.lowpass, BEST.mode  # the band limit of the project's method ("best"), its one home
+
+
+def band_rows(n: int, fs: float) -> np.ndarray:
+    """Samples (bool, (n,)) where the band limit's zero-phase start and end transients have settled."""
+    return reference_filter(fs, LOWPASS, settling_tolerance=SETTLING_TOLERANCE).transient_mask(int(n), MODE)
+
+
+def score_correction(corrected_N, road_N, fs: float, rows=None) -> dict[str, np.ndarray]:
+    """Per wheel: ``nrmse`` (1, band-limited, against the band-limited road force), ``dlc``, ``dlc_road``
+    (1, unfiltered) and ``dlc_error`` (1, dlc / dlc_road - 1), on the settled ``rows`` (bool, (n,)).
+
+    Parameters
+    ----------
+    corrected_N, road_N : array_like, N, (n, 4)
+    fs : float, Hz
+    rows : array_like of bool, (n,), optional
+        Samples to score (e.g. :func:`~scenarios.records.model.differential.settled_mask`),
+        further limited to the band limit's settled samples.
+    """
+    x, r = np.asarray(corrected_N, dtype=float), np.asarray(road_N, dtype=float)
+    use = band_rows(r.shape[0], fs)
+    if rows is not None:
+        use &= np.asarray(rows, dtype=bool)
+    xb, rb = band_limit(x, fs, LOWPASS, MODE), band_limit(r, fs, LOWPASS, MODE)
+    d, d_road = dlc(x[use]), dlc(r[use])
+    return {"nrmse": nrmse(xb[use], rb[use]), "dlc": d, "dlc_road": d_road, "dlc_error": d / d_road - 1.0,
+            "scored_s": np.asarray(float(np.count_nonzero(use)) / fs)}
