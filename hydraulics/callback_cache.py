@@ -89,7 +89,7 @@ def save_entry(directory: pathlib.Path, key: dict, digest: str, functions) -> bo
         if _ENV_USE.search(str(library._final_module)):
             return False
         lib_name, kind, (obj, bitcode) = library.serialize_using_object_code()
-        if kind != "object":  # pragma: no cover - numba's serialization changed
+        if kind != "object":  # pragma: no cover - a numba that serializes otherwise
             return False
         parts.append({"name": name, "library": lib_name, "symbol": cf.native_name,
                       "object_bytes": len(obj), "bitcode_bytes": len(bitcode)})

@@ -16,8 +16,8 @@ from .params import STATE_NAMES, ActuatorParams
 
 __all__ = ["pack", "unpack", "LAYOUT_TAG", "NSTATE", "NPACK", "FIELD_NAMES"]
 
-#: Arbitrary tag in slot 0 marking a row packed by this module (layout version 2: no
-#: ``check_loop_on_init`` slot; version 1 was 7311.0625). Change it whenever the layout changes.
+#: Arbitrary tag in slot 0 marking a row packed by this module's layout (a row of another layout
+#: carries another tag). Change it whenever the layout changes.
 LAYOUT_TAG = 7311.125
 #: Number of activation states per actuator (``len(STATE_NAMES)``).
 NSTATE = 5

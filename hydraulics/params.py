@@ -151,7 +151,7 @@ class ActuatorParams:
     # --- controller (analog PI position loop + differential-pressure feedback) --------------
     kp_per_m: float = 50.0  # velocity constant Ksv*Kq*Kp/A = 73 1/s: 15.5 Hz bandwidth on a 1 MN/m tire
     # to ground, 6 dB gain margin (tuned with hydraulics.loop over tires 0.9-1.8 MN/m, 300-600 kg)
-    ti_s: float = 1.0  # Ti = 1 s: the structure under which the paper's eq. 4 is exact (issue 3)
+    ti_s: float = 1.0  # Ti = 1 s: the structure under which the paper's eq. 4 is exact
     kdp_per_Pa: float = 2.0e-8  # damps the oil-column mode to zeta ~ 0.18 (Euler at 1e-4 s removes
     # omega^2 dt/2 = 24 1/s of its 126 1/s decay rate; tuned with hydraulics.loop)
     # --- reference wheel station for hydraulics.loop.check_design_station -------------------

@@ -171,7 +171,7 @@ class TruckVariant:
         mount pairs :data:`CAB_MOUNT_SPACING_M` apart give the pitch stiffness. Its mass and
         inertia are taken out of the chassis so that the truck's mass, centre of mass and roll
         and pitch inertia are unchanged. 0.5 to 30 Hz (see :data:`BOUNDS`). This is the plant
-        feature a model of the rigid-cab family lacks (issue 17).
+        feature a model of the rigid-cab family lacks.
     cab_mass_kg : float, kg, optional
         Mass of the suspended cab (default :data:`CAB_MASS_KG`; only with ``cab_mount_hz``),
         a uniform box of the cab geom's size. 200 to 1200 kg (see :data:`BOUNDS`).

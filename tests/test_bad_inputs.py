@@ -1,4 +1,4 @@
-"""The bad-input matrix of issue 15: every subcommand refuses bad input before any work.
+"""The bad-input matrix: every subcommand refuses bad input before any work.
 
 One parametrized test over (argv, id) cases across all eight subcommands: bad numbers (negative,
 zero, NaN, infinite, huge, not a number), bad paths (empty, a folder for a file, a file for a

@@ -205,7 +205,7 @@ def test_a_usual_start_time_reads(tmp_path, start):
 
 @pytest.mark.parametrize("scale", ["0", "-0", "0.0e5", "nan", "inf", "-inf", "", "half"])
 def test_a_zero_or_non_finite_scale_is_refused_naming_the_channel(tmp_path, scale):
-    """SCALE.CHAN_2 = 0 read as an all-zero channel, and `rigsim correct` wrote all zeros."""
+    """SCALE.CHAN_2 = 0 would read as an all-zero channel, and `rigsim correct` would write all zeros."""
     refused(write(tmp_path, base_params(SCALE_CHAN_2=scale)), f"SCALE.CHAN_2 = {scale!r}", "channel 'x_FL'",
             "fix:")
     refused(write(tmp_path, base_params(SCALE_CHAN_2=None), name="none.rsp"), "no SCALE.CHAN_2 key", "'x_FL'")

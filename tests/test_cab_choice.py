@@ -56,7 +56,7 @@ def test_a_cab_fit_no_better_keeps_the_cab_held():
 
 
 def test_a_cab_at_its_range_edge_is_not_used():
-    """gen00's rigid-cab truck: the cab fit went to the range's bottom, 1.0 Hz (measured): held, even
+    """gen00's rigid-cab truck: the cab fit goes to the range's bottom, 1.0 Hz (measured): held, even
     with a better fit. Convergence is not part of the choice (the chosen fit's is checked later, by
     the fallback): a far better fit that did not converge is still the better model."""
     for cal in (_fitted(1.0, 0.1), _fitted(29.9, 0.1)):

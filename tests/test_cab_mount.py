@@ -1,5 +1,5 @@
 """Tests of the suspended cab (``TruckVariant.cab_mount_hz``), the plant feature the calibrated
-rigid-cab model family lacks (issue 17).
+rigid-cab model family lacks.
 
 References, independent of the code under test: the XML compiled directly by MuJoCo (the
 model without the mount); MuJoCo's own composite quantities (body masses, ``subtree_com``,
@@ -65,7 +65,7 @@ def test_mount_keeps_mass_centre_of_mass_inertia_and_wheel_loads(payload_kg, cab
     mounted = build_model(TruckVariant(payload_kg=payload_kg, cab_mount_hz=2.0, cab_mass_kg=cab_kg))
     cab = mujoco.mj_name2id(mounted, mujoco.mjtObj.mjOBJ_BODY, names.CAB_BODY)
     assert mounted.body_mass[cab] == pytest.approx(cab_kg or CAB_MASS_KG)
-    # Mass: the sum of the truck's body masses (the cab is a body of its own now).
+    # Mass: the sum of the truck's body masses (with the mount the cab is a body of its own).
     assert mounted.body_mass[_truck_body_ids(mounted)].sum() == pytest.approx(
         rigid.body_mass[_truck_body_ids(rigid)].sum(), rel=1e-12)
     # Centre of mass: MuJoCo's subtree_com of the chassis (truck without pans), both at qpos0.

@@ -6,10 +6,10 @@ the road force through a known T_a simulated with ``scipy.signal.lsim``; the cor
 compared with the road force through the low-pass (the library's ``band_limit``, itself checked
 against scipy in test_correction.py) and with the library called directly.
 
-Deliberate change (one correction, issue of the four corners): corrected columns are written as
-``<name>_corrected`` (``fl_N_corrected``), so they cannot be mistaken for raw ones.
+Corrected columns are written as ``<name>_corrected`` (``fl_N_corrected``), so they cannot be
+mistaken for raw ones.
 
-Deliberate change (one reader): the input is read by ``correction.io.measured.read_channels`` (any
+One reader: the input is read by ``correction.io.measured.read_channels`` (any
 CSV dialect, RPC III, MDF4; units to SI) and the output written by ``write_channels`` in the
 format of its extension (CSV: a ``# key: value`` preamble, ``time [s]``, ``name [N]`` headers);
 ``read_csv`` below parses that CSV by hand, independently of the reader.
@@ -401,9 +401,9 @@ def test_output_equal_to_an_input_is_refused_before_any_work(files, tmp_path):
 
 
 def test_identify_accepts_an_actuator_whose_data_are_not_minimum_phase(tmp_path, rig_data):
-    """Drive -> pan through eq. 4 times an all-pass (a right-half-plane zero at 20 Hz): the former fit
-    (orders 1/4, no clean-up) came back with its zero in the right half-plane and the command refused
-    it ("non-minimum-phase ... refit"). Now the fit is the minimum-phase counterpart (eq. 4 itself)."""
+    """Drive -> pan through eq. 4 times an all-pass (a right-half-plane zero at 20 Hz): a fit that
+    keeps that zero in the right half-plane (orders 1/4, no clean-up) would be refused by the command
+    ("non-minimum-phase ... refit"); the fit is the minimum-phase counterpart (eq. 4 itself)."""
     d = rig_data
     a = 2 * math.pi * 20.0
     num, den = np.polymul(d["num"], [-1.0 / a, 1.0]), np.polymul(d["den"], [1.0 / a, 1.0])

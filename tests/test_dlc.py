@@ -60,8 +60,8 @@ def test_dlc_of_a_sine_on_a_static_load():
 
 
 def test_dlc_at_its_boundaries_and_its_default_axis():
-    """Each refusal exactly where it belongs (found by mutation testing: moving any of these
-    boundaries by one survived the suite). Hand values: [1, 3] has mean 2 and std 1 (DLC 0.5);
+    """Each refusal exactly where it belongs (moving any of these boundaries by one, as a mutation
+    test does, fails here). Hand values: [1, 3] has mean 2 and std 1 (DLC 0.5);
     [0.25, 0.75] has mean 0.5 and std 0.25 (DLC 0.5)."""
     assert dlc(np.array([1.0, 3.0])) == pytest.approx(0.5)  # two samples suffice
     with pytest.raises(ValueError, match="two force samples"):

@@ -284,11 +284,11 @@ def test_events_from_states():
     assert STATE_NAMES[2] == "p1_MPa"
 
 
-# --- design requirements of the defaults (issue 3) -------------------------------------------------
+# --- design requirements of the defaults ---------------------------------------------------------
 @pytest.mark.parametrize("kt", [0.9e6, 1.8e6])
 @pytest.mark.parametrize("mass", [300.0, 600.0, math.inf])
 def test_default_loop_meets_the_design_brief(kt, mass):
-    # Issue 3: stable with margin (here: 6 dB gain margin, and the explicit-Euler map at the
+    # The design brief: stable with margin (here: 6 dB gain margin, and the explicit-Euler map at the
     # simulator's 1e-4 s) under a truck wheel (tire 0.9-1.8 MN/m, unsprung 300-600 kg), and a
     # -3 dB bandwidth of about 10-20 Hz (envelope: ignoring the narrow wheel-hop notch).
     report = check_stable(default(), kt, mass, gain_margin=2.0, dt_s=1e-4)
@@ -345,8 +345,8 @@ def test_tire_stiffness_is_checked_by_the_formula_only():
 
 
 def test_params_are_plain_data_and_the_stability_check_is_separate():
-    # ActuatorParams only validates values: a set without pressure feedback constructs (it used to
-    # run a stability check on construction); hydraulics.loop.check_design_station refuses it,
+    # ActuatorParams only validates values: a set without pressure feedback constructs (no
+    # stability check runs on construction); hydraulics.loop.check_design_station refuses it,
     # naming the gain to change. (Import circles are tested project-wide in tests/test_layers.py.)
     from hydraulics.loop import check_design_station
 

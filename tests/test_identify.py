@@ -211,7 +211,7 @@ def test_fit_of_a_non_minimum_phase_actuator_is_its_minimum_phase_counterpart():
     ratio = fit.frequency_response(f) / _truth(n4, d4, f)
     assert np.max(np.abs(np.degrees(np.angle(ratio)))) < 3.0
     assert fit.non_minimum_phase and fit.held_out_error > 0.5  # reported: the data lag more than T_a
-    # and the correction accepts it (the old fit was refused as non-minimum-phase)
+    # and the correction accepts it (a fit that kept the data's right-half-plane zero would be refused)
     from correction.output.filters import design_correction
 
     design_correction(fit.as_tf(), FS, "regularized")

@@ -106,8 +106,8 @@ def test_an_actuator_table_parses_or_raises_one_sentence(data):
 @given(st.lists(st.tuples(COEFF, COEFF), min_size=4, max_size=4))
 def test_actuators_files_round_trip_or_refuse(tmp_path_factory, pairs):
     """Every corner's (num, den) written and read back equal, or refused by the writer's own
-    check (one sentence, nothing written): the writer never writes what the reader refuses (it
-    once wrote a zero denominator that read_actuators_file then rejected)."""
+    check (one sentence, nothing written): the writer never writes what the reader refuses (a zero
+    denominator, say, which read_actuators_file rejects)."""
     path = tmp_path_factory.mktemp("act") / "actuators.toml"
     actuators = {c: (np.array(n), np.array(d)) for c, (n, d) in zip(CORNERS, pairs)}
     try:

@@ -246,10 +246,11 @@ def test_write_refuses_what_would_not_read_back(tmp_path, data, message):
     assert not (tmp_path / "o.csv").exists()
 
 
-# ---------------------------------------------------------------- what the old read_force_csv checked, on read_channels
+# ---------------------------------------------------------------- a lab's CSV: ms time, text column, uniform rate
 
 def test_ms_time_text_column_and_uniform_rate(tmp_path):
-    """Formerly read_force_csv / sampling_rate (removed; rigsim correct and identify use read_channels)."""
+    """read_channels on a lab's CSV: time in ms, decimal commas, a text column left out, the rate from
+    a uniform time axis (the reader rigsim correct and identify use)."""
     p = _write(tmp_path, "old.csv", "time [ms];Fz_FL [kN];status\n0;12,5;OK\n1;12,75;OK\n2;13;OK\n3;12,25;OK\n")
     mc = read_channels(p)
     assert mc.names == ("Fz_FL",) and mc.time_name == "time"  # the status text is left out

@@ -70,7 +70,7 @@ def test_german_layout_of_the_same_numbers_reads_the_same(tmp_path_factory, rec)
 def test_rpc3_round_trip_within_half_a_step(tmp_path_factory, rec):
     # A channel's int16 scale is its peak / 32767: a peak below ~1e-200 underflows it (not a
     # measured signal). Zeros and tiny samples inside a normal channel are fine (they quantize to
-    # 0 within half a step); filtering on every sample instead failed hypothesis's health check.
+    # 0 within half a step); filtering on every sample instead fails hypothesis's health check.
     assume(all(np.max(np.abs(v)) > 1e-200 or not np.any(v) for v in rec.data.values()))
     p = write_channels(tmp_path_factory.mktemp("rpc") / "r.rsp", rec)
     back = read_channels(p)

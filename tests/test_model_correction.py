@@ -1,4 +1,4 @@
-"""The model correction (issue 17): differential correction, calibration from rig signals, fallback.
+"""The model correction: differential correction, calibration from rig signals, fallback.
 
 Short records (8 s of the paper's medium 72 km/h case) so that the file runs in well under a minute;
 the plant differs from the XML's nominal truck (:func:`plant_scenario`), so calibration has work to do.
@@ -79,7 +79,7 @@ def test_the_pan_motion_is_splined_onto_the_model_steps():
 
 def test_exact_model_differential_correction_beats_the_rig_by_far(record):
     """With the plant's own truck as the model, F_rig + F_model(x_ref) - F_model(x_a) reaches the road force to
-    NRMSE ~0.01 (issue 17's trial: 0.008 on the 60 s case; measured on this 8 s record 0.013-0.015 per wheel,
+    NRMSE ~0.01 (0.008 on the 60 s case; measured on this 8 s record 0.013-0.015 per wheel,
     0.009-0.012 at 20 s), against 0.71-0.78 for the uncorrected rig force: a factor 49-60 here. Pinned at
     > 25 and < 0.025 absolute; DLC within 1 % (measured 0.3 %)."""
     sc, t = record["sc"], record["t"]
@@ -182,7 +182,7 @@ def test_calibration_recovers_a_progressive_tire():
     the ratio and onset fitted from the catalogue's +20 % at the front wheels' static load (the onset's
     first guess, :mod:`scenarios.records.model.onset_load`: 2.66 cm), the other fields held at
     the plant's: both recovered within 3 % from one 3 s window (measured 0.3954 and 3.000 cm; stopped at
-    4 residual evaluations the ratio was still at 0.25, at 6 at 0.38), and the fit NRMSE falls by more
+    4 residual evaluations the ratio is still at 0.25, at 6 at 0.38), and the fit NRMSE falls by more
     than half (0.34-0.44 to 0.05-0.06, the noise's share)."""
     sc = plant_scenario()
     plant = dataclasses.replace(sc.vehicle, tire_progressive_ratio=0.4, tire_progressive_onset_m=0.03)
@@ -206,7 +206,7 @@ def test_calibration_recovers_each_axles_stiffening():
     +25 % beyond 2.2 cm (the heavy truck's rear static deflection is about 2 cm, its fronts' about 3 cm,
     so both cross their onsets), the four fitted from the catalogue's +20 % at each axle's static load,
     the rest held at the plant's: all four within 3 % (measured 0.394, 3.000 cm, 0.248, 2.192 cm; stopped
-    at 4 residual evaluations the front ratio was still at 0.25, at 6 at 0.38), the fit NRMSE more than
+    at 4 residual evaluations the front ratio is still at 0.25, at 6 at 0.38), the fit NRMSE more than
     halved."""
     sc = plant_scenario()
     plant = dataclasses.replace(sc.vehicle, tire_progressive_ratio=0.4, tire_progressive_onset_m=0.03,
@@ -232,8 +232,8 @@ def test_an_onset_given_beyond_the_measured_loads_starts_at_the_static_load():
     every rear load of the window, where neither the onset nor the ratio moves a model force. The
     calibration starts it at the rear's median load instead (onset_load.load_guess: 2.33 cm) and
     recovers the plant's +25 % at 2.2 cm within 3 % (measured 0.247, 2.191 cm; rear fit NRMSE 0.13 ->
-    0.055). With the onset searched in metres from 4 cm (commit 433f6e4) the fit never moved: 0.2 and
-    4 cm, "gtol" after one residual and its Jacobian, rear fit NRMSE 0.29 as it started."""
+    0.055). Searched in metres from 4 cm, the onset would never move (measured: 0.2 and 4 cm, "gtol"
+    after one residual and its Jacobian, rear fit NRMSE 0.29 as it starts)."""
     sc = plant_scenario()
     plant = dataclasses.replace(sc.vehicle, tire_progressive_ratio_rear=0.25, tire_progressive_onset_rear_m=0.022,
                                 tire_progressive_ratio=0.0)
@@ -254,7 +254,7 @@ def test_an_onset_given_beyond_the_measured_loads_starts_at_the_static_load():
 def test_a_stiffening_beyond_every_measured_load_is_held_linear(monkeypatch):
     """An onset fitted at the top of its load range leaves its ratio where the fit wandered (no measured
     load lies beyond it); the calibration sets that ratio to 0 and says so. Forced here: the optimizer's
-    answer is moved to the onset's upper bound (the walk-through's front tires ended there by
+    answer is moved to the onset's upper bound (the walk-through's front tires end there by
     themselves, ratio 0.70)."""
     import scipy.optimize
 
@@ -292,7 +292,7 @@ def test_the_onset_alone_is_refused_before_any_run(record):
 
 def test_an_empty_truck_is_held_empty_not_refused():
     """The static loads of an empty truck put the payload a few kg either side of zero (the
-    generalization suite's four empty cases: -11 to -6 kg, refused before as 'no payload'): within
+    generalization suite's four empty cases: -11 to -6 kg, not to be refused as 'no payload'): within
     EMPTY_FRACTION of the empty truck's weight it is an empty truck, (0 kg, the XML's x), and the
     calibration holds it; a real payload (500 kg, the loads of the catalogue truck carrying it) is
     still estimated, to within 1 %, and a negative 500 kg is still refused."""
@@ -317,7 +317,7 @@ def test_an_empty_truck_is_held_empty_not_refused():
 def test_a_twisted_first_pose_starts_on_its_plane_and_twists_in():
     """A record whose first pan pose is twisted beyond any static rest of the truck (a 45 mm
     diagonal twist: the frame is stiff in torsion, a diagonal pair of tires unloads; generalization
-    case gen11's third window started so and fell back) still runs: the model truck starts at rest
+    case gen11's third window starts so) still runs: the model truck starts at rest
     on the pose's planar part and the twist is brought in over the settling lead-in (a half-cosine,
     at rest at both ends), so the run's forces are finite and every wheel stays loaded."""
     from mjcf.physics import EquilibriumError

@@ -1,6 +1,6 @@
 """The progressive tire (``TruckVariant.tire_progressive_ratio``, bilinear: one kink at the onset) and
 its spread stiffening (``TruckVariant.tire_progressive_spread_m``: 5 elements over a span of deflection),
-the plant feature the calibrated model's bilinear tire cannot represent (issue 17, second round).
+the plant feature the calibrated model's bilinear tire cannot represent.
 
 References, independent of the code under test: the XML compiled directly by MuJoCo (the model
 without the option); the tire's constants as truck_rig.xml's comment derives them (kt 0.9 MN/m per

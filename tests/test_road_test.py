@@ -4,8 +4,8 @@ The choice is measured by ``benchmarks/road_integrator_study.py`` (docs/road_int
 these tests pin the pieces it rests on: the tire force the record reports is MuJoCo's own force
 law (:func:`mjcf.physics.tire_law` against ``actuator_force``, a progressive tire's two elements
 summed), the pan velocity reaches the tire's
-damping through ``ctrl``, and a run agrees with a fine explicit-Euler reference (the former road
-test's integration at a quarter of its step), the reference being independent of the mid-step
+damping through ``ctrl``, and a run agrees with a fine explicit-Euler reference (the XML's
+integrator at a quarter of its 1e-4 s step), the reference being independent of the mid-step
 hold and of the force reconstruction.
 """
 
@@ -75,7 +75,7 @@ def test_tire_law_is_mujocos_force_with_the_pan_velocity_in_ctrl(variant):
 
 def test_road_test_agrees_with_a_fine_explicit_euler_reference():
     """RK4 at 1e-3 s (pans held at mid-step, the force reconstructed at the output instants)
-    against explicit Euler at 2.5e-5 s (the integrator the road test used before, at a quarter
+    against explicit Euler at 2.5e-5 s (the XML's integrator, at a quarter
     of its 1e-4 s step): the wheel forces agree to 0.5 % of their standard deviation and the DLC
     to 0.1 % (the goal of the integrator study). A force not moved to the output instant (the
     pan at mid-step) would miss by ~3 % (measured in the study), so this test can fail."""

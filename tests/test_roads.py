@@ -261,7 +261,7 @@ def test_envelope_is_a_moving_average_with_sinc_response():
 
 def test_road_drive_reads_only_the_profile_points_it_needs_and_gets_the_same_bits():
     """RoadDrive interpolates each chunk on a slice of the profile and makes the slopes of that
-    slice only (memory: a 600 s drive no longer holds two profile-long slope arrays); the values
+    slice only (memory: a 600 s drive holds no profile-long slope arrays); the values
     are bit for bit those of numpy.gradient and numpy.interp on the whole profile."""
     import numpy as np
 

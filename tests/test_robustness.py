@@ -1,6 +1,6 @@
 """Robustness: bad input refused before any work, processes that end cleanly, byte-identical outputs.
 
-Each test pins a failure found by feeding rigsim bad input or killing it: the memory check
+Each test pins a failure that feeding rigsim bad input or killing it can provoke: the memory check
 before a run, the physical bounds of the truck, the static equilibrium's sentence, the iterate
 and paper duration checks, the sweep grid's cap and ETA, temporary files of killed writers,
 pool workers that die with their parent, SIGTERM, plain sweep records, and outputs that are

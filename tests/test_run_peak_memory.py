@@ -1,5 +1,5 @@
 """The peak memory of ``rigsim run`` after the run: the statistics work block by block, and freed
-arrays go back to the system (issue 11: a 600 s rig run under 400 MB, ``benchmarks/run_memory.py``).
+arrays go back to the system (the goal: a 600 s rig run under 400 MB, ``benchmarks/run_memory.py``).
 
 The statistics must stay bit for bit what numpy gives on the whole record (``result.json`` is
 compared byte for byte between runs): the references are numpy's own ``mean``, ``std`` and the

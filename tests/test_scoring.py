@@ -365,8 +365,8 @@ def test_each_method_is_scored_on_exactly_its_own_settled_samples(road_rig, iden
         expected &= reference_filter(fs, m.lowpass, settling_tolerance=tol).transient_mask(n, m.mode)
         assert np.array_equal(ms.settled, expected), m.name
         assert 0 < ms.settled.sum() < n  # each method loses some samples, keeps most
-        # and the figures are taken on exactly those samples (a scoring that forgot its mask
-        # moved the corrected DLC by only 0.3-1.3 %: inside the other tests' tolerances)
+        # and the figures are taken on exactly those samples (a scoring that forgets its mask
+        # moves the corrected DLC by only 0.3-1.3 %: inside the other tests' tolerances)
         assert np.array_equal(ms.figures["dlc_corrected"], dlc(ms.corrected_N[expected])), m.name
         assert np.array_equal(ms.figures["dlc_road_settled"], dlc(both.road_N[expected])), m.name
         assert np.array_equal(ms.figures["dlc_road_band"], dlc(ms.road_band_N[expected])), m.name

@@ -1,16 +1,16 @@
 """SIGTERM ends a command with 143 even where Python would lose the interrupt (scenarios/cli/main.py).
 
-Two ways it was lost, each reproduced here deterministically in a real ``python -m
+Two ways Python loses it, each reproduced here deterministically in a real ``python -m
 scenarios.cli.main run`` whose run (``scenarios.core.run.run``, patched through a
-``sitecustomize`` module on the child's path) does what the library did:
+``sitecustomize`` module on the child's path) does what the library does:
 
-* the handler ran inside a ctypes callback (numba loading its cached callbacks through llvmlite's
+* the handler runs inside a ctypes callback (numba loading its cached callbacks through llvmlite's
   object-cache callback), where Python prints the KeyboardInterrupt as "ignored" and goes on: the
-  terminated command ran its whole run and exited 0 (measured: 2 of 30 SIGTERMs sent 0.05-1.5 s
-  after the start);
-* the KeyboardInterrupt passed through a nested ``PyRun_String`` (MuJoCo's callback module), which
-  leaves CPython's "unhandled KeyboardInterrupt" flag set, so a ``-m`` run ended by SIGINT after
-  printing "rigsim: terminated" (3 of 30).
+  terminated command runs its whole run and exits 0 (measured without the guard: 2 of 30 SIGTERMs
+  sent 0.05-1.5 s after the start);
+* the KeyboardInterrupt passes through a nested ``PyRun_String`` (MuJoCo's callback module), which
+  leaves CPython's "unhandled KeyboardInterrupt" flag set, so a ``-m`` run ends by SIGINT after
+  printing "rigsim: terminated" (measured without the guard: 3 of 30).
 """
 
 from __future__ import annotations

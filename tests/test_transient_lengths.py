@@ -2,8 +2,8 @@
 bounded in memory where it is not.
 
 A T_a with a slow zero (``(10 s + 1)``: T_a^-1 has a pole at -0.1 1/s, a 10 s time constant)
-needs a 200 s horizon; at 100 kHz that was 20 million samples and a 2-point-per-sample FFT of
-twice that (3.1 GB measured). Each response is capped at :data:`MAX_RESPONSE_SAMPLES` samples,
+needs a 200 s horizon; at 100 kHz that is 20 million samples and a 2-point-per-sample FFT of
+twice that (3.1 GB measured, uncapped). Each response is capped at :data:`MAX_RESPONSE_SAMPLES` samples,
 the slowest pole's geometric tail standing in beyond them. Reference: the same filter's lengths computed
 on the whole horizon (below the cap), against which the capped computation must agree.
 """

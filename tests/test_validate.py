@@ -161,7 +161,7 @@ def test_validate_json_is_the_result_through_to_json(short_run):
 
 def test_route3_is_within_loose_multiples_of_the_goal(short_run):
     # settings.GOAL_FRF_DB = 0.5 dB, GOAL_FRF_DEG = 5 deg (route 3 against route 2 up to 30 Hz,
-    # coherence > 0.95) were narrowly missed by the last 60 s run (0.54 dB, 5.6 deg); this 8 s
+    # coherence > 0.95) are narrowly missed by a 60 s run (measured: 0.54 dB, 5.6 deg); this 8 s
     # record measures ~1.2 dB / 6.1 deg (more estimation variance). Bounds: 3x the dB goal and 2x
     # the deg goal. A 1 ms (one sample) misalignment of x_a gives 11-16 deg, a +10 % gain error
     # 2.0 dB, swapped wheels 47 dB: each fails here.
@@ -173,7 +173,7 @@ def test_route3_is_within_loose_multiples_of_the_goal(short_run):
 
 
 def test_step_errors_are_bounded_and_route2_beats_eq4(short_run):
-    # Issue 3 sets no number for the steps. The 2 s step runs do not depend on --duration-s, so
+    # The validation's goals set no number for the steps. The 2 s step runs do not depend on --duration-s, so
     # the 60 s run measures the same: 7.1 % (1 mm) and 9.8 % (1 cm) for route 2, 16.0 % and
     # 13.4 % for eq. 4. Bounds: 10 % and 12 %, below eq. 4's errors, so a route 2 step response
     # no better than eq. 4's fails; route 2 linearizes without leaf friction, so without it the

@@ -1,7 +1,7 @@
 """Units of measured channels: names decorated with units, and their conversion to SI.
 
-A small explicit table, not pint. pint was tried (0.25.3 installs here) and it reads several
-units of test-lab files wrongly without a word: ``g`` is a gram (an accelerometer's ``g`` is
+A small explicit table, not pint: pint (0.25.3 installs here) reads several units of
+test-lab files wrongly without a word: ``g`` is a gram (an accelerometer's ``g`` is
 9.80665 m/s^2), ``Nm`` and ``kNm`` parse to 1e3 and 1e6 m/kg instead of a torque, a lowercase
 ``kn`` is a knot, ``-`` raises an AssertionError; its base units are kg m/s^2 rather than N, and
 its import with a registry takes 0.7 s. The units of rig channels are few; a table that names

@@ -229,8 +229,8 @@ class _SigtermAsInterrupt:
     A handler's exception can be lost: Python runs signal handlers between bytecodes, also inside
     a ctypes callback, which hands the exception to ``sys.unraisablehook`` ("Exception ignored")
     and goes on (numba loading its cached callbacks through llvmlite's object-cache callback: a
-    command terminated then ran its whole 600 s run and exited 0, measured 2 times in 30 with
-    SIGTERM 0.05-1.5 s after the start). While installed, this also takes that hook: a lost
+    command terminated then runs its whole 600 s run and exits 0, measured without the re-send 2
+    times in 30 with SIGTERM 0.05-1.5 s after the start). While installed, this also takes that hook: a lost
     interrupt of its own is sent again, as SIGTERM after :data:`RESEND_S`, until one arrives in
     code that lets it through (:meth:`acknowledge` or :meth:`restore` stop it; late copies are
     ignored). An interrupt that was not lost is never repeated, so cleanup runs undisturbed."""
@@ -329,9 +329,9 @@ def exit_main(code: int) -> None:
     the process ends at once (its outputs are removed and its workers stopped; the standard
     streams are flushed): CPython ends a ``-m`` run by SIGINT, whatever the code, once a
     KeyboardInterrupt has passed through a nested ``PyRun_String`` (MuJoCo's callback module runs
-    one while the hydraulics are installed), so SIGTERM then ended the command as killed by SIGINT
-    after it had printed "rigsim: terminated" (3 times in 30 with SIGTERM 0.05-1.5 s after the
-    start). The ``rigsim`` script exits by the code as it is."""
+    one while the hydraulics are installed), so without ``os._exit`` SIGTERM can end the command as
+    killed by SIGINT after it has printed "rigsim: terminated" (measured: 3 times in 30 with SIGTERM
+    0.05-1.5 s after the start). The ``rigsim`` script exits by the code as it is."""
     if code in INTERRUPTED:
         sys.stdout.flush()
         sys.stderr.flush()

@@ -74,9 +74,9 @@ def return_freed_arrays() -> bool:
     glibc's malloc gives an allocation from 128 KiB up pages of its own, unmapped when freed, but
     raises that threshold to the size of each such block freed (up to 32 MiB), and the heap's
     trim threshold to twice it. From then on arrays up to that size come from the heap, and a
-    freed one stays in the process's resident memory while anything lives above it: a 600 s rig
-    run kept ~45 MB of the road profile's working arrays (freed before the first step) that
-    way, under its 120 MB record (``benchmarks/run_memory.py``: 420 MB peak with the
+    freed one stays in the process's resident memory while anything lives above it: without this
+    call a 600 s rig run keeps ~45 MB of the road profile's working arrays (freed before the first
+    step) that way, under its 120 MB record (``benchmarks/run_memory.py``: 420 MB peak with the
     statistics' temporaries, 360 MB without both). Setting both thresholds with ``mallopt``
     fixes them, at :data:`MMAP_THRESHOLD_BYTES` and twice it, so every array from that size up
     is unmapped when freed. Values computed are the same; the cost is the page faults of each

@@ -27,7 +27,7 @@ def keep_heap_memory(mmap_threshold_bytes: int = 64 * 2**20) -> bool:
     its mmap threshold with fresh mmap'ed pages (page faults on every touch) and raises that
     threshold by itself as large blocks are freed, unless a malloc parameter was set: Dask's
     nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which freezes the threshold at
-    128 KiB, and a sweep case then ran 23 % slower (4.9 against 4.0 s, measured). Setting the
+    128 KiB, and a sweep case then runs 23 % slower (4.9 against 4.0 s, measured). Setting the
     thresholds explicitly (``mallopt``) restores the reuse; the memory stays with the process
     for its next case (:func:`scenarios.core.memory.malloc_thresholds`). Returns whether it was
     applied (False off glibc).

@@ -7,8 +7,8 @@ from rest over the lead-in.
 
 A road drive is a pure function of the step index, so :class:`RoadDrive` holds only the profile
 and makes any range of steps on demand (:meth:`RoadDrive.chunk`): a run steps through it chunk by
-chunk and never holds the drive at the step rate (at the 1e-4 s step that is 0.7 MB per simulated
-second, 2.5 MB/s while it was being made). :meth:`RoadDrive.drive` makes the whole signal as a
+chunk and never holds the drive at the step rate (at the 1e-4 s step a whole drive takes 0.7 MB per
+simulated second, 2.5 MB/s while it is made). :meth:`RoadDrive.drive` makes the whole signal as a
 :class:`~scenarios.core.drive.Drive` for the studies that need it at once (identification at the
 test's rms, iteration); the values are the same, bit for bit, however the steps are chunked.
 """

@@ -69,7 +69,7 @@ def run(
                  f"vehicle.timestep_s = {rig.dt_s:g} s is {steps:.3g} steps",
                  "shorten duration_s or raise vehicle.timestep_s")
     if mode == "road":  # a truck with no rest on its tires is refused before the drive is made
-        rig.rest_state()  # (the rig mode's Rig did so in its stability check)
+        rig.rest_state()  # (the rig mode's Rig does so in its stability check)
     fs = 1.0 / rig.dt_s
     decim = fs / scenario.output_rate_hz
     if abs(decim - round(decim)) > 1e-9:

@@ -191,7 +191,7 @@ RRD_END = b"RRF2FOOT"
 
 def _save(cases: list[_Case], pose_rate_hz: float, files: Sequence[pathlib.Path]) -> None:
     """Each case logged to its own RRD file (rerun's file sink, which encodes on its own thread
-    while the arrays are sent: a 120 s rig run's 53 MB took 0.29 s of CPU against 0.42-0.52 s
+    while the arrays are sent: a 120 s rig run's 53 MB take 0.29 s of CPU against 0.42-0.52 s
     through a memory sink whose bytes Python then wrote, measured ad hoc on a shared machine;
     ``benchmarks/recording_e2e.py`` measures the end-to-end cost); the blueprint goes with the
     first. A file that does not end with rerun's footer (:data:`RRD_END`: the sink failed, a full

@@ -7,7 +7,7 @@ the child and start a resource tracker process too); it imports rerun and does r
 work (:func:`scenarios.review.recording.warm_up`) on the second core while the parent imports
 the simulation and steps. When the run returns, :meth:`RecordingProcess.submit` hands the results
 to the child through a socket pair, pickled and sent on a thread, so the parent goes on writing
-its own files at once (the record of a 30 s rig run with its poses pickles to 7 MB; 30 MB took
+its own files at once (the record of a 30 s rig run with its poses pickles to 7 MB; 30 MB take
 0.10-0.15 s through a pipe, the GIL released while it waits, against 0.05 s of the parent's own
 time to copy them into ``multiprocessing.shared_memory``, which needs the resource tracker's
 bookkeeping in both processes as well). The child writes the .rrd with

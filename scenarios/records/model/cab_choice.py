@@ -4,7 +4,7 @@ A cab on its own mounts (``TruckVariant.cab_mount_hz``, a 1.5-3 Hz mode next to 
 bounce and pitch) loads the front wheels; a model with a rigid cab absorbs it into the front tire
 and leaf-friction values and misses the front wheels' road DLC by 1-6 % (docs/model_correction.md).
 Fitted on every record, the mount frequency is not always pinned: on a smooth road at low speed
-(generalization case gen00, class A at 30 km/h) a rigid-cab truck's fit went from the 2.5 Hz
+(generalization case gen00, class A at 30 km/h) a rigid-cab truck's fit goes from the 2.5 Hz
 guess to the range's bottom, 1.0 Hz, into a local minimum worse than the rigid cab's fit.
 
 So by default (:data:`AUTO`) :func:`calibrate_cab` calibrates both model families, the cab held

@@ -14,44 +14,36 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
 * ``tire_progressive_ratio``, ``tire_progressive_onset_m`` (front tires) and
   ``tire_progressive_ratio_rear``, ``tire_progressive_onset_rear_m``: each axle's tire stiffening, a
   bilinear tire (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection,
-  (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model whose tire is
-  linear cannot follow it: on a plant with a +25 % stiffening at 2 cm the linear-tire model left 13
-  of 96 generalization wheels above the linear floor and the paper's light truck at +50 % fell back
-  to the linear correction (docs/model_correction.md). The ratio from a catalogue guess of +20 %
-  (:mod:`~scenarios.records.model.first_guess`), searched additively (:data:`ADDITIVE`:
-  0-0.7); the onset as the wheel load where the tire stiffens, within the loads the windows
-  measure on its axle, from the axle's static load
+  (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model
+  whose tire is linear cannot follow it (docs/model_correction.md). The ratio from a catalogue
+  guess of +20 % (:mod:`~scenarios.records.model.first_guess`), searched additively
+  (:data:`ADDITIVE`: 0-0.7); the onset as the wheel load where the tire stiffens, within the loads
+  the windows measure on its axle, from the axle's static load
   (:mod:`~scenarios.records.model.onset_load`, which says why: an onset beyond every
-  measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0, where the onset is not identifiable
-  and does not matter (paper case high 72, 30 s: ratio 7.5e-5). Measured on the same case, a plant
-  stiffening +50 % at 3 cm: ratio 0.495 and onset 3.00 cm fitted, every wheel 0.04-0.05 of the
-  linear floor, against 0.84-0.98 (front) with the onset held at 2 cm;
+  measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0,
+  where the onset is not identifiable and does not matter;
 * ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
   cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
-  bounce and pitch that loads the front wheels. A model without it absorbed a plant's 2 Hz cab
-  into front leaf friction (+10 to +23 %) and missed the front wheels' road DLC by 1-2.5 %; with
-  it fitted, the same plant's front wheels came to 0.07-0.09 of the linear floor (paper cases,
-  60 s). Fitted through its compliance (:data:`COMPLIANCE`), 1-30 Hz from a 2.5 Hz guess; on the
-  paper's rough roads a rigid cab fits to the top, 30 Hz, at no loss, but on a smooth road at low
-  speed the fit can wander to the bottom and spoil the front wheels (:data:`DEFAULT_NAMES`), which
-  is why it is not fitted by default. The cab's mass is never fitted: it is locally identifiable
-  on a suspended cab (its Jacobian column's collinearity with the others 0.27, the tire damping's
-  0.21-0.28) but not on a rigid one, and a plant's cab 20 % lighter than the model's costs the
-  front wheels 0.22 of the floor instead of 0.10.
+  bounce and pitch that loads the front wheels. A model without it absorbs a suspended cab's mode
+  into the front leaf friction and misses the front wheels' road DLC. Fitted through its
+  compliance (:data:`COMPLIANCE`), 1-30 Hz from a 2.5 Hz guess; on the paper's rough roads a rigid
+  cab fits to the top, 30 Hz, at no loss, but on a smooth road at low speed the fit can wander to
+  the bottom and spoil the front wheels (:data:`DEFAULT_NAMES`), which is why it is not fitted by
+  default. The cab's mass is never fitted: it is locally identifiable on a suspended cab but not
+  on a rigid one; the price is a larger front-wheel error where the plant's cab mass differs from
+  the model's.
 
 Not fitted: the chassis (5.2 t, its CoM and inertia), the axles' masses, the cab's mass (the
 model's :data:`mjcf.build.CAB_MASS_KG`) and the leaf springs' rate and viscous damping are held at
 their catalogue (XML) values; the tire free radius only moves
 the static ride height, and the pan mass does not enter a tire force whose pans follow a given
-motion, so neither can be identified from x_a and F_rig. Every fitted field came out identifiable
-on the paper's cases (the 1-sigma of :class:`~scenarios.records.model.result.Calibration`
-are ~1 % or less, ``benchmarks/model_correction.py``), but for the onset of a tire that does not
-stiffen (ratio fitted to ~0: the onset then changes nothing, and its sigma says so). A tire whose
-wheels never leave the stiff branch (the heavy truck's fronts, static deflection 2.9 cm) trades its
-stiffness against its ratio; that is why each axle has its own: with one ratio shared by both axles,
-the medium case with a +25 % tire at 2 cm settled at ratio 0.58 at 2.5 cm, front stiffness -21 %,
-rear +22 %, and its rear wheels at 0.50-0.52 of the linear floor; with a ratio per axle, the rear's
-0.247 at 2.00 cm was recovered and every wheel came to 0.04-0.11 of the floor (paper cases, 60 s).
+motion, so neither can be identified from x_a and F_rig. How well each fitted field is pinned
+shows in its 1-sigma (:class:`~scenarios.records.model.result.Calibration`); the onset of a tire
+that does not stiffen (ratio fitted to ~0) changes nothing, and its sigma says so. A tire whose
+wheels never leave the stiff branch (the heavy truck's front tires) trades its stiffness against
+its ratio; that is why each axle has its own ratio and onset: one ratio shared by both axles
+settles at a compromise that bends both axles' tire stiffnesses and leaves one axle's wheels far
+from the plant's forces.
 
 First guess: :mod:`scenarios.records.model.first_guess` (payload from the record's
 static loads, the rest a catalogue guess that never reads a plant).
@@ -63,11 +55,14 @@ the window's start has decayed). Given the drive x_ref, the residual is weighted
 frequencies where the pans miss the drive (:mod:`scenarios.records.model.weighting`):
 what the differential correction takes from the model. With the plant in the model family it
 changes nothing; with a structural mismatch it keeps the mismatch from bending the parameters
-where the correction needs them (medium case, cab mode on, 20 s: front tire stiffness +4.4 %
--> +0.7 %, friction +10.7 % -> +5.6 %, corrected NRMSE front 0.129 / 0.141 -> 0.119 / 0.133). The leaves' dry friction is MuJoCo's ``frictionloss``, a soft
+where the correction needs them. The leaves' dry friction is MuJoCo's ``frictionloss``, a soft
 constraint (smoothed), so the forces are smooth in the parameters and a forward-difference
 Jacobian (step :data:`FD_STEP` of each scaled parameter) works; its perturbed runs go to the
 worker pool (:func:`scenarios.core.pool.run_jobs`) together, one model run per window and variant.
+
+Results: ``benchmarks/model_correction.py`` measures the calibration on the paper's cases and the
+generalization suite (fitted values and their 1-sigma, fit and corrected NRMSE per wheel against
+the linear floor, DLC, wall time); docs/model_correction.md discusses them.
 """
 
 from __future__ import annotations
@@ -104,10 +99,9 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m":
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
-#: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, measured at commit
-#: d95a96c where the cab was fitted by default: 1.0 Hz, front wheels 1.36 of the linear floor against
-#: 0.19 with the cab held rigid; the paper's rougher cases fit a rigid cab to the top, 30 Hz, and
-#: lose nothing).
+#: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
+#: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
+#: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
 DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
 #: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.build.BOUNDS`.
@@ -136,12 +130,12 @@ WINDOWS, WINDOW_S, WINDOW_LEAD_S = 3, 4.0, 2.5
 #: Forward-difference step of each scaled parameter (1: 1 % of a positive field, 1 cm of payload x).
 FD_STEP = 0.01
 #: Most residual evaluations of the least squares (the Jacobians come on top, one per iteration).
-#: 60: with each axle's stiffening fitted (12 values), two of the suite's 72 calibrations (30 s, cab
-#: held) stopped unconverged at the former 30 and fell back to the linear correction: gen17's
-#: rigid plant (its front tires sit past any onset, kt and ratio crawl along their valley) and
-#: gen04's gradual stiffening; at 60 both converged (0.07-0.09 x and 0.10 x the floor, DLC within
-#: 0.24 %). A cap changes nothing for a fit that converges below it (the same trajectory), so the
-#: other 70 and the paper's 12 stand as measured.
+#: 60: with each axle's stiffening fitted (12 values), a cap of 30 leaves two of the generalization
+#: suite's 72 calibrations (30 s, cab held) unconverged, and they fall back to the linear
+#: correction: gen17's rigid plant (its front tires sit past any onset, kt and ratio crawl along
+#: their valley) and gen04's gradual stiffening; at 60 both converge (0.07-0.09 x and 0.10 x the
+#: floor, DLC within 0.24 %). A cap changes nothing for a fit that converges below it (the same
+#: trajectory).
 MAX_NFEV = 60
 #: Block of the robust uncertainty, s: longer than the fit residual's correlation (the truck's
 #: slowest modes, ~0.6 s period), short enough for a few dozen blocks in the windows.

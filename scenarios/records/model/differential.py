@@ -3,7 +3,7 @@
 A truck model driven by the rig's measured pan motion x_a should reproduce the measured wheel
 force F_rig; driven by the drive x_ref (the road profile) it predicts the road force. Used as a
 difference, the model only has to predict the change the actuators' error x_a - x_ref causes:
-its own errors largely cancel (issue 17). Per wheel, on the measured (noisy) F_rig, unfiltered
+its own errors largely cancel. Per wheel, on the measured (noisy) F_rig, unfiltered
 (no low-pass is needed: nothing is inverted).
 
 Both model runs start from rest while the truck on the rig was already moving at the record's
@@ -53,10 +53,10 @@ START_S = 3.0
 #: paper's cases) the linear correction is the better one: at +50 % tire the light truck's wheels
 #: show excess 0.145-0.168 and a model correction worse than the linear one (1.01-1.40 x its NRMSE),
 #: the heavy truck's 0.03-0.135 and a better one (0.18-0.79 x); at +25 % at most 0.117, always
-#: better; in the family at most 0.062 (paper cases and the generalization suite, README). All of
-#: these were measured on the linear-tire family; with the stiffening fitted every plant run so far
-#: stayed at or below 0.079 (the gradual stiffening included), so the limit is yet to be met by the
-#: new family's failures. Another case's forces give ~1.
+#: better; in the family at most 0.062 (paper cases and the generalization suite, README). These
+#: figures are of a model family with linear tires; with each axle's stiffening fitted, every plant
+#: measured stays at or below 0.079 (the gradual stiffening included), below the limit.
+#: Another case's forces give ~1.
 EXCESS_NRMSE_LIMIT = 0.14
 
 

@@ -6,11 +6,11 @@ F_on = kt x onset. The calibration searches F_on (N) instead of the onset (m), w
 its windows measure on that axle (:func:`load_range`), and hands MuJoCo onset = F_on / kt:
 
 * an onset whose load lies beyond every measured load changes no model force, so neither it nor
-  the ratio has a gradient, and a fit that wanders there stays there: the generalization suite's
-  gen00 and gen12 (30 s, a +25 % tire at 2 cm, rear static deflection 1.95 cm) started from the
-  catalogue's 2 cm at the catalogue's rear kt (2.07 MN/m: 41 kN, above the largest rear load of
-  36-38 kN), never moved the rear ratio, and ended linear at the range's top (4 cm), their rear
-  wheels at 0.51-0.56 of the linear floor (measured at commit 433f6e4);
+  the ratio has a gradient, and a fit that wanders there stays there: searched in metres, the
+  generalization suite's gen00 and gen12 (30 s, a +25 % tire at 2 cm, rear static deflection
+  1.95 cm) start from the catalogue's 2 cm at the catalogue's rear kt (2.07 MN/m: 41 kN, above the
+  largest rear load of 36-38 kN), never move the rear ratio, and end linear at the range's top
+  (4 cm), their rear wheels at 0.51-0.56 of the linear floor;
 * a load range does not move when kt does: a bound in metres would;
 * every bilinear tire is still representable on the measured loads: one stiffening below the
   smallest load is the same there as one at that load, one beyond the largest the same as a
@@ -38,7 +38,7 @@ ONSET_RATIO = {"tire_progressive_onset_m": "tire_progressive_ratio",
 #: to show its ratio, which the fit leaves wherever it wandered: :func:`calibrate` sets that ratio
 #: to 0, a tire linear over every load the record shows, rather than extrapolate a stiffening it
 #: never saw to the larger loads of the drive (the walk-through's front tires, linear in truth, fit
-#: ratio 0.70 at 4.18 cm, past their largest load; their corrected DEL5 came out 28.90 kN against
+#: ratio 0.70 at 4.18 cm, past their largest load; their corrected DEL5 comes out 28.90 kN against
 #: 28.38 kN with the ratio set to 0).
 TOP = 0.02
 #: The record's columns (corners fl, fr, rl, rr) whose loads bound each onset.
@@ -58,7 +58,7 @@ def load_range(force_N, windows, name: str) -> tuple[float, float]:
     """(smallest, largest) measured load of onset ``name``'s wheels on the scored samples of
     ``windows`` ((run start, scored start, end) sample triples), N; neither below 0: a wheel off
     the ground reads 0 and the load cells' noise about it (generalization case gen03, an empty
-    truck on a class D road, went below 0 at the front, and its negative onset was refused)."""
+    truck on a class D road, reads below 0 at the front, and a negative onset is refused)."""
     return _range(_loads(force_N, windows, name))
 
 

@@ -23,7 +23,7 @@ __all__ = ["MAX_CASES", "axis_keys", "check_key", "flatten", "format_value", "re
 
 #: Most cases a grid may have. Each case is two runs (tens of core-seconds for a 60 s case) and
 #: a validated scenario in memory (~2 kB); 10 000 cases are days of a cluster's time, more is
-#: almost surely an axis given too many values (a million cases took 1.9 GB just to validate).
+#: almost surely an axis given too many values (a million cases take 1.9 GB just to validate).
 MAX_CASES = 10_000
 
 

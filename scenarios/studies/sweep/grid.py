@@ -63,8 +63,8 @@ from scenarios.studies.scoring import MIN_SCORED_S, shortest_scorable_s
 __all__ = ["Case", "SweepGrid", "EvalSettings", "axis_keys", "load_grid", "parse_grid", "format_value",
            "GRID_FORMAT", "MAX_CASES"]
 
-#: Version of the case-file format and of the fingerprint recipe (part of every fingerprint).
-#: 2: cases scored by scenarios.studies.scoring.score_pair (settings gained actuator, noise_N).
+#: Version of the case-file format and of the fingerprint recipe (part of every fingerprint): a
+#: case file of another version is not reused. Raise it whenever either changes.
 GRID_FORMAT = 3
 
 _SWEEP_KEYS = {"name", "base", *SETTING_KEYS}

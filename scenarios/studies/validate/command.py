@@ -16,11 +16,11 @@ import sys
 __all__ = ["add_parser", "cmd_validate", "MIN_DURATION_S", "MIN_IDENT_DURATION_S"]
 
 #: Shortest Table 1 record, s: two output samples at the scenario's 1 kHz (a DLC needs two;
-#: ``--duration-s 1e-6`` ran all eleven jobs, then failed on the DLC).
+#: a shorter one, ``--duration-s 1e-6``, would run all eleven jobs, then fail on the DLC).
 MIN_DURATION_S = 1e-3
 #: Shortest identification record, s: route 3's Welch segments are a quarter of the record, so
-#: d s resolve 4/d Hz and give ~12.5 d points below 50 Hz for a fit of 10 coefficients (0.1 s ran
-#: every job, then failed with "1 usable frequency points cannot determine 10 coefficients").
+#: d s resolve 4/d Hz and give ~12.5 d points below 50 Hz for a fit of 10 coefficients (0.1 s would
+#: run every job, then fail with "1 usable frequency points cannot determine 10 coefficients").
 MIN_IDENT_DURATION_S = 1.0
 
 

@@ -148,7 +148,7 @@ class ValidateResult:
 
     @property
     def goals(self) -> dict:
-        """Issue 3's goals met (bool): route 3 within :data:`GOAL_FRF_DB` dB / :data:`GOAL_FRF_DEG`
+        """The validation's goals met (bool): route 3 within :data:`GOAL_FRF_DB` dB / :data:`GOAL_FRF_DEG`
         deg, the linearized model within :data:`GOAL_TABLE1_PCT` % of the rig, road above rig."""
         t1 = self.table1
         return {
