@@ -185,6 +185,26 @@ def _reason(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
+def _connect_reason(exc: BaseException, address: str) -> str:
+    """Why connecting failed: the system's reason of distributed's last attempt, or, where that
+    attempt was cut off by the deadline (its cause then a cancellation), of one plain TCP connect
+    to the address, made now within a second ("Connection refused")."""
+    cause = exc
+    while cause.__cause__ is not None:
+        cause = cause.__cause__
+    if getattr(cause, "strerror", None):
+        return cause.strerror
+    host, _, port = address.partition("://")[2].rpartition(":")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=1.0).close()
+    except OSError as probe:
+        if getattr(probe, "strerror", None):
+            return probe.strerror
+    except ValueError:
+        pass
+    return _reason(exc)
+
+
 def _message(exc: BaseException, address: str, timeout_s: float) -> str:
     """One sentence for any failure of reaching or questioning the scheduler."""
     from distributed.comm import CommClosedError
@@ -195,8 +215,8 @@ def _message(exc: BaseException, address: str, timeout_s: float) -> str:
         return (f"--scheduler {address}: nothing answered there as a Dask scheduler within {timeout_s:g} s; "
                 f"check that a scheduler runs there and {_FIX}")
     if isinstance(exc, OSError) and not isinstance(exc, CommClosedError):  # distributed gave up connecting
-        return (f"--scheduler {address}: cannot connect within {timeout_s:g} s ({_reason(exc)}); start a Dask "
-                f"scheduler there or {_FIX}")
+        return (f"--scheduler {address}: cannot connect within {timeout_s:g} s ({_connect_reason(exc, address)}); "
+                f"start a Dask scheduler there or {_FIX}")
     return (f"--scheduler {address}: the peer there does not answer as a Dask scheduler "
             f"({type(exc).__name__} reading its reply); {_FIX}")
 
