@@ -4,15 +4,17 @@
 
     python benchmarks/generalization_blame.py [--cases 24] [--duration-s 30] [--jobs N] [--only gen01 gen02 ...]
 
-For each case of :mod:`generalization`'s suite the corrected DLC error (corrected against road, per
-wheel, %) is taken apart along one chain, each step removing one cause with the rest kept:
+For each case of the generalization suite (:func:`scenarios.studies.suites.generalization_cases`,
+as ``benchmarks/generalization.py`` runs it) the corrected DLC error (corrected against road, per
+wheel, %) is taken apart along one chain, each step removing one cause with the rest kept
+(the runs and the correction with one cause removed: :mod:`scenarios.studies.decomposition`):
 
-1. ``identified``: the project's correction, as :mod:`generalization` scores it (T_a identified
+1. ``identified``: the project's correction, as ``benchmarks/generalization.py`` scores it (T_a identified
    before the test from independent random drives, ``rigsim identify``; nonlinear DYNTRAC rig;
    leaf-spring friction on; 100 N load-cell noise).
 2. ``linearized``: the same rig run corrected with each wheel's own path of the linearized plant
    (its exact frequency response, zero-phase, under the same 30 Hz low-pass:
-   :class:`nrmse_decomposition.ExactLinearCorrection`). Step 1 - 2: **identification** (what the
+   :class:`scenarios.studies.decomposition.ExactLinearCorrection`). Step 1 - 2: **identification** (what the
    fitted T_a gets wrong about the small-signal actuator).
 3. ``linear pans``: a road-mode run whose pans follow the profile through that linear T_a per
    wheel, corrected by it exactly. Step 2 - 3: **actuators** (the rig's own nonlinearity, flow
@@ -26,7 +28,7 @@ wheel, %) is taken apart along one chain, each step removing one cause with the 
    against the road force) and the **rest** (rear-tire lift-off, large angles, noise).
 
 All DLCs of a case are taken on the same samples, where every correction of the chain has
-settled; so step 1 here differs from :mod:`generalization`'s figure (each method on its own
+settled; so step 1 here differs from ``benchmarks/generalization.py``'s figure (each method on its own
 settled samples) by a few hundredths of a percent. The shares are differences along this order
 and not unique (the effects interact): read them as "what removing this cause, given the causes
 before it are gone, changes". Per failing wheel (outside 1 %), the table names the largest share
@@ -42,7 +44,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import pathlib
 import sys
 import time
 
@@ -51,14 +52,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-from generalization import GOAL_MOST_PCT, case_documents  # noqa: E402
-from nrmse_decomposition import LOWPASS, MODE, ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
-
-from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
 from correction.metrics.dlc import dlc  # noqa: E402
+from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
 from correction.output.filters import reference_filter  # noqa: E402
 from correction.output.pipeline import correct_forces  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
@@ -66,9 +61,15 @@ from scenarios.core.config import parse_scenario  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.core.rig import Rig  # noqa: E402
 from scenarios.core.run import run  # noqa: E402
+from scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
+from scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 from scenarios.studies.identify.compute import identify_rig  # noqa: E402
+from scenarios.studies.suites import generalization_cases  # noqa: E402
 
+#: A wheel whose corrected DLC is further than this from the road DLC fails (%): the generalization
+#: suite's goal for most wheels (``benchmarks/generalization.py``).
+GOAL_MOST_PCT = 1.0
 #: The chain's causes, in the order they are removed.
 CAUSES = ("identification", "actuators", "friction", "band_limit", "rest")
 #: Kernel tail (sum |taps|) the exact linear corrections leave outside their margins, 1: their
@@ -163,12 +164,15 @@ def table(rows: list[dict]) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", type=int, default=24, help="size of the generalization suite (default 24)")
+    ap.add_argument("--cases", type=int, default=24, help="the generalization suite's first N cases (1-24, default 24)")
     ap.add_argument("--duration-s", type=float, default=30.0, help="seconds per run (default 30)")
     ap.add_argument("--only", nargs="+", help="parts of case names to analyse (default: every case)")
     ap.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     args = ap.parse_args(argv)
-    docs = case_documents(args.cases, args.duration_s)
+    try:
+        docs = generalization_cases(args.cases, args.duration_s)
+    except ValueError as exc:
+        raise SystemExit(f"--cases: {exc}") from None
     if args.only:
         docs = [d for d in docs if any(k in d["name"] for k in args.only)]
         if not docs:

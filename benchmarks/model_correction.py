@@ -1,4 +1,4 @@
-"""The model correction (issue 17) on the paper's cases or the generalization suite, against the linear floor.
+"""The model correction on the paper's cases or the generalization suite, against the linear floor.
 
 ::
 
@@ -7,26 +7,27 @@
                                           [--cab auto|held|fitted] [--plants rigid cab tire smooth]
                                           [--tire-ratio 0.25]
 
-Suites: ``paper``, the paper's three scenarios (60 s by default; a per-wheel table per case with the
-fitted parameters); ``generalization``, the 24 cases of ``benchmarks/generalization.py`` (issue 9:
-ISO classes A-D, 30-100 km/h, payload 0-8000 kg, track types, seeds; 30 s by default; one table,
-two rows per case: the worse wheel of each axle). ``--cases``: parts of the cases' names.
+Suites (:func:`scenarios.studies.suites.pick_cases`): ``paper``, the paper's three scenarios (60 s
+by default; a per-wheel table per case with the fitted parameters); ``generalization``, the 24
+cases of the generalization suite (``scenarios/data/suites/generalization.toml``: ISO classes
+A-D, 30-100 km/h, payload 0-8000 kg, track types, seeds; 30 s by default; one table, two rows per
+case: the worse wheel of each axle). ``--cases``: parts of the cases' names.
 
 For each case the truck on the rig (the "plant") differs from the XML's nominal truck as a real
-truck differs from its catalogue (:data:`PLANT_FACTORS`: payload -5 % and 0.1 m further forward,
-tire stiffness +10 % front / -10 % rear, tire damping +20 % / -20 %, leaf friction +30 % / -30 %:
-the issue's trial, plus the damping and the payload's position; the payload factor applies to the
-case's own payload, 0 kg included). Four plants (``--plants``, :data:`PLANT_KEYS`):
+truck differs from its catalogue (``scenarios/data/suites/model_plants.toml``, read by
+:func:`scenarios.studies.suites.model_plants`; :data:`PLANT_FACTORS`: payload -5 % and 0.1 m
+further forward, tire stiffness +10 % front / -10 % rear, tire damping +20 % / -20 %, leaf
+friction +30 % / -30 %; the payload factor applies to the case's own payload, 0 kg included).
+Four plants (``--plants``, :data:`PLANT_KEYS`; :mod:`scenarios.studies.model_suite.plants`):
 
 * ``rigid``: that truck with the XML's rigid cab and linear tires;
 * ``cab``: the same with its cab on its own mounts at :data:`CAB_HZ`;
 * ``tire``: the ``rigid`` plant with a bilinear progressive tire (``TruckVariant.tire_progressive_ratio``,
   ``--tire-ratio``, default :data:`TIRE_RATIO`, at the default onset, 2 cm): in the model family,
-  whose tire is bilinear with each axle's ratio and onset fitted (it was not before: the earlier runs in
-  docs/model_correction.md are of a linear-tire family);
-* ``smooth``: the ``rigid`` plant with tires that stiffen gradually, by :data:`SMOOTH_RATIO` over
-  :data:`SMOOTH_SPREAD_M` of deflection about 2 cm (``TruckVariant.tire_progressive_spread_m``, five
-  steps), which the family's one-kink tire cannot represent: the structural mismatch.
+  whose tire is bilinear with each axle's ratio and onset fitted;
+* ``smooth``: the ``rigid`` plant with tires that stiffen gradually, by 50 % over 2 cm of
+  deflection about 2 cm (``TruckVariant.tire_progressive_spread_m``, five steps), which the
+  family's one-kink tire cannot represent: the structural mismatch.
 
 The model's cab (``--cab``, :func:`scenarios.records.model.cab_choice.calibrate_cab`):
 ``auto`` (default) calibrates the cab held rigid and the cab's mount frequency fitted and keeps the
@@ -50,21 +51,19 @@ DLC; beside them the linear floor (:func:`correction.output.floor.linear_floor`,
 as ``benchmarks/nrmse_decomposition.py``, in-sample) and the project's linear correction
 (:func:`scenarios.studies.scoring.score_pair`, method ``best``).
 
-Goals (issue 17): NRMSE at most half the linear floor (mismatch off), below it (mismatch on), every
-wheel within 1 % of the road DLC; calibration plus correction of a 60 s case within 5 minutes on 2
+Goals: NRMSE at most half the linear floor (mismatch off), below it (mismatch on), every wheel
+within 1 % of the road DLC; calibration plus correction of a 60 s case within 5 minutes on 2
 cores (wall time, and CPU time of this process and its workers, are printed: the machine may be shared).
 Scored per wheel is what the method delivers: the model correction, or the linear correction where
-it falls back (:func:`model_correction_tables.delivered`). Prints the tables (with the cab the
-calibration chose), the share of wheels meeting each goal, then one JSON line with every number.
+it falls back (:func:`scenarios.studies.model_suite.report.delivered`). Prints the tables (with the
+cab the calibration chose), the share of wheels meeting each goal, then one JSON line with every number.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
-import pathlib
 import resource
 import sys
 import time
@@ -74,116 +73,45 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-from generalization import case_documents  # noqa: E402
-from nrmse_decomposition import pick_cases  # noqa: E402
-from correction.output.apply import band_limit  # noqa: E402
 from correction.metrics.dlc import dlc, nrmse  # noqa: E402
+from correction.output.apply import band_limit  # noqa: E402
 from correction.output.floor import linear_floor  # noqa: E402
-from mjcf.build import TruckVariant  # noqa: E402
 from mjcf.names import CORNERS  # noqa: E402
-from scenarios.core.config import load_scenario, parse_scenario  # noqa: E402
 from scenarios.core.files import to_json  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.core.rig import Rig  # noqa: E402
-from scenarios.core.run import run  # noqa: E402
-from scenarios.studies import scoring  # noqa: E402
-from scenarios.studies.identify.compute import identify_rig  # noqa: E402
-from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES, HELD  # noqa: E402
-from scenarios.records.model.first_guess import xml_nominal  # noqa: E402
+from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
 from scenarios.records.model.differential import correct_with_model, settled_mask  # noqa: E402
+from scenarios.records.model.first_guess import xml_nominal  # noqa: E402, F401  (the plants' nominal values)
 from scenarios.records.model.score import LOWPASS, MODE, band_rows  # noqa: E402
-from model_correction_tables import GOAL_S, goals, suite_table, summary, table  # noqa: E402
+from scenarios.studies import scoring  # noqa: E402
+from scenarios.studies.model_suite.plants import (TIRE_PLANT, mismatch, plant_job, plant_keys,  # noqa: E402
+                                                  plant_name, plant_scenario, plant_truck, plant_variant)
+from scenarios.studies.model_suite.report import GOAL_S, goals, suite_table, summary, table  # noqa: E402
+from scenarios.studies.suites import SUITES, case_name, model_plants, pick_cases  # noqa: E402
 
-#: The plant against the XML's nominal truck: factors (payload: of the case's payload).
-PLANT_FACTORS = {"payload_kg": 0.95, "tire_stiffness_front_N_per_m": 1.10, "tire_stiffness_rear_N_per_m": 0.90,
-                 "tire_damping_front_Ns_per_m": 1.20, "tire_damping_rear_Ns_per_m": 0.80,
-                 "spring_friction_front_N": 1.30, "spring_friction_rear_N": 0.70}
+#: The plants' catalogue offsets: factors on the XML's nominal values (payload: of the case's payload).
+PLANT_FACTORS = dict(model_plants().factors)
 #: The plant's payload x against the XML's (m, forward positive).
-PLANT_PAYLOAD_SHIFT_M = 0.1
+PLANT_PAYLOAD_SHIFT_M = model_plants().payload_x_shift_m
 #: The plants, in their default order: rigid cab, cab on :data:`CAB_HZ` mounts, bilinear progressive
 #: tire, gradually stiffening tire.
-PLANT_KEYS = ("rigid", "cab", "tire", "smooth")
+PLANT_KEYS = plant_keys()
 #: The ``cab`` plant's cab bounce frequency, Hz.
-CAB_HZ = 2.0
-#: The ``tire`` plant's progressive tire: extra stiffness beyond the onset
-#: (``TruckVariant.tire_progressive_ratio``, 1; an estimate, radial truck tires stiffen by 10-30 %).
-TIRE_RATIO = 0.25
-#: The ``smooth`` plant's tire: stiffness rising by this ratio (1) in five equal steps over
-#: :data:`SMOOTH_SPREAD_M` (m) about the default onset (2 cm), i.e. from kt at 1 cm of deflection to
-#: 1.5 kt at 3 cm, across every wheel's static deflection (1.6-2.9 cm on the paper's payloads): an
-#: estimate of a tire stiffening over its working deflection, chosen before any run, as hard as the
-#: +50 % that made the linear-tire family fall back on the paper's light truck.
-SMOOTH_RATIO, SMOOTH_SPREAD_M = 0.5, 0.02
+CAB_HZ = plant_truck("cab")["cab_mount_hz"]
+#: The ``tire`` plant's progressive tire: extra stiffness beyond the onset (``--tire-ratio``'s default, 1).
+TIRE_RATIO = plant_truck(TIRE_PLANT)["tire_progressive_ratio"]
 #: The linear floor's FIR, samples ahead and behind (benchmarks/nrmse_decomposition.py's defaults at 1 kHz).
 LEAD, LAG = 50, 400
 
 
-def plant_variant(case_payload_kg: float, plant: str = "rigid", tire_ratio: float = TIRE_RATIO) -> TruckVariant:
-    """The plant truck of a case (``case_payload_kg``, kg): :data:`PLANT_FACTORS` on the XML's nominal
-    values and the rigid cab (``plant`` "rigid"), the cab on :data:`CAB_HZ` mounts ("cab"), or the
-    rigid cab and a progressive tire of ``tire_ratio`` (1; "tire"), or the rigid cab and the gradually
-    stiffening tire ("smooth")."""
-    if plant not in PLANT_KEYS:
-        raise ValueError(f"plant must be one of {', '.join(PLANT_KEYS)}, got {plant!r}")
-    nominal = xml_nominal()
-    values = {k: nominal[k] * f for k, f in PLANT_FACTORS.items()}
-    values["payload_kg"] = case_payload_kg * PLANT_FACTORS["payload_kg"]
-    values["payload_x_m"] = nominal["payload_x_m"] + PLANT_PAYLOAD_SHIFT_M
-    if plant == "cab":
-        values["cab_mount_hz"] = CAB_HZ
-    if plant == "tire":
-        values["tire_progressive_ratio"] = float(tire_ratio)
-    if plant == "smooth":
-        values |= {"tire_progressive_ratio": SMOOTH_RATIO, "tire_progressive_spread_m": SMOOTH_SPREAD_M}
-    return TruckVariant(**values)
-
-
-def plant_name(plant: str, tire_ratio: float = TIRE_RATIO) -> str:
-    """A plant's readable name (``tire_ratio``, 1: the ``tire`` plant's)."""
-    return {"rigid": "rigid cab", "cab": f"cab on {CAB_HZ:g} Hz mounts",
-            "tire": f"progressive tire +{100 * tire_ratio:g} %",
-            "smooth": f"tire stiffening +{100 * SMOOTH_RATIO:g} % over {100 * SMOOTH_SPREAD_M:g} cm"}[plant]
-
-
-def mismatch(plant: str, cab: str) -> str:
-    """ "on" where the plant lies outside the model family calibrated with cab mode ``cab``, "off" inside:
-    the gradually stiffening tire always, the cab on its mounts only with the cab held rigid (the bilinear
-    progressive tire is in the family: each axle's ratio and onset are fitted)."""
-    return "on" if plant == "smooth" or (plant == "cab" and cab == HELD) else "off"
-
-
-def case_name(case) -> str:
-    """A case's name: a paper scenario's file stem (``case`` its path, str) or a suite document's name (dict)."""
-    return str(case["name"]) if isinstance(case, dict) else pathlib.Path(case).stem
-
-
-def plant_scenario(case, duration_s: float, plant: str = "rigid", tire_ratio: float = TIRE_RATIO):
-    """The case (a paper scenario's path, or a scenario document of ``generalization.case_documents``)
-    at ``duration_s`` (s) with its plant truck (:func:`plant_variant` of the case's own payload)."""
-    sc = parse_scenario(case) if isinstance(case, dict) else load_scenario(case)
-    payload = sc.vehicle.payload_kg if sc.vehicle.payload_kg is not None else xml_nominal()["payload_kg"]
-    return dataclasses.replace(sc, duration_s=float(duration_s), vehicle=plant_variant(payload, plant, tire_ratio))
-
-
 def pick(suite: str, keys: list[str] | None, duration_s: float) -> list:
-    """The cases of ``suite`` whose names contain each of ``keys`` (all by default): paths or documents."""
-    if suite == "paper":
-        return [str(p) for p in pick_cases(keys)]
-    docs = case_documents(24, duration_s)
-    hits = [[d for d in docs if k in d["name"]] for k in keys or ()]
-    for k, hit in zip(keys or (), hits):
-        if len(hit) != 1:
-            raise SystemExit(f"--cases {k!r} matches {len(hit)} suite cases (gen00 ... gen23); give a unique part")
-    return [h[0] for h in hits] if keys else docs
-
-
-def plant_job(case, duration_s: float, plant: str, kind: str, tire_ratio: float = TIRE_RATIO):
-    """One MuJoCo run of a case's plant: "road", "rig" or "identify" (the rig characterized before the test)."""
-    sc = plant_scenario(case, duration_s, plant, tire_ratio)
-    return identify_rig(sc) if kind == "identify" else run(sc, kind)
+    """The cases of ``suite`` whose names contain each of ``keys`` (all by default): paths or documents
+    (:func:`scenarios.studies.suites.pick_cases`); a key matching no case or several ends the run."""
+    try:
+        return pick_cases(suite, keys, duration_s)
+    except ValueError as exc:
+        raise SystemExit(f"--cases: {exc}") from None
 
 
 def cpu_s() -> float:
@@ -227,8 +155,8 @@ def analyse(case, duration_s, plant, road, rig, ident, noise_N, workers, cab: st
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--suite", choices=("paper", "generalization"), default="paper",
-                    help="the paper's three cases (default) or the 24 cases of benchmarks/generalization.py")
+    ap.add_argument("--suite", choices=SUITES, default="paper",
+                    help="the paper's three cases (default) or the 24 cases of the generalization suite")
     ap.add_argument("--duration-s", type=float, default=None,
                     help="analysed seconds per run (default 60 for the paper's cases, 30 for the suite)")
     ap.add_argument("--cases", nargs="+", help="parts of the cases' names (default: all of the suite)")
@@ -241,8 +169,8 @@ def main(argv=None) -> int:
     ap.add_argument("--plants", nargs="+", choices=PLANT_KEYS, default=list(PLANT_KEYS),
                     help=f"the plant trucks, in this order (default all four): rigid (the XML's rigid cab), cab "
                          f"(the same with its cab on {CAB_HZ:g} Hz mounts), tire (the rigid one with a bilinear "
-                         "progressive tire, --tire-ratio: in the model family), smooth (the rigid one with a tire "
-                         f"stiffening by {100 * SMOOTH_RATIO:g} %% over {100 * SMOOTH_SPREAD_M:g} cm: outside it)")
+                         "progressive tire, --tire-ratio: in the model family), smooth (the rigid one with a "
+                         f"{plant_name('smooth').replace('%', '%%')}: outside it)")
     ap.add_argument("--tire-ratio", type=float, default=TIRE_RATIO,
                     help=f"the tire plant's extra tire stiffness beyond the onset, 1 (default {TIRE_RATIO:g}: +"
                          f"{100 * TIRE_RATIO:g} %%)")

@@ -8,9 +8,9 @@
 For every calibrated row of the runs' JSON lines (the last line of each file): the fit NRMSE per
 wheel (the calibrated model, pans following x_a, against the measured F_rig on the calibration
 windows), the load cells' share of it (their noise over the force's std on the windows: the
-calibration's own ``noise_nrmse`` where the run recorded it; for runs made before it did, the
-plant's rig test is run again, the same seed so the same noise, and read as the calibration reads
-it, :func:`correction.identification.noise.noise_rms`) and the model error beyond it, sqrt(fit^2 - noise^2)
+calibration's own ``noise_nrmse`` where the run recorded it; where it did not, the plant's rig
+test is run again (:func:`scenarios.studies.model_suite.plants.plant_job`), the same seed so the
+same noise, and read as the calibration reads it, :func:`correction.identification.noise.noise_rms`) and the model error beyond it, sqrt(fit^2 - noise^2)
 (:func:`~scenarios.records.model.result.model_error`, what the fallback,
 ``differential.EXCESS_NRMSE_LIMIT``, reads); beside them the outcome against the road: the
 model correction's NRMSE over the linear floor and over the linear correction's NRMSE.
@@ -22,27 +22,26 @@ record predicts the correction's error against the road).
 
 from __future__ import annotations
 
+import argparse
 import json
 import pathlib
 import sys
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-import model_correction as mcb  # noqa: E402
-from correction.identification.noise import noise_rms  # noqa: E402
-from mjcf.names import CORNERS  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.studies import scoring  # noqa: E402
-from scenarios.records.model.result import model_error  # noqa: E402
+from correction.identification.noise import noise_rms
+from mjcf.names import CORNERS
+from scenarios.core.pool import run_jobs
+from scenarios.records.model.result import model_error
+from scenarios.studies import scoring
+from scenarios.studies.model_suite.plants import plant_job, plant_scenario
+from scenarios.studies.suites import case_name, pick_cases
 
 
 def measured(case, duration_s: float, plant: str, tire_ratio: float, noise_N: float):
     """The plant's rig test again: (time, s; the measured force with the load cells' noise, N)."""
-    sc = mcb.plant_scenario(case, duration_s, plant, tire_ratio)
-    rig = mcb.plant_job(case, duration_s, plant, "rig", tire_ratio)
+    sc = plant_scenario(case, duration_s, plant, tire_ratio)
+    rig = plant_job(case, duration_s, plant, "rig", tire_ratio)
     return rig.t_s, scoring.measured_force(rig, noise_N, sc.seed)
 
 
@@ -57,9 +56,9 @@ def read_noise(cal: dict, t, force) -> np.ndarray:
 def wheels(run: dict) -> list[dict]:
     """Per wheel of every calibrated row of one run's JSON: fit, noise and model error (1), outcome."""
     dur, ratio = run["duration_s"], run["tire_ratio"]
-    cases = {mcb.case_name(c): c for c in mcb.pick(run["suite"], None, dur)}
+    cases = {case_name(c): c for c in pick_cases(run["suite"], None, dur)}
     rows = [r for r in run["rows"] if r["calibration"]]
-    rerun = [r for r in rows if not r["calibration"].get("noise_nrmse")]  # recorded before noise_nrmse was
+    rerun = [r for r in rows if not r["calibration"].get("noise_nrmse")]  # a run that did not record it
     forces = run_jobs([(measured, (cases[r["case"]], dur, r["plant_key"], ratio, run["noise_N"])) for r in rerun])
     noises = {id(r): read_noise(r["calibration"], t, force) for r, (t, force) in zip(rerun, forces)}
     out = []
@@ -78,11 +77,11 @@ def wheels(run: dict) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    paths = (argv if argv is not None else sys.argv[1:])
-    if not paths:
-        raise SystemExit("give the output file(s) of benchmarks/model_correction.py")
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs", nargs="+", type=pathlib.Path,
+                    help="output files of benchmarks/model_correction.py (their last line: the JSON)")
     rows = []
-    for p in paths:
+    for p in ap.parse_args(argv).runs:
         rows += wheels(json.loads(pathlib.Path(p).read_text().strip().splitlines()[-1]))
     for o in sorted(rows, key=lambda o: o["error"]):
         print(f"{o['case'][:30]:30s} {o['plant']:5s} {o['wheel']}  fit {o['fit']:.3f}  noise {o['noise']:.3f}  "

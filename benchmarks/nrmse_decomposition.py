@@ -55,6 +55,8 @@ NRMSE = rms(x - road_band) / std(road_band) (:func:`correction.metrics.dlc.nrmse
 force through ``band_limit(road, fs, "regularized", "zerophase")``; means over the four wheels.
 Prints a markdown table, one row per case and configuration, then one JSON line with every
 number (per wheel too). Nothing here corrects anything in the project: the floor is a diagnostic.
+The runs through the linearized plant and its exact correction are
+:mod:`scenarios.studies.decomposition`'s.
 """
 
 from __future__ import annotations
@@ -74,25 +76,24 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
 from correction.metrics.dlc import nrmse  # noqa: E402
+from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
 from correction.output.filters import reference_filter  # noqa: E402
 from correction.output.floor import linear_floor  # noqa: E402
 from correction.output.pipeline import correct_forces  # noqa: E402
 from mjcf.names import CORNERS, REAR  # noqa: E402
 from mjcf.physics import tire_forces  # noqa: E402
-from scenarios.core.config import load_scenario, paper_scenarios  # noqa: E402
-from scenarios.core.drive import Drive  # noqa: E402
+from scenarios.core.config import load_scenario  # noqa: E402
 from scenarios.core.files import to_json  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.core.rig import Rig  # noqa: E402
 from scenarios.core.run import run  # noqa: E402
+from scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
+from scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 from scenarios.studies.identify.compute import identify_rig  # noqa: E402
+from scenarios.studies.suites import paper_cases  # noqa: E402
 
-LOWPASS, MODE = "regularized", "zerophase"  # the band limit of the project's method ("best")
 CONFIGS = tuple((k, f) for k in ("rig", "linear", "linear_mimo") for f in (True, False))
 LABELS = {"rig": "nonlinear rig", "linear": "linear T_a per wheel", "linear_mimo": "linear 4x4 T (coupled pans)"}
 #: A rear tire below this fraction of its static load counts as lifted off, 1.
@@ -102,33 +103,11 @@ LIFTOFF_FRACTION = 0.01
 LIFTOFF_GUARD_S = 0.25
 #: Folds of the floors' cross-validation (out-of-fold NRMSE beside the in-sample one).
 FOLDS = 5
-#: Length of the grid on which the exact linear correction's kernel is evaluated for its margins, s.
-KERNEL_WINDOW_S = 64.0
-
-
-def with_friction(sc, friction: bool):
-    """``sc`` with the leaf springs' dry friction as it is (True) or off (False)."""
-    if friction:
-        return sc
-    return dataclasses.replace(sc, vehicle=dataclasses.replace(
-        sc.vehicle, spring_friction_front_N=0.0, spring_friction_rear_N=0.0))
 
 
 def scenario_of(path: str, duration_s: float, friction: bool):
     """The scenario at ``path`` with ``duration_s`` (s), leaf-spring friction on or off."""
     return with_friction(dataclasses.replace(load_scenario(path), duration_s=float(duration_s)), friction)
-
-
-def linear_pans_run(sc, diagonal: bool):
-    """A road-mode run of ``sc`` whose pans follow the profile through the linearized plant: each
-    wheel's own path (``diagonal``) or the whole 4 x 4 plant (each pan also moved by the other
-    posts' drives). Friction never enters the linearization."""
-    plant = Rig(sc).linearize()
-
-    def through_linear_ta(drive: Drive) -> Drive:
-        return plant.pan_drive(drive, diagonal=diagonal)
-
-    return run(sc, "road", pan_drive=through_linear_ta)
 
 
 # ----------------------------------------------------------------------------- worker jobs: runs
@@ -143,56 +122,6 @@ def run_job(path: str, duration_s: float, kind: str, friction: bool):
     if kind not in ("linear", "linear_mimo"):
         return run(sc, kind)
     return linear_pans_run(sc, diagonal=(kind == "linear"))
-
-
-# ----------------------------------------------------------------------------- the exact linear correction
-class ExactLinearCorrection:
-    """Zero-phase correction by a linear T_a given as a frequency response: ``|T_F| / T_a(f)``.
-
-    Duck-types what :func:`correction.output.apply.correct_zero_phase` needs of a
-    :class:`~correction.output.correction_filter.CorrectionFilter` (``fs``, ``zero_phase_response``,
-    ``transient_samples``); its margins come from its own kernel at ``tolerance``.
-
-    Parameters
-    ----------
-    plant : scenarios.core.plant.PlantLinearization
-    wheel : int
-        The wheel whose own path T_a = x_a / x_ref is inverted.
-    fs : float, Hz
-    tolerance : float, 1
-        Tail of the kernel (sum of |taps|) left outside the margins.
-    """
-
-    def __init__(self, plant, wheel: int, fs: float, tolerance: float, cache: dict | None = None):
-        self.plant, self.wheel, self.fs = plant, int(wheel), float(fs)
-        self.cache = {} if cache is None else cache  # frequency grid -> (nf, 4, 4) response, shared by wheels
-        self.reference = reference_filter(fs, LOWPASS, settling_tolerance=tolerance)
-        m = int(KERNEL_WINDOW_S * fs)
-        kernel = np.fft.irfft(self.zero_phase_response(np.fft.rfftfreq(m, 1.0 / fs)), m)
-        self.margins = (_tail(kernel[:m // 2], tolerance), _tail(kernel[m // 2:][::-1], tolerance))
-
-    def zero_phase_response(self, f_hz) -> np.ndarray:
-        f = np.atleast_1d(np.asarray(f_hz, dtype=float))
-        key = (f.size, float(f[0]), float(f[-1]))
-        if key not in self.cache:
-            self.cache[key] = self.plant.frequency_response(f)
-        ta = self.cache[key][:, self.wheel, self.wheel]
-        return self.reference.zero_phase_response(f) / ta  # |T_F| with T_a^-1's phase
-
-    def transient_samples(self, mode: str = MODE) -> tuple[int, int]:
-        return self.margins
-
-    def transient_mask(self, n: int) -> np.ndarray:
-        mask = np.zeros(n, dtype=bool)
-        mask[self.margins[0]:n - self.margins[1]] = True
-        return mask
-
-
-def _tail(h: np.ndarray, tol: float) -> int:
-    """Samples after which sum |h[k:]| <= tol (h: one side of a kernel, from lag 0 outwards)."""
-    tail = np.cumsum(np.abs(h)[::-1])[::-1]
-    idx = np.flatnonzero(tail > tol)
-    return 0 if idx.size == 0 else int(idx[-1] + 1)
 
 
 # ----------------------------------------------------------------------------- worker jobs: analysis
@@ -315,21 +244,6 @@ def table(rows: list[dict], taps: tuple[int, int], fs: float) -> str:
     return "\n".join(lines)
 
 
-def pick_cases(cases: list[str] | None) -> list[pathlib.Path]:
-    """The paper scenarios whose file names contain each of ``cases`` (all three by default)."""
-    paths = paper_scenarios()
-    if not cases:
-        return paths
-    out = []
-    for key in cases:
-        hit = [p for p in paths if key in p.stem]
-        if len(hit) != 1:
-            raise SystemExit(f"--cases {key!r} matches {len(hit)} of {', '.join(p.stem for p in paths)}; "
-                             "give a unique part of one name")
-        out.append(hit[0])
-    return out
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration-s", type=float, default=60.0, help="analysed seconds per run (default 60)")
@@ -342,7 +256,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if not (args.duration_s > 0 and args.lead_s >= 0 and args.lag_s > 0 and args.noise_N >= 0):
         raise SystemExit("--duration-s and --lag-s must be > 0 s, --lead-s and --noise-N >= 0")
-    paths = [str(p) for p in pick_cases(args.cases)]
+    try:
+        paths = [str(p) for p in paper_cases(args.cases)]
+    except ValueError as exc:
+        raise SystemExit(f"--cases: {exc}") from None
     fs = load_scenario(paths[0]).output_rate_hz
     lead, lag = int(round(args.lead_s * fs)), int(round(args.lag_s * fs))
     t0 = time.perf_counter()

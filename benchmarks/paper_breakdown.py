@@ -5,14 +5,15 @@
     python benchmarks/paper_breakdown.py [--duration-s 60]
 
 ``benchmarks/paper_overhead.py`` compares the command's wall time with bare MuJoCo's for the same
-steps (issue 11's goal: at most 1.2x). This script says what the rest is. It runs the jobs of
+steps (goal: at most 1.2x). This script says what the rest is. It runs the jobs of
 ``rigsim paper`` one after the other in this process, exactly as its workers do
-(:mod:`scenarios.studies.paper.compute`'s job functions with the command's ``finish_run`` and
-``finish``, then the report the parent renders), and charges the CPU time (``time.process_time``,
+(:mod:`scenarios.studies.paper.compute`'s job functions ``identify_job``, ``run_job`` and
+``case_job``, with the files the command's ``finish_run`` and ``finish`` write, then the report
+the parent renders), and charges the CPU time (``time.process_time``,
 s; this process only, so a busy machine disturbs it little) to stages:
 
 * ``physics``: inside ``mujoco.rollout.rollout`` (every run's and identification's stepping, the
-  hydraulic callbacks included: ``benchmarks/step_rate.py`` puts them at ~1-3 % of it);
+  hydraulic callbacks included: ``benchmarks/step_rate.py`` measures their share of it);
 * ``identification``, ``road run``, ``rig run``: the rest of each job (drives, poses of the
   record, statistics, the frequency-response estimate and fits);
 * ``run files``: each run's ``result.json`` and ``timeseries.csv`` (``write_case_run``);
@@ -26,6 +27,7 @@ s; this process only, so a busy machine disturbs it little) to stages:
 Prints one JSON line: the seconds per stage, the non-physics total, its ratio to the physics, and
 the share the goal leaves: on J cores with perfect packing, wall <= 1.2 x bare needs the
 non-physics CPU within 0.2 x the physics' CPU (the parent's serial imports count J times).
+Goal: ``non_physics_over_physics`` at most 0.2.
 """
 
 from __future__ import annotations
@@ -41,8 +43,6 @@ import sys
 import tempfile
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: What ``rigsim paper``'s parent imports before it starts its pool (scenarios/studies/paper/command.py).
 PARENT_IMPORTS = ("import scenarios.cli.main, scenarios.studies.paper.compute, scenarios.studies.paper.report, "
@@ -53,8 +53,7 @@ def import_cpu_s() -> float:
     """CPU time (s) of a fresh interpreter importing :data:`PARENT_IMPORTS` (best of three)."""
     code = f"import resource; {PARENT_IMPORTS}; r = resource.getrusage(resource.RUSAGE_SELF); " \
            "print(r.ru_utime + r.ru_stime)"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-           "MUJOCO_GL": "disable"}
+    env = {**os.environ, "MUJOCO_GL": "disable"}
     runs = [float(subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
                                  check=True).stdout) for _ in range(3)]
     return min(runs)
@@ -112,13 +111,13 @@ def breakdown(duration_s: float | None) -> dict:
     cases = []
     try:
         for p in paper_scenarios():
-            sc = compute._scenario(p, duration_s)
-            ident = clock.stage("identification", compute._identify_job, str(p), duration_s)
-            road = clock.stage("road run", compute._run_job, str(p), "road", duration_s)
-            rig = clock.stage("rig run", compute._run_job, str(p), "rig", duration_s)
+            sc = compute.case_scenario(p, duration_s)
+            ident = clock.stage("identification", compute.identify_job, str(p), duration_s)
+            road = clock.stage("road run", compute.run_job, str(p), "road", duration_s)
+            rig = clock.stage("rig run", compute.run_job, str(p), "rig", duration_s)
             for r in (road, rig):
                 clock.stage("run files", write_case_run, r, out)
-            score = clock.stage("scoring", compute._case_job, str(p), duration_s, NOISE_N, road, rig, ident, None)
+            score = clock.stage("scoring", compute.case_job, str(p), duration_s, NOISE_N, road, rig, ident, None)
             case = compute.PaperCase(scenario=sc, road=road, rig=rig, identification=ident, score=score)
             clock.stage("figures", write_case, case, out)
             cases.append(case)

@@ -12,12 +12,12 @@
 3. Times bare MuJoCo stepping the same number of steps on the same J cores: J worker processes,
    each stepping its share of the steps with ``mujoco.rollout`` on the truck on the pans with a
    stiff built-in position servo per pan instead of the hydraulics, replaying the pan motion of
-   the hydraulic rig (:func:`step_rate.bare_controls`), under the same integration and step,
+   the hydraulic rig (:func:`scenarios.studies.bare_twin.bare_controls`), under the same integration and step,
    after a warm-up; the bare wall time is the slowest worker's. This is the cost of the
    multibody physics alone, with no callback, no I/O, no Python between steps.
 
 Prints one JSON line: steps, paper wall and CPU time (s), the bare wall time (s), their ratio
-(goal of issue 11: at most 1.2) and the paper's CPU seconds per bare CPU second. With
+(goal: at most 1.2) and the paper's CPU seconds per bare CPU second. With
 ``--repeats R`` the two are timed alternately R times and the smallest of each is used (the
 least disturbed by other processes on a shared machine).
 """
@@ -37,9 +37,6 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: Steps each bare rollout call takes (the forces of one recorded chunk, replayed), 1.
 CHUNK_STEPS = 20_000
@@ -47,7 +44,7 @@ CHUNK_STEPS = 20_000
 
 def paper_steps(duration_s: float | None) -> dict:
     """MuJoCo steps of ``rigsim paper`` by integration: ``{"rk4": the road runs', the rig runs' and
-    the identifications'}``, each at its test's time step (all RK4 at 1e-3 s today)."""
+    the identifications'}``, each at its test's time step (RK4 at 1e-3 s, :mod:`scenarios.core.rig`)."""
     import dataclasses
 
     from scenarios.core.config import load_scenario, paper_scenarios
@@ -68,23 +65,23 @@ def paper_steps(duration_s: float | None) -> dict:
 
 def bare_worker(steps: int, integration: str) -> dict:
     """Step the bare truck ``steps`` times (rollouts of :data:`CHUNK_STEPS`) under ``integration``
-    (a key of :data:`step_rate.INTEGRATIONS`); wall and CPU time, s."""
+    (a key of :data:`scenarios.studies.bare_twin.INTEGRATIONS`); wall and CPU time, s."""
     import mujoco
     from mujoco import rollout
 
-    import step_rate as sr
     from hydraulics.bridge import hydraulic_callbacks
+    from scenarios.studies.bare_twin import bare_controls, build_models, drive_signal, initial_state, static_loads
 
-    rig, bare, corners = sr.build_models(argparse.Namespace(model="truck", spec=None, integration=integration))
-    loads = sr.static_loads(bare, corners)
+    rig, bare, corners = build_models("truck", integration=integration)
+    loads = static_loads(bare, corners)
     hyd = [mujoco.mj_name2id(rig, mujoco.mjtObj.mjOBJ_ACTUATOR, f"hyd_{c}") for c in corners]
     n = min(CHUNK_STEPS, steps)
     x_ref = np.zeros((n, rig.nu))
-    x_ref[:, hyd] = sr.drive_signal(n, rig.opt.timestep, corners)
+    x_ref[:, hyd] = drive_signal(n, rig.opt.timestep, corners)
     with hydraulic_callbacks(rig, fast=True):
-        state, sensordata = rollout.rollout(rig, mujoco.MjData(rig), sr.initial_state(rig, corners, loads, True), x_ref)
-    forces = sr.bare_controls(rig, bare, corners, state, sensordata)
-    data, s0 = mujoco.MjData(bare), sr.initial_state(bare, corners, loads, False)
+        state, sensordata = rollout.rollout(rig, mujoco.MjData(rig), initial_state(rig, corners, loads, True), x_ref)
+    forces = bare_controls(rig, bare, corners, state, sensordata)
+    data, s0 = mujoco.MjData(bare), initial_state(bare, corners, loads, False)
     rollout.rollout(bare, data, s0, forces[:10])  # warm-up
     left = steps
     c0, t0 = time.process_time(), time.perf_counter()
@@ -113,10 +110,9 @@ def time_paper(jobs: int, duration_s: float | None) -> dict:
     argv = [sys.executable, "-m", "scenarios.cli.main", "paper", "--out", str(out), "--jobs", str(jobs), "--quiet"]
     if duration_s is not None:
         argv += ["--duration-s", f"{duration_s:g}"]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run(argv, env=env, cwd=ROOT, capture_output=True, text=True)
+    proc = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     shutil.rmtree(out.parent, ignore_errors=True)

@@ -28,23 +28,20 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import sys
 import tempfile
 import time
 
 import mujoco
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-from correction.output.apply import correct  # noqa: E402
-from correction.output.filters import reference_filter  # noqa: E402
-from scenarios.core.config import parse_scenario  # noqa: E402
-from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, PoseRecorder  # noqa: E402
-from scenarios.review.recording import write_recording  # noqa: E402
-from scenarios.core.rig import Rig  # noqa: E402
-from scenarios.core.run import run  # noqa: E402
-from scenarios.core.watch import output_schedule  # noqa: E402
+from correction.output.apply import correct
+from correction.output.filters import reference_filter
+from scenarios.core.config import parse_scenario
+from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, PoseRecorder
+from scenarios.core.rig import Rig
+from scenarios.core.run import run
+from scenarios.core.watch import output_schedule
+from scenarios.review.recording import write_recording
 
 TARGET_RATIO = 0.05
 

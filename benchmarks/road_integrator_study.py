@@ -8,16 +8,15 @@ the step, and the tire force at t_k is reconstructed with the tire's law
 through that code path: ``Rig(sc, hydraulic=False)`` with the step in ``vehicle.timestep_s``,
 the integrator set on the compiled model, ``rig.run(rig.road_source(), rate_hz=1000)``.
 
-"former" is the road test as it was stepped before (commit 6b0aa2e): the pans on their slide
-joints (``build_spec(variant)``), the XML's explicit Euler at 1e-4 s, a Python loop setting the
-pan joints' qpos/qvel to the drive's z_k, v_k before each ``mj_step`` and reading
-``actuator_force`` after it; reproduced in :func:`former_run` (the same forces, bit for bit, as
-that commit's road ``Rig.run``: checked on 3 s of paper case 1 when this study was written).
+"loop" is the road test stepped without ``mujoco.rollout``, the plainest way and the costs'
+baseline: the pans on their slide joints (``build_spec(variant)``), the XML's explicit Euler at
+1e-4 s, a Python loop setting the pan joints' qpos/qvel to the drive's z_k, v_k before each
+``mj_step`` and reading ``actuator_force`` after it (:func:`loop_run`).
 "Euler 1e-4 s" goes through rollout and is not that loop: its pans hold the mid-step values.
 
 1. road DLC: the paper's three cases (``--dlc-s``, default 20 s after the 2 s lead-in), the DLC
    of each wheel's force (:func:`correction.metrics.dlc.dlc`), its error (%) against Euler at 2.5e-5 s
-   (the issue's reference; goal within 0.1 %) and against RK4 at 1e-4 s (a second, higher-order
+   (the reference; goal within 0.1 %) and against RK4 at 1e-4 s (a second, higher-order
    reference); the wheel-force NRMSE (:func:`correction.metrics.dlc.nrmse`) against each at the common
    output instants. Beside them, against the Euler reference: the raw sensor force (what MuJoCo
    applied over the step: the pan at mid-step, moving at its mean velocity; the rollout's
@@ -30,8 +29,8 @@ that commit's road ``Rig.run``: checked on 3 s of paper case 1 when this study w
    a SimulationError or a non-finite output is a failure; a case the scenario refuses before any
    step (ScenarioError) is counted apart.
 3. cost: one road run of paper case 1 (``--dlc-s``) in this process after a warm-up, median of
-   ``--repeats``, rounds interleaved; the wall time of ``Rig.run`` (of the loop for "former"),
-   as a ratio to "former".
+   ``--repeats``, rounds interleaved; the wall time of ``Rig.run`` (of the loop for "loop"),
+   as a ratio to "loop".
 
 Prints a markdown table, one JSON line and the cheapest configuration passing all goals.
 
@@ -46,7 +45,6 @@ import argparse
 import dataclasses
 import json
 import os
-import pathlib
 import sys
 import time
 import types
@@ -57,25 +55,24 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-from generalization import case_documents  # noqa: E402
-from integrator_study import INTEGRATORS, paper_case, scenario_at  # noqa: E402
 from correction.metrics.dlc import dlc, nrmse  # noqa: E402
 from mjcf.build import build_spec  # noqa: E402
 from mjcf.names import CORNERS, pan_joint  # noqa: E402
 from mjcf.physics import RigIndex, static_equilibrium, tire_law  # noqa: E402
 from scenarios.core import stepping  # noqa: E402
-from scenarios.core.config import ScenarioError, parse_scenario  # noqa: E402
+from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.core.rig import RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S, Rig, actuator_params  # noqa: E402
 from scenarios.core.watch import SimulationError, output_schedule  # noqa: E402
+from scenarios.studies.suites import generalization_cases  # noqa: E402
 
-#: (integrator, time step in s); "former": the loop of explicit Euler steps with the pan joints set.
-CONFIGS = (("Euler", 2.5e-5), ("RK4", 1e-4), ("former", 1e-4), ("Euler", 1e-4), ("RK4", 5e-4),
+INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER, "RK4": mujoco.mjtIntegrator.mjINT_RK4,
+               "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}
+
+#: (integrator, time step in s); "loop": the loop of explicit Euler steps with the pan joints set.
+CONFIGS = (("Euler", 2.5e-5), ("RK4", 1e-4), ("loop", 1e-4), ("Euler", 1e-4), ("RK4", 5e-4),
            ("RK4", 1e-3), ("RK4", 2e-3), ("implicitfast", 1e-3))
-REFERENCE, SECOND_REFERENCE, FORMER = 0, 1, 2
+REFERENCE, SECOND_REFERENCE, LOOP = 0, 1, 2
 REFERENCES = (REFERENCE, SECOND_REFERENCE)  # not candidates: no generalization runs
 ADOPTED = CONFIGS.index((RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S))
 DLC_GOAL_PCT, OUTPUT_HZ = 0.1, 1000.0
@@ -83,9 +80,19 @@ GEN_CASES, GEN_BATCH = 24, 6
 MAX_STEP_S = 1e-3  # the largest vehicle.timestep_s a scenario accepts (mjcf.build.BOUNDS)
 
 
+def scenario_at(scenario, dt_s: float, **changes):
+    """The scenario with ``vehicle.timestep_s = dt_s`` (s) and other top-level ``changes``."""
+    return dataclasses.replace(scenario, vehicle=dataclasses.replace(scenario.vehicle, timestep_s=dt_s), **changes)
+
+
+def paper_case(k: int, duration_s: float):
+    """The paper's case ``k`` (Table 2's order) at ``duration_s`` (s)."""
+    return dataclasses.replace(load_scenario(paper_scenarios()[k]), duration_s=float(duration_s))
+
+
 def label(i: int) -> str:
     name, dt = CONFIGS[i]
-    return f"{name} {dt:g} s" + (" (Euler loop, pan joints)" if i == FORMER else "")
+    return f"{name} {dt:g} s" + (" (Euler, pan joints)" if i == LOOP else "")
 
 
 def rate_hz(i: int) -> float:
@@ -103,8 +110,8 @@ def make_rig(scenario, i: int) -> Rig:
     return rig
 
 
-def former_setup(scenario):
-    """(model, index, drive) of the former road test: pans on slide joints limited to the
+def loop_setup(scenario):
+    """(model, index, drive) of the road test stepped in a loop: pans on slide joints limited to the
     actuator's stroke, the XML's explicit Euler at 1e-4 s, the road on that step."""
     params = actuator_params(scenario)
     variant = scenario.vehicle
@@ -114,14 +121,14 @@ def former_setup(scenario):
     for c in CORNERS:
         spec.joint(pan_joint(c)).range = [-params.half_stroke_m, params.half_stroke_m]
     model = spec.compile()
-    if model.opt.integrator != INTEGRATORS["Euler"] or model.opt.timestep != CONFIGS[FORMER][1]:
-        raise ValueError("the model file no longer gives explicit Euler at 1e-4 s: 'former' is not the former loop")
+    if model.opt.integrator != INTEGRATORS["Euler"] or model.opt.timestep != CONFIGS[LOOP][1]:
+        raise ValueError("the model file does not give explicit Euler at 1e-4 s: 'loop' would not be the Euler loop")
     drive = Rig(scenario_at(scenario, model.opt.timestep), hydraulic=False).road_source()
     return model, RigIndex.of(model), drive
 
 
-def former_run(model, idx, drive, rate: float) -> dict:
-    """The former road test's stepping: the output instants (s), drive (m) and tire forces (N)."""
+def loop_run(model, idx, drive, rate: float) -> dict:
+    """The road test stepped in a Python loop: the output instants (s), drive (m) and tire forces (N)."""
     data = mujoco.MjData(model)
     static_equilibrium(model, data, pan_z_m=drive.chunk(0, 1)[0][0])
     k0, decim, n_out = output_schedule(drive, model.opt.timestep, rate)
@@ -140,7 +147,7 @@ def former_run(model, idx, drive, rate: float) -> dict:
             if out[i]:
                 force[row[i]] = act_force[idx.tire_actuator]
     if np.any(data.warning.number) or not np.all(np.isfinite(force)):
-        raise SimulationError("the former loop warned or produced non-finite tire forces")
+        raise SimulationError("the Euler loop warned or produced non-finite tire forces")
     return {"t": t, "x": x, "f": force, "raw": None}
 
 
@@ -175,8 +182,8 @@ def road_run(sc, i: int, capture: bool = False) -> dict:
     """One road run of ``sc`` at configuration ``i``: output instants (s), drive (m), forces (N);
     with ``capture`` also the raw sensor force (the pan at mid-step, at its mean velocity) and
     that force with the pan moved back to z_k ("moved"), N."""
-    if i == FORMER:
-        return former_run(*former_setup(sc), rate_hz(i))
+    if i == LOOP:
+        return loop_run(*loop_setup(sc), rate_hz(i))
     rig = make_rig(sc, i)
     drive = rig.road_source()
     if not capture:
@@ -202,7 +209,7 @@ def road_run(sc, i: int, capture: bool = False) -> dict:
 def dlc_job(i: int, case: int, duration_s: float) -> dict:
     """Worker: one road run of paper case ``case`` at configuration ``i``."""
     try:
-        return road_run(paper_case(case, duration_s), i, capture=i != FORMER)
+        return road_run(paper_case(case, duration_s), i, capture=i != LOOP)
     except Exception as exc:  # a failed configuration is a result, not the end of the study
         return {"error": f"{type(exc).__name__}: {exc}"}
 
@@ -227,15 +234,15 @@ def gen_job(i: int, docs: list, duration_s: float) -> list:
 # ------------------------------------------------------------------------ in this process
 def cost(duration_s: float, repeats: int) -> dict:
     """Per configuration: the median wall time (s) of one road run of paper case 1 (the stepping:
-    ``Rig.run`` or the former loop; the model built beforehand), rounds interleaved, after a warm-up."""
+    ``Rig.run`` or the Euler loop; the model built beforehand), rounds interleaved, after a warm-up."""
     sc = paper_case(0, duration_s)
-    made = {i: former_setup(sc) if i == FORMER else make_rig(sc, i) for i in range(len(CONFIGS))}
+    made = {i: loop_setup(sc) if i == LOOP else make_rig(sc, i) for i in range(len(CONFIGS))}
 
     def once(i: int) -> float:
-        if i == FORMER:
+        if i == LOOP:
             model, idx, drive = made[i]
             t0 = time.perf_counter()
-            former_run(model, idx, drive, rate_hz(i))
+            loop_run(model, idx, drive, rate_hz(i))
         else:
             drive = made[i].road_source()
             t0 = time.perf_counter()
@@ -277,7 +284,7 @@ def main(argv=None) -> dict:
     args = ap.parse_args(argv)
     t_start = time.perf_counter()
     n = len(CONFIGS)
-    docs = case_documents(GEN_CASES, args.gen_s)
+    docs = generalization_cases(GEN_CASES, args.gen_s)
     jobs, where = [], []
     for i in range(n):  # the references (the longest jobs) first
         for c in range(3):
@@ -312,7 +319,7 @@ def main(argv=None) -> dict:
                 row["nrmse" + key] = [x["nrmse"].tolist() for x in cmp]
                 row["worst_nrmse" + key] = float(np.max(row["nrmse" + key]))
                 row["drive_difference_m" + key] = max(x["drive_m"] for x in cmp)
-            for key in ("raw", "moved") if i != FORMER else ():
+            for key in ("raw", "moved") if i != LOOP else ():
                 part = [compare(runs[(i, c)], runs[(REFERENCE, c)], key) for c in range(3)]
                 row[key + "_nrmse"] = [x["nrmse"].tolist() for x in part]
                 row["worst_" + key + "_nrmse"] = float(np.max(row[key + "_nrmse"]))
@@ -321,14 +328,14 @@ def main(argv=None) -> dict:
         row["stable"] = None if g is None else int(sum(r["ok"] for r in g))
         row["unstable_cases"] = [] if g is None else [f"{r['case']}: {r['error']}" for r in g if not r["ok"]]
         row["refused"] = None if g is None else int(sum(bool(r.get("refused")) for r in g))
-        row.update(run_s=costs[i], cost_ratio=costs[i] / costs[FORMER])
+        row.update(run_s=costs[i], cost_ratio=costs[i] / costs[LOOP])
         row["passes"] = bool(not row["errors"] and row["worst_dlc_pct"] <= DLC_GOAL_PCT
                              and row["stable"] == GEN_CASES and row["output_hz"] == OUTPUT_HZ)
         rows.append(row)
 
     print(f"# Road-test integrator study: against {label(REFERENCE)} and {label(SECOND_REFERENCE)}; paper cases "
           f"{args.dlc_s:g} s each (+2 s lead-in), {GEN_CASES} generalization cases of {args.gen_s:g} s; "
-          f"cost: median of {args.repeats}, ratio to {label(FORMER)}\n")
+          f"cost: median of {args.repeats}, ratio to {label(LOOP)}\n")
     print("| config | road run s | cost ratio | worst DLC err % | worst NRMSE | vs RK4 1e-4: DLC % ; NRMSE "
           "| raw sensor: NRMSE ; DLC % | pan at z_k, mean velocity: NRMSE ; DLC % | stable | passes |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |")
@@ -359,9 +366,9 @@ def main(argv=None) -> dict:
     candidates = [r for i, r in enumerate(rows) if r["passes"] and i not in REFERENCES]
     best = min(candidates, key=lambda r: r["cost_ratio"]) if candidates else None
     print(f"\nCheapest passing: {best['config'] if best else 'none'}"
-          + (f" (cost ratio {best['cost_ratio']:.2f} of {label(FORMER)})" if best else "")
+          + (f" (cost ratio {best['cost_ratio']:.2f} of {label(LOOP)})" if best else "")
           + f"; adopted (scenarios.core.rig): {label(ADOPTED)}")
-    summary = {"reference": label(REFERENCE), "second_reference": label(SECOND_REFERENCE), "former": label(FORMER),
+    summary = {"reference": label(REFERENCE), "second_reference": label(SECOND_REFERENCE), "loop": label(LOOP),
                "adopted": label(ADOPTED), "cheapest_passing": best["config"] if best else None,
                "dlc_s": args.dlc_s, "gen_s": args.gen_s, "repeats": args.repeats,
                "wall_s": round(time.perf_counter() - t_start, 1), "configs": rows}

@@ -9,21 +9,20 @@ fresh process per duration and reads its peak resident memory (``getrusage`` of 
 child, ``ru_maxrss``). Prints one JSON line: the peak per duration (MB), the fixed part (the
 shortest run: interpreter, MuJoCo, numpy, scipy, numba, the model), the slope (MB per simulated
 minute: the record; the drive is made chunk by chunk and not held) and the size of the output
-(``timeseries.csv``, MB) for comparison. Goal of issue 11: a 600 s run under 400 MB
+(``timeseries.csv``, MB) for comparison. Goal: a 600 s run under 400 MB
 (``goal_met``, when 600 s is among the durations).
 
-What the peak is made of (rig mode, 600 s): ~184 MB of imports (numpy, scipy.signal with
-scipy.stats, MuJoCo, numba), ~40 MB of model and hydraulic callbacks (numba's code generator
-loading the cached machine code: ~32 MB), the road profile read during the run (15 MB) and the
-record (25 float64 columns at 1 kHz: 120 MB). The statistics and ``timeseries.csv`` work block
-by block after the run, within what the profile freed.
+What the peak is made of: the imports (numpy, scipy.signal with scipy.stats, MuJoCo, numba),
+the model and the hydraulic callbacks (numba's code generator loading the cached machine code),
+the road profile read during the run, and the record (25 float64 columns at 1 kHz: 12 MB per
+simulated minute). The statistics and ``timeseries.csv`` work block by block after the run,
+within what the profile freed.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
 import pathlib
 import resource
 import shutil
@@ -44,8 +43,7 @@ def peak_mb(mode: str, duration_s: float) -> tuple[float, float]:
             "import resource, sys; from scenarios.cli.main import main; rc = main(sys.argv[1:]); "
             "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr); sys.exit(rc)",
             "run", SCENARIO, "--mode", mode, "--duration-s", f"{duration_s:g}", "--out", str(out), "--quiet"]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    proc = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True)
+    proc = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         raise SystemExit(f"rigsim run failed: {proc.stderr.strip()[-400:]}")
     kb = int(proc.stderr.strip().splitlines()[-1])  # ru_maxrss is in KiB on Linux

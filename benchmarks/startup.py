@@ -41,7 +41,6 @@ import tempfile
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # this tree's packages (also when run from another checkout)
 SCENARIO = ROOT / "scenarios" / "data" / "paper" / "high_72kmh_3640kg.toml"
 
 

@@ -23,12 +23,10 @@ import sys
 import tempfile
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-
-from scenarios.core.pool import local_executor  # noqa: E402
-from scenarios.studies.sweep.executors import dask_executor  # noqa: E402
-from scenarios.studies.sweep.grid import parse_grid  # noqa: E402
-from scenarios.studies.sweep.run import run_sweep  # noqa: E402
+from scenarios.core.pool import local_executor
+from scenarios.studies.sweep.executors import dask_executor
+from scenarios.studies.sweep.grid import parse_grid
+from scenarios.studies.sweep.run import run_sweep
 
 TARGET_SPEEDUP = 1.9
 

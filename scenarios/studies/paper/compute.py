@@ -25,7 +25,7 @@ from scenarios.studies.identify.compute import RigIdentification, identify_rig
 from scenarios.studies.paper.table import PAPER_TABLE2
 from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, score_pair
 
-__all__ = ["PaperCase", "PaperResult", "run_paper", "ROW_KEYS"]
+__all__ = ["PaperCase", "PaperResult", "run_paper", "ROW_KEYS", "case_scenario", "run_job", "identify_job", "case_job"]
 
 #: paper.json's figures of a case (means over the wheels and per wheel) -> PairScore keys.
 ROW_KEYS = {
@@ -183,32 +183,32 @@ class PaperResult:
         return "\n".join(lines)
 
 
-def _scenario(path, duration_s: float | None):
+def case_scenario(path, duration_s: float | None):
     """The scenario at ``path``, with ``duration_s`` (s) in place of its own if given."""
     scenario = load_scenario(path)
     return scenario if duration_s is None else dataclasses.replace(scenario, duration_s=duration_s)
 
 
-def _run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None,
-             finish_run: Callable | None = None) -> RunResult:
+def run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None,
+            finish_run: Callable | None = None) -> RunResult:
     """Worker: load and run one scenario in one mode (in its own process), then ``finish_run(result)``."""
-    scenario = _scenario(path, duration_s)
+    scenario = case_scenario(path, duration_s)
     result = run(scenario, mode, pose_rate_hz=pose_rate_hz)
     if finish_run is not None:
         finish_run(result)
     return result
 
 
-def _identify_job(path: str, duration_s: float | None = None) -> RigIdentification:
+def identify_job(path: str, duration_s: float | None = None) -> RigIdentification:
     """Worker: identify the rig of one scenario (its test drive sets the rms), in its own process."""
-    scenario = _scenario(path, duration_s)
+    scenario = case_scenario(path, duration_s)
     return identify_rig(scenario)
 
 
-def _case_job(path: str, duration_s: float | None, noise_N: float, road: RunResult, rig: RunResult,
-              ident: RigIdentification, finish: Callable | None) -> PairScore:
+def case_job(path: str, duration_s: float | None, noise_N: float, road: RunResult, rig: RunResult,
+             ident: RigIdentification, finish: Callable | None) -> PairScore:
     """Worker: score one case (and ``finish(case)``, e.g. its files), as soon as its runs are in."""
-    scenario = _scenario(path, duration_s)
+    scenario = case_scenario(path, duration_s)
     score = score_pair(road, rig, Rig(scenario), methods=METHODS, identified=ident.actuators(),
                        noise_N=noise_N, seed=scenario.seed)
     if finish is not None:
@@ -247,11 +247,11 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
         ``finish_run(run_result)`` with each road and rig run, in the worker that ran it, as soon as
         it is done (picklable; e.g. writing the run's files while other runs go on).
     """
-    scenarios = [_scenario(p, duration_s) for p in paths]
+    scenarios = [case_scenario(p, duration_s) for p in paths]
     calls = []
     for p in paths:
-        calls += [(_identify_job, (str(p), duration_s))]
-        calls += [(_run_job, (str(p), mode, duration_s, pose_rate_hz, finish_run)) for mode in ("road", "rig")]
+        calls += [(identify_job, (str(p), duration_s))]
+        calls += [(run_job, (str(p), mode, duration_s, pose_rate_hz, finish_run)) for mode in ("road", "rig")]
     runs: list = [None] * len(calls)
     scores: list = [None] * len(paths)
     with local_executor(worker_count(workers, len(calls))) as ex:
@@ -270,7 +270,7 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
                 c = i // 3
                 if all(r is not None for r in runs[3 * c:3 * c + 3]):
                     ident, road, rig = runs[3 * c:3 * c + 3]
-                    case = ex.submit(_case_job, str(paths[c]), duration_s, noise_N, road, rig, ident, finish)
+                    case = ex.submit(case_job, str(paths[c]), duration_s, noise_N, road, rig, ident, finish)
                     jobs[case] = ("case", c)
                     pending.add(case)
     cases = [PaperCase(scenario=sc, road=runs[3 * c + 1], rig=runs[3 * c + 2], identification=runs[3 * c],

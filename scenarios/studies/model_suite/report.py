@@ -1,13 +1,18 @@
-"""benchmarks/model_correction.py's tables and goals, from its rows (one per case and plant).
+"""The model-correction study's tables and goals, from its rows (one per case and plant).
 
-A row (``model_correction.analyse``) holds ``case``, ``plant`` (a readable name), ``plant_key``
-(rigid / cab / tire / smooth), ``mismatch`` ("off": the plant inside the calibrated model family, "on":
-outside), ``method`` and ``reason`` (the model correction or the fallback to the linear one, and
-why), ``calibration`` (:class:`scenarios.records.model.result.Calibration` or None),
-``truth`` (the plant's values of the fitted fields, SI), per-wheel figures under ``wheels``
-(``floor``, ``linear``, ``linear_dlc_error``, ``rig``, and ``model``, ``model_dlc_error`` unless it
-fell back; NRMSE and DLC errors, 1), their ``mean``, ``scored_s`` (s), ``cpu_s`` and ``wall_s``
-(s, calibration plus correction).
+A row (``benchmarks/model_correction.py``'s ``analyse``) holds ``case``, ``plant`` (a readable
+name, :func:`scenarios.studies.model_suite.plants.plant_name`), ``plant_key`` (rigid / cab / tire
+/ smooth), ``mismatch`` ("off": the plant inside the calibrated model family, "on": outside),
+``method`` and ``reason`` (the model correction or the fallback to the linear one, and why),
+``calibration`` (:class:`scenarios.records.model.result.Calibration` or None), ``truth`` (the
+plant's values of the fitted fields, SI), per-wheel figures under ``wheels`` (``floor``,
+``linear``, ``linear_dlc_error``, ``rig``, and ``model``, ``model_dlc_error`` unless it fell back;
+NRMSE and DLC errors, 1), their ``mean``, ``scored_s`` (s), ``cpu_s`` and ``wall_s`` (s,
+calibration plus correction).
+
+The study's goals: the delivered NRMSE at most half the linear floor where the plant lies inside
+the model family (mismatch off), below it where outside (on); every wheel within 1 % of the road
+DLC; calibration plus correction of a 60 s case within :data:`GOAL_S` on 2 cores.
 """
 
 from __future__ import annotations
@@ -15,6 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from mjcf.names import CORNERS
+
+__all__ = ["GOAL_S", "FLOOR_GOALS", "wheels", "delivered", "plants_of", "cab_cell", "table", "summary", "goals",
+           "suite_table"]
 
 #: Wall-time goal of calibration plus correction of a 60 s case, s.
 GOAL_S = 300.0
@@ -108,7 +116,7 @@ def summary(rows: list[dict]) -> dict:
 
 
 def goals(rows: list[dict], duration_s: float) -> str:
-    """One line per goal of the issue: the share of wheels that meet it, met or not, the worst wheel
+    """One line per goal of the study: the share of wheels that meet it, met or not, the worst wheel
     (``duration_s``, s: the records' length)."""
     s, out = summary(rows), []
     for mismatch, (_, word) in FLOOR_GOALS.items():
