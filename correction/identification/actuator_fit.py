@@ -51,6 +51,7 @@ import numpy as np
 from correction.identification.actuator_fit_rules import (CANDIDATE_ORDERS, ActuatorFitError, choose_orders, held_out_error,
                                  rational_response, usable_actuator)
 from correction.identification.identify import fit_rational, h1_estimate
+from correction.output.lowpass import BAND_HZ
 from correction.output.transfer import describe_roots, transfer_bandwidth_hz
 
 __all__ = ["ActuatorFitError", "ActuatorFit", "fit_frequency_response", "fit_actuator", "default_nperseg",
@@ -59,9 +60,9 @@ __all__ = ["ActuatorFitError", "ActuatorFit", "fit_frequency_response", "fit_act
 #: Least fraction of the points in :data:`COHERENCE_BAND_HZ` with coherence >= coherence_min, 1.
 MIN_COHERENT_FRACTION = 0.7
 #: Band whose coherence decides whether the data support a fit, Hz (clipped to the fitted band).
-COHERENCE_BAND_HZ = (1.0, 30.0)
+COHERENCE_BAND_HZ = (1.0, BAND_HZ)
 #: Bands of :attr:`ActuatorFit.band_errors`, Hz (clipped to the fitted band).
-REPORT_BANDS_HZ = ((0.1, 1.0), (1.0, 10.0), (10.0, 30.0), (30.0, 60.0))
+REPORT_BANDS_HZ = ((0.1, 1.0), (1.0, 10.0), (10.0, BAND_HZ), (BAND_HZ, 60.0))
 #: Anchors ``H = 1`` at these fractions of the frequency resolution, 1.
 _ANCHORS = (0.01, 0.02, 0.05)
 #: Segments of the H1 estimate that a record needs for a usable coherence, 1.

@@ -37,6 +37,7 @@ import numpy as np
 from correction.input.convergence import IterationStabilityError, nrmse, predicted_spectral_radius
 from correction.input.frf import FRF, as_columns, frf_on_grid, inverse_frf
 from correction.input.update import band_weight, end_taper, drive_update
+from correction.output.lowpass import BAND_HZ
 
 __all__ = ["IterationStep", "IterationResult", "iterate_drive"]
 
@@ -122,7 +123,7 @@ def iterate_drive(
     drive0=None,
     response0=None,
     gain: float = 0.8,
-    band_hz: tuple[float, float] = (0.3, 30.0),
+    band_hz: tuple[float, float] = (0.3, BAND_HZ),
     coherence_min: float = 0.8,
     max_iterations: int = 8,
     tolerance: float = 0.01,

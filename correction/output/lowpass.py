@@ -28,9 +28,17 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
-__all__ = ["LowPass", "paper_lowpass", "regularized_lowpass", "as_lowpass"]
+__all__ = ["BAND_HZ", "BAND_ORDER", "LowPass", "paper_lowpass", "regularized_lowpass", "as_lowpass"]
+
+#: The correction's band limit, Hz: the corner of the regularized low-pass, and the top of the band
+#: in which the identification fits and checks T_a, the drive iteration updates the drive and the
+#: studies compare responses. ``rigsim correct --lowpass-hz`` (``lowpass_hz=``) moves the low-pass's
+#: corner for one correction.
+BAND_HZ = 30.0
+#: Order of the regularized low-pass (Butterworth), 1: above T_a's relative degree (3 for eq. 4),
+#: so the corrected force rolls off beyond :data:`BAND_HZ`.
+BAND_ORDER = 6
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,15 +127,16 @@ def paper_lowpass(f1_hz: float = 16.0, f2_hz: float = 24.0, zeta1: float = 1.0,
                                f"zeta {float(zeta1):g}/{float(zeta2):g} (paper eq. 5)")
 
 
-def regularized_lowpass(corner_hz: float = 30.0, order: int = 6) -> LowPass:
+def regularized_lowpass(corner_hz: float = BAND_HZ, order: int = BAND_ORDER) -> LowPass:
     """A Butterworth low-pass above the band of interest (this project's regularized inverse).
 
     Parameters
     ----------
     corner_hz : float, Hz
-        -3 dB frequency (default 30 Hz: the inverse is within 0.4 % of exact up to 20 Hz).
+        -3 dB frequency (default :data:`BAND_HZ`, 30 Hz: the inverse is within 0.4 % of exact up
+        to 20 Hz).
     order : int
-        Filter order (default 6). It must exceed the relative degree of ``T_a`` (3 for eq. 4)
+        Filter order (default :data:`BAND_ORDER`, 6). It must exceed the relative degree of ``T_a`` (3 for eq. 4)
         for the corrected force to roll off; at least 4 is advisable.
 
     Returns
@@ -136,6 +145,8 @@ def regularized_lowpass(corner_hz: float = 30.0, order: int = 6) -> LowPass:
         Butterworth poles (``scipy.signal.butter(order, 2 pi corner_hz, analog=True)``), unit
         static gain, ``band_hz = corner_hz``.
     """
+    from scipy import signal  # here, not at import: the command-line parsers read BAND_HZ
+
     corner = _positive("corner_hz", corner_hz)
     if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or order < 1:
         raise ValueError(f"low-pass parameter order must be a positive integer, got {order!r}")

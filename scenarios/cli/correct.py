@@ -4,8 +4,9 @@
 
     rigsim correct IN (--actuator ACT.toml | --actuators ACTS.toml [--map fl=CH,...]
                    | --identify DRIVE_CH,DISP_CH) -o OUT [--force] [--time-col NAME]
-                   [--lowpass paper|regularized] [--mode causal|zerophase] [--columns A,B]
-                   [--transient drop|mark|keep] [--decimal .|,] [--thousands none|,|.|'|space]
+                   [--lowpass paper|regularized] [--lowpass-hz HZ] [--mode causal|zerophase]
+                   [--columns A,B] [--transient drop|mark|keep] [--quiet]
+                   [--decimal .|,] [--thousands none|,|.|'|space]
     rigsim correct IN --model TRUCK.toml --pairs fl=DRIVE:LVDT,... -o OUT [--map fl=CH,...] ...
 
 ``IN`` is read by :func:`correction.io.measured.read_channels` (any CSV dialect, RPC III, MDF4, TDMS),
@@ -31,32 +32,36 @@ sentence naming the channel or line and the fix) and nothing is written; ``-o`` 
 or an existing file without ``--force``, is refused before any work.
 
 ``--model TRUCK.toml --pairs fl=DRIVE:LVDT,...`` corrects instead by a truck model calibrated on
-the file's own drive, LVDT and force channels (:mod:`scenarios.cli.correct_model`); the shared
-parts are :mod:`scenarios.records.channels` (which channels) and
-:mod:`scenarios.records.output` (checks, the linear correction, the file and the table).
+the file's own drive, LVDT and force channels (:mod:`scenarios.cli.correct_model`).
+
+This module parses and prints: the work is the records API's (:mod:`scenarios.records.api`; the
+settings checked by :func:`scenarios.records.settings.correction_settings`, the file read and
+the correction planned by their ``read``, then ``check_output``, ``run`` and the result's
+``write``), whose messages name the command's flags (:data:`CLI_NAMING`).
 """
 
 from __future__ import annotations
 
 import argparse
 
-from scenarios.records.channels import parse_options, plan_channels, read_input
+from scenarios.records.naming import Naming
+from scenarios.records.output import check_out_file
 from scenarios.studies.identify.command import add_number_format
-from scenarios.records.output import (check_out_file, fit_metadata, linear_correction,
-                                          linear_metadata, output_units, probe_output, rigsim_version,
-                                          write_corrected)
 
-__all__ = ["add_parser", "cmd_correct"]
+__all__ = ["CLI_NAMING", "add_parser", "cmd_correct"]
 
-
-def _error(message: str):
-    from scenarios.core.config import ScenarioError
-
-    return ScenarioError(message)
+#: The records API's keywords as ``rigsim correct`` names them.
+CLI_NAMING = Naming({"actuator": "--actuator", "actuators": "--actuators", "identify": "--identify",
+                     "columns": "--columns", "corner_map": "--map", "lowpass": "--lowpass",
+                     "lowpass_hz": "--lowpass-hz", "mode": "--mode", "transient": "--transient",
+                     "normalize_dc": "--normalize-dc", "model": "--model", "pairs": "--pairs", "workers": "--jobs",
+                     "max_evaluations": "--max-evaluations", "calibration_windows": "--calibration-windows",
+                     "cab": "--cab", "path": "-o"})
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``correct`` on an ``argparse`` sub-parsers object; sets ``func=cmd_correct``."""
+    from correction.output.lowpass import BAND_HZ, BAND_ORDER
     from scenarios.cli.correct_model import add_model_arguments
 
     c = subparsers.add_parser(
@@ -82,7 +87,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c.add_argument("--force", action="store_true", help="replace OUT if it exists (never an input file)")
     c.add_argument("--lowpass", choices=("paper", "regularized"), default="regularized",
                    help="paper: eq. 5 (2 x 2nd order, 16/24 Hz, zeta 1; already -3 dB near 8 Hz); "
-                        "regularized: 6th-order Butterworth at 30 Hz, inverse ~exact to 20 Hz (default)")
+                        f"regularized: Butterworth of order {BAND_ORDER} at --lowpass-hz, inverse ~exact to "
+                        "two thirds of it (default)")
+    c.add_argument("--lowpass-hz", type=float, default=None, metavar="HZ",
+                   help=f"with --lowpass regularized: the Butterworth's corner (-3 dB), Hz, below half the "
+                        f"sampling rate (default {BAND_HZ:g})")
     c.add_argument("--mode", choices=("causal", "zerophase"), default="zerophase",
                    help="zerophase: |T_a^-1 T_F| with T_a^-1's phase, offline (default); causal: as a "
                         "real-time filter (adds T_F's phase lag)")
@@ -94,38 +103,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c.add_argument("--transient", choices=("drop", "mark", "keep"), default="drop",
                    help="samples inside the filters' transients: drop (default), mark ('settled' channel) or keep")
     c.add_argument("--normalize-dc", action="store_true", help="scale T_a to T_a(0) = 1 instead of refusing it")
+    c.add_argument("--quiet", action="store_true",
+                   help="no progress lines or notes on stderr (the result is printed)")
     add_model_arguments(c)
     c.set_defaults(func=cmd_correct)
     return c
-
-
-def _read_actuators(args):
-    from correction.io.actuator_file import read_actuator_file, read_actuators_file
-
-    given = [o for o in ("actuator", "actuators", "identify") if getattr(args, o) is not None]
-    if len(given) != 1:
-        raise _error("give exactly one of --actuator ACT.toml, --actuators ACTS.toml and --identify DRIVE_COL,DISP_COL")
-    if args.map is not None and args.actuators is None:
-        raise _error("--map maps corners of a per-corner file: use it with --actuators ACTS.toml")
-    try:
-        if args.actuator is not None:
-            return read_actuator_file(args.actuator)
-        if args.actuators is not None:
-            return read_actuators_file(args.actuators)
-    except ValueError as exc:
-        raise _error(str(exc)) from None
-    return None
-
-
-def _metadata(args, id_cols, cols, corners) -> dict[str, str]:
-    """How the output was made: rigsim version, input, T_a source, low-pass, mode, tolerance."""
-    source = f"identified from {','.join(id_cols)}" if args.identify else str(args.actuator or args.actuators)
-    meta = {"made_by": "rigsim correct", "rigsim_version": rigsim_version(), "input": str(args.input),
-            "ta_source": source}
-    if corners is not None:
-        meta["corners"] = ",".join(f"{k}={c}" for k, c in zip(corners, cols))
-    meta.update(linear_metadata(args))
-    return fit_metadata(args.out, meta)
 
 
 def cmd_correct(args) -> int:
@@ -133,45 +115,22 @@ def cmd_correct(args) -> int:
     from scenarios.cli import correct_model
 
     if args.model is not None:
-        return correct_model.cmd_correct_model(args)
+        return correct_model.cmd_correct_model(args, CLI_NAMING)
     correct_model.refuse_model_options(args)
-    import numpy as np
+    from scenarios.records.settings import correction_settings
 
-    from correction.identification.actuator_fit import fit_actuator
-
-    inputs = [args.input, args.actuator, args.actuators]
-    check_out_file(args.out, inputs, args.force)
-    asked, items, id_cols = parse_options(args)
-    ta_file = _read_actuators(args)
-    mc, name = read_input(args, asked, items, id_cols)
-    asked = None if asked is None else [name(c) for c in asked]
-    items = None if items is None else [(k, name(c)) for k, c in items]
-    force_cols, id_cols, corners = plan_channels(args, mc, asked, items, [name(c) for c in id_cols],
-                                                 list(ta_file) if args.actuators is not None else None)
-    if not force_cols:
-        raise _error(f"{str(args.input)!r} has no force channel to correct (unit N, kN... or none); name them with "
-                     "--columns")
-    fs = mc.fs_hz
-    meta = _metadata(args, id_cols, force_cols, corners)
-    probe_output(args.out, output_units(force_cols, args.transient), meta)
-    source = f"from {str(args.actuator or args.actuators)!r}"
-    if args.identify is not None:
-        drive, disp = (mc.data[c] for c in id_cols)
-        if np.std(drive) == 0 or np.std(disp) == 0:
-            raise _error(f"--identify columns {id_cols[0]!r} and {id_cols[1]!r} must vary to identify T_a")
-        try:
-            fit = fit_actuator(drive, disp, fs)
-        except ValueError as exc:
-            raise _error(f"cannot identify T_a from {id_cols[0]!r} and {id_cols[1]!r}: {exc}") from None
-        tas = fit
-        source = (f"identified (orders {fit.orders[0]}/{fit.orders[1]}, held-out error {fit.held_out_error:.1%}, "
-                  f"bandwidth {fit.bandwidth_hz:.3g} Hz)")
-    else:
-        tas = ta_file if corners is None else [ta_file[c] for c in corners]
-    forces = mc.array(force_cols)
-    res = linear_correction(args, forces, tas, fs, force_cols, corners)
-    write_corrected(args, mc, force_cols, forces, res.corrected_N, res.settled, meta, inputs)
-    print(f"corrected {len(force_cols)} channel(s) of {str(args.input)!r} at {fs:.6g} Hz (T_a {source}, low-pass "
-          f"{res.filters[0].lowpass.description}, {args.mode}); {forces.shape[0] - int(res.settled.sum())} transient "
-          f"samples {'dropped' if args.transient == 'drop' else 'kept'}; wrote {args.out}")
+    check_out_file(args.out, [args.input, args.actuator, args.actuators], args.force)
+    settings = correction_settings(
+        actuator=args.actuator, actuators=args.actuators, identify=args.identify, columns=args.columns,
+        corner_map=args.map, lowpass=args.lowpass, lowpass_hz=args.lowpass_hz, mode=args.mode,
+        transient=args.transient, normalize_dc=args.normalize_dc, naming=CLI_NAMING)
+    plan = settings.read(args.input, time_col=args.time_col, decimal=args.decimal, thousands=args.thousands)
+    plan.check_output(args.out)
+    result = plan.run()
+    result.write(args.out, overwrite=args.force)
+    if result.settled.any():
+        print(result.table())
+    print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz "
+          f"({result.description}); {result.transient_samples} transient samples "
+          f"{'dropped' if args.transient == 'drop' else 'kept'}; wrote {args.out}")
     return 0

@@ -1,30 +1,33 @@
-"""Which channels of a measured file ``rigsim correct`` corrects, and the corner of each.
+"""Which channels of a record are corrected, and the corner of each.
 
-Shared by the linear correction (:mod:`scenarios.cli.correct`) and the model correction
-(:mod:`scenarios.cli.correct_model`): ``--columns``, ``--map`` and ``--identify`` parsed
-(:func:`parse_options`), the file read once with only the channels they name
-(:func:`read_input`), and the force channels chosen and checked (:func:`plan_channels`): a corner
+Shared by the linear correction and the model correction (:mod:`scenarios.records.api`):
+``columns``, ``corner_map`` and ``identify`` read in their text form (``"A,B"``,
+``"fl=Fz_FL,..."``, ``"DRIVE,DISP"``) or as Python sequences (:func:`parse_columns`,
+:func:`parse_corner_map`, :func:`parse_identify`), the channels they name so that a file is read
+with only those (:func:`wanted_channels`), each name as given matched to the name as read
+(:func:`resolver`), and the force channels chosen and checked (:func:`plan_channels`): a corner
 corrects the force channel whose name holds the corner as a token (``tire_force_fl_N``,
-``Fz_FL``, case-insensitive, :func:`names_corner`) or the one ``--map`` gives. Every refusal is a
-:class:`scenarios.core.config.ScenarioError` of one sentence naming the channel and the fix.
-Imports nothing heavy at module level (the parser's start-up stays light).
+``Fz_FL``, case-insensitive, :func:`names_corner`) or the one ``corner_map`` gives. Every refusal
+is a :class:`scenarios.core.config.ScenarioError` of one sentence naming the channel and the fix,
+the parameter named as the caller's :class:`~scenarios.records.naming.Naming` says. Imports
+nothing heavy at module level (the parser's start-up stays light).
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 
-__all__ = ["FORCE_UNITS", "LENGTH_UNITS", "split_columns",
-           "names_corner", "map_items", "check_map", "auto_map", "parse_options", "read_input", "unit_text",
-           "plan_channels"]
+from scenarios.records.naming import KEYWORDS, Naming
+
+__all__ = ["FORCE_UNITS", "LENGTH_UNITS", "split_columns", "names_corner", "map_items", "check_map", "auto_map",
+           "parse_columns", "parse_corner_map", "parse_identify", "wanted_channels", "read_record", "resolver",
+           "unit_text", "plan_channels"]
 
 #: SI units of forces, lengths as the reader returns them ("": none given, taken as SI).
 FORCE_UNITS, LENGTH_UNITS = ("N", ""), ("m", "")
 
-#: ``--decimal`` and ``--thousands`` choices: :data:`correction.io.measured_numbers.DECIMALS` and
-#: ``THOUSANDS`` (not imported here, to keep the parser light).
-
-#: Whose corners ``--map`` and the name tokens are matched against, in the linear correction's messages.
+#: Whose corners ``corner_map`` and the name tokens are matched against, in the linear correction's messages.
 ACTUATOR_FILE = "the actuator file"
 
 
@@ -52,33 +55,33 @@ def names_corner(column: str, corner: str) -> bool:
     return bool(cor) and any(col[i:i + len(cor)] == cor for i in range(len(col) - len(cor) + 1))
 
 
-def map_items(text: str) -> list[tuple[str, str]]:
-    """``--map`` as (corner, channel) pairs; syntax only."""
+def map_items(text: str, naming: Naming = KEYWORDS) -> list[tuple[str, str]]:
+    """``"fl=Fz_FL,fr=Fz_FR"`` as (corner, channel) pairs; syntax only."""
     items = []
-    for item in split_columns(text, "--map"):
+    for item in split_columns(text, naming("corner_map")):
         corner, sep, col = (x.strip() for x in item.partition("="))
         if not sep or not corner or not col:
-            raise _error(f"--map item {item!r} must be CORNER=COLUMN, e.g. fl=Fz_FL")
+            raise _error(f"{naming('corner_map')} item {item!r} must be CORNER=COLUMN, e.g. fl=Fz_FL")
         items.append((corner, col))
     return items
 
 
-def check_map(items, corners, names, owner: str = ACTUATOR_FILE) -> dict[str, str]:
-    """``--map`` items checked against the ``corners`` of ``owner`` and the input's channel ``names``."""
-    out = {}
+def check_map(items, corners, names, owner: str = ACTUATOR_FILE, naming: Naming = KEYWORDS) -> dict[str, str]:
+    """``corner_map`` items checked against the ``corners`` of ``owner`` and the input's channel ``names``."""
+    out, opt = {}, naming("corner_map")
     for corner, col in items:
         if corner not in corners:
-            raise _error(f"--map names corner {corner!r}, which is not in {owner} (its corners are "
+            raise _error(f"{opt} names corner {corner!r}, which is not in {owner} (its corners are "
                          f"{', '.join(corners)})")
         if col not in names:
-            raise _error(f"--map names column {col!r}, which is not in the input (its columns are {', '.join(names)})")
+            raise _error(f"{opt} names column {col!r}, which is not in the input (its columns are {', '.join(names)})")
         if corner in out:
-            raise _error(f"--map gives corner {corner!r} twice; give each corner one column")
+            raise _error(f"{opt} gives corner {corner!r} twice; give each corner one column")
         out[corner] = col
     return out
 
 
-def auto_map(corners, pool, restricted: bool, owner: str = ACTUATOR_FILE) -> dict[str, str]:
+def auto_map(corners, pool, restricted: bool, owner: str = ACTUATOR_FILE, naming: Naming = KEYWORDS) -> dict[str, str]:
     """Corner -> column by name tokens; one sentence naming the corner (or column) and the fix."""
     out = {}
     if restricted:  # every asked column needs exactly one corner
@@ -87,10 +90,10 @@ def auto_map(corners, pool, restricted: bool, owner: str = ACTUATOR_FILE) -> dic
             if len(hits) != 1:
                 what = "no corner" if not hits else f"several corners ({', '.join(hits)})"
                 raise _error(f"column {col!r} names {what} of {owner} (corners {', '.join(corners)}); "
-                             f"fix: --map CORNER={col}")
+                             f"fix: {naming.setting('corner_map', f'CORNER={col}')}")
             if hits[0] in out:
-                raise _error(f"columns {out[hits[0]]!r} and {col!r} both name corner {hits[0]!r}; fix: --map "
-                             f"{hits[0]}=COLUMN")
+                raise _error(f"columns {out[hits[0]]!r} and {col!r} both name corner {hits[0]!r}; fix: "
+                             f"{naming.setting('corner_map', f'{hits[0]}=COLUMN')}")
             out[hits[0]] = col
         return out
     for corner in corners:
@@ -98,38 +101,117 @@ def auto_map(corners, pool, restricted: bool, owner: str = ACTUATOR_FILE) -> dic
         if len(hits) != 1:
             what = "no column" if not hits else f"several columns ({', '.join(hits)})"
             raise _error(f"corner {corner!r} of {owner} matches {what} of the input; fix: "
-                         f"--map {corner}=COLUMN (or --columns naming the force columns)")
+                         f"{naming.setting('corner_map', f'{corner}=COLUMN')} (or {naming('columns')} naming the "
+                         "force columns)")
         out[corner] = hits[0]
     return out
 
 
-def parse_options(args):
-    """(--columns list or None, --map items or None, --identify channels); syntax only."""
-    id_cols = split_columns(args.identify, "--identify") if args.identify is not None else []
-    if args.identify is not None and len(id_cols) != 2:
-        raise _error(f"--identify needs two columns DRIVE_COL,DISP_COL, got {args.identify!r}")
-    asked = split_columns(args.columns, "--columns") if args.columns is not None else None
-    if asked is not None and len(set(asked)) != len(asked):
-        raise _error(f"--columns {args.columns!r} names a column twice; name each column once")
-    items = map_items(args.map) if args.map is not None else None
-    return asked, items, id_cols
+def _names(value, key: str, naming: Naming) -> list[str]:
+    """A text ``"A,B"`` or a sequence of channel names as a list; an empty name refused."""
+    if isinstance(value, str):
+        return split_columns(value, naming(key))
+    names = [str(c).strip() for c in value]
+    if not all(names):
+        raise _error(f"{naming(key)} {value!r} has an empty channel name; give names separated by commas")
+    return names
 
 
-def read_input(args, asked, items, id_cols):
-    """The input's channels (every numeric one, or only those named by --columns, --map and
-    ``id_cols``), and each name as given -> the name as read (a CSV header may match by case)."""
+def parse_identify(value, naming: Naming = KEYWORDS) -> list[str]:
+    """``identify`` (``"DRIVE,DISP"`` or two names) as [drive, displacement]; [] when None."""
+    if value is None:
+        return []
+    cols = _names(value, "identify", naming)
+    if len(cols) != 2:
+        raise _error(f"{naming('identify')} needs two columns DRIVE_COL,DISP_COL, got {value!r}")
+    return cols
+
+
+def parse_columns(value, naming: Naming = KEYWORDS) -> list[str] | None:
+    """``columns`` (``"A,B"`` or names) as a list, None when not given; a name twice refused."""
+    if value is None:
+        return None
+    asked = _names(value, "columns", naming)
+    if len(set(asked)) != len(asked):
+        raise _error(f"{naming('columns')} {value!r} names a column twice; name each column once")
+    return asked
+
+
+def parse_corner_map(value, naming: Naming = KEYWORDS) -> list[tuple[str, str]] | None:
+    """``corner_map`` (``"fl=Fz_FL,..."``, a mapping or (corner, channel) pairs) as pairs; None when not given."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        return map_items(value, naming)
+    pairs = value.items() if isinstance(value, Mapping) else value
+    items = []
+    for item in pairs:
+        if isinstance(item, str) or len(item) != 2 or not all(str(x).strip() for x in item):
+            raise _error(f"{naming('corner_map')} item {item!r} must be CORNER=COLUMN, e.g. fl=Fz_FL")
+        items.append((str(item[0]).strip(), str(item[1]).strip()))
+    return items
+
+
+def wanted_channels(asked, items, id_cols) -> list[str] | None:
+    """The channels to read: those named by ``asked`` (columns), ``items`` (corner map) and ``id_cols``
+    (never corrected), in that order; None (every numeric channel) when neither columns nor map is given."""
+    if asked is None and items is None:
+        return None
+    return list(dict.fromkeys((asked or []) + [c for _, c in items or []] + list(id_cols)))
+
+
+def read_record(path, *, time_col: str | None = None, channels=None, decimal: str | None = None,
+                thousands: str | None = None):
+    """Read a rig's record: its channels in SI on its uniform time axis.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        .csv/.txt/.dat in any dialect, .rsp/.drv/.tim/.rpc (RPC III), .mf4/.mdf (MDF4), .tdms.
+    time_col : str, optional
+        The time column (default: the one with a time name: ``time``, ``t``, ``zeit``...).
+    channels : sequence of str, optional
+        Only these channels, in this order (a name may be a header as written, or differ by case);
+        default: every numeric channel.
+    decimal : {".", ","}, optional
+        A text file's decimal mark (default: decided by its numbers).
+    thousands : {"none", ",", ".", "'", "space"}, optional
+        A text file's thousands separator (default: detected).
+
+    Returns
+    -------
+    correction.io.measured.MeasuredChannels
+        ``time_s`` (s), ``data`` in SI (a force in kN is read in N, a length in mm in m), ``units``,
+        ``source_units``, ``fs_hz`` (Hz), ``metadata``, ``path``.
+
+    Raises
+    ------
+    ScenarioError
+        One sentence naming the file and the column, line, unit or option at fault
+        (:func:`correction.io.measured.read_channels`).
+    """
     from correction.io.measured import MeasuredDataError, read_channels
 
-    wanted = None
-    if asked is not None or items is not None:
-        wanted = list(dict.fromkeys((asked or []) + [c for _, c in items or []] + list(id_cols)))
     try:
-        mc = read_channels(args.input, time_col=args.time_col, channels=wanted, decimal=args.decimal,
-                           thousands=args.thousands)
+        return read_channels(path, time_col=time_col, channels=channels, decimal=decimal, thousands=thousands)
     except MeasuredDataError as exc:
         raise _error(str(exc)) from None
-    alias = dict(zip(wanted, mc.names)) if wanted is not None else {}
-    return mc, (lambda name: alias.get(name, name))
+
+
+def resolver(mc, as_read: Mapping | None = None):
+    """name -> the channel of ``mc`` it names: itself, the name ``as_read`` gives it (the reader matched
+    it to a header as written, or by case), or the one channel equal to it but for case; else itself."""
+    names, as_read = list(mc.names), dict(as_read or {})
+    low = [n.lower() for n in names]
+
+    def name(given: str) -> str:
+        if given in names:
+            return given
+        if given in as_read:
+            return as_read[given]
+        return names[low.index(given.lower())] if low.count(given.lower()) == 1 else given
+
+    return name
 
 
 def unit_text(mc, name: str) -> str:
@@ -137,44 +219,47 @@ def unit_text(mc, name: str) -> str:
     return mc.source_units.get(name) or mc.units.get(name) or "no unit"
 
 
-def plan_channels(args, mc, asked, items, id_cols, corners, owner: str = ACTUATOR_FILE):
+def plan_channels(mc, asked, items, id_cols, corners, owner: str = ACTUATOR_FILE, naming: Naming = KEYWORDS):
     """(channels to correct, ``id_cols``, corner of each channel or None); checks only.
 
-    ``id_cols``: the drive and displacement channels (``--identify``), never corrected; ``corners``:
-    the corner names of ``owner`` (the ``--actuators`` file, the truck model), None: no corners.
+    ``mc``: the record (:class:`correction.io.measured.MeasuredChannels`); ``asked``, ``items``: the
+    columns and corner-map pairs (names as read), None when not given; ``id_cols``: the drive and
+    displacement channels (``identify``, ``pairs``), never corrected; ``corners``: the corner
+    names of ``owner`` (the per-corner actuator file, the truck model), None: no corners.
     """
     names, time_name = list(mc.names), mc.time_name
     for col in id_cols + (asked or []):
         if col == time_name:
             raise _error(f"column {col!r} is the time column and cannot be corrected or used to identify")
         if col not in names:
-            raise _error(f"column {col!r} is not in {str(args.input)!r}; its columns are {', '.join(names)}")
+            raise _error(f"column {col!r} is not in {str(mc.path)!r}; its columns are {', '.join(names)}")
     for col in id_cols:
         if mc.units[col] not in LENGTH_UNITS:
-            raise _error(f"--identify channel {col!r} is in {unit_text(mc, col)}, not a length; give the drive and "
+            raise _error(f"{naming('identify')} channel {col!r} is in {unit_text(mc, col)}, not a length; give the drive and "
                          "the pan displacement (m, mm...)")
     pool = asked if asked is not None else [n for n in names if n not in id_cols and mc.units[n] in FORCE_UNITS]
     if corners is None:
         cols, mapped = pool, None
     else:
         if items is not None:
-            mapping = check_map(items, corners, names, owner)
+            mapping = check_map(items, corners, names, owner, naming)
             if asked is not None:
                 missing = [c for c in asked if c not in mapping.values()]
                 if missing:
                     raise _error(f"column {missing[0]!r} is not mapped to a corner; fix: add CORNER={missing[0]} to "
-                                 "--map")
+                                 f"{naming('corner_map')}")
                 mapping = {k: v for k, v in mapping.items() if v in asked}
         else:
-            mapping = auto_map(corners, pool, asked is not None, owner)
+            mapping = auto_map(corners, pool, asked is not None, owner, naming)
         cols, mapped = list(mapping.values()), list(mapping)
         dup = sorted({c for c in cols if cols.count(c) > 1})
         if dup:
-            raise _error(f"column {dup[0]!r} is mapped to several corners; fix: --map each corner to its own column")
+            raise _error(f"column {dup[0]!r} is mapped to several corners; fix: {naming('corner_map')} each corner to "
+                         "its own column")
     for col in cols:
         if col == time_name:
-            raise _error(f"column {time_name!r} is the time column and cannot be corrected; fix: --map")
+            raise _error(f"column {time_name!r} is the time column and cannot be corrected; fix: {naming('corner_map')}")
         if mc.units[col] not in FORCE_UNITS:
             raise _error(f"channel {col!r} is in {unit_text(mc, col)}, not a force; name the force channels (N, "
-                         "kN...) with --columns or --map")
+                         f"kN...) with {naming('columns')} or {naming('corner_map')}")
     return cols, id_cols, mapped

@@ -1,20 +1,28 @@
-"""The output of ``rigsim correct``: checks before any work, the linear correction, the file and the table.
+"""The output side of a record's correction: checks before any work, the linear correction, the metadata.
 
-Shared by the linear correction (:mod:`scenarios.cli.correct`) and the model correction
-(:mod:`scenarios.cli.correct_model`, which falls back to the linear one): ``-o`` refused before
-any work (:func:`check_out_file`, :func:`probe_output`), the one linear correction with the
-command's options (:func:`linear_correction`), and the corrected forces written by
-:func:`correction.io.measured.write_channels` with the settled samples handled as ``--transient``
-asks and the DLC table printed (:func:`write_corrected`). Imports nothing heavy at module level.
+Shared by the linear correction and the model correction (which falls back to the linear one) of
+:mod:`scenarios.records.api`: an output file refused before any work (:func:`check_out_file`,
+:func:`probe_output`), the one linear correction with its options (:func:`linear_correction`,
+:func:`lowpass_filter`), and the metadata that says how a corrected file was made
+(:func:`linear_metadata`), fitted to what the output's format can hold (:func:`fit_metadata`).
+Imports nothing heavy at module level.
 """
 
 from __future__ import annotations
 
-import math
 import pathlib
+import textwrap
 
-__all__ = ["check_out_file", "header_value", "fit_metadata", "rigsim_version",
-           "linear_metadata", "output_units", "probe_output", "dlc_table", "linear_correction", "write_corrected"]
+from scenarios.records.naming import KEYWORDS, Naming
+
+__all__ = ["SENTENCE_KEYS", "GIVEN", "check_out_file", "header_value", "fit_metadata", "rigsim_version", "lowpass_filter",
+           "linear_metadata", "output_units", "probe_output", "linear_correction"]
+
+#: Metadata keys whose value is a sentence: an RPC III header (96-byte values) holds it split over
+#: ``key``, ``key_2``, ``key_3``...
+SENTENCE_KEYS = ("fallback_reason", "cal_cab")
+#: The metadata's ``ta_source`` (or ``scenario_file``) of a T_a (or truck) given as a Python object.
+GIVEN = "given in the call"
 
 
 def _error(message: str):
@@ -45,13 +53,18 @@ def header_value(text: str) -> str:
     return text if len(text) <= 96 else "..." + text[-93:]
 
 
-def fit_metadata(out, meta: dict) -> dict[str, str]:
-    """``meta`` as ``out``'s format can hold it (RPC III: :func:`header_value` of each value)."""
+def fit_metadata(out, meta) -> dict[str, str]:
+    """``meta`` as ``out``'s format can hold it: in RPC III each :data:`SENTENCE_KEYS` value split
+    over numbered keys at word boundaries, and :func:`header_value` of every value."""
     from correction.io.measured import format_of
 
-    if format_of(out) == "rpc3":
-        return {k: header_value(v) for k, v in meta.items()}
-    return {k: str(v) for k, v in meta.items()}
+    if format_of(out) != "rpc3":
+        return {k: str(v) for k, v in meta.items()}
+    fitted = {}
+    for key, value in meta.items():
+        parts = textwrap.wrap(str(value), 96) if key in SENTENCE_KEYS else [value]
+        fitted.update({key + (f"_{i + 1}" if i else ""): header_value(v) for i, v in enumerate(parts)})
+    return fitted
 
 
 def rigsim_version() -> str:
@@ -64,15 +77,27 @@ def rigsim_version() -> str:
         return "unknown (not installed)"
 
 
-def linear_metadata(args) -> dict[str, str]:
-    """How the linear correction was made: its formula, low-pass, mode, tolerance, transients."""
+def lowpass_filter(lowpass: str, lowpass_hz: float | None = None):
+    """The low-pass T_F: ``"paper"`` (eq. 5) or ``"regularized"``, the Butterworth of order
+    :data:`~correction.output.lowpass.BAND_ORDER` at ``lowpass_hz`` (Hz; default
+    :data:`~correction.output.lowpass.BAND_HZ`). Returns a :class:`~correction.output.lowpass.LowPass`."""
+    from correction.output.lowpass import as_lowpass, regularized_lowpass
+
+    if lowpass == "regularized" and lowpass_hz is not None:
+        return regularized_lowpass(corner_hz=lowpass_hz)
+    return as_lowpass(lowpass)
+
+
+def linear_metadata(*, lowpass: str, lowpass_hz: float | None, mode: str, transient: str,
+                    normalize_dc: bool) -> dict[str, str]:
+    """How the linear correction was made: its formula, low-pass (``lowpass`` with its corner
+    ``lowpass_hz``, Hz), mode, tolerance, transients, static-gain scaling."""
     from correction.output.pipeline import SETTLING_TOLERANCE
-    from correction.output.lowpass import as_lowpass
 
     return {"correction": "F_corrected = T_a^-1 T_F F_measured", "force_unit": "N",
-            "lowpass": f"{args.lowpass}: {as_lowpass(args.lowpass).description}", "mode": args.mode,
-            "settling_tolerance": f"{SETTLING_TOLERANCE:g}", "transient": args.transient,
-            "normalize_dc": "yes" if args.normalize_dc else "no"}
+            "lowpass": f"{lowpass}: {lowpass_filter(lowpass, lowpass_hz).description}", "mode": mode,
+            "settling_tolerance": f"{SETTLING_TOLERANCE:g}", "transient": transient,
+            "normalize_dc": "yes" if normalize_dc else "no"}
 
 
 def output_units(cols, transient: str) -> dict[str, str]:
@@ -83,10 +108,10 @@ def output_units(cols, transient: str) -> dict[str, str]:
     return units
 
 
-def probe_output(out, units, meta) -> None:
+def probe_output(out, units, meta, option: str = "-o") -> None:
     """Write two samples of the output's channels and metadata to a scratch file of the same
     format: whatever the writer would refuse (a name, a metadata value, a missing extra) is
-    refused now, before the correction."""
+    refused now, before the correction; the sentence names ``out`` as ``option``."""
     import tempfile
     from types import SimpleNamespace
 
@@ -97,76 +122,36 @@ def probe_output(out, units, meta) -> None:
         try:
             write_channels(pathlib.Path(tmp) / f"probe{pathlib.Path(out).suffix}", probe, metadata=meta)
         except MeasuredDataError as exc:
-            raise _error(f"-o {str(out)!r} cannot be written: {exc}") from None
+            raise _error(f"{option} {str(out)!r} cannot be written: {exc}") from None
 
 
-def dlc_table(cols, before_N, after_N, fs: float) -> str:
-    """Per column, before and after correction (the settled rows): DLC (1) with its change in %,
-    the stress factor E[(F/F_static)^4] (1) and the damage-equivalent load for m = 5 at 1 Hz (kN)."""
-    from correction.metrics.damage import damage_equivalent_load, stress_factor
-    from correction.metrics.dlc import dlc
-
-    lines = [f"{'column':<24} {'DLC before':>10} {'DLC after':>10} {'change':>8}   "
-             f"{'SF4 before':>10} {'SF4 after':>10}   {'DEL5 before':>11} {'DEL5 after':>11}"]
-    for j, col in enumerate(cols):
-        try:
-            b, a = float(dlc(before_N[:, j])), float(dlc(after_N[:, j]))
-        except ValueError:  # not a compressive load (mean <= 0): no DLC
-            lines.append(f"{col:<24} {'-':>10} {'-':>10} {'-':>8}")
-            continue
-        sf = [float(stress_factor(x[:, j])) for x in (before_N, after_N)]
-        dl = [float(damage_equivalent_load(x[:, j], 5, duration_s=x.shape[0] / fs)) / 1e3 for x in (before_N, after_N)]
-        lines.append(f"{col:<24} {b:>10.4f} {a:>10.4f} {100.0 * (a / b - 1.0) if b > 0 else math.nan:>7.1f}%   "
-                     f"{sf[0]:>10.4f} {sf[1]:>10.4f}   {dl[0]:>8.2f} kN {dl[1]:>8.2f} kN")
-    return "\n".join(lines)
-
-
-def linear_correction(args, forces, tas, fs: float, cols, corners):
+def linear_correction(forces, tas, fs: float, cols, corners, *, lowpass, mode: str, normalize_dc: bool,
+                      transient: str, lowpass_hz: float | None = None, naming: Naming = KEYWORDS):
     """The linear correction :func:`correction.output.pipeline.correct_forces` of ``forces`` (N, (n, k))
-    with ``tas`` (one T_a or one per column) and the command's ``--lowpass``, ``--mode`` and
-    ``--normalize-dc``; a refused T_a, or (``--transient drop``) a record no longer than the
-    filters' transients, as one sentence naming the corner and channel. Returns the
+    with ``tas`` (one T_a or one per column), the low-pass ``lowpass`` (a
+    :class:`~correction.output.lowpass.LowPass`, whose corner the caller set as ``lowpass_hz``, Hz),
+    ``mode`` and ``normalize_dc``; a refused T_a, or (``transient="drop"``) a record no longer
+    than the filters' transients, as one sentence naming the corner and channel. Returns the
     :class:`~correction.output.pipeline.CorrectedForces`."""
     import numpy as np
 
     from correction.output.pipeline import SETTLING_TOLERANCE, CorrectionError, correct_forces
 
     try:
-        res = correct_forces(forces, tas, fs, lowpass=args.lowpass, mode=args.mode, normalize_dc=args.normalize_dc,
+        res = correct_forces(forces, tas, fs, lowpass=lowpass, mode=mode, normalize_dc=normalize_dc,
                              settling_tolerance=SETTLING_TOLERANCE)
-    except CorrectionError as exc:
-        msg = str(exc).replace("pass normalize_dc=True", "pass --normalize-dc")
-        if exc.column is not None and corners is not None:
-            msg = f"corner {corners[exc.column]!r} (column {cols[exc.column]!r}): {msg}"
+    except ValueError as exc:  # a CorrectionError names its column; the low-pass alone (T_a = 1) none
+        msg = str(exc).replace("pass normalize_dc=True", f"pass {naming.setting('normalize_dc')}")
+        if lowpass_hz is not None and msg.startswith("sampling rate"):  # the corner is the user's to lower
+            msg = msg.replace("; fix: ", f"; fix: lower {naming('lowpass_hz')} ({lowpass_hz:g} Hz), or ", 1)
+        column = exc.column if isinstance(exc, CorrectionError) else None
+        if column is not None and corners is not None:
+            msg = f"corner {corners[column]!r} (column {cols[column]!r}): {msg}"
         raise _error(msg) from None
-    if args.transient == "drop" and np.count_nonzero(res.settled) < 2:
-        head = max(f.transient_samples(args.mode)[0] for f in res.filters)
-        tail = max(f.transient_samples(args.mode)[1] for f in res.filters)
+    if transient == "drop" and np.count_nonzero(res.settled) < 2:
+        head = max(f.transient_samples(mode)[0] for f in res.filters)
+        tail = max(f.transient_samples(mode)[1] for f in res.filters)
         raise _error(f"the record ({forces.shape[0] / fs:.3g} s) is not longer than the correction's transients "
                      f"({head / fs:.3g} s at the start, {tail / fs:.3g} s at the end); fix: give a longer record "
-                     "or pass --transient keep")
+                     f"or pass {naming.setting('transient', 'keep')}")
     return res
-
-
-def write_corrected(args, mc, cols, forces, corrected, settled, meta, inputs) -> None:
-    """Write ``<channel>_corrected`` (N) of ``cols`` to ``args.out`` with ``meta``: the ``settled``
-    rows (``--transient drop``), or all with a ``settled`` 0/1 channel (``mark``) or without
-    (``keep``); then print the DLC table of the settled rows, before (``forces``, N) and after."""
-    from types import SimpleNamespace
-
-    import numpy as np
-
-    from correction.io.measured import MeasuredDataError, write_channels
-
-    rows = np.flatnonzero(settled) if args.transient == "drop" else np.arange(forces.shape[0])
-    data = {f"{c}_corrected": corrected[rows, j] for j, c in enumerate(cols)}
-    if args.transient == "mark":
-        data["settled"] = settled[rows].astype(float)
-    try:
-        write_channels(args.out, SimpleNamespace(time_s=mc.time_s[rows], data=data,
-                                                 units=output_units(cols, args.transient)),
-                       metadata=meta, overwrite=args.force, inputs=inputs)
-    except MeasuredDataError as exc:
-        raise _error(str(exc)) from None
-    if settled.any():
-        print(dlc_table(cols, forces[settled], corrected[settled], mc.fs_hz))

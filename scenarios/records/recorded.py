@@ -1,9 +1,10 @@
 """T_a per corner from a recorded file of a real rig: the drive and the LVDT channel of each post.
 
-No simulator: the file is read by :func:`correction.io.measured.read_channels` (any CSV dialect, RPC
-III, MDF4, TDMS; only the channels the pairs name), each channel converted to SI (an LVDT in mm
-is fitted in m), and each pair is fitted by :func:`correction.identification.actuator_fit.fit_actuator`
-(single-input H1, the project's one fitting policy). For a clean identification the posts should
+No simulator: the file is read by :func:`scenarios.records.channels.read_record` (any CSV dialect,
+RPC III, MDF4, TDMS; only the channels the pairs name: :func:`identify_recorded`), each channel in SI
+(an LVDT in mm is fitted in m), and each pair of the record (:func:`identify_record`) is fitted
+by :func:`correction.identification.actuator_fit.fit_actuator` (single-input H1, the project's
+one fitting policy). For a clean identification the posts should
 be driven by independent random drives; a test drive (front and rear the same profile delayed)
 lets each estimate absorb what the other posts do.
 """
@@ -17,11 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from correction.identification.actuator_fit import ActuatorFitError, fit_actuator
-from correction.io.measured import MeasuredDataError, read_channels
 from scenarios.core.config import ScenarioError
+from scenarios.records.channels import read_record, resolver
+from scenarios.records.naming import KEYWORDS, Naming
 
-__all__ = ["RecordedIdentification", "parse_pairs", "identify_recorded"]
-
+__all__ = ["RecordedIdentification", "parse_pairs", "pairs_of", "identify_record", "identify_recorded"]
 
 
 @dataclass(frozen=True)
@@ -56,63 +57,106 @@ class RecordedIdentification:
         return {**self.meta(), "corners": {c: f.to_dict() for c, f in self.fits.items()}}
 
 
-def parse_pairs(text: str) -> dict[str, tuple[str, str]]:
+def parse_pairs(text: str, naming: Naming = KEYWORDS) -> dict[str, tuple[str, str]]:
     """``"fl=DRIVE:LVDT,fr=..."`` -> ``{"fl": ("DRIVE", "LVDT"), ...}``; one-sentence errors."""
     out: dict[str, tuple[str, str]] = {}
     for item in (p.strip() for p in text.split(",")):
         corner, sep, cols = item.partition("=")
         drive, sep2, lvdt = cols.partition(":")
         if not (sep and sep2 and corner.strip() and drive.strip() and lvdt.strip()):
-            raise ScenarioError(f"--pairs entry {item!r} must read CORNER=DRIVE_COL:LVDT_COL, e.g. fl=drive_fl:lvdt_fl")
+            raise ScenarioError(f"{naming('pairs')} entry {item!r} must read CORNER=DRIVE_COL:LVDT_COL, e.g. "
+                                "fl=drive_fl:lvdt_fl")
         corner = corner.strip()
         if corner in out:
-            raise ScenarioError(f"--pairs names corner {corner!r} twice; give each corner once")
+            raise ScenarioError(f"{naming('pairs')} names corner {corner!r} twice; give each corner once")
         out[corner] = (drive.strip(), lvdt.strip())
     return out
 
 
-def identify_recorded(path, pairs_text: str, time_col: str | None = None, *, decimal: str | None = None,
-                      thousands: str | None = None) -> RecordedIdentification:
-    """Fit T_a for each ``corner=DRIVE:LVDT`` pair of the recorded file ``path``.
+def pairs_of(pairs, naming: Naming = KEYWORDS) -> dict[str, tuple[str, str]]:
+    """``pairs`` as ``{corner: (drive, LVDT)}``: the text ``"fl=DRIVE:LVDT,..."`` (:func:`parse_pairs`)
+    or a mapping of corner -> (drive, LVDT) channel names."""
+    if isinstance(pairs, str):
+        return parse_pairs(pairs, naming)
+    out = {}
+    for corner, cols in dict(pairs).items():
+        if isinstance(cols, str) or len(cols) != 2 or not all(str(c).strip() for c in cols):
+            raise ScenarioError(f"{naming('pairs')} gives corner {corner!r} {cols!r}; give (DRIVE_COL, LVDT_COL)")
+        out[str(corner)] = (str(cols[0]).strip(), str(cols[1]).strip())
+    return out
+
+
+def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None) -> RecordedIdentification:
+    """Fit T_a for each corner's (drive, LVDT) pair of channels of a record.
+
+    Parameters
+    ----------
+    record : correction.io.measured.MeasuredChannels
+        The record (:func:`scenarios.records.api.read_record`); drive and LVDT channels are
+        lengths in m (a file's mm are read as m) or carry no unit (taken as m).
+    pairs : Mapping[str, tuple[str, str]] or str
+        Per corner the drive and LVDT channel names, ``{"fl": ("Soll_FL", "Weg_FL"), ...}`` or
+        ``"fl=Soll_FL:Weg_FL,..."``; a name may differ from the record's by case.
+    naming : Naming
+        How messages name ``pairs`` (a command passes its flag).
+    as_read : Mapping[str, str], optional
+        Channel name as given -> as the reader returned it (it may match a header as written).
+
+    Returns
+    -------
+    RecordedIdentification
+
+    Raises
+    ------
+    ScenarioError
+        A channel, unit or pair problem, or a record that cannot support a fit (one sentence).
+    """
+    opt, name = naming("pairs"), resolver(record, as_read)
+    pairs = {corner: (name(d), name(x)) for corner, (d, x) in pairs_of(pairs, naming).items()}
+    fits = {}
+    for corner, (d, x) in pairs.items():
+        for col in (d, x):
+            if col not in record.data:
+                raise ScenarioError(f"{opt} {corner}: channel {col!r} is not in {str(record.path)!r}; its channels "
+                                    f"are {', '.join(record.names)}")
+            if record.units[col] not in ("m", ""):
+                raise ScenarioError(f"{opt} {corner}: channel {col!r} is in {record.source_units[col]}, not a length; "
+                                    "give the drive and the LVDT (pan displacement) channels, in m or mm")
+        drive, lvdt = record.data[d], record.data[x]
+        if np.std(drive) == 0 or np.std(lvdt) == 0:
+            raise ScenarioError(f"{opt} {corner}: columns {d!r} and {x!r} must vary to identify T_a")
+        try:
+            fits[corner] = fit_actuator(drive, lvdt, record.fs_hz)
+        except ActuatorFitError as exc:
+            raise ScenarioError(f"{opt} {corner}: {exc}") from None
+    return RecordedIdentification(source=str(pathlib.Path(record.path)), pairs=pairs, fits=fits,
+                                  fs_hz=float(record.fs_hz), record_s=float(record.n_samples / record.fs_hz))
+
+
+def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str | None = None,
+                      thousands: str | None = None, naming: Naming = KEYWORDS) -> RecordedIdentification:
+    """Fit T_a for each corner's pair of the recorded file ``path``, reading only the pairs' channels.
 
     Parameters
     ----------
     path : str or os.PathLike
-        Any file :func:`correction.io.measured.read_channels` reads; drive and LVDT channels are
-        lengths (m, mm...; converted to m) or carry no unit (taken as m).
-    pairs_text : str
-        ``"fl=DRIVE:LVDT,fr=..."``, channel names as the reader returns them (``Weg_FL`` for a
-        header ``Weg_FL [mm]``).
+        Any file :func:`correction.io.measured.read_channels` reads.
+    pairs : str or Mapping[str, tuple[str, str]]
+        ``"fl=DRIVE:LVDT,fr=..."`` or ``{"fl": (DRIVE, LVDT), ...}``, channel names as the reader
+        returns them (``Weg_FL`` for a header ``Weg_FL [mm]``).
     time_col : str, optional
         The time column (default: the one with a time name).
     decimal, thousands : str, optional
         A text file's decimal mark and thousands separator (``read_channels``); default: detected.
+    naming : Naming
+        How messages name ``pairs`` (a command passes its flag).
 
     Raises
     ------
     ScenarioError
         A file, channel, unit or pair problem, or a record that cannot support a fit (one sentence).
     """
-    pairs = parse_pairs(pairs_text)
+    pairs = pairs_of(pairs, naming)
     wanted = list(dict.fromkeys(c for cols in pairs.values() for c in cols))
-    try:
-        mc = read_channels(path, time_col=time_col, channels=wanted, decimal=decimal, thousands=thousands)
-    except MeasuredDataError as exc:
-        raise ScenarioError(str(exc)) from None
-    name = dict(zip(wanted, mc.names))  # as asked -> as read (a CSV header may match by case)
-    pairs = {corner: (name[d], name[x]) for corner, (d, x) in pairs.items()}
-    fits = {}
-    for corner, (d, x) in pairs.items():
-        for col in (d, x):
-            if mc.units[col] not in ("m", ""):
-                raise ScenarioError(f"--pairs {corner}: channel {col!r} is in {mc.source_units[col]}, not a length; "
-                                    "give the drive and the LVDT (pan displacement) channels, in m or mm")
-        drive, lvdt = mc.data[d], mc.data[x]
-        if np.std(drive) == 0 or np.std(lvdt) == 0:
-            raise ScenarioError(f"--pairs {corner}: columns {d!r} and {x!r} must vary to identify T_a")
-        try:
-            fits[corner] = fit_actuator(drive, lvdt, mc.fs_hz)
-        except ActuatorFitError as exc:
-            raise ScenarioError(f"--pairs {corner}: {exc}") from None
-    return RecordedIdentification(source=str(pathlib.Path(path)), pairs=pairs, fits=fits, fs_hz=float(mc.fs_hz),
-                                  record_s=float(mc.n_samples / mc.fs_hz))
+    mc = read_record(path, time_col=time_col, channels=wanted, decimal=decimal, thousands=thousands)
+    return identify_record(mc, pairs=pairs, naming=naming, as_read=dict(zip(wanted, mc.names)))

@@ -79,22 +79,25 @@ def cmd_identify(args) -> int:
     from scenarios.core.drive import IDENT_SEED
     from scenarios.core.files import atomic_write_bytes, to_json
     from scenarios.core.outputs import staged_output
+    from scenarios.records.naming import Naming
     from scenarios.studies.identify.report import bode_png
 
     _check(args)
     seed = IDENT_SEED if args.seed is None else int(args.seed)
     scenario = load_scenario(args.scenario) if args.scenario is not None else None
+    naming = Naming({"pairs": "--pairs"})
     if args.from_file is not None:
         from scenarios.records.recorded import parse_pairs
 
-        parse_pairs(args.pairs)  # the syntax of --pairs before anything is written
+        parse_pairs(args.pairs, naming)  # the syntax of --pairs before anything is written
     inputs = (args.from_file, *(scenario.input_files if scenario is not None else ()))
     with staged_output(args.out, force=getattr(args, "force", False), inputs=inputs) as stage:
         if args.from_file is not None:
-            from scenarios.records.recorded import identify_recorded
+            from scenarios.records import recorded
 
-            ident = identify_recorded(args.from_file, args.pairs, time_col=args.time_col,
-                                      decimal=getattr(args, "decimal", None), thousands=getattr(args, "thousands", None))
+            ident = recorded.identify_recorded(args.from_file, args.pairs, time_col=args.time_col,
+                                               decimal=getattr(args, "decimal", None),
+                                               thousands=getattr(args, "thousands", None), naming=naming)
             title = pathlib.Path(args.from_file).name
         else:
             from correction.identification.actuator_fit import ActuatorFitError

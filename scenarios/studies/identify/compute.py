@@ -18,6 +18,7 @@ import numpy as np
 
 from correction.identification.actuator_fit import fit_frequency_response
 from correction.identification.identify import h1_estimate
+from correction.output.lowpass import BAND_HZ
 from mjcf.names import CORNERS
 from scenarios.core.drive import IDENT_SEED, Drive, identification_drive
 from scenarios.core.rig import Rig
@@ -31,7 +32,7 @@ IDENT_MIN_S = 30.0
 IDENT_SKIP_S = 3.0
 #: The band in which the identification drive's rms is matched to the test drive's, Hz: the
 #: correction's (its regularized low-pass is at 30 Hz; below 0.1 Hz the high-passed road has nothing).
-MATCH_BAND_HZ = (0.1, 30.0)
+MATCH_BAND_HZ = (0.1, BAND_HZ)
 #: The band the T_a fit covers, Hz (beyond the correction's 30 Hz, up to the oil-column region).
 FIT_BAND_HZ = (0.1, 60.0)
 #: Welch segment of the H1 estimate, s (0.25 Hz resolution).

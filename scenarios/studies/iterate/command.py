@@ -26,7 +26,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``iterate`` on an ``argparse`` sub-parsers object; sets ``func=cmd_iterate``."""
     # The targets are scenarios.studies.iterate.compute.TARGETS and the noise default
     # scenarios.studies.scoring.NOISE_N: importing those here would load the whole simulator for
-    # ``rigsim --help`` (tests/test_startup.py pins both).
+    # ``rigsim --help`` (tests/test_startup.py pins both). The band limit's module is light.
+    from correction.output.lowpass import BAND_HZ
+
     c = subparsers.add_parser(
         "iterate", help="iterate the rig's drive file until the pans (or tire forces) match the road test",
         description="Input correction on the simulated rig: identify the rig's FRF matrix, then iterate "
@@ -40,8 +42,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c.add_argument("--gain", type=float, default=0.8, help="relaxation gain g (default 0.8; stable below ~2)")
     c.add_argument("--max-iterations", type=int, default=6, help="most drive updates (default 6)")
     c.add_argument("--tolerance", type=float, default=0.01, help="stop at this mean NRMSE (default 0.01)")
-    c.add_argument("--band-hz", type=float, nargs=2, default=(0.3, 30.0), metavar=("LO", "HI"),
-                   help="frequency band of the update, Hz (default 0.3 30)")
+    c.add_argument("--band-hz", type=float, nargs=2, default=(0.3, BAND_HZ), metavar=("LO", "HI"),
+                   help=f"frequency band of the update, Hz (default 0.3 {BAND_HZ:g})")
     c.add_argument("--coherence-min", type=float, default=0.8,
                    help="no update where the identification's coherence is below this (default 0.8)")
     c.add_argument("--duration-s", type=float, default=None, help="override the scenario's duration, s")

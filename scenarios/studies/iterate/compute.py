@@ -44,6 +44,7 @@ from correction.input.convergence import IterationStabilityError
 from correction.metrics.dlc import dlc, nrmse
 from correction.input.frf import FRF, identify_frf
 from correction.input.iterate import IterationResult, iterate_drive
+from correction.output.lowpass import BAND_HZ
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive, identification_drive
 from scenarios.core.results import RunResult
@@ -177,7 +178,7 @@ class IterateResult:
 
 
 def check_options(target: str, *, gain: float = 0.8, max_iterations: int = 6, tolerance: float = 0.01,
-                  band_hz=(0.3, 30.0), coherence_min: float = 0.8, noise_N: float | None = None,
+                  band_hz=(0.3, BAND_HZ), coherence_min: float = 0.8, noise_N: float | None = None,
                   run_anyway: bool = False, duration_s: float | None = None) -> None:
     """Refuse bad options before any work (arguments as :func:`iterate_scenario`'s; ``duration_s``, s,
     the scenario's duration).
@@ -260,7 +261,7 @@ def _row(force_N, road_N, s, road_dlc, rig_runs, wall_s=None, lowpassed=None) ->
 
 
 def iterate_scenario(scenario: Scenario, target: str, *, gain: float = 0.8, max_iterations: int = 6,
-                     tolerance: float = 0.01, band_hz=(0.3, 30.0), coherence_min: float = 0.8,
+                     tolerance: float = 0.01, band_hz=(0.3, BAND_HZ), coherence_min: float = 0.8,
                      noise_N: float | None = None, run_anyway: bool = False,
                      say: SayFn | None = None) -> IterateResult:
     """Road run, rig run, identification and the iteration; the comparison with the output correction.

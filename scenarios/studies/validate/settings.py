@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import pathlib
 
+from correction.output.lowpass import BAND_HZ
 from scenarios.core.config import Scenario, load_scenario, paper_scenarios
 
 __all__ = [
@@ -22,7 +23,7 @@ __all__ = [
 #: Frequency range of the Bode plots, Hz (issue 3).
 BODE_RANGE_HZ = (0.1, 50.0)
 #: Upper end of the FRF comparisons against route 2, Hz (issue 3).
-COMPARE_MAX_HZ = 30.0
+COMPARE_MAX_HZ = BAND_HZ
 #: Multiple coherence (1) above which an identified FRF point counts (issue 3).
 COHERENCE_MIN = 0.95
 #: Goals of issue 3: route 3 within GOAL_FRF_DB (dB) and GOAL_FRF_DEG (deg) of route 2 up to

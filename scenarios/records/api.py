@@ -1,0 +1,146 @@
+"""Correcting a rig's record from Python: read it, correct it, write it.
+
+::
+
+    from scenarios.records import read_record, correct_record
+    record = read_record("rig.csv")                          # .rsp/.mf4/.tdms; decimal=, thousands=, time_col=
+    result = correct_record(record, actuators="acts.toml")  # or actuator=, identify=, model=..., pairs=...
+    result.write("corrected.rsp")
+
+:func:`read_record` reads any file a lab keeps (CSV in any dialect, RPC III, MDF4, TDMS) into its
+channels in SI; :func:`correct_record` corrects its wheel forces, linearly by ``T_a^-1 T_F``
+(:func:`correction.output.pipeline.correct_forces`) or by a truck model calibrated on the record,
+and returns a :class:`~scenarios.records.corrected.CorrectionResult` whose
+:meth:`~scenarios.records.corrected.CorrectionResult.write` writes what ``rigsim correct`` writes;
+:func:`identify_record` fits T_a per corner from the record's drive and LVDT channels (what
+``rigsim identify --from-file`` does). ``rigsim correct`` runs the same steps
+(:func:`scenarios.records.settings.correction_settings`, then the settings'
+:meth:`~scenarios.records.settings.CorrectionSettings.read`, the plan's
+:meth:`~scenarios.records.plan.CorrectionPlan.check_output` and
+:meth:`~scenarios.records.plan.CorrectionPlan.run`). Every refusal is one
+:class:`~scenarios.core.config.ScenarioError` sentence (a ``ValueError``) naming the keyword at
+fault. Imports nothing heavy at module level.
+"""
+
+from __future__ import annotations
+
+import os
+
+from scenarios.records.channels import read_record
+from scenarios.records.corrected import ChannelLoads, CorrectionResult
+from scenarios.records.settings import correction_settings
+
+__all__ = ["read_record", "correct_record", "identify_record", "CorrectionResult", "ChannelLoads"]
+
+
+def correct_record(record, *, actuator=None, actuators=None, identify=None, model=None, pairs=None, columns=None,
+                   corner_map=None, lowpass: str = "regularized", lowpass_hz: float | None = None,
+                   mode: str = "zerophase", transient: str = "drop", normalize_dc: bool = False,
+                   workers: int | None = None, max_evaluations: int | None = None,
+                   calibration_windows: int | None = None, cab: str | None = None,
+                   progress=None) -> CorrectionResult:
+    """Correct the wheel forces of a rig's record for the actuators' dynamics.
+
+    Give exactly one source of T_a (``actuator``, ``actuators`` or ``identify``) for the linear
+    correction ``F_corrected = T_a^-1 T_F F_measured``, or ``model`` and ``pairs`` for the
+    correction by a truck model calibrated on the record,
+    ``F_corrected = F_rig + F_model(x_ref) - F_model(x_a)`` (minutes of CPU; where the model does
+    not reproduce the forces the linear correction is used, and the result says why).
+
+    Parameters
+    ----------
+    record : correction.io.measured.MeasuredChannels or str or os.PathLike
+        The record (:func:`read_record`), or a file to read with only the channels needed.
+    actuator : str, os.PathLike or T_a, optional
+        One T_a for every force channel: an actuator file (``[transfer_function] num, den`` or
+        eq. 4's ``[parameters]``, :mod:`correction.io.actuator_file`), or ``(num, den)`` in
+        descending powers of s (s in rad/s), an ``ActuatorFit`` or a ``control.TransferFunction``.
+        With ``model``: the linear fallback's T_a.
+    actuators : str, os.PathLike or Mapping[str, T_a], optional
+        One T_a per corner: a per-corner actuator file (``rigsim identify``'s ``actuators.toml``)
+        or corner -> T_a; each corner corrects the force channel whose name holds the corner as
+        a token (``tire_force_fl_N``, ``Fz_FL``) or the one ``corner_map`` gives. With ``model``:
+        the linear fallback's, one for each of fl, fr, rl, rr.
+    identify : (str, str) or str, optional
+        The drive and pan displacement channels (lengths) T_a is fitted from
+        (:func:`correction.identification.actuator_fit.fit_actuator`), ``("drive", "lvdt")`` or ``"drive,lvdt"``.
+    model : str, os.PathLike or Scenario, optional
+        A scenario file whose rig is used and whose ``[vehicle]`` values start the calibration.
+    pairs : Mapping[str, tuple[str, str]] or str, optional
+        With ``model``: per corner fl, fr, rl, rr the drive and LVDT channels,
+        ``{"fl": ("Soll_FL", "Weg_FL"), ...}`` or ``"fl=Soll_FL:Weg_FL,..."``.
+    columns : sequence of str or str, optional
+        The force channels to correct (default: every force channel, N or no unit, that is not a
+        drive or displacement channel; with a corner's T_a, those naming a corner).
+    corner_map : Mapping[str, str], sequence of (str, str) or str, optional
+        Corner -> force channel, ``{"fl": "Fz_FL"}`` or ``"fl=Fz_FL,..."``.
+    lowpass : {"regularized", "paper"}
+        The low-pass T_F: a Butterworth of order :data:`~correction.output.lowpass.BAND_ORDER` at
+        ``lowpass_hz`` (default), or the paper's eq. 5 (16/24 Hz).
+    lowpass_hz : float, Hz, optional
+        The regularized low-pass's corner, its -3 dB frequency (default
+        :data:`~correction.output.lowpass.BAND_HZ`, 30 Hz); finite, > 0, below fs / 2.
+    mode : {"zerophase", "causal"}
+        ``zerophase``: ``|T_a^-1 T_F|`` with T_a^-1's phase, offline; ``causal``: as a real-time filter.
+    transient : {"drop", "mark", "keep"}
+        What the written file holds of the samples inside the correction's transients: none,
+        all with a ``settled`` 0/1 channel, or all.
+    normalize_dc : bool
+        Scale each T_a to ``T_a(0) = 1`` instead of refusing one that is off.
+    workers : int, optional
+        With ``model``: worker processes (default: all cores).
+    max_evaluations : int, optional
+        With ``model``: most evaluations of the calibration's residual (default 60).
+    calibration_windows : int, optional
+        With ``model``: windows of 2.5 s lead-in + 4 s the model is fitted on (default 3).
+    cab : {"auto", "held", "fitted"}, optional
+        With ``model``: the model's cab held, its mount frequency fitted, or (default) the better fit.
+    progress : callable, optional
+        Called with each progress line or note of a long run (the model's calibration); default: silent.
+
+    Returns
+    -------
+    CorrectionResult
+        The corrected forces (N, every sample) and which are settled, ``fs_hz`` (Hz), the method
+        used and why, the calibration (model), the metadata and the per-channel loads
+        (``loads``, ``table()``); ``write(path)`` writes the file.
+
+    Raises
+    ------
+    ScenarioError
+        One sentence naming the keyword, channel or file at fault and the fix; nothing is computed.
+    """
+    settings = correction_settings(
+        actuator=actuator, actuators=actuators, identify=identify, model=model, pairs=pairs, columns=columns,
+        corner_map=corner_map, lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
+        normalize_dc=normalize_dc, workers=workers, max_evaluations=max_evaluations,
+        calibration_windows=calibration_windows, cab=cab)
+    plan = settings.read(record) if isinstance(record, (str, os.PathLike)) else settings.plan(record)
+    return plan.run(progress)
+
+
+def identify_record(record, *, pairs):
+    """Fit T_a per corner from a record's drive and LVDT channels, as ``rigsim identify --from-file``.
+
+    Parameters
+    ----------
+    record : correction.io.measured.MeasuredChannels
+        The record (:func:`read_record`): independent random drives on the posts give the cleanest fit.
+    pairs : Mapping[str, tuple[str, str]] or str
+        Per corner the drive and LVDT channels (lengths, m), ``{"fl": ("Soll_FL", "Weg_FL"), ...}``
+        or ``"fl=Soll_FL:Weg_FL,..."``.
+
+    Returns
+    -------
+    scenarios.records.recorded.RecordedIdentification
+        ``fits`` per corner (stable, minimum phase, ``T_a(0) = 1``), ``actuators()``, ``meta()``;
+        :func:`correction.io.actuator_file.write_actuators_file` writes them for ``actuators=``.
+
+    Raises
+    ------
+    ScenarioError
+        A channel, unit or pair problem, or a record that cannot support a fit (one sentence).
+    """
+    from scenarios.records import recorded
+
+    return recorded.identify_record(record, pairs=pairs)

@@ -1,0 +1,207 @@
+"""A record's corrected forces as data: :class:`CorrectionResult`, its load table and its file.
+
+:func:`scenarios.records.api.correct_record` returns a :class:`CorrectionResult`: the corrected
+forces in N per channel, where they are settled, how they were corrected and why, and per
+channel the loads before and after (:class:`ChannelLoads`: DLC, stress factor, damage-equivalent
+load; :meth:`CorrectionResult.table` as text). :meth:`CorrectionResult.write` writes the file
+``rigsim correct`` writes, through :func:`correction.io.measured.write_channels`: the time (s) and
+``<channel>_corrected`` in N, the settled samples only (``transient="drop"``) or all of them,
+with a ``settled`` 0/1 channel (``"mark"``) or without (``"keep"``), and the metadata. Imports
+nothing heavy at module level.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+
+from scenarios.records.output import fit_metadata, output_units
+
+__all__ = ["ChannelLoads", "channel_loads", "loads_table", "CorrectionResult"]
+
+
+@dataclass(frozen=True)
+class ChannelLoads:
+    """One channel's loads on the settled samples, before and after the correction.
+
+    Attributes
+    ----------
+    channel : str
+    dlc_before, dlc_after : float or None, 1
+        Dynamic Load Coefficient, std / mean; None when the mean is not a compressive load (<= 0).
+    change : float or None, 1
+        ``dlc_after / dlc_before - 1`` (NaN when ``dlc_before`` is 0).
+    stress_factor_before, stress_factor_after : float or None, 1
+        ``E[(F / F_static)^4]`` (:func:`correction.metrics.damage.stress_factor`).
+    del5_before_N, del5_after_N : float or None, N
+        Damage-equivalent load for the exponent m = 5 at 1 Hz
+        (:func:`correction.metrics.damage.damage_equivalent_load`).
+    """
+
+    channel: str
+    dlc_before: float | None = None
+    dlc_after: float | None = None
+    change: float | None = None
+    stress_factor_before: float | None = None
+    stress_factor_after: float | None = None
+    del5_before_N: float | None = None
+    del5_after_N: float | None = None
+
+
+def channel_loads(cols, before_N, after_N, fs: float) -> tuple[ChannelLoads, ...]:
+    """Per column of ``before_N`` and ``after_N`` (N, (n, k), sampled at ``fs`` Hz) its :class:`ChannelLoads`."""
+    from correction.metrics.damage import damage_equivalent_load, stress_factor
+    from correction.metrics.dlc import dlc
+
+    rows = []
+    for j, col in enumerate(cols):
+        try:
+            b, a = float(dlc(before_N[:, j])), float(dlc(after_N[:, j]))
+        except ValueError:  # not a compressive load (mean <= 0): no DLC
+            rows.append(ChannelLoads(col))
+            continue
+        sf = [float(stress_factor(x[:, j])) for x in (before_N, after_N)]
+        dl = [float(damage_equivalent_load(x[:, j], 5, duration_s=x.shape[0] / fs)) for x in (before_N, after_N)]
+        rows.append(ChannelLoads(col, b, a, a / b - 1.0 if b > 0 else math.nan, sf[0], sf[1], dl[0], dl[1]))
+    return tuple(rows)
+
+
+def loads_table(loads) -> str:
+    """:class:`ChannelLoads` rows as the text table ``rigsim correct`` prints (DLC and its change in %,
+    stress factor, damage-equivalent load in kN)."""
+    lines = [f"{'column':<24} {'DLC before':>10} {'DLC after':>10} {'change':>8}   "
+             f"{'SF4 before':>10} {'SF4 after':>10}   {'DEL5 before':>11} {'DEL5 after':>11}"]
+    for r in loads:
+        if r.dlc_before is None:
+            lines.append(f"{r.channel:<24} {'-':>10} {'-':>10} {'-':>8}")
+            continue
+        lines.append(f"{r.channel:<24} {r.dlc_before:>10.4f} {r.dlc_after:>10.4f} {100.0 * r.change:>7.1f}%   "
+                     f"{r.stress_factor_before:>10.4f} {r.stress_factor_after:>10.4f}   "
+                     f"{r.del5_before_N / 1e3:>8.2f} kN {r.del5_after_N / 1e3:>8.2f} kN")
+    return "\n".join(lines)
+
+
+def _frozen(a) -> np.ndarray:
+    a = np.array(a)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class CorrectionResult:
+    """The corrected forces of a record, how they were corrected, and their loads.
+
+    Attributes
+    ----------
+    channels : tuple of str
+        The corrected channels, as named in the record.
+    corners : tuple of str or None
+        The corner of each channel (per-corner T_a, the truck model); None: one T_a for all.
+    time_s : numpy.ndarray, (n,), s
+        The record's time axis, every sample.
+    measured_N, corrected_N : numpy.ndarray, (n, k), N
+        The measured and the corrected force of each channel, every sample.
+    settled : numpy.ndarray of bool, (n,)
+        The samples outside the correction's transients (the filters', or the model runs' start-up).
+    fs_hz : float, Hz
+        Sampling rate.
+    method : {"linear", "model"}
+        The correction used: ``T_a^-1 T_F`` (linear) or ``F_rig + F_model(x_ref) - F_model(x_a)``.
+    reason : str
+        Why the linear correction was used although the model was asked for (one sentence); "" otherwise.
+    description : str
+        How the forces were corrected, one line (T_a's source, low-pass and mode; or the model).
+    transient : {"drop", "mark", "keep"}
+        What :meth:`write` does with the samples that are not settled.
+    metadata : Mapping[str, str]
+        What :meth:`write` puts in the file's metadata (fitted there to the format).
+    loads : tuple of ChannelLoads
+        Per channel the loads on the settled samples; empty when no sample is settled.
+    calibration : scenarios.records.model.result.Calibration or None
+        The truck model's calibration, when the model was asked for and could be calibrated.
+    actuators : tuple
+        The T_a of each channel (linear; ``(num, den)`` or an identified
+        :class:`~correction.identification.actuator_fit.ActuatorFit`); empty for the model.
+    filters : tuple of CorrectionFilter
+        The linear correction's filter of each channel; empty for the model.
+    inputs : tuple of str
+        The files the result was made from: :meth:`write` never writes onto one of them.
+    """
+
+    channels: tuple
+    corners: tuple | None
+    time_s: np.ndarray
+    measured_N: np.ndarray
+    corrected_N: np.ndarray
+    settled: np.ndarray
+    fs_hz: float
+    method: str
+    reason: str
+    description: str
+    transient: str
+    metadata: Mapping = field(default_factory=dict)
+    loads: tuple = ()
+    calibration: object = None
+    actuators: tuple = ()
+    filters: tuple = ()
+    inputs: tuple = ()
+
+    def __post_init__(self) -> None:
+        for name in ("time_s", "measured_N", "corrected_N", "settled"):
+            object.__setattr__(self, name, _frozen(getattr(self, name)))
+        object.__setattr__(self, "metadata", MappingProxyType(dict(self.metadata)))
+
+    @property
+    def transient_samples(self) -> int:
+        """Samples that are not settled (dropped from the file with ``transient="drop"``)."""
+        return int(self.settled.size - np.count_nonzero(self.settled))
+
+    def table(self) -> str:
+        """The load table as text: per channel DLC before and after (and its change in %), stress
+        factor, damage-equivalent load (kN), on the settled samples."""
+        return loads_table(self.loads)
+
+    def write(self, path, *, overwrite: bool = False) -> pathlib.Path:
+        """Write the corrected forces to ``path``, in its extension's format.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            .csv/.txt/.dat, .rsp/.drv/.tim/.rpc (RPC III), .mf4/.mdf, .tdms
+            (:func:`correction.io.measured.write_channels`).
+        overwrite : bool
+            Replace an existing file; a file the result was made from is never replaced.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written: the time (s), ``<channel>_corrected`` (N) and, with
+            ``transient="mark"``, ``settled`` (0/1); with ``transient="drop"`` only the settled samples.
+
+        Raises
+        ------
+        ScenarioError
+            One sentence: an existing file without ``overwrite``, an input file, an extension no
+            writer knows, a name or metadata value the format cannot hold.
+        """
+        from types import SimpleNamespace
+
+        from correction.io.measured import MeasuredDataError, write_channels
+
+        rows = np.flatnonzero(self.settled) if self.transient == "drop" else np.arange(self.settled.size)
+        data = {f"{c}_corrected": self.corrected_N[rows, j] for j, c in enumerate(self.channels)}
+        if self.transient == "mark":
+            data["settled"] = self.settled[rows].astype(float)
+        out = SimpleNamespace(time_s=self.time_s[rows], data=data, units=output_units(self.channels, self.transient))
+        try:
+            return write_channels(path, out, metadata=fit_metadata(path, self.metadata), overwrite=overwrite,
+                                  inputs=self.inputs)
+        except MeasuredDataError as exc:
+            from scenarios.core.config import ScenarioError
+
+            raise ScenarioError(str(exc)) from None

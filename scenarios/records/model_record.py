@@ -1,0 +1,217 @@
+"""A record corrected by a truck model calibrated on it: the plan, the run, the linear fallback, the metadata.
+
+The truck model (the project's truck, ``truck_rig.xml``) is calibrated on the record alone: per
+corner the drive x_ref and the LVDT x_a (``pairs``; lengths in m) and the wheel force F_rig (the
+force channel whose name holds the corner as a token, or ``corner_map``'s; in N); then
+F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
+(:func:`scenarios.records.model.differential.correct_with_model`). The scenario's rig (actuator
+stroke) is used, and its ``[vehicle]`` tire and leaf-friction values, where given, are the
+calibration's first guesses (:func:`first_guess`); the payload and its position always start
+from the record's static loads.
+
+Where the model cannot be trusted on this record (it does not reproduce F_rig, or its calibration
+did not converge or could not run) the linear correction is used instead
+(:func:`scenarios.records.linear.linear_result`), with the given fallback T_a, else T_a
+identified per corner from the ``pairs`` channels (:func:`scenarios.records.recorded.identify_record`),
+and the reason goes into the result and the file's metadata (:func:`model_metadata`: the method
+and why, the calibration's fitted values with units and 1-sigma, the fit NRMSE per wheel).
+Imports nothing heavy at module level.
+"""
+
+from __future__ import annotations
+
+from scenarios.records.channels import LENGTH_UNITS, plan_channels, resolver, unit_text
+from scenarios.records.corrected import CorrectionResult, channel_loads
+from scenarios.records.linear import linear_result, ta_text
+from scenarios.records.output import linear_metadata, rigsim_version
+
+__all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "cal_key", "calibration_meta", "model_metadata",
+           "plan_model", "run_model"]
+
+#: The fields the payload's first guess comes from the record for (a [vehicle] value is not used).
+FROM_STATIC_LOADS = ("payload_kg", "payload_x_m")
+#: How the model correction corrects, in a result's description.
+MODEL_TEXT = "the truck model calibrated on the record (F_rig + F_model(drive) - F_model(LVDT))"
+
+
+def _error(message: str):
+    from scenarios.core.config import ScenarioError
+
+    return ScenarioError(message)
+
+
+def _windows(settings) -> tuple[int, int]:
+    """(calibration windows, most fit evaluations) of the settings, the calibration's defaults where not given."""
+    from scenarios.records.model.calibrate import MAX_NFEV, WINDOWS
+
+    return (WINDOWS if settings.calibration_windows is None else int(settings.calibration_windows),
+            MAX_NFEV if settings.max_evaluations is None else int(settings.max_evaluations))
+
+
+def _check_pairs(record, pairs, naming) -> None:
+    """Each pairs channel: in the record, not the time, a length, varying."""
+    import numpy as np
+
+    names, opt = list(record.names), naming("pairs")
+    for corner, cols in pairs.items():
+        for col in cols:
+            if col == record.time_name or col not in names:
+                what = "is the time column" if col == record.time_name else f"is not in {str(record.path)!r}"
+                raise _error(f"{opt} {corner}: channel {col!r} {what}; its channels are {', '.join(names)}")
+            if record.units[col] not in LENGTH_UNITS:
+                raise _error(f"{opt} {corner}: channel {col!r} is in {unit_text(record, col)}, not a length; give "
+                             "the drive and the LVDT (pan displacement) channels, in m or mm")
+        if any(np.std(record.data[c]) == 0 for c in cols):
+            raise _error(f"{opt} {corner}: channels {cols[0]!r} and {cols[1]!r} must vary (a drive and the pan's "
+                         "motion)")
+
+
+def plan_model(settings, record, as_read=None):
+    """(force channels in corner order, corners, pairs as read, the probe's metadata); every check
+    before any work, one ScenarioError sentence otherwise."""
+    import numpy as np
+
+    from mjcf.names import CORNERS
+    from scenarios.core.config import ScenarioError
+    from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, fit_windows
+
+    n, name = settings.naming, resolver(record, as_read)
+    pairs = {corner: (name(d), name(x)) for corner, (d, x) in settings.pairs.items()}
+    _check_pairs(record, pairs, n)
+    asked = None if settings.columns is None else [name(c) for c in settings.columns]
+    items = None if settings.corner_map is None else [(k, name(c)) for k, c in settings.corner_map]
+    cols, _, corners = plan_channels(record, asked, items, [c for cs in pairs.values() for c in cs], CORNERS,
+                                     owner="the truck model", naming=n)  # the pairs' channels are never corrected
+    mapping = dict(zip(corners, cols))
+    missing = [c for c in CORNERS if c not in mapping]
+    if missing:
+        raise _error(f"corner {missing[0]!r} has no force channel; fix: "
+                     f"{n.setting('corner_map', f'{missing[0]}=CHANNEL')} ({n('model')} corrects the four wheels "
+                     f"{', '.join(CORNERS)} together)")
+    force_cols = [mapping[c] for c in CORNERS]
+    for col in force_cols:
+        if not np.all(np.isfinite(record.data[col])):
+            raise _error(f"channel {col!r} has NaN or infinite values; clean or cut the record first")
+    try:
+        fit_windows(record.time_s, _windows(settings)[0], WINDOW_S, WINDOW_LEAD_S)
+    except ScenarioError as exc:
+        raise _error(f"{str(record.path)!r}: {exc}") from None
+    return force_cols, CORNERS, pairs, model_metadata(settings, record, pairs, force_cols, None, None)
+
+
+def first_guess(scenario) -> tuple[dict, list[str]]:
+    """(fitted fields' first guesses from the scenario's [vehicle], its other given fields: not used)."""
+    from mjcf.tires import REAR_FIELDS
+    from scenarios.records.model.calibrate import FITTED
+
+    given = {k: getattr(scenario.vehicle, k) for k in type(scenario.vehicle).field_names()
+             if getattr(scenario.vehicle, k) is not None}
+    guess = {k: float(v) for k, v in given.items() if k in FITTED and k not in FROM_STATIC_LOADS}
+    for every, rear in REAR_FIELDS.items():
+        if every in guess and rear not in guess:  # an all-wheel value is the rear tires' too
+            guess[rear] = guess[every]
+    return guess, [k for k in given if k not in guess]
+
+
+def cal_key(name: str) -> str:
+    """The metadata key of the fitted field ``name``: ``cal_`` and the name, "progressive" shortened
+    to "prog" so that every key fits RPC III's 32 bytes (``cal_tire_prog_onset_rear_m``: 26)."""
+    return "cal_" + name.replace("progressive", "prog")
+
+
+def calibration_meta(cal) -> dict[str, str]:
+    """The calibration in metadata: one key per fitted value (unit, 1-sigma, first guess), fit NRMSE per wheel."""
+    from mjcf.names import CORNERS
+    from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT
+
+    meta = {cal_key(n): f"{v:.6g} {u} +- {s:.2g} (robust {sr:.2g}; first guess {g:.6g})"
+            for n, u, g, v, s, sr in zip(cal.names, cal.units, cal.initial, cal.fitted, cal.sigma, cal.sigma_robust)}
+    meta["cal_fit_nrmse"] = ", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.fit_nrmse))
+    meta["cal_model_error"] = (", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.excess_nrmse))
+                               + f" (limit {EXCESS_NRMSE_LIMIT:g})")
+    meta["cal_windows_s"] = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in cal.windows_s)
+    meta["cal_runs"] = f"{cal.evaluations} truck variants, {'converged' if cal.converged else 'not converged'}"
+    return meta
+
+
+def model_metadata(settings, record, pairs, force_cols, model_result, fallback_source: str | None) -> dict[str, str]:
+    """How the output was made; ``model_result`` the ModelCorrection (None: every key the file may
+    carry, with the longest sentences, to check an output before the work)."""
+    from scenarios.records.model.differential import START_S
+
+    method = "probe" if model_result is None else model_result.method
+    meta = {"made_by": "rigsim correct --model", "rigsim_version": rigsim_version(), "input": str(record.path),
+            "scenario_file": str(settings.scenario_file), "method": method}
+    reason = "x " * 100 if model_result is None else model_result.reason
+    if reason:
+        meta["fallback_reason"] = reason
+    meta.update({"corners": ",".join(f"{k}={c}" for k, c in zip(pairs, force_cols)),
+                 "pairs": ",".join(f"{k}={d}:{x}" for k, (d, x) in pairs.items())})
+    if method in ("model", "probe"):
+        meta.update({"correction": "F_corrected = F_rig + F_model(x_ref) - F_model(x_a)", "force_unit": "N",
+                     "start_up_s": f"{START_S:g} (model runs' start-up: not settled)",
+                     "transient": settings.transient})
+    if method in ("linear", "probe"):
+        meta.update({"ta_source": fallback_source or "x",
+                     **linear_metadata(lowpass=settings.lowpass, lowpass_hz=settings.lowpass_hz, mode=settings.mode,
+                                       transient=settings.transient, normalize_dc=settings.normalize_dc)})
+    cal = None if model_result is None else model_result.calibration
+    if model_result is None:
+        from scenarios.records.model.calibrate import FITTED, UNITS
+
+        meta.update({cal_key(n): f"0 {UNITS[n]}" for n in FITTED})
+        meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})
+        meta["cal_cab"] = "x " * 150
+    elif cal is not None:
+        meta.update(calibration_meta(cal))
+        if cal.cab_choice:
+            meta["cal_cab"] = cal.cab_choice
+    return meta
+
+
+def run_model(plan, progress=None) -> CorrectionResult:
+    """Calibrate the truck model on the planned record and correct it, or correct it linearly and say why.
+
+    ``plan``: a :class:`~scenarios.records.plan.CorrectionPlan` of the model correction;
+    ``progress``: called with each progress line and note (None: silent)."""
+    from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S
+    from scenarios.records.model.differential import correct_with_model
+
+    s, record, pairs = plan.settings, plan.record, plan.pairs
+    say = progress or (lambda line: None)
+    windows, max_nfev = _windows(s)
+    guess, unused = first_guess(s.scenario)
+    fs, forces = record.fs_hz, record.array(plan.channels)
+    if unused:
+        say(f"note: {str(s.scenario_file)!r} [vehicle] {', '.join(unused)} not used: the model is the project's "
+            "truck, its payload and position start from the record's static loads")
+    say(f"model correction of {str(record.path)!r} ({forces.shape[0] / fs:.4g} s at {fs:.6g} Hz): calibrating "
+        f"the truck model on {windows} window(s) of {WINDOW_LEAD_S + WINDOW_S:g} s, at most {max_nfev} fit "
+        f"evaluations, {s.workers} worker process(es); this takes minutes")
+    res = correct_with_model(record.time_s, record.array([d for d, _ in pairs.values()]),
+                             record.array([x for _, x in pairs.values()]), forces, base_scenario=s.scenario,
+                             workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab)
+    cal = res.calibration
+    if cal is not None:
+        say(f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
+            f"{'converged' if cal.converged else 'not converged'}, worst fit NRMSE {cal.worst_fit_nrmse:.3f})"
+            + (f"; corrected in {res.timings['correction_s']:.1f} s" if not res.use_linear else ""))
+    if not res.use_linear:
+        settled = res.settled
+        loads = channel_loads(plan.channels, forces[settled], res.corrected_N[settled], fs) if settled.any() else ()
+        return CorrectionResult(
+            channels=plan.channels, corners=plan.corners, time_s=record.time_s, measured_N=forces,
+            corrected_N=res.corrected_N, settled=settled, fs_hz=float(fs), method="model", reason="",
+            description=MODEL_TEXT, transient=s.transient,
+            metadata=model_metadata(s, record, pairs, plan.channels, res, None), loads=loads, calibration=cal,
+            inputs=plan.inputs)
+    if s.ta is not None:
+        tas, source = s.ta, ta_text(s.ta_source)
+    else:
+        from scenarios.records.recorded import identify_record
+
+        say(f"the model is not used; identifying T_a per corner from {s.naming('pairs')} for the linear correction")
+        fits = identify_record(record, pairs=pairs, naming=s.naming).fits
+        tas, source = [fits[c] for c in pairs], f"identified per corner from {s.naming('pairs')}"
+    return linear_result(plan, tas, source, corners=list(pairs), reason=res.reason, calibration=cal,
+                         metadata=model_metadata(s, record, pairs, plan.channels, res, source))

@@ -1,0 +1,293 @@
+"""What to correct and how: the options of a record's correction checked, and their files read.
+
+:func:`correction_settings` checks every option of :func:`scenarios.records.api.correct_record`
+before any record is read (choices, the low-pass corner, which T_a source, the model's options)
+and reads the files they name (the actuator files, the truck's scenario file); the
+:class:`CorrectionSettings` it returns knows which channels a record needs
+(:attr:`CorrectionSettings.channels`) and plans the correction of a record
+(:meth:`CorrectionSettings.plan`, :meth:`CorrectionSettings.read`:
+:mod:`scenarios.records.plan`). Every refusal is one
+:class:`~scenarios.core.config.ScenarioError` sentence naming the parameter as ``naming`` says.
+Imports nothing heavy at module level.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from scenarios.records.channels import parse_columns, parse_corner_map, parse_identify, wanted_channels
+from scenarios.records.naming import KEYWORDS, Naming
+from scenarios.records.output import GIVEN
+
+__all__ = ["LOWPASSES", "MODES", "TRANSIENTS", "CABS", "CorrectionSettings", "correction_settings"]
+
+LOWPASSES = ("paper", "regularized")
+MODES = ("causal", "zerophase")
+TRANSIENTS = ("drop", "mark", "keep")
+CABS = ("auto", "held", "fitted")
+
+
+def _error(message: str):
+    from scenarios.core.config import ScenarioError
+
+    return ScenarioError(message)
+
+
+def _is_path(value) -> bool:
+    return isinstance(value, (str, os.PathLike))
+
+
+@dataclass(frozen=True)
+class CorrectionSettings:
+    """A correction's options, checked, with their files read (made by :func:`correction_settings`).
+
+    Attributes
+    ----------
+    method : {"linear", "model"}
+        The correction asked for.
+    columns : tuple of str or None
+        The force channels to correct (None: chosen by unit and corner names).
+    corner_map : tuple of (str, str) or None
+        (corner, channel) pairs.
+    identify : tuple of str
+        The (drive, displacement) channels T_a is fitted from; empty when not.
+    ta : object or None
+        The T_a: one (``actuator``) or corner -> T_a (``actuators``); with the model, the linear
+        fallback's (one, or one per corner fl, fr, rl, rr), None: identified from ``pairs``.
+    per_corner : bool
+        ``ta`` is a corner -> T_a mapping (linear correction).
+    ta_source : str or None
+        The T_a's file as given, or :data:`~scenarios.records.output.GIVEN`.
+    pairs : Mapping[str, tuple[str, str]] or None
+        The model's (drive, LVDT) channels per corner, in corner order.
+    scenario : scenarios.core.config.Scenario or None
+        The truck model's scenario (the model correction).
+    scenario_file : str or None
+    lowpass : {"paper", "regularized"}
+    lowpass_hz : float or None, Hz
+        The regularized low-pass's corner; None: :data:`correction.output.lowpass.BAND_HZ`.
+    mode : {"causal", "zerophase"}
+    transient : {"drop", "mark", "keep"}
+    normalize_dc : bool
+    workers : int or None
+        Worker processes of the model correction.
+    max_evaluations, calibration_windows : int or None
+        The model's calibration: most fit evaluations, windows.
+    cab : {"auto", "held", "fitted"}
+    inputs : tuple of str
+        The files read besides the record (a corrected file never replaces one).
+    naming : Naming
+        How messages name the parameters.
+    """
+
+    method: str
+    columns: tuple | None
+    corner_map: tuple | None
+    identify: tuple
+    ta: object
+    per_corner: bool
+    ta_source: str | None
+    pairs: Mapping | None
+    scenario: object
+    scenario_file: str | None
+    lowpass: str
+    lowpass_hz: float | None
+    mode: str
+    transient: str
+    normalize_dc: bool
+    workers: int | None
+    max_evaluations: int | None
+    calibration_windows: int | None
+    cab: str
+    inputs: tuple
+    naming: Naming = KEYWORDS
+
+    @property
+    def channels(self) -> list[str] | None:
+        """The channels a record needs (the columns, the corner map's, the identification's or the
+        pairs'), or None: every numeric channel (neither columns nor corner map given)."""
+        extra = [c for cols in self.pairs.values() for c in cols] if self.pairs else list(self.identify)
+        return wanted_channels(None if self.columns is None else list(self.columns),
+                               None if self.corner_map is None else list(self.corner_map), extra)
+
+    def plan(self, record, as_read: Mapping | None = None):
+        """The correction of ``record`` (a :class:`~correction.io.measured.MeasuredChannels`) planned and
+        checked (:class:`scenarios.records.plan.CorrectionPlan`); ``as_read``: channel name as given ->
+        as the reader returned it (default: matched exactly, else by case)."""
+        from scenarios.records.plan import make_plan
+
+        return make_plan(self, record, as_read)
+
+    def read(self, path, *, time_col: str | None = None, decimal: str | None = None, thousands: str | None = None):
+        """Read ``path`` with only the channels these settings need (:attr:`channels`;
+        :func:`scenarios.records.channels.read_record`'s options) and plan its correction."""
+        from scenarios.records.channels import read_record
+
+        wanted = self.channels
+        record = read_record(path, time_col=time_col, channels=wanted, decimal=decimal, thousands=thousands)
+        return self.plan(record, dict(zip(wanted, record.names)) if wanted is not None else None)
+
+
+def _choice(naming: Naming, key: str, value, allowed) -> None:
+    if value not in allowed:
+        raise _error(f"{naming(key)} must be one of {', '.join(allowed)}, got {value!r}")
+
+
+def _check_lowpass(naming: Naming, lowpass: str, lowpass_hz) -> float | None:
+    if lowpass_hz is None:
+        return None
+    opt = naming("lowpass_hz")
+    if isinstance(lowpass_hz, bool) or not isinstance(lowpass_hz, numbers.Real) or not (
+            math.isfinite(lowpass_hz) and lowpass_hz > 0):
+        raise _error(f"{opt} must be a finite number of Hz > 0, got {lowpass_hz!r}")
+    if lowpass != "regularized":
+        raise _error(f"{opt} sets the corner of the regularized low-pass; the paper's low-pass keeps its 16/24 Hz: "
+                     f"drop {opt} or pass {naming.setting('lowpass', 'regularized')}")
+    return float(lowpass_hz)
+
+
+def _one_ta(value):
+    """(T_a, source) from ``value``: an actuator file (path) or a T_a object."""
+    if not _is_path(value):
+        return value, GIVEN
+    from correction.io.actuator_file import read_actuator_file
+
+    try:
+        return read_actuator_file(value), str(value)
+    except ValueError as exc:
+        raise _error(str(exc)) from None
+
+
+def _corner_tas(value, naming: Naming) -> tuple[dict, str]:
+    """(corner -> T_a, source) from ``value``: a per-corner actuator file (path) or a mapping."""
+    if not _is_path(value):
+        if not isinstance(value, Mapping):
+            raise _error(f"{naming('actuators')} must be a per-corner actuator file or a mapping of corner -> T_a, "
+                         f"got {type(value).__name__}")
+        return dict(value), GIVEN
+    from correction.io.actuator_file import read_actuators_file
+
+    try:
+        return read_actuators_file(value), str(value)
+    except ValueError as exc:
+        raise _error(str(exc)) from None
+
+
+def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers, max_evaluations,
+                   calibration_windows):
+    """(pairs in corner order, workers); the model's options only."""
+    from mjcf.names import CORNERS
+    from scenarios.core.pool import worker_count
+    from scenarios.records.recorded import pairs_of
+
+    n = naming
+    if identify is not None:
+        raise _error(f"{n('identify')} fits one T_a for the linear correction; with {n('model')} the fallback "
+                     f"identifies each corner from {n('pairs')}: drop {n('identify')}")
+    if actuator is not None and actuators is not None:
+        raise _error(f"give at most one of {n('actuator')} and {n('actuators')} (the T_a of {n('model')}'s linear "
+                     "fallback)")
+    if not pairs:
+        raise _error(f"{n('model')} needs {n.setting('pairs', 'fl=DRIVE:LVDT,fr=...,rl=...,rr=...')} naming each "
+                     "corner's drive and LVDT channels")
+    pairs = pairs_of(pairs, n)
+    for corner in pairs:
+        if corner not in CORNERS:
+            raise _error(f"{n('pairs')} names corner {corner!r}; the truck's corners are {', '.join(CORNERS)}")
+    missing = [c for c in CORNERS if c not in pairs]
+    if missing:
+        raise _error(f"{n('pairs')} has no corner {missing[0]!r}; give CORNER=DRIVE:LVDT for each of "
+                     f"{', '.join(CORNERS)}")
+    try:
+        workers = worker_count(workers)
+    except (TypeError, ValueError):
+        raise _error(f"{n('workers')} must be a whole number >= 1, got {workers}") from None
+    for key, value in (("max_evaluations", max_evaluations), ("calibration_windows", calibration_windows)):
+        if value is not None and (isinstance(value, bool) or int(value) != value or value < 1):
+            raise _error(f"{n(key)} must be a whole number >= 1, got {value}")
+    return {c: pairs[c] for c in CORNERS}, workers
+
+
+def _fallback_tas(naming: Naming, actuator, actuators):
+    """(the model's linear fallback T_a: one, or one per corner in corner order, or None; its source)."""
+    from mjcf.names import CORNERS
+
+    if actuator is not None:
+        return _one_ta(actuator)
+    if actuators is None:
+        return None, None
+    table, source = _corner_tas(actuators, naming)
+    missing = [c for c in CORNERS if c not in table]
+    if missing:
+        raise _error(f"{naming('actuators')} {source!r} has no corner {missing[0]!r}; the linear fallback of "
+                     f"{naming('model')} corrects the four corners {', '.join(CORNERS)}")
+    return [table[c] for c in CORNERS], source
+
+
+def correction_settings(*, actuator=None, actuators=None, identify=None, model=None, pairs=None, columns=None,
+                        corner_map=None, lowpass: str = "regularized", lowpass_hz: float | None = None,
+                        mode: str = "zerophase", transient: str = "drop", normalize_dc: bool = False,
+                        workers: int | None = None, max_evaluations: int | None = None,
+                        calibration_windows: int | None = None, cab: str | None = None,
+                        naming: Naming = KEYWORDS) -> CorrectionSettings:
+    """Check the options of a correction and read their files; the parameters are
+    :func:`scenarios.records.api.correct_record`'s (``naming``: how messages name them).
+
+    Raises
+    ------
+    ScenarioError
+        One sentence naming the parameter (an option, a file, a T_a source) and the fix.
+    """
+    n = naming
+    _choice(n, "lowpass", lowpass, LOWPASSES)
+    _choice(n, "mode", mode, MODES)
+    _choice(n, "transient", transient, TRANSIENTS)
+    _choice(n, "cab", "auto" if cab is None else cab, CABS)
+    lowpass_hz = _check_lowpass(n, lowpass, lowpass_hz)
+    common = dict(lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
+                  normalize_dc=bool(normalize_dc), cab="auto" if cab is None else cab, naming=n)
+    if model is None:
+        extra = {"pairs": pairs, "workers": workers, "max_evaluations": max_evaluations,
+                 "calibration_windows": calibration_windows, "cab": cab}
+        given = [k for k, v in extra.items() if v is not None]
+        if given:
+            raise _error(f"{n(given[0])} goes with {n.setting('model', 'TRUCK.toml')} (the model correction); drop "
+                         f"it, or give {n('model')}")
+        id_cols = parse_identify(identify, n)
+        asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
+        sources = [k for k, v in (("actuator", actuator), ("actuators", actuators), ("identify", identify))
+                   if v is not None]
+        if len(sources) != 1:
+            raise _error(f"give exactly one of {n.setting('actuator', 'ACT.toml')}, "
+                         f"{n.setting('actuators', 'ACTS.toml')} and {n.setting('identify', 'DRIVE_COL,DISP_COL')}")
+        if items is not None and actuators is None:
+            raise _error(f"{n('corner_map')} maps corners of a per-corner file: use it with "
+                         f"{n.setting('actuators', 'ACTS.toml')}")
+        ta, source = (None, None) if identify is not None else (
+            _one_ta(actuator) if actuator is not None else _corner_tas(actuators, n))
+        return CorrectionSettings(
+            method="linear", columns=None if asked is None else tuple(asked),
+            corner_map=None if items is None else tuple(items), identify=tuple(id_cols), ta=ta,
+            per_corner=actuators is not None, ta_source=source, pairs=None, scenario=None, scenario_file=None,
+            workers=None, max_evaluations=None, calibration_windows=None,
+            inputs=tuple(str(p) for p in (actuator, actuators) if _is_path(p)), **common)
+    pairs, workers = _model_options(n, identify, actuator, actuators, pairs, workers, max_evaluations,
+                                    calibration_windows)
+    if _is_path(model):
+        from scenarios.core.config import load_scenario
+
+        scenario, scenario_file = load_scenario(model), str(model)
+    else:
+        scenario, scenario_file = model, GIVEN
+    asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
+    ta, source = _fallback_tas(n, actuator, actuators)
+    return CorrectionSettings(
+        method="model", columns=None if asked is None else tuple(asked),
+        corner_map=None if items is None else tuple(items), identify=(), ta=ta, per_corner=False,
+        ta_source=source, pairs=pairs, scenario=scenario, scenario_file=scenario_file, workers=workers,
+        max_evaluations=max_evaluations, calibration_windows=calibration_windows,
+        inputs=tuple(str(p) for p in (model, actuator, actuators) if _is_path(p)), **common)
