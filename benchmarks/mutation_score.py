@@ -32,11 +32,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 #: Module -> the tests that claim to cover it (the command run against each mutant).
 TARGETS = {
-    "correction/metrics/dlc.py": ["tests/test_dlc.py", "tests/test_damage.py"],
-    "correction/output/eq4.py": ["tests/test_transfer.py", "tests/test_correction.py"],
-    "correction/metrics/rainflow_damage.py": ["tests/test_rainflow_fast.py", "tests/test_damage.py"],
-    "hydraulics/model.py": ["tests/test_hydraulics_laws.py", "tests/test_hydraulics_model.py"],
-    "scenarios/studies/scoring.py": ["tests/test_scoring.py"],
+    "correction/metrics/dlc.py": ["tests/correction/metrics/test_dlc.py", "tests/correction/metrics/test_damage.py"],
+    "correction/output/eq4.py": ["tests/correction/output/test_transfer.py", "tests/correction/output/test_correction.py"],
+    "correction/metrics/rainflow_damage.py": ["tests/correction/metrics/test_rainflow_fast.py", "tests/correction/metrics/test_damage.py"],
+    "hydraulics/model.py": ["tests/hydraulics/test_hydraulics_laws.py", "tests/hydraulics/test_hydraulics_model.py"],
+    "scenarios/studies/scoring.py": ["tests/scenarios/studies/test_scoring.py"],
 }
 
 

@@ -3,7 +3,7 @@
 The MJCF (``truck_rig.xml``) names each element after its wheel station; :mod:`hydraulics`
 adds one user actuator per station and :mod:`scenarios` reads joints, actuators, sensors and
 sites. All of them spell the names through this module, so a renamed element is renamed here
-once (``tests/test_mjcf.py`` checks every name below exists in the compiled model).
+once (``tests/mjcf/test_mjcf.py`` checks every name below exists in the compiled model).
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ __all__ = ["BASE_BYTES", "BYTES_PER_STEP", "BYTES_PER_OUTPUT", "MMAP_THRESHOLD_B
 #: (:class:`scenarios.core.road_drive.RoadDrive`, on the slice of the profile each chunk reads) and
 #: not held; what grows with the run's length is the road profile (0.02 m spacing) and its
 #: filtering: measured (tracemalloc peak of scenarios.core.run.run, 120 km/h, 1e-4 s, 2 s against
-#: 8 s: tests/test_memory.py) ~3.5 B per step; 8 with a margin.
+#: 8 s: tests/scenarios/core/test_memory.py) ~3.5 B per step; 8 with a margin.
 BYTES_PER_STEP = 8
 #: Memory per output sample, bytes: the records and the result's signals (~280 B measured in rig
 #: mode); ``timeseries.csv`` is streamed in blocks (scenarios.core.results.csv_parts).

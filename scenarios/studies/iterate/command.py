@@ -26,7 +26,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``iterate`` on an ``argparse`` sub-parsers object; sets ``func=cmd_iterate``."""
     # The targets are scenarios.studies.iterate.compute.TARGETS and the noise default
     # scenarios.studies.scoring.NOISE_N: importing those here would load the whole simulator for
-    # ``rigsim --help`` (tests/test_startup.py pins both). The band limit's module is light.
+    # ``rigsim --help`` (tests/scenarios/cli/test_startup.py pins both). The band limit's module is light.
     from correction.output.lowpass import BAND_HZ
 
     c = subparsers.add_parser(

@@ -46,7 +46,7 @@ def _report_md(js: dict) -> str:
         f"   {r1['flow_direction']}.",
         f"2. **Numerical** — {r2['method']} ({r2['states']} states). The actuator alone (one pan, static "
         "valve, spring to ground) linearized the same way reproduces eq. 4 to 1e-6 relative: "
-        "`tests/test_hydraulics_mujoco.py::test_transition_fd_reproduces_eq4`.",
+        "`tests/hydraulics/test_hydraulics_mujoco.py::test_transition_fd_reproduces_eq4`.",
         f"3. **Identified** — {r3['method']}. Drive RMS {1e3 * r3['drive_rms_m']:.1f} mm, "
         f"{r3['drive_velocity_rms_m_s']:.2f} m/s; record {r3['record_s']:g} s at {r3['rate_hz']:g} Hz.",
         "",

@@ -23,7 +23,7 @@ from correction.metrics.damage import stress_factor
 from correction.metrics.dlc import BLOCK_ROWS, column_sum, dlc, force_statistics
 from scenarios.core.memory import MMAP_THRESHOLD_BYTES
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 SCENARIO = "scenarios/data/paper/high_72kmh_3640kg.toml"
 
 

@@ -42,11 +42,6 @@ def _write_csv(path, names, columns) -> None:
     path.write_text("\n".join(rows) + "\n")
 
 
-def _one_line(err: str) -> str:
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in err, err
-    return lines[0]
-
 
 @pytest.fixture(scope="module")
 def rig(tmp_path_factory):
@@ -186,11 +181,11 @@ def test_lowpass_hz_is_the_butterworth_corner_of_the_correction(white, corner_hz
     ("490", [], "fix: lower --lowpass-hz (490 Hz), or record or resample"),
     ("20", ["--lowpass", "paper"], "--lowpass-hz sets the corner of the regularized low-pass; the paper's"),
 ])
-def test_bad_lowpass_hz_exits_2_in_one_line(rig, tmp_path, capsys, value, extra, expected):
+def test_bad_lowpass_hz_exits_2_inone_line(one_line, rig, tmp_path, capsys, value, extra, expected):
     out = tmp_path / "o.csv"
     argv = ["correct", str(rig / "rig.csv"), "--actuator", str(rig / "act.toml"), "-o", str(out), *extra]
     assert main(argv + [f"--lowpass-hz={value}"]) == 2
-    line = _one_line(capsys.readouterr().err)
+    line = one_line(capsys.readouterr().err)
     assert line.startswith("rigsim: error: ") and expected in line, line
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == []
 
@@ -231,7 +226,7 @@ def test_identify_record_gives_the_actuators_file_of_rigsim_identify(rig, tmp_pa
 @pytest.fixture(scope="module")
 def truck_record(tmp_path_factory):
     """7 s of the paper's high-roughness 72 km/h case on the hydraulic rig, written as a lab's CSV
-    (tests/test_correct_model.py's layout), and a TRUCK.toml whose first guesses are the truck's own."""
+    (tests/scenarios/records/test_correct_model.py's layout), and a TRUCK.toml whose first guesses are the truck's own."""
     import dataclasses
 
     from test_correct_model import _write_csv as write_lab_csv

@@ -17,7 +17,7 @@ from scenarios.core.config import parse_scenario, paper_scenarios
 from scenarios.studies import suites
 from scenarios.studies.model_suite import plants
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 
 # The generalization suite's rule: case i cycles through class, speed, payload and tracks.
 CLASSES = ("A", "B", "C", "D")

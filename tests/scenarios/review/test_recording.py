@@ -23,7 +23,7 @@ from scenarios.core.run import run
 rr = pytest.importorskip("rerun")
 pa = pytest.importorskip("pyarrow")
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 SCENARIO = {"name": "t", "speed_kmh": 72.0, "duration_s": 2.0, "lead_in_s": 1.0, "seed": 1,
             "road": {"roughness": "C"}}
 TRUCK = ("chassis", "payload", "front_axle", "rear_axle")

@@ -56,7 +56,7 @@ def test_the_same_flag_in_every_subcommand(flag, commands):
 def test_model_command_shows_a_suspended_cab(capsys):
     """rigsim model --cab-mount-hz: the cab on its own mounts (TruckVariant.cab_mount_hz) appears as
     cab modes near the mount frequency (the cab's own bounce/pitch on the mount springs; see
-    tests/test_cab_mount.py for the modal reference), with the same static loads as the rigid cab
+    tests/mjcf/test_cab_mount.py for the modal reference), with the same static loads as the rigid cab
     (the cab's mass moves from the chassis to its own body); a bad value is refused with exit 2."""
     from scenarios.cli.main import main
 

@@ -35,7 +35,7 @@ from scenarios.cli.main import main
 from scenarios.studies.sweep.grid import MAX_CASES
 from scenarios.studies.sweep.scheduler import CONNECT_TIMEOUT_S
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 LOOPBACK = "127.0.0.1"
 
 BASE = textwrap.dedent("""
@@ -272,7 +272,7 @@ def test_a_refused_connection_names_its_reason(grid, tmp_path):
 
 
 # -------------------------------------------------------------------------------- SIGTERM
-#: The child's case function (through a ``sitecustomize`` on its path, as tests/test_sigterm.py
+#: The child's case function (through a ``sitecustomize`` on its path, as tests/scenarios/cli/test_sigterm.py
 #: does): seed 1 finishes at once, every other case keeps its worker's core busy as a real case
 #: does, so the pool's queue is full of cases waiting when the signal comes and the parent's
 #: threads compete for the cores.

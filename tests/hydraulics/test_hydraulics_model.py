@@ -22,7 +22,7 @@ from hydraulics.model import (MPA, chamber_flows, orifice_root, orifice_root_slo
                               soft_clip_slope)
 from hydraulics.packing import FIELD_NAMES, NPACK
 
-PKG = pathlib.Path(__file__).resolve().parents[1] / "hydraulics"
+PKG = pathlib.Path(__file__).resolve().parents[2] / "hydraulics"
 
 
 def default() -> ActuatorParams:

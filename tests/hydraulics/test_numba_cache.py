@@ -19,7 +19,7 @@ import pytest
 
 from hydraulics import callback_cache, kernels
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 PRELUDE = """
 import json, mujoco

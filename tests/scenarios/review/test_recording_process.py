@@ -21,7 +21,7 @@ from scenarios.core.config import parse_scenario
 from scenarios.core.run import run
 from scenarios.review.recording import write_recording
 from scenarios.review.recording_process import RecordingError, RecordingProcess
-from tests.test_recording import ROOT, SCENARIO, read_rrd, sine_poses
+from tests.scenarios.review.test_recording import ROOT, SCENARIO, read_rrd, sine_poses
 
 rr = pytest.importorskip("rerun")
 

@@ -2,7 +2,7 @@
 
 Pure checks of :attr:`Calibration.excess_nrmse` and :func:`fallback_reason` on hand-made
 calibrations (the numbers behind the limit are measured by benchmarks/model_correction.py; the
-runs that produce a real fallback are tests/test_model_correction.py's and tests/test_correct_model.py's).
+runs that produce a real fallback are tests/scenarios/records/test_model_correction.py's and tests/scenarios/records/test_correct_model.py's).
 """
 
 from __future__ import annotations

@@ -274,11 +274,6 @@ def test_check_output_file_refuses_an_unwritable_folder(readonly):
 
 
 # ------------------------------------------------------------------------------- rigsim run
-def _one_line(err: str) -> str:
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in err, err
-    return lines[0]
-
 
 @pytest.fixture()
 def scenario(tmp_path):
@@ -287,7 +282,7 @@ def scenario(tmp_path):
     return path
 
 
-def test_a_second_run_into_the_same_folder_is_refused_and_force_replaces(tmp_path, scenario, capsys, monkeypatch):
+def test_a_second_run_into_the_same_folder_is_refused_and_force_replaces(one_line, tmp_path, scenario, capsys, monkeypatch):
     out = tmp_path / "out"
     assert main(["run", str(scenario), "--out", str(out), "--quiet"]) == 0
     assert f"wrote {out / 'result.json'} and {out / 'timeseries.csv'}" in capsys.readouterr().out
@@ -298,7 +293,7 @@ def test_a_second_run_into_the_same_folder_is_refused_and_force_replaces(tmp_pat
 
     monkeypatch.setattr(run_module, "run", lambda *a, **k: pytest.fail("the run started"))
     assert main(["run", str(scenario), "--out", str(out), "--quiet"]) == 2
-    line = _one_line(capsys.readouterr().err)
+    line = one_line(capsys.readouterr().err)
     assert line == (f"rigsim: error: --out {out} already holds a previous result (3 files); choose another folder "
                     "or give --force to replace it")
     assert _listing(out) == first
@@ -308,7 +303,7 @@ def test_a_second_run_into_the_same_folder_is_refused_and_force_replaces(tmp_pat
     other = tmp_path / "other.toml"
     other.write_text(SCENARIO.replace("seed = 5", "seed = 6"))
     assert main(["run", str(other), "--out", str(out), "--quiet", "--force"]) == 2
-    assert _one_line(capsys.readouterr().err) == (f"rigsim: error: --out {out} holds notes.txt that rigsim did not "
+    assert one_line(capsys.readouterr().err) == (f"rigsim: error: --out {out} holds notes.txt that rigsim did not "
                                                   "write there; move it out of the folder or name another folder")
     assert _listing(out) == {**first, "notes.txt": _listing(out)["notes.txt"]}
     (out / "notes.txt").unlink()
@@ -320,15 +315,15 @@ def test_a_second_run_into_the_same_folder_is_refused_and_force_replaces(tmp_pat
     assert _no_staging(tmp_path)
 
 
-def test_run_refuses_an_empty_out(tmp_path, scenario, capsys, monkeypatch):
+def test_run_refuses_an_empty_out(one_line, tmp_path, scenario, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     before = sorted(os.listdir(tmp_path))
     assert main(["run", str(scenario), "--out", "", "--quiet"]) == 2
-    assert _one_line(capsys.readouterr().err) == "rigsim: error: --out is empty; name the output folder"
+    assert one_line(capsys.readouterr().err) == "rigsim: error: --out is empty; name the output folder"
     assert sorted(os.listdir(tmp_path)) == before
 
 
-def test_run_refuses_an_rrd_it_cannot_write_before_the_run(tmp_path, scenario, capsys, monkeypatch):
+def test_run_refuses_an_rrd_it_cannot_write_before_the_run(one_line, tmp_path, scenario, capsys, monkeypatch):
     from scenarios.core import run as run_module
 
     monkeypatch.setattr(run_module, "run", lambda *a, **k: pytest.fail("the run started"))
@@ -337,14 +332,14 @@ def test_run_refuses_an_rrd_it_cannot_write_before_the_run(tmp_path, scenario, c
     for rrd, what in ((tmp_path / "file" / "x.rrd", "is not a folder"), (tmp_path / "exists.rrd", "already exists"),
                       (tmp_path / "out", "is the --out folder")):
         assert main(["run", str(scenario), "--out", str(tmp_path / "out"), "--rrd", str(rrd), "--quiet"]) == 2
-        assert what in _one_line(capsys.readouterr().err)
+        assert what in one_line(capsys.readouterr().err)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["exists.rrd", "file", "s.toml"]
 
 
-def test_run_refuses_an_rrd_into_a_read_only_folder(tmp_path, scenario, capsys, readonly):
+def test_run_refuses_an_rrd_into_a_read_only_folder(one_line, tmp_path, scenario, capsys, readonly):
     out = tmp_path / "out"
     assert main(["run", str(scenario), "--out", str(out), "--rrd", str(readonly / "x.rrd"), "--quiet"]) == 2
-    assert "no permission to write in" in _one_line(capsys.readouterr().err)
+    assert "no permission to write in" in one_line(capsys.readouterr().err)
     assert not out.exists() and list(readonly.iterdir()) == [] and _no_staging(tmp_path)
 
 
@@ -391,11 +386,11 @@ def test_run_writes_an_rrd_inside_its_folder_with_the_rest(tmp_path, scenario, c
     assert f"wrote recording {out / 'run.rrd'}" in capsys.readouterr().out
 
 
-def test_run_failing_after_the_simulation_leaves_nothing(tmp_path, scenario, capsys, monkeypatch):
+def test_run_failing_after_the_simulation_leaves_nothing(one_line, tmp_path, scenario, capsys, monkeypatch):
     _stand_in_recording(monkeypatch, failure=OSError(28, "No space left on device"))
     out = tmp_path / "out"
     assert main(["run", str(scenario), "--out", str(out), "--rrd", str(tmp_path / "x.rrd"), "--quiet"]) == 2
-    assert "No space left" in _one_line(capsys.readouterr().err)
+    assert "No space left" in one_line(capsys.readouterr().err)
     assert not out.exists() and _no_staging(tmp_path)
 
 
@@ -506,7 +501,7 @@ STUDIES = ["paper", "validate", "identify", "iterate"]
 
 
 @pytest.mark.parametrize("name", STUDIES)
-def test_a_study_writes_its_folder_in_one_piece_and_names_the_final_paths(name, tmp_path, scenario, capsys,
+def test_a_study_writes_its_folder_in_one_piece_and_names_the_final_paths(one_line, name, tmp_path, scenario, capsys,
                                                                           monkeypatch):
     argv, files = _study(name, monkeypatch, False, scenario)
     out = tmp_path / "out"
@@ -519,12 +514,12 @@ def test_a_study_writes_its_folder_in_one_piece_and_names_the_final_paths(name, 
     # a second time: refused before the computation, the first result unchanged
     first = _listing(out)
     assert main([name, *argv, "--out", str(out), "--quiet"]) == 2
-    assert "already holds a previous result" in _one_line(capsys.readouterr().err)
+    assert "already holds a previous result" in one_line(capsys.readouterr().err)
     assert _listing(out) == first
     # --force replaces it, but never a file rigsim did not write there
     (out / "notes.txt").write_text("x")
     assert main([name, *argv, "--out", str(out), "--quiet", "--force"]) == 2
-    assert "holds notes.txt that rigsim did not write there" in _one_line(capsys.readouterr().err)
+    assert "holds notes.txt that rigsim did not write there" in one_line(capsys.readouterr().err)
     (out / "notes.txt").unlink()
     assert main([name, *argv, "--out", str(out), "--quiet", "--force"]) == 0
     assert _names(out) == sorted(files) and _no_staging(tmp_path)
@@ -545,20 +540,20 @@ def test_a_failing_study_leaves_nothing_and_force_keeps_the_old_result(name, tmp
 
 
 @pytest.mark.parametrize("name", ["paper", "validate"])
-def test_a_study_refuses_an_rrd_it_cannot_write_before_any_work(name, tmp_path, scenario, capsys, monkeypatch):
+def test_a_study_refuses_an_rrd_it_cannot_write_before_any_work(one_line, name, tmp_path, scenario, capsys, monkeypatch):
     argv, _ = _study(name, monkeypatch, True, scenario)  # the computation would fail: it must not start
     (tmp_path / "file").write_text("")
     out = tmp_path / "out"
     assert main([name, *argv, "--out", str(out), "--rrd", str(tmp_path / "file" / "x.rrd"), "--quiet"]) == 2
-    assert "--rrd" in _one_line(capsys.readouterr().err)
+    assert "--rrd" in one_line(capsys.readouterr().err)
     assert not out.exists() and _no_staging(tmp_path)
 
 
-def test_paper_rrd_into_a_read_only_folder_is_refused_before_any_work(tmp_path, capsys, monkeypatch, readonly):
+def test_paper_rrd_into_a_read_only_folder_is_refused_before_any_work(one_line, tmp_path, capsys, monkeypatch, readonly):
     _fake_paper(monkeypatch, True)
     out = tmp_path / "out"
     assert main(["paper", "--out", str(out), "--rrd", str(readonly / "p.rrd"), "--quiet"]) == 2
-    assert "no permission" in _one_line(capsys.readouterr().err)
+    assert "no permission" in one_line(capsys.readouterr().err)
     assert not out.exists() and list(readonly.iterdir()) == []
 
 

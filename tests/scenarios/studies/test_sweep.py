@@ -34,7 +34,7 @@ from scenarios.studies.sweep.grid import GRID_FORMAT, load_grid, parse_grid
 from scenarios.studies.sweep.run import run_sweep
 from scenarios.studies.sweep.settings import EvalSettings
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 
 BASE = """
 [sweep]

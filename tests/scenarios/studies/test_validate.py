@@ -209,7 +209,7 @@ def test_recording_of_the_table1_runs_is_written(short_run):
     path = out / "validate.rrd"
     assert path.stat().st_size > 100_000
     assert "wrote recording" in printed
-    from tests.test_recording import read_rrd
+    from tests.scenarios.review.test_recording import read_rrd
 
     recordings = read_rrd(path)
     assert len(recordings) == 1

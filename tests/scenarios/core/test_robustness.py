@@ -30,7 +30,7 @@ from scenarios.core import memory
 from scenarios.core.config import ScenarioError, parse_scenario
 from scenarios.core.files import atomic_write_bytes, remove_stale_temp_files
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
 
 DOC = {"name": "r", "speed_kmh": 72.0, "duration_s": 2.0, "seed": 5, "lead_in_s": 0.5,
@@ -110,7 +110,7 @@ def test_rig_run_checks_the_records_of_any_drive(monkeypatch):
     assert rec.t_s.size == 251
 
 
-# The memory per step and per output sample: tests/test_memory.py (measured peaks).
+# The memory per step and per output sample: tests/scenarios/core/test_memory.py (measured peaks).
 
 
 # ------------------------------------------------------------------------- the truck's bounds

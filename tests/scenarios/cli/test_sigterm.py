@@ -25,7 +25,7 @@ import time
 import pytest
 
 from scenarios.cli.main import INTERRUPTED, exit_main
-from tests.test_recording_process import ENV, TOML
+from tests.scenarios.review.test_recording_process import ENV, TOML
 
 
 def _command(tmp_path, patch: str) -> tuple[subprocess.CompletedProcess, float]:

@@ -34,7 +34,7 @@ from correction.io import measured_core
 from correction.io.measured import MeasuredDataError, read_channels, write_channels
 from correction.io.tomlfile import read_toml
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
 #: Wall time a refused file may take in a subprocess, s: imports on a loaded machine included. A
 #: reader that waits on a pipe never ends; one that reads /dev/zero is stopped by the memory cap.

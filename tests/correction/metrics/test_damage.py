@@ -310,7 +310,7 @@ def test_damage_metrics_of_a_sine_and_compare():
 
 def test_cycles_counted_on_the_turning_points_are_the_librarys_on_every_sample():
     """rainflow_cycles counts with numpy (reversals, four-point passes, the stack on the rest;
-    tests/test_rainflow_fast.py for generated and awkward histories): the reference is
+    tests/correction/metrics/test_rainflow_fast.py for generated and awkward histories): the reference is
     ``rainflow.extract_cycles`` on the raw history, exactly (ranges, means and counts, in order),
     on 3000 short histories with plateaus, constant and monotone runs, and on a long noisy one."""
     rainflow = pytest.importorskip("rainflow")  # the test extra's reference

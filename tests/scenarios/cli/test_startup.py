@@ -12,7 +12,7 @@ import sys
 
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[3]
 HEAVY = ("control", "matplotlib", "mujoco", "numba", "rerun", "scipy.signal")
 
 

@@ -32,11 +32,6 @@ def _tree(folder: pathlib.Path) -> dict[str, str]:
             for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def _one_line(err: str) -> str:
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in err, err
-    return lines[0]
-
 
 @pytest.fixture()
 def no_work(monkeypatch):
@@ -48,10 +43,10 @@ def no_work(monkeypatch):
     monkeypatch.setattr(recorded, "identify_recorded", lambda *a, **k: pytest.fail("the identification started"))
 
 
-def _refused(argv, folder, capsys, *expected):
+def _refused(one_line, argv, folder, capsys, *expected):
     before = _tree(folder)
     assert main(argv) == 2
-    line = _one_line(capsys.readouterr().err)
+    line = one_line(capsys.readouterr().err)
     for text in expected:
         assert text in line, line
     assert _tree(folder) == before
@@ -59,21 +54,21 @@ def _refused(argv, folder, capsys, *expected):
 
 
 @pytest.mark.parametrize("force", [False, True])
-def test_the_folder_of_the_input_is_refused_as_out(tmp_path, capsys, no_work, force):
+def test_the_folder_of_the_input_is_refused_as_out(one_line, tmp_path, capsys, no_work, force):
     d = tmp_path / "d"
     d.mkdir()
     (d / "rec.csv").write_text(CSV)
     (d / "notes.txt").write_text("mine")
     (d / "scen.toml").write_text(SCENARIO)
     extra = ["--force"] if force else []
-    line = _refused(["identify", "--from-file", str(d / "rec.csv"), "--pairs", "fl=drive_fl:lvdt_fl",
+    line = _refused(one_line, ["identify", "--from-file", str(d / "rec.csv"), "--pairs", "fl=drive_fl:lvdt_fl",
                      "--out", str(d), "--quiet", *extra], tmp_path, capsys, f"--out {d} contains the input {d / 'rec.csv'}")
     assert "previous result" not in line
-    _refused(["run", str(d / "scen.toml"), "--out", str(d), "--quiet", *extra], tmp_path, capsys,
+    _refused(one_line, ["run", str(d / "scen.toml"), "--out", str(d), "--quiet", *extra], tmp_path, capsys,
              f"--out {d} contains the input {d / 'scen.toml'}")
 
 
-def test_the_working_folder_its_parents_and_home_are_refused(tmp_path, capsys, no_work, monkeypatch):
+def test_the_working_folder_its_parents_and_home_are_refused(one_line, tmp_path, capsys, no_work, monkeypatch):
     work = tmp_path / "home" / "work"
     (work / "src").mkdir(parents=True)
     (work / "src" / "a.py").write_text("x = 1\n")
@@ -82,30 +77,30 @@ def test_the_working_folder_its_parents_and_home_are_refused(tmp_path, capsys, n
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
     for out, what in ((".", "is the working folder"), ("..", "contains the working folder"),
                       (str(tmp_path / "home"), "contains the working folder"), (str(tmp_path), "contains")):
-        _refused(["run", "scen.toml", "--out", out, "--quiet", "--force"], tmp_path, capsys, what)
+        _refused(one_line, ["run", "scen.toml", "--out", out, "--quiet", "--force"], tmp_path, capsys, what)
     monkeypatch.chdir(tmp_path)  # the home folder, as such, from elsewhere
     (tmp_path / "s.toml").write_text(SCENARIO)
-    _refused(["run", "s.toml", "--out", str(tmp_path / "home"), "--quiet", "--force"], tmp_path, capsys,
+    _refused(one_line, ["run", "s.toml", "--out", str(tmp_path / "home"), "--quiet", "--force"], tmp_path, capsys,
              "the home folder")
 
 
-def test_a_symbolic_link_to_the_folder_of_the_input_is_refused(tmp_path, capsys, no_work):
+def test_a_symbolic_link_to_the_folder_of_the_input_is_refused(one_line, tmp_path, capsys, no_work):
     d = tmp_path / "d"
     d.mkdir()
     (d / "scen.toml").write_text(SCENARIO)
     (tmp_path / "link").symlink_to(d)
-    _refused(["run", str(d / "scen.toml"), "--out", str(tmp_path / "link"), "--quiet", "--force"], tmp_path,
+    _refused(one_line, ["run", str(d / "scen.toml"), "--out", str(tmp_path / "link"), "--quiet", "--force"], tmp_path,
              capsys, "contains the input")
 
 
 @pytest.mark.parametrize("force", [False, True])
-def test_a_folder_rigsim_did_not_write_is_refused_force_or_not(tmp_path, capsys, no_work, force):
+def test_a_folder_rigsim_did_not_write_is_refused_force_or_not(one_line, tmp_path, capsys, no_work, force):
     (tmp_path / "s.toml").write_text(SCENARIO)
     mine = tmp_path / "mine"
     (mine / "data").mkdir(parents=True)
     (mine / "data" / "x.bin").write_bytes(b"\x00\x01")
     (mine / "readme.txt").write_text("mine")
-    line = _refused(["run", str(tmp_path / "s.toml"), "--out", str(mine), "--quiet", *(["--force"] * force)],
+    line = _refused(one_line, ["run", str(tmp_path / "s.toml"), "--out", str(mine), "--quiet", *(["--force"] * force)],
                     tmp_path, capsys)
     assert line == (f"rigsim: error: --out {mine} holds 2 files that rigsim did not write; name a new or empty "
                     "folder (--force replaces only a folder rigsim wrote)")
@@ -137,13 +132,13 @@ def test_force_refuses_a_file_added_between_the_check_and_the_replacement(tmp_pa
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging folder left
 
 
-def test_a_sweep_folder_is_resumed_by_sweep_and_refused_by_force(tmp_path, capsys, no_work):
+def test_a_sweep_folder_is_resumed_by_sweep_and_refused_by_force(one_line, tmp_path, capsys, no_work):
     out = tmp_path / "sweep"
     claim_output_folder(out, written_by="rigsim sweep", create=True)
     (out / "results.csv").write_text("case\n")
     assert claim_output_folder(out, written_by="rigsim sweep") == out  # resumed into
     (tmp_path / "s.toml").write_text(SCENARIO)
-    _refused(["run", str(tmp_path / "s.toml"), "--out", str(out), "--quiet", "--force"], tmp_path, capsys,
+    _refused(one_line, ["run", str(tmp_path / "s.toml"), "--out", str(out), "--quiet", "--force"], tmp_path, capsys,
              "holds the results of rigsim sweep, which resumes into it")
     mine = tmp_path / "mine"
     mine.mkdir()
@@ -156,30 +151,30 @@ def test_a_sweep_folder_is_resumed_by_sweep_and_refused_by_force(tmp_path, capsy
         claim_output_folder(tmp_path / "run", written_by="rigsim sweep")
 
 
-def test_a_dangling_symbolic_link_as_out_is_refused_before_the_run(tmp_path, capsys, no_work):
+def test_a_dangling_symbolic_link_as_out_is_refused_before_the_run(one_line, tmp_path, capsys, no_work):
     (tmp_path / "s.toml").write_text(SCENARIO)
     (tmp_path / "out").symlink_to(tmp_path / "nowhere")
-    _refused(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "out"), "--quiet"], tmp_path, capsys,
+    _refused(one_line, ["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "out"), "--quiet"], tmp_path, capsys,
              "is a symbolic link to", "which does not exist")
 
 
-def test_an_output_file_ending_in_a_slash_is_refused(tmp_path, capsys):
+def test_an_output_file_ending_in_a_slash_is_refused(one_line, tmp_path, capsys):
     (tmp_path / "in.csv").write_text("time_s,Fz_fl_N\n" + "".join(f"{i / 1000},{20000 + i}\n" for i in range(50)))
     (tmp_path / "p").mkdir()
-    _refused(["correct", str(tmp_path / "in.csv"), "--actuator", str(tmp_path / "none.toml"), "-o",
+    _refused(one_line, ["correct", str(tmp_path / "in.csv"), "--actuator", str(tmp_path / "none.toml"), "-o",
               str(tmp_path / "p" / "x.csv") + "/"], tmp_path, capsys, "ends in '/'")
 
 
-def test_a_speed_that_aliases_the_road_band_names_the_scenario_keys(tmp_path, capsys):
+def test_a_speed_that_aliases_the_road_band_names_the_scenario_keys(one_line, tmp_path, capsys):
     """200 km/h = 55.6 m/s carries the synthesized road's 10 cycle/m to 556 Hz, above the 500 Hz
     Nyquist rate of the 1 kHz drive: the limits follow from v n_max <= fs / 2."""
     (tmp_path / "s.toml").write_text(SCENARIO.replace("speed_kmh = 72.0", "speed_kmh = 200.0"))
-    line = _refused(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o"), "--quiet"], tmp_path, capsys,
+    line = _refused(one_line, ["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "o"), "--quiet"], tmp_path, capsys,
                     "speed_kmh = 200 km/h", "road.n_max_cyc_per_m = 10 cycle/m")
     assert "at most 180 km/h" in line and "at most 9 cycle/m" in line and "fs_hz" not in line
 
 
-def test_a_long_run_states_its_cost_and_one_too_large_for_the_disk_is_refused(tmp_path, capsys, no_work,
+def test_a_long_run_states_its_cost_and_one_too_large_for_the_disk_is_refused(one_line, tmp_path, capsys, no_work,
                                                                               monkeypatch):
     import shutil
 
@@ -195,7 +190,7 @@ def test_a_long_run_states_its_cost_and_one_too_large_for_the_disk_is_refused(tm
     assert "a 3600 s rig run: about" in err and "3,600,001 rows x 25 columns" in err
     usage = shutil.disk_usage(tmp_path)
     monkeypatch.setattr(shutil, "disk_usage", lambda p: usage._replace(free=100 * 2**20))
-    _refused(["run", str(tmp_path / "s.toml"), "--mode", "rig", "--out", str(tmp_path / "o")], tmp_path, capsys,
+    _refused(one_line, ["run", str(tmp_path / "s.toml"), "--mode", "rig", "--out", str(tmp_path / "o")], tmp_path, capsys,
              "would write about 1.", "100 MiB free")
 
 

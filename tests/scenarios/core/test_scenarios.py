@@ -15,7 +15,7 @@ from scenarios.cli.main import main
 from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
 from scenarios.core.run import run
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
+REPO = pathlib.Path(__file__).resolve().parents[3]
 
 SHORT = """
 name = "short"

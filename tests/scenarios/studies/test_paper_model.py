@@ -1,5 +1,5 @@
 """``rigsim paper --model``: the third method's table and paper.json entry (the correction itself
-is tested in tests/test_model_correction.py; a whole paper run with --model takes minutes)."""
+is tested in tests/scenarios/records/test_model_correction.py; a whole paper run with --model takes minutes)."""
 
 from __future__ import annotations
 
