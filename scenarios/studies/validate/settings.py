@@ -20,16 +20,16 @@ __all__ = [
     "MIN_IDENT_S", "FIT_ORDERS", "MAX_WORKERS", "TABLE1_SCENARIO", "table1_scenario_path", "validation_scenario",
 ]
 
-#: Frequency range of the Bode plots, Hz (issue 3).
+#: Frequency range of the Bode plots, Hz.
 BODE_RANGE_HZ = (0.1, 50.0)
-#: Upper end of the FRF comparisons against route 2, Hz (issue 3).
+#: Upper end of the FRF comparisons against route 2, Hz: the correction's band limit.
 COMPARE_MAX_HZ = BAND_HZ
-#: Multiple coherence (1) above which an identified FRF point counts (issue 3).
+#: Multiple coherence (1) above which an identified FRF point counts.
 COHERENCE_MIN = 0.95
-#: Goals of issue 3: route 3 within GOAL_FRF_DB (dB) and GOAL_FRF_DEG (deg) of route 2 up to
+#: The validation's goals: route 3 within GOAL_FRF_DB (dB) and GOAL_FRF_DEG (deg) of route 2 up to
 #: COMPARE_MAX_HZ, and the linearized-model DLC within GOAL_TABLE1_PCT (%) of the rig's.
 GOAL_FRF_DB, GOAL_FRF_DEG, GOAL_TABLE1_PCT = 0.5, 5.0, 2.0
-#: Step sizes of the Figure 7 analogue, m (issue 3: about 1 mm and 1 cm).
+#: Step sizes of the Figure 7 analogue, m (about 1 mm and 1 cm).
 STEP_SMALL_M, STEP_LARGE_M = 1.0e-3, 1.0e-2
 #: Duration of the step runs and the time of the step, s.
 STEP_RUN_S, STEP_AT_S = 2.0, 0.05
