@@ -124,7 +124,7 @@ def _solve(factors: list, m: int, taps: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fir_fit(x, y, lead: int, lag: int, *, rows=None, folds: int = 0, block_rows: int | None = None) -> FirFit:
-    """Fit the affine FIR filter from ``x`` to ``y`` with lags ``-lead .. lag`` by least squares.
+    """Fit the affine FIR filter from ``x`` to ``y`` with lags ``-lead`` to ``lag`` by least squares.
 
     Parameters
     ----------
