@@ -5,7 +5,7 @@
     python benchmarks/paper_breakdown.py [--duration-s 60]
 
 ``benchmarks/paper_overhead.py`` compares the command's wall time with bare MuJoCo's for the same
-steps (goal: at most 1.2x). This script says what the rest is. It runs the jobs of
+steps (goal: at most 1.5x). This script says what the rest is. It runs the jobs of
 ``rigsim paper`` one after the other in this process, exactly as its workers do
 (:mod:`scenarios.studies.paper.compute`'s job functions ``identify_job``, ``run_job`` and
 ``case_job``, with the files the command's ``finish_run`` and ``finish`` write, then the report
@@ -25,15 +25,16 @@ s; this process only, so a busy machine disturbs it little) to stages:
   starts (measured in a subprocess, CPU of that process).
 
 Prints one JSON line: the seconds per stage, the non-physics total, its ratio to the physics, and
-the share the goal leaves: on J cores with perfect packing, wall <= 1.2 x bare needs the
-non-physics CPU within 0.2 x the physics' CPU (the parent's serial imports count J times).
-Goal: ``non_physics_over_physics`` at most 0.2.
+the share the goal leaves: on J cores with perfect packing, wall <= 1.5 x bare needs the
+non-physics CPU within 0.5 x the physics' CPU (the parent's serial imports count J times).
+Goal: ``non_physics_over_physics`` at most 0.5.
 """
 
 from __future__ import annotations
 
 import argparse
 import functools
+import gc
 import json
 import os
 import pathlib
@@ -50,8 +51,9 @@ PARENT_IMPORTS = ("import scenarios.cli.main, scenarios.studies.paper.compute, s
 
 
 def import_cpu_s() -> float:
-    """CPU time (s) of a fresh interpreter importing :data:`PARENT_IMPORTS` (best of three)."""
-    code = f"import resource; {PARENT_IMPORTS}; r = resource.getrusage(resource.RUSAGE_SELF); " \
+    """CPU time (s) of a fresh interpreter importing :data:`PARENT_IMPORTS` with the collector off,
+    as the command imports them (best of three)."""
+    code = f"import gc, resource; gc.disable(); {PARENT_IMPORTS}; r = resource.getrusage(resource.RUSAGE_SELF); " \
            "print(r.ru_utime + r.ru_stime)"
     env = {**os.environ, "MUJOCO_GL": "disable"}
     runs = [float(subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
@@ -105,6 +107,7 @@ def breakdown(duration_s: float | None) -> dict:
     from scenarios.studies.paper.report import render_report, write_case, write_case_run
     from scenarios.studies.scoring import NOISE_N
 
+    gc.freeze()  # as the command does with its imports' objects before its pool starts
     clock = _Clock()
     original = clock.wrap_rollout()
     out = pathlib.Path(tempfile.mkdtemp(prefix="paper_breakdown_"))
@@ -144,7 +147,7 @@ def main(argv=None) -> int:
         "cpu_s": {k: round(v, 2) for k, v in sorted(stages.items(), key=lambda kv: -kv[1])},
         "physics_cpu_s": round(physics, 2), "non_physics_cpu_s": round(other, 2),
         "non_physics_over_physics": round(other / physics, 3),
-        "goal_non_physics_over_physics": 0.2,
+        "goal_non_physics_over_physics": 0.5,
     }))
     return 0
 

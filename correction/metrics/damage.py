@@ -308,6 +308,7 @@ def damage_metrics(force_N, fs_hz: float, static_N=None, exponents=(3, 5, 10)) -
     c = dynamic_load_coefficient(f, axis=0)
     duration = f.shape[0] / fs
     impact = impact_factors(f, s, (95.0, 99.9))
+    cycles = rainflow_cycles(f)  # counted once, summed for every exponent's DEL and pseudo-damage
     cols = lambda v: tuple(float(x) for x in np.atleast_1d(v))  # noqa: E731
     return DamageMetrics(
         fs_hz=fs, duration_s=duration, n_equivalent=duration * 1.0, exponents=exps,
@@ -315,8 +316,8 @@ def damage_metrics(force_N, fs_hz: float, static_N=None, exponents=(3, 5, 10)) -
         stress_factor_4=cols(stress_factor(f, s, 4.0)),
         stress_factor_4_gaussian=cols((mean / s) ** 4 * stress_factor_gaussian(c, 4)),
         impact_95=cols(impact[0]), impact_999=cols(impact[1]),
-        del_N=tuple(cols(damage_equivalent_load(f, m, duration_s=duration)) for m in exps),
-        pseudo_damage=tuple(cols(pseudo_damage(f, m)) for m in exps),
+        del_N=tuple(cols(damage_equivalent_load(f, m, duration_s=duration, cycles=cycles)) for m in exps),
+        pseudo_damage=tuple(cols(pseudo_damage(f, m, cycles=cycles)) for m in exps),
     )
 
 

@@ -15,7 +15,7 @@ samples both find the same 66 794 full cycles; the residue moves the m = 10 pseu
 
 Counted here with numpy, giving exactly what ``rainflow.extract_cycles`` gives (the same cycles,
 the same floating-point values, in the same order, so sums over them are the same floats too;
-tests/test_rainflow_fast.py compares them), which moved to the tests: the library is a Python
+tests/correction/metrics/test_rainflow_fast.py compares them), which moved to the tests: the library is a Python
 generator, 0.97 s of the 1.31 s scoring of a 60 s paper case (24 records, 125 000 cycles, under
 cProfile); counted here, 0.08 s. A 60 s wheel force with load-cell noise (30 000 reversals)
 takes ~2 ms instead of ~50 ms. The steps:
@@ -271,7 +271,17 @@ def rainflow_cycles(force_N):
     return out[0] if one else out
 
 
-def pseudo_damage(force_N, m):
+def _given_cycles(f: np.ndarray, one: bool, cycles) -> list:
+    """Each column's cycles: counted now, or ``cycles`` (:func:`rainflow_cycles` of the same force)."""
+    if cycles is None:
+        return [_cycles_1d(f[:, j]) for j in range(f.shape[1])]
+    cols = [cycles] if one else list(cycles)
+    if len(cols) != f.shape[1]:
+        raise ValueError(f"cycles has {len(cols)} columns, the force {f.shape[1]}; pass rainflow_cycles(force_N)")
+    return cols
+
+
+def pseudo_damage(force_N, m, *, cycles=None):
     """Relative fatigue damage sum n_i S_i^m of a force history (Palmgren-Miner, no S-N intercept).
 
     With an S-N curve N(S) = C S^-m, Miner's rule gives the damage D = sum n_i / N(S_i)
@@ -286,6 +296,8 @@ def pseudo_damage(force_N, m):
         Force history, shape (n,) or (n, k) (time along axis 0).
     m : float
         Woehler exponent (dimensionless, > 0); see :data:`WOHLER_PRESETS`.
+    cycles : optional
+        :func:`rainflow_cycles` of ``force_N``, when the caller has counted them: summed, not counted again.
 
     Returns
     -------
@@ -295,11 +307,12 @@ def pseudo_damage(force_N, m):
     """
     m = _exponent(m)
     f, one = force_columns(force_N)
-    d = np.array([float(np.sum(c * r ** m)) for r, _mean, c in (_cycles_1d(f[:, j]) for j in range(f.shape[1]))])
+    d = np.array([float(np.sum(c * r ** m)) for r, _mean, c in _given_cycles(f, one, cycles)])
     return float(d[0]) if one else d
 
 
-def damage_equivalent_load(force_N, m, n_equivalent=None, duration_s=None, f_equivalent_hz: float = 1.0):
+def damage_equivalent_load(force_N, m, n_equivalent=None, duration_s=None, f_equivalent_hz: float = 1.0, *,
+                           cycles=None):
     """Damage-equivalent load range: the constant range that does the record's damage in N_eq cycles.
 
     DEL = (sum n_i S_i^m / N_eq)^(1/m), from Miner's rule with an S-N curve of slope m: N_eq
@@ -322,6 +335,8 @@ def damage_equivalent_load(force_N, m, n_equivalent=None, duration_s=None, f_equ
         Equivalent cycle rate; 1 Hz (one equivalent cycle per second of record, the "1 Hz DEL")
         is the common convention in wind-turbine and vehicle load practice, and makes DELs of
         records of different lengths comparable.
+    cycles : optional
+        :func:`rainflow_cycles` of ``force_N``, as for :func:`pseudo_damage`.
 
     Returns
     -------
@@ -346,7 +361,7 @@ def damage_equivalent_load(force_N, m, n_equivalent=None, duration_s=None, f_equ
                          "(N_eq = f_equivalent_hz * duration_s)")
     if not (math.isfinite(n_eq) and n_eq > 0):
         raise ValueError(f"{what} must be a positive number of equivalent cycles, got {n_eq}")
-    return (pseudo_damage(force_N, m) / n_eq) ** (1.0 / m)
+    return (pseudo_damage(force_N, m, cycles=cycles) / n_eq) ** (1.0 / m)
 
 
 def level_crossings(force_N, levels_N):

@@ -7,6 +7,7 @@ what its arrays are).
 
 from __future__ import annotations
 
+import functools
 import pathlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -146,16 +147,122 @@ CSV_BLOCK_ROWS = 10_000
 def csv_parts(result: RunResult):
     """``timeseries.csv`` as a sequence of byte blocks: the header line, then rows (``%.10g``,
     comma-separated) :data:`CSV_BLOCK_ROWS` at a time."""
-    import io
-
     yield (",".join(result.column_names()) + "\n").encode("ascii")
     n = result.t_s.shape[0]
     for i in range(0, n, CSV_BLOCK_ROWS):
-        buf = io.StringIO()
-        np.savetxt(buf, result.rows(i, min(n, i + CSV_BLOCK_ROWS)), delimiter=",", fmt="%.10g")
-        text = buf.getvalue()
-        buf.close()  # numpy's writer wraps buf in a reference cycle: free its text now, not at the next GC
-        yield text.encode("ascii")
+        yield _csv_rows(result.rows(i, min(n, i + CSV_BLOCK_ROWS)))
+
+
+#: 10**0 .. 10**22, every power of ten a binary64 holds exactly (read from its decimal text).
+_POW10 = np.array([float(f"1e{k}") for k in range(23)])
+_ZERO, _DOT, _MINUS = ord("0"), ord("."), ord("-")
+#: Numbers formatted per pass of :func:`_csv_rows` (its temporaries peak at ~180 bytes per number: 12 MB).
+_FORMAT_VALUES = 1 << 16
+
+
+@functools.cache
+def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lookup tables of :func:`_csv_rows`: the five ASCII digits of 0 .. 99999 (leading zeros; one
+    5-byte item each), their trailing zeros (5 for 0), and which of a number's 22 byte slots
+    to keep, by text length L (slots 1 .. L), plus 21 if negative (slot 0, the sign)."""
+    n = np.arange(100_000)
+    digits = (n[:, None] // 10 ** np.arange(4, -1, -1) % 10 + _ZERO).astype(np.uint8)
+    trailing = sum((n % 10**j == 0).astype(np.int64) for j in range(1, 6))
+    keep = np.zeros((42, 22), dtype=bool)
+    for length in range(21):
+        keep[length, 1:1 + length] = keep[21 + length, 1:1 + length] = True
+    keep[21:, 0] = keep[:, 21] = True
+    return np.ascontiguousarray(digits).view("V5").ravel(), trailing, keep.view("V22").ravel()
+
+
+def _scaled(a: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """a * 10**(9 - e) in one rounding: by or through an exact power of ten (|9 - e| <= 22)."""
+    k = 9 - e
+    return np.where(k >= 0, a * _POW10[np.clip(k, 0, 22)], a / _POW10[np.clip(-k, 0, 22)])
+
+
+def _text(g: np.ndarray, digits: np.ndarray, nd: np.ndarray, e: int, exponent: bool):
+    """Write ``%.10g``'s text of numbers of decimal exponent ``e`` (sign aside) into the first slots
+    of ``g`` (rows of 20 bytes), from their ten ASCII digits and the count ``nd`` of them before
+    the trailing zeros (in exponent notation the same for all); return its length(s)."""
+    if not exponent and e >= 0:  # 123.45, 1000
+        g[:, :e + 1], g[:, e + 1], g[:, e + 2:11] = digits[:, :e + 1], _DOT, digits[:, e + 1:]
+        return np.where(nd > e + 1, nd + 1, e + 1)
+    if not exponent:  # 0.00123
+        lead = 1 - e  # "0." and -e - 1 zeros
+        g[:, :lead] = np.frombuffer(b"0.000"[:lead], dtype=np.uint8)
+        g[:, lead:lead + 10] = digits
+        return lead + nd
+    n = int(nd[0])  # 1.2345e+15, 1e-07
+    g[:, 0], g[:, 1], g[:, 2:n + 1] = digits[:, 0], _DOT, digits[:, 1:n]
+    at = n + 1 if n > 1 else 1
+    g[:, at:at + 4] = np.frombuffer(f"e{e:+03d}".encode("ascii"), dtype=np.uint8)
+    return at + 4
+
+
+def _csv_rows(block: np.ndarray) -> bytes:
+    """The rows of a 2-D float array as CSV lines, each number as ``"%.10g" % x`` writes it: the bytes
+    of ``numpy.savetxt(f, block, delimiter=",", fmt="%.10g")``, formatted with numpy (~2.5x faster).
+
+    The ten significant digits d of |x| = d * 10**(e - 9) are the scaled value |x| * 10**(9 - e)
+    rounded to an integer. It is computed in one correctly rounded operation (:func:`_scaled`),
+    which is monotonic and maps no number across a tie k + 1/2 (a binary64 below 1e10): the
+    computed value rounds as the exact one does unless it is a tie itself. Those numbers,
+    non-finite ones and magnitudes outside 1e-12 .. 1e31 (none in a run's signals) are formatted
+    by Python itself; zeros are "0" and "-0". Each number gets 22 byte slots: the sign, the text
+    (:func:`_text`, for the numbers of one layout at a time: sorted by it), the separator; the
+    slots a number does not use are dropped.
+    """
+    step = max(1, _FORMAT_VALUES // block.shape[1])
+    if block.shape[0] > step:
+        return b"".join(_csv_rows(block[i:i + step]) for i in range(0, block.shape[0], step))
+    v = np.ascontiguousarray(block, dtype=float).ravel()
+    a = np.abs(v)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        e = np.floor(np.log10(a))
+        ok = np.isfinite(e) & (e >= -12) & (e <= 30)
+        e = np.where(ok, e, 0.0).astype(np.int64)
+        scaled = _scaled(a, e)
+        off = np.flatnonzero((scaled >= 1e10) | (scaled < 1e9))  # log10 one off next to a power of ten
+        e[off] += np.where(scaled[off] >= 1e10, 1, -1)
+        scaled[off] = _scaled(a[off], e[off])
+    ok &= (scaled >= 1e9) & (scaled < 1e10)
+    scaled = np.where(ok, scaled, 1e9)
+    whole = np.floor(scaled)
+    ok &= scaled - whole != 0.5  # exact: both below 2**34
+    d = whole.astype(np.int64) + (scaled - whole > 0.5)
+    carry = d == 10**10  # rounded up to the next power of ten
+    d[carry] = 10**9
+    e += carry
+    digit_table, trailing, keep_table = _tables()
+    low = d % 100_000
+    nd = np.where(low == 0, 5 - trailing[d // 100_000], 10 - trailing[low])
+    exponent = (e < -4) | (e >= 10)
+    layout = np.where(ok, np.where(exponent, 64 + (e + 16) * 11 + nd, e + 16), 1 << 14).astype(np.int16)
+    order = np.argsort(layout, kind="stable")
+    layout, e, nd, d = layout[order], e[order], nd[order], d[order]
+    digits = np.empty((v.size, 2), dtype="V5")
+    digits[:, 0], digits[:, 1] = digit_table[d // 100_000], digit_table[d % 100_000]
+    digits = digits.view(np.uint8).reshape(v.size, 10)
+    text, length = np.empty((v.size, 22), dtype=np.uint8), np.zeros(v.size, dtype=np.int64)
+    bounds = np.append(np.flatnonzero(np.diff(layout, prepend=-1)), v.size).tolist()
+    for i, j in zip(bounds[:-1], bounds[1:]):
+        if layout[i] == 1 << 14:
+            break
+        length[i:j] = _text(text[i:j, 1:21], digits[i:j], nd[i:j], int(e[i]), layout[i] >= 64)
+    grid = np.empty_like(text)
+    grid.view("V22")[order] = text.view("V22")
+    length[order] = length.copy()
+    zero = np.flatnonzero(v == 0)
+    grid[zero, 1], length[zero] = _ZERO, 1  # "0", "-0"
+    for i in np.flatnonzero(~ok & (v != 0)):
+        s = ("%.10g" % v[i]).encode("ascii")
+        grid[i, 1:1 + len(s)], length[i] = np.frombuffer(s, dtype=np.uint8), len(s)
+    grid[:, 0], grid[:, 21] = _MINUS, ord(",")
+    grid[block.shape[1] - 1::block.shape[1], 21] = ord("\n")
+    sign = np.signbit(v) & (ok | (v == 0))  # Python's text carries its own
+    keep = keep_table[length + 21 * sign].view(bool).reshape(grid.shape)
+    return grid[keep].tobytes()
 
 
 #: ``timeseries.<ext>`` formats of a run (``rigsim run --format``): name -> extension. CSV for

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from correction.output.apply import band_limit
-from correction.metrics.damage import damage_equivalent_load, stress_factor
+from correction.metrics.damage import damage_equivalent_load, rainflow_cycles, stress_factor
 from correction.metrics.dlc import dlc, nrmse
 from correction.output.eq4 import eq4_coefficients_from
 from correction.output.pipeline import SETTLING_TOLERANCE, correct_forces
@@ -81,6 +81,12 @@ class MethodScore:
         figures of the road, measured rig and corrected force on the same samples:
         ``stress_factor_<road|rig|corrected>`` (1, n = 4) and ``del_<road|rig|corrected>_N`` (N, m = 5).
     scored_s : float, s
+    cycles : Mapping[str, list] or None
+        The rainflow cycles behind the DELs, counted once: for ``road``, ``rig`` and ``corrected``
+        on the settled samples, per wheel ``(ranges_N, means_N, counts)``
+        (:func:`correction.metrics.damage.rainflow_cycles`); the report's histograms read them
+        where the pair is scored. None in a copy sent to another process (pickled): they are
+        left out, as large as the forces and read nowhere else.
     """
 
     method: Method
@@ -91,6 +97,11 @@ class MethodScore:
     actuators: tuple
     figures: Mapping
     scored_s: float
+    cycles: Mapping | None
+
+    def __getstate__(self) -> dict:
+        """Pickled without :attr:`cycles` (None in the copy)."""
+        return {**self.__dict__, "cycles": None}
 
 
 @dataclass(frozen=True)
@@ -194,12 +205,15 @@ def measured_force(rig, noise_N: float, seed: int) -> np.ndarray:
 DAMAGE_EXPONENT_STRESS, DAMAGE_EXPONENT_DEL = 4, 5
 
 
-def _damage(road_N: np.ndarray, rig_N: np.ndarray, corrected_N: np.ndarray, fs: float) -> dict:
-    out = {}
+def _damage(road_N: np.ndarray, rig_N: np.ndarray, corrected_N: np.ndarray, fs: float) -> tuple[dict, dict]:
+    """The damage figures of the three (n, k) forces, and the rainflow cycles behind them (counted once)."""
+    out, cycles = {}, {}
     for name, f in (("road", road_N), ("rig", rig_N), ("corrected", corrected_N)):
+        cycles[name] = rainflow_cycles(f)
         out[f"stress_factor_{name}"] = np.atleast_1d(stress_factor(f, n=DAMAGE_EXPONENT_STRESS))
-        out[f"del_{name}_N"] = np.atleast_1d(damage_equivalent_load(f, DAMAGE_EXPONENT_DEL, duration_s=f.shape[0] / fs))
-    return out
+        out[f"del_{name}_N"] = np.atleast_1d(damage_equivalent_load(f, DAMAGE_EXPONENT_DEL, duration_s=f.shape[0] / fs,
+                                                                    cycles=cycles[name]))
+    return out, cycles
 
 
 def _actuators(method: Method, rig_model, force_N: np.ndarray, identified) -> list:
@@ -267,9 +281,10 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
         figures = {"dlc_corrected": dlc(out[s]), "dlc_road_settled": dlc(road_f[s]),
                    "dlc_road_band": dlc(road_b[s]), "dlc_rig_band": dlc(rig_b[s]),
                    "nrmse_corrected": nrmse(out[s], road_b[s]), "nrmse_rig": nrmse(rig_b[s], road_b[s])}
-        figures.update(_damage(road_f[s], rig_f[s], out[s], fs))
+        damage, cycles = _damage(road_f[s], rig_f[s], out[s], fs)
+        figures.update(damage)
         actuators = tuple((np.asarray(num, float), np.asarray(den, float)) for num, den in tas)
         scores[m.name] = MethodScore(method=m, corrected_N=out, road_band_N=road_b, rig_band_N=rig_b, settled=settled,
-                                     actuators=actuators, figures=figures, scored_s=scored_s)
+                                     actuators=actuators, figures=figures, scored_s=scored_s, cycles=cycles)
     return PairScore(t_s=road.t_s, road_N=road_f, rig_N=rig_f, noise_N=float(noise_N), dlc_road=dlc(road_f),
                      dlc_rig=dlc(rig_f), methods=scores, corners=tuple(road.corners))

@@ -10,6 +10,7 @@ and the recording need.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import copy
 import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -126,7 +127,11 @@ class PaperResult:
     models: tuple | None = None
 
     def rows(self) -> list[dict]:
-        return [c.row() for c in self.cases]
+        """paper.json's entry of each case (:meth:`PaperCase.row`), worked out once per result: the
+        tables, the report and paper.json all read them (a copy each, to change at will)."""
+        if "_rows" not in self.__dict__:
+            object.__setattr__(self, "_rows", [c.row() for c in self.cases])
+        return copy.deepcopy(self.__dict__["_rows"])
 
     def model_table(self) -> str | None:
         """The third method's table (``--model``), or None."""
@@ -148,7 +153,7 @@ class PaperResult:
         }
 
     def damage_table(self) -> str:
-        """Damage figures (issue 13's goals): stress factor E[(F/F_static)^4] and the damage-equivalent
+        """Damage figures: stress factor E[(F/F_static)^4] and the damage-equivalent
         load (m = 5, 1 Hz), road / rig / corrected, means over the wheels, errors against the road."""
         head = (f"{'case':28s} {'stress factor n=4: road':>24s} {'rig':>15s} {'corrected':>15s}   "
                 f"{'DEL m=5 (kN): road':>19s} {'rig':>15s} {'corrected':>15s}   {'spatial r: rig':>14s} {'corr.':>6s}")
@@ -216,15 +221,36 @@ def case_job(path: str, duration_s: float | None, noise_N: float, road: RunResul
     return score
 
 
+def _tire_forces(result: RunResult) -> RunResult:
+    """What a run's scoring reads of it: the time axis and the tire forces. A case job is sent
+    this much (a sixth of a rig run's signals); the whole runs stay in the parent."""
+    return dataclasses.replace(result, signals={"tire_force_N": result.signals["tire_force_N"]}, poses=None)
+
+
+def _scoring_job(path: str, duration_s: float | None, noise_N: float, road: RunResult, rig: RunResult,
+                 ident: RigIdentification, finish: Callable | None, case_jobs: Callable | None) -> tuple:
+    """Worker: :func:`case_job`; returns the score and the calls ``case_jobs(case)`` asks for."""
+    follow_ups = []
+
+    def done(case: PaperCase) -> None:
+        if finish is not None:
+            finish(case)
+        if case_jobs is not None:
+            follow_ups.extend(case_jobs(case))
+
+    return case_job(path, duration_s, noise_N, road, rig, ident, done), follow_ups
+
+
 def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float | None = None,
               noise_N: float = NOISE_N, pose_rate_hz: float | None = None,
               on_done: Callable[[RunResult], None] | None = None, finish: Callable | None = None,
-              finish_run: Callable | None = None) -> PaperResult:
+              finish_run: Callable | None = None, case_jobs: Callable | None = None,
+              on_scored: Callable | None = None) -> PaperResult:
     """Run the cases of ``paths`` on the road and on the rig, and score each pair.
 
     The three runs of every case (identification, road, rig) are jobs of one process pool; a
     case's scoring (and ``finish``) is a job of the same pool, started as soon as that case's
-    runs are in, so it overlaps the other cases' runs.
+    runs are in, so it overlaps the other cases' runs; the jobs ``case_jobs`` asks for follow it.
 
     Parameters
     ----------
@@ -243,6 +269,15 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
     finish : callable, optional
         ``finish(case)`` with each :class:`PaperCase`, in the worker that scored it (picklable: a
         module-level function or a ``functools.partial`` of one; e.g. writing the case's figures).
+        The case's road and rig runs there hold the time axis and the tire forces only.
+    case_jobs : callable, optional
+        ``case_jobs(case)``, likewise: returns calls ``[(fn, args), ...]`` (picklable) that run as
+        further jobs of the pool, each on the next free worker (e.g. drawing the case's figures:
+        those of the last case scored then share the cores).
+    on_scored : callable, optional
+        ``on_scored(result)`` in the parent as soon as every case is scored, with the
+        :class:`PaperResult` returned at the end, while the jobs ``case_jobs`` asked for may still
+        run (e.g. rendering the report meanwhile).
     finish_run : callable, optional
         ``finish_run(run_result)`` with each road and rig run, in the worker that ran it, as soon as
         it is done (picklable; e.g. writing the run's files while other runs go on).
@@ -254,6 +289,13 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
         calls += [(run_job, (str(p), mode, duration_s, pose_rate_hz, finish_run)) for mode in ("road", "rig")]
     runs: list = [None] * len(calls)
     scores: list = [None] * len(paths)
+    result = None
+
+    def assembled() -> PaperResult:
+        cases = [PaperCase(scenario=sc, road=runs[3 * c + 1], rig=runs[3 * c + 2], identification=runs[3 * c],
+                           score=scores[c]) for c, sc in enumerate(scenarios)]
+        return PaperResult(cases=tuple(cases), noise_N=float(noise_N))
+
     with local_executor(worker_count(workers, len(calls))) as ex:
         jobs = {ex.submit(fn, *args): ("run", i) for i, (fn, args) in enumerate(calls)}
         pending = set(jobs)
@@ -261,8 +303,18 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
             done, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for fut in done:
                 kind, i = jobs[fut]
+                if kind == "follow-up":
+                    fut.result()
+                    continue
                 if kind == "case":
-                    scores[i] = fut.result()
+                    scores[i], follow_ups = fut.result()
+                    for fn, args in follow_ups:
+                        job = ex.submit(fn, *args)
+                        jobs[job] = ("follow-up", i)
+                        pending.add(job)
+                    if on_scored is not None and all(s is not None for s in scores):
+                        result = assembled()
+                        on_scored(result)
                     continue
                 runs[i] = fut.result()
                 if on_done is not None and isinstance(runs[i], RunResult):
@@ -270,9 +322,8 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
                 c = i // 3
                 if all(r is not None for r in runs[3 * c:3 * c + 3]):
                     ident, road, rig = runs[3 * c:3 * c + 3]
-                    case = ex.submit(case_job, str(paths[c]), duration_s, noise_N, road, rig, ident, finish)
+                    case = ex.submit(_scoring_job, str(paths[c]), duration_s, noise_N, _tire_forces(road),
+                                     _tire_forces(rig), ident, finish, case_jobs)
                     jobs[case] = ("case", c)
                     pending.add(case)
-    cases = [PaperCase(scenario=sc, road=runs[3 * c + 1], rig=runs[3 * c + 2], identification=runs[3 * c],
-                       score=scores[c]) for c, sc in enumerate(scenarios)]
-    return PaperResult(cases=tuple(cases), noise_N=float(noise_N))
+    return result if result is not None else assembled()

@@ -9,10 +9,15 @@ import numpy as np
 
 from scenarios.core.files import atomic_write_bytes
 
-__all__ = ["render_report", "case_figures", "write_case", "write_case_run", "write_files"]
+__all__ = ["render_report", "case_figures", "case_figure_data", "case_figure_jobs", "render_figure", "write_case",
+           "write_case_run", "write_figure", "write_files"]
 
 _WINDOW_S = 3.0  # s of trace shown in the Figure 8 analogue
 _EXCEEDANCE_POINTS = 500  # points of each exceedance curve (log-spaced ranks), 1
+#: Axes titles at the top of their axes, placed there rather than found there: matplotlib's
+#: automatic placement measures every axis's tick labels once more per draw only to learn that
+#: nothing sits above the axes (the ticks are at the bottom).
+_TITLE_AT_TOP = {"loc": "left", "fontsize": 10, "y": 1.0}
 
 
 def _png(fig, tight: bool = True) -> bytes:
@@ -23,27 +28,36 @@ def _png(fig, tight: bool = True) -> bytes:
     return buf.getvalue()
 
 
-def _figure8(name: str, road, ev) -> bytes:
+def _figure8_data(case) -> dict:
+    """What the Figure 8 analogue draws: a few seconds of the forces of the front and rear left wheel."""
+    ev = case.score
+    t = ev.t_s
+    settled = np.flatnonzero(ev.settled)
+    start = settled[0] + (settled[-1] - settled[0]) // 3
+    sl = slice(start, min(start + int(round(_WINDOW_S / (t[1] - t[0]))), settled[-1]))
+    wheels = [0, 2]
+    return {"name": case.name, "t_s": t[sl], "road": ev.road_lowpassed_N["best"][sl][:, wheels],
+            "rig": ev.rig_N[sl][:, wheels], "paper": ev.corrected_N["paper"][sl][:, wheels],
+            "best": ev.corrected_N["best"][sl][:, wheels]}
+
+
+def _figure8(data: dict) -> bytes:
     """Road (band-limited), rig and corrected tire forces over a few seconds, front and rear left."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    t = ev.t_s
-    settled = np.flatnonzero(ev.settled)
-    start = settled[0] + (settled[-1] - settled[0]) // 3
-    sl = slice(start, min(start + int(round(_WINDOW_S / (t[1] - t[0]))), settled[-1]))
+    name, t = data["name"], data["t_s"]
     fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
-    for ax, i, label in zip(axes, (0, 2), ("front left (fl)", "rear left (rl)")):
+    for ax, i, label in zip(axes, (0, 1), ("front left (fl)", "rear left (rl)")):
         kn = 1e-3
-        ax.plot(t[sl], ev.road_lowpassed_N["best"][sl, i] * kn, color="k", lw=1.6, label="road (30 Hz low-pass)")
-        ax.plot(t[sl], ev.rig_N[sl, i] * kn, color="tab:red", lw=1.0, label="rig, measured")
-        ax.plot(t[sl], ev.corrected_N["paper"][sl, i] * kn, color="tab:orange", lw=1.0, ls="--",
-                label="corrected, paper's method")
-        ax.plot(t[sl], ev.corrected_N["best"][sl, i] * kn, color="tab:blue", lw=1.2, label="corrected, this project")
+        ax.plot(t, data["road"][:, i] * kn, color="k", lw=1.6, label="road (30 Hz low-pass)")
+        ax.plot(t, data["rig"][:, i] * kn, color="tab:red", lw=1.0, label="rig, measured")
+        ax.plot(t, data["paper"][:, i] * kn, color="tab:orange", lw=1.0, ls="--", label="corrected, paper's method")
+        ax.plot(t, data["best"][:, i] * kn, color="tab:blue", lw=1.2, label="corrected, this project")
         ax.set_ylabel("tire force, kN")
-        ax.set_title(label, loc="left", fontsize=10)
+        ax.set_title(label, **_TITLE_AT_TOP)
         ax.grid(alpha=0.3)
     axes[0].legend(ncol=2, fontsize=8, loc="upper right")
     axes[-1].set_xlabel("time, s")
@@ -85,7 +99,37 @@ def _bars(rows) -> bytes:
     return data
 
 
-def _damage_figure(name: str, case) -> bytes:
+def _damage_data(case) -> dict:
+    """What the damage figure draws, per wheel: the exceedance curves of F / F_static (road, rig,
+    corrected) and the rainflow range histograms, from the cycles the scoring counted for the DELs
+    (:attr:`scenarios.studies.scoring.MethodScore.cycles`; counted here for a score without them)."""
+    best = case.score.methods["best"]
+    s = best.settled
+    forces = {"road": case.score.road_N[s], "rig, measured": case.score.rig_N[s], "corrected": best.corrected_N[s]}
+    if best.cycles is None:
+        from correction.metrics.damage import rainflow_cycles
+
+        cycles = {label: rainflow_cycles(f) for label, f in forces.items()}
+    else:
+        cycles = dict(zip(forces, (best.cycles["road"], best.cycles["rig"], best.cycles["corrected"])))
+    wheels = []
+    for i, corner in enumerate(case.score.corners):
+        static = float(np.mean(forces["road"][:, i]))
+        bins, curves = None, {}
+        for label, f in forces.items():
+            x = np.sort(f[:, i] / static)[::-1]
+            # ranks on a log grid: the curve as drawn on the log axis, 500 points instead of every sample
+            rank = np.unique(np.geomspace(1, x.size, _EXCEEDANCE_POINTS).astype(int))
+            ranges, _, counts = cycles[label][i]
+            if bins is None:
+                bins = np.linspace(0.0, float(np.max(ranges)) * 1.05 / 1e3, 30)
+            h, _ = np.histogram(np.asarray(ranges) / 1e3, bins=bins, weights=counts)
+            curves[label] = (x[rank - 1], rank / x.size, np.maximum(h, 0.5))
+        wheels.append((corner, bins, curves))
+    return {"name": case.name, "wheels": wheels}
+
+
+def _damage_figure(data: dict) -> bytes:
     """Per wheel: exceedance of F / F_static (road, rig, corrected) and the rainflow range histogram."""
     import matplotlib
 
@@ -93,27 +137,14 @@ def _damage_figure(name: str, case) -> bytes:
     import matplotlib.pyplot as plt
     from matplotlib.ticker import LogLocator
 
-    from correction.metrics.damage import rainflow_cycles
-
-    best = case.score.methods["best"]
-    s = best.settled
-    forces = {"road": case.score.road_N[s], "rig, measured": case.score.rig_N[s], "corrected": best.corrected_N[s]}
+    name = data["name"]
     colors = {"road": "k", "rig, measured": "tab:red", "corrected": "tab:blue"}
     fig, axes = plt.subplots(2, 4, figsize=(13, 6.2))
-    for i, corner in enumerate(case.score.corners):
-        static = float(np.mean(forces["road"][:, i]))
-        bins = None
-        for label, f in forces.items():
-            x = np.sort(f[:, i] / static)[::-1]
-            # ranks on a log grid: the curve as drawn on the log axis, 500 points instead of every sample
-            rank = np.unique(np.geomspace(1, x.size, _EXCEEDANCE_POINTS).astype(int))
-            axes[0, i].semilogy(x[rank - 1], rank / x.size, color=colors[label], lw=1.2, label=label)
-            ranges, _, counts = rainflow_cycles(f[:, i])
-            if bins is None:
-                bins = np.linspace(0.0, float(np.max(ranges)) * 1.05 / 1e3, 30)
-            h, _ = np.histogram(np.asarray(ranges) / 1e3, bins=bins, weights=counts)
-            axes[1, i].step(bins[:-1], np.maximum(h, 0.5), where="post", color=colors[label], lw=1.1)
-        axes[0, i].set_title(corner, loc="left", fontsize=10)
+    for i, (corner, bins, curves) in enumerate(data["wheels"]):
+        for label, (x, p, h) in curves.items():
+            axes[0, i].semilogy(x, p, color=colors[label], lw=1.2, label=label)
+            axes[1, i].step(bins[:-1], h, where="post", color=colors[label], lw=1.1)
+        axes[0, i].set_title(corner, **_TITLE_AT_TOP)
         axes[0, i].set_xlabel("F / F_static")
         axes[1, i].set_yscale("log")
         axes[1, i].set_xlabel("rainflow range, kN")
@@ -204,16 +235,41 @@ def _report_md(rows, table: str, figures: list[str], damage_table: str = "") -> 
     return "\n".join(lines)
 
 
+#: A case's figures by kind: what each draws, from the case (numbers only, small enough to send to
+#: another process), and how it is drawn.
+_FIGURES = {"damage": (_damage_data, _damage_figure), "figure8": (_figure8_data, _figure8)}
+
+
+def case_figure_data(case) -> dict[str, tuple[str, dict]]:
+    """What one case's figures draw: ``{file name: (kind, data)}`` for :func:`render_figure`."""
+    return {f"{kind}_{case.name}.png": (kind, prepare(case)) for kind, (prepare, _draw) in _FIGURES.items()}
+
+
+def render_figure(kind: str, data: dict) -> bytes:
+    """One figure (``kind`` of :func:`case_figure_data`) as PNG bytes."""
+    return _FIGURES[kind][1](data)
+
+
 def case_figures(case) -> dict[str, bytes]:
     """One case's figures, rendered in memory: its Figure 8 analogue and its damage figure."""
-    return {f"figure8_{case.name}.png": _figure8(case.name, case.road, case.score),
-            f"damage_{case.name}.png": _damage_figure(case.name, case)}
+    return {fname: render_figure(kind, data) for fname, (kind, data) in case_figure_data(case).items()}
 
 
 def write_case(case, out) -> list[pathlib.Path]:
-    """Write one case's figures into ``out``: what ``rigsim paper`` has each worker do as soon as it
-    has scored the case (its runs' files are :func:`write_case_run`'s)."""
+    """Write one case's figures into ``out`` (its runs' files are :func:`write_case_run`'s)."""
     return write_files(out, case_figures(case))
+
+
+def write_figure(out, fname: str, kind: str, data: dict) -> list[pathlib.Path]:
+    """Render one figure of :func:`case_figure_data` and write it into ``out``."""
+    return write_files(out, {fname: render_figure(kind, data)})
+
+
+def case_figure_jobs(case, out) -> list[tuple]:
+    """One case's figures as jobs for other workers: ``[(write_figure, args), ...]``, the longest
+    first. What ``rigsim paper`` has the worker that scored a case return (the data to draw is
+    small): the figures of the last case scored are then drawn at once on two cores."""
+    return [(write_figure, (out, fname, kind, data)) for fname, (kind, data) in case_figure_data(case).items()]
 
 
 def write_case_run(result, out) -> list[pathlib.Path]:

@@ -1,7 +1,6 @@
 """The paper's published numbers, kept as data: one home for them.
 
-"Correction of dynamic wheel forces measured on road simulators" (reference copy in
-``../shared/reference/``): Table 1 (the high-roughness 72 km/h 3640 kg case: road test, DYNTRAC
+"Correction of dynamic wheel forces measured on road simulators": Table 1 (the high-roughness 72 km/h 3640 kg case: road test, DYNTRAC
 test, the nonlinear and the linearized model of the rig) and Table 2 (road, DYNTRAC and DYNTRAC
 corrected, for the three cases). Every report prints them beside the simulated values.
 """
