@@ -73,7 +73,6 @@ def h1_estimate(u, y, fs: float, nperseg: int, *, noverlap: int | None = None,
     ``H^T = G_uu^-1 G_uy``. The multiple coherence is ``Re(g^H G_uu^-1 g) / G_yy`` with
     ``g = G_uy[:, i]``. H1 is unbiased by output noise and biased low by input noise.
     """
-    from scipy import signal
 
     uc, u1 = _as_columns(u, "u")
     yc, y1 = _as_columns(y, "y")
@@ -87,21 +86,21 @@ def h1_estimate(u, y, fs: float, nperseg: int, *, noverlap: int | None = None,
     if not (np.all(np.isfinite(uc)) and np.all(np.isfinite(yc))):
         raise ValueError("u and y must be finite")
     m, p = uc.shape[1], yc.shape[1]
-    kw = dict(fs=fs, nperseg=nperseg, noverlap=noverlap, window=window, detrend="constant")
-    f, _ = signal.welch(uc[:, 0], **kw)
+    f, spectra = _welch_spectra(np.column_stack([uc, yc]), fs, nperseg, noverlap, window)
+    su, sy, even = spectra[:m], spectra[m:], nperseg % 2 == 0
     g_uu = np.empty((f.size, m, m), dtype=complex)
     for j in range(m):
         for k in range(j, m):
-            _, g = signal.csd(uc[:, j], uc[:, k], **kw)
+            g = _cross_density(su[j], su[k], even)
             g_uu[:, j, k] = g
             g_uu[:, k, j] = np.conj(g)
     g_uy = np.empty((f.size, m, p), dtype=complex)
     for j in range(m):
         for i in range(p):
-            _, g_uy[:, j, i] = signal.csd(uc[:, j], yc[:, i], **kw)
+            g_uy[:, j, i] = _cross_density(su[j], sy[i], even)
     g_yy = np.empty((f.size, p))
     for i in range(p):
-        _, g_yy[:, i] = signal.welch(yc[:, i], **kw)
+        g_yy[:, i] = _cross_density(sy[i], sy[i], even, auto=True)
     h = np.full((f.size, p, m), np.nan + 0j)
     coh = np.full((f.size, p), np.nan)
     for n in range(f.size):
@@ -115,6 +114,35 @@ def h1_estimate(u, y, fs: float, nperseg: int, *, noverlap: int | None = None,
     if u1 and y1:
         return f, h[:, 0, 0], coh[:, 0]
     return f, h, coh
+
+
+def _welch_spectra(x: np.ndarray, fs: float, nperseg: int, noverlap: int | None, window: str):
+    """Each column's short-time spectra as ``scipy.signal.csd`` computes them (Welch segments,
+    constant detrend, one-sided, density scaling), once per column: ``(f, [S_0, S_1, ...])``.
+
+    :func:`_cross_density` combines two of them into the cross density ``csd`` returns, to the
+    bit, so that each record is transformed once instead of once per pair it belongs to."""
+    from scipy.signal import ShortTimeFFT, get_window
+
+    n = x.shape[0]
+    noverlap = nperseg // 2 if noverlap is None else int(noverlap)
+    sft = ShortTimeFFT(get_window(window, nperseg), nperseg - noverlap, fs, fft_mode="onesided", mfft=nperseg,
+                       scale_to="psd", phase_shift=None)
+    p1 = (n - noverlap) // sft.hop
+    return sft.f, [sft.stft_detrend(x[:, c], "constant", p0=0, p1=p1, k_offset=nperseg // 2) for c in range(x.shape[1])]
+
+
+def _cross_density(sa: np.ndarray, sb: np.ndarray, even: bool, auto: bool = False) -> np.ndarray:
+    """``scipy.signal.csd(a, b)`` (``E[conj(A) B]``) from the spectra of :func:`_welch_spectra`
+    (``even``: an even segment length, whose last bin, Nyquist, is not doubled); ``auto``:
+    ``scipy.signal.welch(a)``, real. The same operations in the same order as scipy's."""
+    pxy = sa.real**2 + sa.imag**2 if auto else sb * sa.conj()
+    pxy = np.moveaxis(pxy, 0, -1)
+    pxy[..., 1:-1 if even else None] *= 2
+    pxy = np.moveaxis(pxy, -1, 0)
+    pxy = pxy.mean(axis=-1) if pxy.shape[-1] > 1 else np.reshape(pxy, pxy.shape[:-1])
+    pxy = pxy.astype(complex)
+    return pxy.real if auto else pxy
 
 
 def _poly_eval(c_asc: np.ndarray, x: np.ndarray) -> np.ndarray:
