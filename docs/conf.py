@@ -33,7 +33,8 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip",
+# results/: tables the benchmarks write, included by the pages, never pages of their own.
+exclude_patterns = ["_build", "results", "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip",
                     "auto_examples/*.md5", "auto_examples/*.json", "**.ipynb_checkpoints"]
 
 # Markdown pages: $...$ and $$...$$ math, ::: fences, heading anchors for links between pages.

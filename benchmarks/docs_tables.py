@@ -1,0 +1,151 @@
+"""The tables of docs/validation.md, written from the studies' own result files.
+
+::
+
+    python benchmarks/docs_tables.py [--paper out/paper] [--validate out/validate] [--out docs/results]
+
+Reads the output folder of a finished ``rigsim paper --out DIR`` (its ``paper.json``) and of a
+finished ``rigsim validate --out DIR`` (its ``validate.json``) and writes
+
+* ``paper_table2.md``: the Table 2 analogue, DLC (mean of the four wheels) of the road, the rig,
+  the rig corrected by the paper's method and by this project's, the road through the same
+  low-pass, and the NRMSE, each case beside the paper's published values
+  (:data:`scenarios.studies.paper.table.PAPER_TABLE2`);
+* ``validate_table1.md``: the Table 1 analogue, DLC of the road test, the rig test and the
+  linearized models, beside the paper's.
+
+Each file ends in the line saying how it was measured (:mod:`scenarios.studies.results_page`):
+the command (with the duration and noise read from the results), the date of the result file,
+and the rigsim version, platform, CPU count and Python of the machine running this script: run
+it where the study ran. A folder that is not given, or has no result file, is skipped with one
+line on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import pathlib
+import re
+import sys
+
+from scenarios.studies.paper.table import PAPER_TABLE1, PAPER_TABLE2
+from scenarios.studies.results_page import write_results_page
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+#: What writes the files (their first line says so).
+SCRIPT = "python benchmarks/docs_tables.py --paper DIR --validate DIR"
+
+TABLE2_HEADER = ("case", "road DLC (paper)", "rig DLC (paper)", "corrected, paper's method (paper)",
+                 "corrected, this project", "road through the same low-pass", "NRMSE")
+TABLE1_HEADER = ("", "road test", "rig test (nonlinear multibody)", "linearized model (route 2 T_a per wheel)",
+                 "eq. 4 T_a", "route 2 whole linear plant")
+
+
+def case_label(name: str) -> str:
+    """``paper-medium-72kmh-6360kg`` -> ``medium, 72 km/h, 6360 kg``; any other name as it is."""
+    m = re.fullmatch(r"paper-(\w+)-(\d+)kmh-(\d+)kg", name)
+    return f"{m[1]}, {m[2]} km/h, {m[3]} kg" if m else name
+
+
+def _date_of(path: pathlib.Path) -> datetime.date:
+    return datetime.date.fromtimestamp(path.stat().st_mtime)
+
+
+def _with_paper(value: float, paper: float | None) -> str:
+    return f"{value:.4f}" if paper is None else f"{value:.4f} ({paper:.4f})"
+
+
+def table2_rows(result: dict) -> list[list[str]]:
+    """One row per case of ``paper.json``'s ``cases``, the paper's values in brackets."""
+    rows = []
+    for case in result["cases"]:
+        paper = PAPER_TABLE2.get(case["case"]) or case.get("paper") or {}
+        rows.append([case_label(case["case"]),
+                     _with_paper(case["dlc_road"], paper.get("road")),
+                     _with_paper(case["dlc_rig"], paper.get("rig")),
+                     _with_paper(case["dlc_corrected_paper"], paper.get("corrected")),
+                     f"{case['dlc_corrected']:.4f}", f"{case['dlc_road_lowpassed']:.4f}",
+                     f"{case['nrmse_corrected']:.3f}"])
+    return rows
+
+
+def paper_command(folder: pathlib.Path, result: dict) -> str:
+    """The ``rigsim paper`` command of the result: its duration from the first case's road run
+    (``<case>/road/result.json``: samples over rate) when the folder has it, its noise."""
+    command = "rigsim paper --out DIR"
+    cases = result.get("cases") or [{}]
+    run = folder / str(cases[0].get("case")) / "road" / "result.json"
+    if run.is_file():
+        r = json.loads(run.read_text())
+        command += f" --duration-s {round((r['samples'] - 1) / r['rate_hz'], 3):g}"
+    if "noise_N" in cases[0]:
+        command += f" --noise-N {cases[0]['noise_N']:g}"
+    return command
+
+
+def write_table2(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
+    """``out/paper_table2.md`` from ``folder/paper.json``."""
+    source = folder / "paper.json"
+    result = json.loads(source.read_text())
+    note = ("DLC = std/mean of the wheel force, mean of the four wheels; the paper's Table 2 in brackets. "
+            "Road and rig over the whole record, every corrected figure on the samples where its filters "
+            "have settled. NRMSE = rms(corrected - road through the low-pass) / std(road through the low-pass).")
+    return write_results_page(out, "paper_table2", "Table 2 analogue: DLC of the paper's cases", TABLE2_HEADER,
+                              table2_rows(result), paper_command(folder, result), _date_of(source), note,
+                              SCRIPT)
+
+
+def table1_rows(result: dict) -> list[list[str]]:
+    """This model's row and the paper's row of ``validate.json``'s ``table1``."""
+    t = result["table1"]
+    paper = {**PAPER_TABLE1, **t.get("paper", {})}
+    paper_pct = 100.0 * (paper["linearized_model"] / paper["rig_test"] - 1.0)
+    return [["this model", f"{t['road_test']:.4f}", f"{t['rig_test']:.4f}",
+             f"{t['linearized_model']:.4f} ({t['linearized_vs_rig_pct']:+.2f} %)",
+             f"{t['linearized_model_eq4']:.4f} ({t['linearized_eq4_vs_rig_pct']:+.2f} %)",
+             f"{t['linearized_model_route2_mimo']:.4f} ({t['linearized_route2_mimo_vs_rig_pct']:+.2f} %)"],
+            ["paper", f"{paper['road_test']:.4f}", f"{paper['rig_test']:.4f} (nonlinear model {paper['nonlinear_model']:.4f})",
+             f"{paper['linearized_model']:.4f} ({paper_pct:+.2f} %)", "", ""]]
+
+
+def write_table1(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
+    """``out/validate_table1.md`` from ``folder/validate.json``."""
+    source = folder / "validate.json"
+    result = json.loads(source.read_text())
+    command = "rigsim validate --out DIR"
+    if "duration_s" in result:
+        command += f" --duration-s {result['duration_s']:g}"
+    if "ident_duration_s" in result:
+        command += f" --ident-duration-s {result['ident_duration_s']:g}"
+    note = ("DLC = std/mean of the tire force, mean of the four wheels; in brackets each linearized model "
+            "against the rig test. The rig test is the nonlinear multibody rig: it stands for both the "
+            "paper's DYNTRAC test and its nonlinear model.")
+    return write_results_page(out, "validate_table1",
+                              "Table 1 analogue: DLC of the rig and its linearized models (high roughness, 72 km/h, 3640 kg)",
+                              TABLE1_HEADER, table1_rows(result), command, _date_of(source), note, SCRIPT)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--paper", type=pathlib.Path, default=pathlib.Path("out/paper"),
+                    help="output folder of rigsim paper (default out/paper)")
+    ap.add_argument("--validate", type=pathlib.Path, default=pathlib.Path("out/validate"),
+                    help="output folder of rigsim validate (default out/validate)")
+    ap.add_argument("--out", type=pathlib.Path, default=ROOT / "docs" / "results",
+                    help="folder of the written tables (default docs/results of this repository)")
+    args = ap.parse_args(argv)
+    written = 0
+    for folder, fname, write in ((args.paper, "paper.json", write_table2), (args.validate, "validate.json", write_table1)):
+        if not (folder / fname).is_file():
+            print(f"{folder / fname}: no such file, its table is not written", file=sys.stderr)
+            continue
+        print(f"wrote {write(folder, args.out)}")
+        written += 1
+    return 0 if written else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

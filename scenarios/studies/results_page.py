@@ -1,0 +1,146 @@
+"""A table of measured results as a Markdown file the documentation includes.
+
+The script that measures a table writes it with :func:`write_results_page`: a title line, the
+table, and one line saying how and where it was measured (the command, the date, the rigsim
+version, the machine). A page of ``docs/`` includes the file (myst's ``{include}``), so the
+numbers on the page are the ones the script measured, never copied by hand.
+
+Light imports only (standard library and :mod:`correction.io.atomic`): nothing here is on a
+simulation's or a correction's path.
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import pathlib
+import platform
+from collections.abc import Sequence
+
+from correction.io.atomic import atomic_write_text
+
+__all__ = ["configuration_line", "markdown_table", "results_page", "write_results_page"]
+
+
+def _rigsim_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rigsim")
+    except PackageNotFoundError:  # pragma: no cover - a source tree that is not installed
+        return "unknown (not installed)"
+
+
+def configuration_line(command: str, date: datetime.date | str | None = None) -> str:
+    """The line saying how and where a table was measured.
+
+    Parameters
+    ----------
+    command : str
+        The command that measures the table, e.g. ``"rigsim paper --out DIR"``.
+    date : datetime.date or str, optional
+        When it was measured (default: today). A datetime counts by its date.
+
+    Returns
+    -------
+    str
+        "Measured by `<command>` on <date>, rigsim <version>, <platform>, <n> CPUs, Python
+        <version>." The version, platform and CPU count are those of the running interpreter.
+    """
+    if date is None:
+        date = datetime.date.today()
+    if isinstance(date, datetime.datetime):
+        date = date.date()
+    day = date.isoformat() if isinstance(date, datetime.date) else str(date)
+    cpus = os.cpu_count() or 1
+    return (f"Measured by `{command}` on {day}, rigsim {_rigsim_version()}, "
+            f"{platform.system()} {platform.machine()}, {cpus} CPU{'s' if cpus != 1 else ''}, "
+            f"Python {platform.python_version()}.")
+
+
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """A Markdown pipe table.
+
+    Parameters
+    ----------
+    header : sequence of str
+        The column titles.
+    rows : sequence of sequences
+        One sequence per row, as many cells as ``header``; each cell is written with ``str``
+        (format the numbers before).
+
+    Returns
+    -------
+    str
+        The table, one line per row, ending in a newline.
+
+    Raises
+    ------
+    ValueError
+        If a row has not as many cells as the header.
+    """
+    lines = ["| " + " | ".join(header) + " |", "| " + " | ".join("---" for _ in header) + " |"]
+    for i, row in enumerate(rows):
+        cells = [str(c).replace("|", "\\|") for c in row]
+        if len(cells) != len(header):
+            raise ValueError(f"row {i} has {len(cells)} cells, the header {len(header)}")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def results_page(title: str, header: Sequence[str], rows: Sequence[Sequence[object]], command: str,
+                 date: datetime.date | str | None = None, note: str = "", script: str = "") -> str:
+    """The text of a results file: title line, table, optional note, configuration line.
+
+    Parameters
+    ----------
+    title : str
+        One line, written in bold above the table.
+    header, rows
+        The table (:func:`markdown_table`).
+    command : str
+        The command that measures the table (:func:`configuration_line`).
+    date : datetime.date or str, optional
+        When it was measured (default: today).
+    note : str, optional
+        A paragraph after the table (what the columns mean), empty for none.
+    script : str, optional
+        The command that writes the file, when it is not ``command`` itself.
+
+    Returns
+    -------
+    str
+        Markdown, starting with a comment that says which command writes the file.
+    """
+    parts = [f"<!-- written by `{script or command}`: do not edit by hand -->",
+             f"**{title}**", markdown_table(header, rows).rstrip("\n")]
+    if note:
+        parts.append(note.strip())
+    parts.append(configuration_line(command, date))
+    return "\n\n".join(parts) + "\n"
+
+
+def write_results_page(folder, name: str, title: str, header: Sequence[str], rows: Sequence[Sequence[object]],
+                       command: str, date: datetime.date | str | None = None, note: str = "",
+                       script: str = "") -> pathlib.Path:
+    """Write ``<folder>/<name>.md`` atomically (:func:`results_page`'s text).
+
+    Parameters
+    ----------
+    folder : str or path-like
+        Where the file goes, e.g. ``docs/results``; made if missing.
+    name : str
+        The file's name without ``.md``.
+    title, header, rows, command, date, note, script
+        As :func:`results_page`.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{name}.md"
+    atomic_write_text(path, results_page(title, header, rows, command, date, note, script))
+    return path

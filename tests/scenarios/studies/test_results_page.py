@@ -1,0 +1,139 @@
+"""scenarios.studies.results_page and benchmarks/docs_tables.py: a table of measured results as a
+Markdown file the documentation includes.
+
+Expected values: the table and the configuration line the helper is given (the version, platform,
+CPU count and Python of this interpreter), and the rows of a small fake ``paper.json`` /
+``validate.json`` built with the keys the real ones have (``rigsim paper`` / ``rigsim validate``).
+"""
+
+from __future__ import annotations
+
+import datetime
+import importlib.util
+import json
+import os
+import pathlib
+import platform
+import subprocess
+import sys
+
+import pytest
+
+from scenarios.studies.paper.table import PAPER_TABLE2
+from scenarios.studies.results_page import (
+    configuration_line,
+    markdown_table,
+    write_results_page,
+)
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+
+
+def _docs_tables():
+    spec = importlib.util.spec_from_file_location("benchmark_docs_tables", ROOT / "benchmarks" / "docs_tables.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_helper_writes_title_table_and_configuration_line(tmp_path):
+    path = write_results_page(tmp_path / "results", "demo", "A demo table", ("case", "DLC"),
+                              [["a", "0.1000"], ["b", "0.2000"]], "rigsim demo --out DIR",
+                              date=datetime.date(2026, 1, 2), note="DLC = std/mean.")
+    assert path == tmp_path / "results" / "demo.md"
+    text = path.read_text()
+    lines = text.splitlines()
+    assert "**A demo table**" in lines
+    assert "| case | DLC |\n| --- | --- |\n| a | 0.1000 |\n| b | 0.2000 |\n" in text
+    assert "DLC = std/mean." in lines
+    cpus = os.cpu_count()
+    assert lines[-1] == (f"Measured by `rigsim demo --out DIR` on 2026-01-02, rigsim {_version()}, "
+                         f"{platform.system()} {platform.machine()}, {cpus} CPU{'s' if cpus != 1 else ''}, "
+                         f"Python {platform.python_version()}.")
+    assert not list((tmp_path / "results").glob("*.tmp*")), "no temporary file left behind"
+
+
+def _version():
+    from importlib.metadata import version
+
+    return version("rigsim")
+
+
+def test_configuration_line_defaults_to_today():
+    assert f" on {datetime.date.today().isoformat()}, rigsim " in configuration_line("x")
+
+
+def test_a_row_of_the_wrong_width_is_refused():
+    with pytest.raises(ValueError, match="row 0 has 1 cells"):
+        markdown_table(("a", "b"), [["only one"]])
+
+
+def test_the_helper_is_light():
+    """Importing it loads no numerical or simulation package (it is no part of a hot path)."""
+    code = ("import sys, scenarios.studies.results_page; "
+            "print(sorted(m for m in ('numpy', 'scipy', 'mujoco', 'matplotlib') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"
+
+
+CASE_KEYS = ("dlc_road", "dlc_rig", "dlc_corrected_paper", "dlc_corrected", "dlc_road_lowpassed", "nrmse_corrected")
+
+
+def _fake_paper(folder: pathlib.Path) -> None:
+    """A paper.json with rigsim paper's structure (two cases) and one case's road result.json."""
+    cases = []
+    for k, name in enumerate(("paper-medium-72kmh-6360kg", "paper-high-48kmh-3640kg")):
+        case = {key: 0.1 + 0.01 * k + 0.001 * i for i, key in enumerate(CASE_KEYS)}
+        case.update(case=name, noise_N=100.0, paper=dict(PAPER_TABLE2[name]))
+        cases.append(case)
+    folder.mkdir()
+    (folder / "paper.json").write_text(json.dumps({"cases": cases, "methods": {}, "note": ""}))
+    run = folder / cases[0]["case"] / "road"
+    run.mkdir(parents=True)
+    (run / "result.json").write_text(json.dumps({"samples": 20001, "rate_hz": 1000.0}))
+
+
+def _fake_validate(folder: pathlib.Path) -> None:
+    folder.mkdir()
+    table1 = {"road_test": 0.25, "rig_test": 0.2, "linearized_model": 0.199, "linearized_model_eq4": 0.19,
+              "linearized_model_route2_mimo": 0.1995, "linearized_vs_rig_pct": -0.5,
+              "linearized_eq4_vs_rig_pct": -5.0, "linearized_route2_mimo_vs_rig_pct": -0.25}
+    (folder / "validate.json").write_text(json.dumps({"duration_s": 20.0, "ident_duration_s": 40.0, "table1": table1}))
+
+
+def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path):
+    _fake_paper(tmp_path / "paper")
+    _fake_validate(tmp_path / "validate")
+    out = tmp_path / "results"
+    assert _docs_tables().main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "validate"),
+                                "--out", str(out)]) == 0
+    table2 = (out / "paper_table2.md").read_text().splitlines()
+    assert "| medium, 72 km/h, 6360 kg | 0.1000 (0.0985) | 0.1010 (0.0854) | 0.1020 (0.0994) | 0.1030 | 0.1040 | 0.105 |" \
+        in table2
+    assert "| high, 48 km/h, 3640 kg | 0.1100 (0.1912) | 0.1110 (0.1497) | 0.1120 (0.1794) | 0.1130 | 0.1140 | 0.115 |" \
+        in table2
+    assert table2[-1].startswith("Measured by `rigsim paper --out DIR --duration-s 20 --noise-N 100` on ")
+    table1 = (out / "validate_table1.md").read_text().splitlines()
+    assert "| this model | 0.2500 | 0.2000 | 0.1990 (-0.50 %) | 0.1900 (-5.00 %) | 0.1995 (-0.25 %) |" in table1
+    assert "| paper | 0.2105 | 0.1754 (nonlinear model 0.1748) | 0.1724 (-1.71 %) |  |  |" in table1
+    assert table1[-1].startswith("Measured by `rigsim validate --out DIR --duration-s 20 --ident-duration-s 40` on ")
+
+
+def test_docs_tables_skips_a_missing_folder(tmp_path, capsys):
+    _fake_paper(tmp_path / "paper")
+    out = tmp_path / "results"
+    assert _docs_tables().main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "none"),
+                                "--out", str(out)]) == 0
+    assert (out / "paper_table2.md").is_file() and not (out / "validate_table1.md").exists()
+    assert "validate.json: no such file" in capsys.readouterr().err
+    assert _docs_tables().main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
+                                "--out", str(out)]) == 1
+
+
+def test_the_pages_files_are_the_scripts():
+    """docs/validation.md includes the files docs_tables.py writes, and each ends in its
+    configuration line."""
+    page = (ROOT / "docs" / "validation.md").read_text()
+    for name in ("paper_table2", "validate_table1"):
+        assert f"```{{include}} results/{name}.md" in page
+        assert (ROOT / "docs" / "results" / f"{name}.md").read_text().splitlines()[-1].startswith("Measured by `rigsim ")
