@@ -39,6 +39,7 @@ SCRIPT = "python benchmarks/docs_tables.py --paper DIR --validate DIR"
 
 TABLE2_HEADER = ("case", "road DLC (paper)", "rig DLC (paper)", "corrected, paper's method (paper)",
                  "corrected, this project", "road through the same low-pass", "NRMSE")
+DAMAGE_HEADER = ("case", "stress factor n = 4: road", "rig", "corrected", "DEL m = 5: road", "rig", "corrected")
 TABLE1_HEADER = ("", "road test", "rig test (nonlinear multibody)", "linearized model (route 2 T_a per wheel)",
                  "eq. 4 T_a", "route 2 whole linear plant")
 
@@ -71,6 +72,23 @@ def table2_rows(result: dict) -> list[list[str]]:
     return rows
 
 
+def _against(value: float, road: float, text: str) -> str:
+    return f"{text} ({100.0 * (value / road - 1.0):+.1f} %)"
+
+
+def damage_rows(result: dict) -> list[list[str]]:
+    """One row per case of ``paper.json``: the stress factor (n = 4) and the damage-equivalent load
+    (m = 5, kN) of road, rig and this project's correction, rig and corrected against the road."""
+    rows = []
+    for case in result["cases"]:
+        sf = [case[f"stress_factor_{k}"] for k in ("road", "rig", "corrected")]
+        dl = [case[f"del_{k}_N"] / 1e3 for k in ("road", "rig", "corrected")]
+        rows.append([case_label(case["case"]), f"{sf[0]:.4f}", _against(sf[1], sf[0], f"{sf[1]:.4f}"),
+                     _against(sf[2], sf[0], f"{sf[2]:.4f}"), f"{dl[0]:.2f} kN",
+                     _against(dl[1], dl[0], f"{dl[1]:.2f} kN"), _against(dl[2], dl[0], f"{dl[2]:.2f} kN")])
+    return rows
+
+
 def paper_command(folder: pathlib.Path, result: dict) -> str:
     """The ``rigsim paper`` command of the result: its duration from the first case's road run
     (``<case>/road/result.json``: samples over rate) when the folder has it, its noise."""
@@ -95,6 +113,19 @@ def write_table2(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
     return write_results_page(out, "paper_table2", "Table 2 analogue: DLC of the paper's cases", TABLE2_HEADER,
                               table2_rows(result), paper_command(folder, result), _date_of(source), note,
                               SCRIPT)
+
+
+def write_damage(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
+    """``out/paper_damage.md`` from ``folder/paper.json``."""
+    source = folder / "paper.json"
+    result = json.loads(source.read_text())
+    note = ("Means of the four wheels. Stress factor E[(F/F_static)^4] of pavements' fourth-power law; "
+            "damage-equivalent load of the rainflow-counted cycles (ASTM E1049-85), m = 5, one cycle per "
+            "second; road, rig and corrected on the same samples (where the correction has settled), rig "
+            "and corrected against the road in brackets.")
+    return write_results_page(out, "paper_damage", "Damage of the paper's cases: pavements and components",
+                              DAMAGE_HEADER, damage_rows(result), paper_command(folder, result), _date_of(source),
+                              note, SCRIPT)
 
 
 def table1_rows(result: dict) -> list[list[str]]:
@@ -138,7 +169,8 @@ def main(argv=None) -> int:
                     help="folder of the written tables (default docs/results of this repository)")
     args = ap.parse_args(argv)
     written = 0
-    for folder, fname, write in ((args.paper, "paper.json", write_table2), (args.validate, "validate.json", write_table1)):
+    for folder, fname, write in ((args.paper, "paper.json", write_table2), (args.paper, "paper.json", write_damage),
+                                 (args.validate, "validate.json", write_table1)):
         if not (folder / fname).is_file():
             print(f"{folder / fname}: no such file, its table is not written", file=sys.stderr)
             continue

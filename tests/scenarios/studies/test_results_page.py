@@ -77,6 +77,9 @@ def test_the_helper_is_light():
 
 
 CASE_KEYS = ("dlc_road", "dlc_rig", "dlc_corrected_paper", "dlc_corrected", "dlc_road_lowpassed", "nrmse_corrected")
+#: Damage figures of a case: stress factors (1) and damage-equivalent loads (N) of road, rig, corrected.
+DAMAGE = {"stress_factor_road": 1.25, "stress_factor_rig": 1.125, "stress_factor_corrected": 1.2,
+          "del_road_N": 20000.0, "del_rig_N": 15000.0, "del_corrected_N": 19000.0}
 
 
 def _fake_paper(folder: pathlib.Path) -> None:
@@ -84,7 +87,7 @@ def _fake_paper(folder: pathlib.Path) -> None:
     cases = []
     for k, name in enumerate(("paper-medium-72kmh-6360kg", "paper-high-48kmh-3640kg")):
         case = {key: 0.1 + 0.01 * k + 0.001 * i for i, key in enumerate(CASE_KEYS)}
-        case.update(case=name, noise_N=100.0, paper=dict(PAPER_TABLE2[name]))
+        case.update(case=name, noise_N=100.0, paper=dict(PAPER_TABLE2[name]), **DAMAGE)
         cases.append(case)
     folder.mkdir()
     (folder / "paper.json").write_text(json.dumps({"cases": cases, "methods": {}, "note": ""}))
@@ -113,6 +116,10 @@ def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path):
     assert "| high, 48 km/h, 3640 kg | 0.1100 (0.1912) | 0.1110 (0.1497) | 0.1120 (0.1794) | 0.1130 | 0.1140 | 0.115 |" \
         in table2
     assert table2[-1].startswith("Measured by `rigsim paper --out DIR --duration-s 20 --noise-N 100` on ")
+    # 1.125 / 1.25 - 1 = -10.0 %, 1.2 / 1.25 - 1 = -4.0 %; 15 / 20 - 1 = -25.0 %, 19 / 20 - 1 = -5.0 %
+    damage = (out / "paper_damage.md").read_text().splitlines()
+    assert ("| medium, 72 km/h, 6360 kg | 1.2500 | 1.1250 (-10.0 %) | 1.2000 (-4.0 %) | 20.00 kN | 15.00 kN (-25.0 %) "
+            "| 19.00 kN (-5.0 %) |") in damage
     table1 = (out / "validate_table1.md").read_text().splitlines()
     assert "| this model | 0.2500 | 0.2000 | 0.1990 (-0.50 %) | 0.1900 (-5.00 %) | 0.1995 (-0.25 %) |" in table1
     assert "| paper | 0.2105 | 0.1754 (nonlinear model 0.1748) | 0.1724 (-1.71 %) |  |  |" in table1
@@ -134,6 +141,6 @@ def test_the_pages_files_are_the_scripts():
     """docs/validation.md includes the files docs_tables.py writes, and each ends in its
     configuration line."""
     page = (ROOT / "docs" / "validation.md").read_text()
-    for name in ("paper_table2", "validate_table1"):
+    for name in ("paper_table2", "paper_damage", "validate_table1"):
         assert f"```{{include}} results/{name}.md" in page
         assert (ROOT / "docs" / "results" / f"{name}.md").read_text().splitlines()[-1].startswith("Measured by `rigsim ")
