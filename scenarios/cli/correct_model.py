@@ -44,10 +44,8 @@ from __future__ import annotations
 
 import sys
 
-from scenarios.records.model_record import cal_key
-from scenarios.records.model_record import first_guess as _first_guess  # noqa: F401 (tests read it here)
 
-__all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "MODEL_OPTIONS", "cal_key"]
+__all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "MODEL_OPTIONS"]
 
 #: The options only ``--model`` reads: argparse dest -> option.
 MODEL_OPTIONS = {"pairs": "--pairs", "jobs": "--jobs", "max_evaluations": "--max-evaluations",

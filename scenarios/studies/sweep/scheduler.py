@@ -173,10 +173,16 @@ class _Attempt:
         return self._outcome if finished else None
 
 
-def _reason(exc: BaseException) -> str:
-    """The root cause of a failed connection, one line ("Connection refused")."""
+def _root(exc: BaseException) -> BaseException:
+    """The last of ``exc``'s chain of causes."""
     while exc.__cause__ is not None:
         exc = exc.__cause__
+    return exc
+
+
+def _reason(exc: BaseException) -> str:
+    """The root cause of a failed connection, one line ("Connection refused")."""
+    exc = _root(exc)
     if getattr(exc, "strerror", None):
         return exc.strerror
     if isinstance(exc, TimeoutError):
@@ -189,11 +195,8 @@ def _connect_reason(exc: BaseException, address: str) -> str:
     """Why connecting failed: the system's reason of distributed's last attempt, or, where that
     attempt was cut off by the deadline (its cause then a cancellation), of one plain TCP connect
     to the address, made now within a second ("Connection refused")."""
-    cause = exc
-    while cause.__cause__ is not None:
-        cause = cause.__cause__
-    if getattr(cause, "strerror", None):
-        return cause.strerror
+    if getattr(_root(exc), "strerror", None):
+        return _reason(exc)
     host, _, port = address.partition("://")[2].rpartition(":")
     try:
         socket.create_connection((host.strip("[]"), int(port)), timeout=1.0).close()

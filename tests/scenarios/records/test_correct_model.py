@@ -32,7 +32,7 @@ import pytest
 
 from correction.metrics.dlc import dlc
 from correction.io.measured import read_channels
-from scenarios.cli.correct_model import cal_key
+from scenarios.records.model_record import cal_key
 from scenarios.cli.main import build_parser, main
 from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.core.run import run
@@ -258,7 +258,7 @@ def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
 def test_an_all_wheel_stiffening_in_truck_toml_is_the_rear_guess_too(tmp_path):
     """TRUCK.toml's [vehicle] tire_progressive_ratio / _onset_m (all wheels) start both axles' fits;
     a rear value given starts the rear's."""
-    from scenarios.cli.correct_model import _first_guess
+    from scenarios.records.model_record import first_guess as _first_guess
     from scenarios.core.config import parse_scenario
 
     base = {"name": "truck", "speed_kmh": 72.0, "duration_s": 10.0, "road": {"roughness": "C"}}
