@@ -34,7 +34,8 @@ from typing import Any
 from correction.io.tomlfile import check_keys, number, read_toml
 from mjcf.build import TruckVariant
 
-__all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios"]
+__all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios",
+           "PAPER_CONFIGURATIONS"]
 
 
 class ScenarioError(ValueError):
@@ -271,10 +272,26 @@ def load_scenario(path) -> Scenario:
         raise ScenarioError(f"{p.name}: {exc}") from None
 
 
-def paper_scenarios() -> list[pathlib.Path]:
-    """The shipped scenario files of the paper's three cases (Table 2 order)."""
+#: The configurations of the paper's cases: folder of ``scenarios/data`` by name. ``design``: the
+#: project's default actuator gains, the ISO class of each roughness word and the XML's leaf
+#: friction; ``dyntrac``: the rig's loop gains, the roads and the leaf friction fitted to the
+#: paper's Table 2 (``benchmarks/dyntrac_fit.py``).
+PAPER_CONFIGURATIONS = MappingProxyType({"design": "paper", "dyntrac": "paper_dyntrac"})
+
+
+def paper_scenarios(configuration: str = "design") -> list[pathlib.Path]:
+    """The shipped scenario files of the paper's three cases (Table 2 order).
+
+    Parameters
+    ----------
+    configuration : str
+        A key of :data:`PAPER_CONFIGURATIONS`: ``"design"`` (default) or ``"dyntrac"``.
+    """
     import importlib.resources
 
-    base = importlib.resources.files("scenarios").joinpath("data", "paper")
+    if configuration not in PAPER_CONFIGURATIONS:
+        raise ScenarioError(f"the paper's configuration must be one of {sorted(PAPER_CONFIGURATIONS)}, "
+                            f"got {configuration!r}")
+    base = importlib.resources.files("scenarios").joinpath("data", PAPER_CONFIGURATIONS[configuration])
     names = ("medium_72kmh_6360kg.toml", "high_48kmh_3640kg.toml", "high_72kmh_3640kg.toml")
     return [pathlib.Path(str(base.joinpath(n))) for n in names]

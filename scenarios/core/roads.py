@@ -34,13 +34,13 @@ ISO_CLASSES = MappingProxyType({  # geometric-mean Gd(n0) per class, m^3 (ISO 86
 #   0.01-10 cycle/m, computed with this module): A 2.2 m/km, B 4.4 m/km, C 8.9 m/km.
 #   FHWA calls IRI <= 2.7 m/km acceptable, so by IRI alone "medium" ~ A, "high" ~ B.
 # - Dynamic load: the paper's road-test DLCs (0.0985 medium at 72 km/h with 6360 kg;
-#   0.1912 / 0.2105 high at 48 / 72 km/h with 3640 kg). This project's MuJoCo truck
-#   (mjcf/) gives, over 60 s road tests of the shipped paper scenarios, DLC 0.051 (A) /
-#   0.101 (B) on the medium case, and 0.104 / 0.127 (B) or 0.214 / 0.267 (C) on the high
-#   cases at 48 / 72 km/h (DLC scales with sqrt(Gd), i.e. x2 per class).
-# The project reproduces the paper's tables, so the words map by dynamic load: medium B,
-# high C. The truck the paper measured was evidently more excitable than an IRI-class
-# guess suggests (its suspension and payload are not published). Calibrate here, only here.
+#   0.1912 / 0.2105 high at 48 / 72 km/h with 3640 kg). This project's truck (mjcf/) on w = 2
+#   roads of the class geometric means comes nearest them with medium B and high C (DLC
+#   scales with sqrt(Gd): x2 per class).
+# The words map by dynamic load: medium B, high C (the truck the paper measured was evidently
+# more excitable than an IRI-class guess suggests). The paper's own cases carry their levels as
+# numbers (gd_n0_m3), fitted with the rig to the paper's Table 2 by benchmarks/dyntrac_fit.py:
+# inside these two classes.
 ROUGHNESS_WORDS = MappingProxyType({"medium": "B", "high": "C"})
 
 TRACK_MODES = ("identical", "independent", "coherent")

@@ -17,6 +17,10 @@ def add_parser(subparsers) -> None:
     pp.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     pp.add_argument("--duration-s", type=float, default=None,
                     help="override every case's duration in s (a quick look; the paper's cases run 60 s)")
+    pp.add_argument("--rig", choices=("design", "dyntrac"), default="design",
+                    help="the cases' configuration: 'design' (default), the project's actuator gains, ISO class roads "
+                         "and leaf friction; 'dyntrac', the rig's loop gains, the roads and the leaf friction fitted "
+                         "to the paper's Table 2 (benchmarks/dyntrac_fit.py)")
     # The default is scenarios.studies.scoring.NOISE_N, applied in cmd_paper: importing scoring here
     # would load the whole simulator for ``rigsim --help`` (tests/scenarios/cli/test_startup.py pins the number).
     pp.add_argument("--noise-N", type=float, default=None,
@@ -76,7 +80,7 @@ def cmd_paper(args) -> int:
         gc.freeze()
         gc.enable()
 
-    paths = paper_scenarios()
+    paths = paper_scenarios(getattr(args, "rig", "design"))
     for p in paths:  # validate everything before anything runs
         load_scenario(p)
     _check(args)

@@ -172,19 +172,30 @@ class PaperResult:
         return "\n".join(lines)
 
     def table(self) -> str:
-        """Table 2 analogue for the terminal: means over the four wheels, the paper's values in brackets."""
-        head = (f"{'case':28s} {'road':>15s} {'rig':>15s} {'corr. paper':>15s} {'corrected':>10s} "
+        """Table 2 analogue for the terminal: means over the four wheels, the paper's values in brackets.
+
+        ``ceiling``: the road force through the paper's low-pass T_F alone, the most the paper's
+        method can give back (a perfect inverse of T_a under T_F). A corrected value above it (marked
+        ``^``) is an over-correction by eq. 4 (its T_a lags more than the rig's); the paper's own
+        corrected value is marked likewise where it exceeds even its road, which lies above any
+        T_F ceiling."""
+        head = (f"{'case':28s} {'road':>15s} {'rig':>15s} {'corr. paper':>17s} {'ceiling':>8s} {'corrected':>10s} "
                 f"{'road LP':>8s} {'NRMSE':>6s}")
         lines = [head, "-" * len(head)]
         for r in self.rows():
             ref = r["paper"]
+            ceiling = r["dlc_road_lowpassed_paper"]
+            over = "^" if r["dlc_corrected_paper"] > ceiling else " "
+            ref_over = "^" if ref["corrected"] > ref["road"] else " "
             lines.append(
                 f"{r['case']:28s} {r['dlc_road']:7.4f} ({ref['road']:.4f}) {r['dlc_rig']:7.4f} ({ref['rig']:.4f}) "
-                f"{r['dlc_corrected_paper']:7.4f} ({ref['corrected']:.4f}) {r['dlc_corrected']:10.4f} "
-                f"{r['dlc_road_lowpassed']:8.4f} {r['nrmse_corrected']:6.3f}")
+                f"{r['dlc_corrected_paper']:7.4f}{over}({ref['corrected']:.4f}{ref_over}) {ceiling:8.4f} "
+                f"{r['dlc_corrected']:10.4f} {r['dlc_road_lowpassed']:8.4f} {r['nrmse_corrected']:6.3f}")
         lines.append("DLC = std/mean of the wheel force, mean of the four wheels; (paper's Table 2). corr. paper: eq. 4 and")
-        lines.append("the paper's 16/24 Hz low-pass; corrected: T_a identified per corner (rigsim identify), 30 Hz low-pass; road LP: the road")
-        lines.append("force through the same low-pass; NRMSE = rms(corrected - road LP) / std(road LP).")
+        lines.append("the paper's 16/24 Hz low-pass T_F; ceiling: the road force through T_F alone, the most that method can")
+        lines.append("give back; ^: above it (the paper's value: above its road), eq. 4 over-corrected. corrected: T_a identified")
+        lines.append("per corner (rigsim identify), 30 Hz low-pass; road LP: the road force through the same low-pass;")
+        lines.append("NRMSE = rms(corrected - road LP) / std(road LP).")
         return "\n".join(lines)
 
 

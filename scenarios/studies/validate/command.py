@@ -48,6 +48,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
     p.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p.add_argument("--rig", choices=("design", "dyntrac"), default="design",
+                   help="the Table 1 case's configuration, as rigsim paper --rig (default: design)")
     p.set_defaults(func=cmd_validate)
     return p
 
@@ -88,7 +90,7 @@ def cmd_validate(args) -> int:
         pose_rate = DEFAULT_POSE_RATE_HZ
     with staged_output(args.out, force=force) as stage:
         result = this.validate(duration_s=duration_s, ident_duration_s=ident_s, jobs=jobs, progress=progress,
-                               pose_rate_hz=pose_rate)
+                               pose_rate_hz=pose_rate, rig=getattr(args, "rig", "design"))
         paths = {k: stage.final(p) for k, p in write_report(result, stage.path).items()}
         lines = summary_lines(result)
         if rrd is not None:

@@ -77,7 +77,7 @@ def check_arguments(duration_s: float | None, ident_duration_s: float | None, jo
 
 def validate(*, duration_s: float | None = None, ident_duration_s: float | None = None,
              jobs: int | None = None, progress: SayFn | None = None,
-             pose_rate_hz: float | None = None) -> ValidateResult:
+             pose_rate_hz: float | None = None, rig: str = "design") -> ValidateResult:
     """Compute the whole validation (routes 1-3, Figure 7 and Table 1 analogues).
 
     Parameters
@@ -93,6 +93,9 @@ def validate(*, duration_s: float | None = None, ident_duration_s: float | None 
         ``progress(line)`` for one-line progress messages.
     pose_rate_hz : float, Hz, optional
         Keep the Table 1 road and rig runs with body poses at this rate (for a recording).
+    rig : str
+        The paper cases' configuration (:data:`scenarios.core.config.PAPER_CONFIGURATIONS`):
+        ``"design"`` or ``"dyntrac"``.
 
     Raises
     ------
@@ -103,7 +106,7 @@ def validate(*, duration_s: float | None = None, ident_duration_s: float | None 
     """
     wall0 = time.perf_counter()
     workers = check_arguments(duration_s, ident_duration_s, jobs)
-    path = str(table1_scenario_path())
+    path = str(table1_scenario_path(rig))
     sc = validation_scenario(path, duration_s)
     table_s = sc.duration_s
     ident_s = float(ident_duration_s) if ident_duration_s is not None else max(2.0 * table_s, MIN_IDENT_S)

@@ -49,9 +49,10 @@ MAX_WORKERS = 8
 TABLE1_SCENARIO = "high_72kmh_3640kg.toml"
 
 
-def table1_scenario_path() -> pathlib.Path:
-    """The shipped scenario of the paper's Table 1 (high roughness, 72 km/h, 3640 kg)."""
-    for p in paper_scenarios():
+def table1_scenario_path(configuration: str = "design") -> pathlib.Path:
+    """The shipped scenario of the paper's Table 1 (high roughness, 72 km/h, 3640 kg) in a
+    configuration of :data:`scenarios.core.config.PAPER_CONFIGURATIONS` (``"design"`` or ``"dyntrac"``)."""
+    for p in paper_scenarios(configuration):
         if p.name == TABLE1_SCENARIO:
             return p
     raise FileNotFoundError(f"scenarios/data/paper/{TABLE1_SCENARIO} is missing")  # pragma: no cover
