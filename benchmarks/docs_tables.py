@@ -2,17 +2,22 @@
 
 ::
 
-    python benchmarks/docs_tables.py [--paper out/paper] [--validate out/validate] [--out docs/results]
+    python benchmarks/docs_tables.py [--paper out/paper] [--validate out/validate]
+                                     [--iterate DIR ...] [--out docs/results]
 
-Reads the output folder of a finished ``rigsim paper --out DIR`` (its ``paper.json``) and of a
-finished ``rigsim validate --out DIR`` (its ``validate.json``) and writes
+Reads the output folder of a finished ``rigsim paper --out DIR`` (its ``paper.json``), of a
+finished ``rigsim validate --out DIR`` (its ``validate.json``) and of finished ``rigsim iterate
+CASE.toml --target displacement|force --out DIR`` runs (their ``iteration.json``) and writes
 
 * ``paper_table2.md``: the Table 2 analogue, DLC (mean of the four wheels) of the road, the rig,
   the rig corrected by the paper's method and by this project's, the road through the same
   low-pass, and the NRMSE, each case beside the paper's published values
   (:data:`scenarios.studies.paper.table.PAPER_TABLE2`);
 * ``validate_table1.md``: the Table 1 analogue, DLC of the road test, the rig test and the
-  linearized models, beside the paper's.
+  linearized models, beside the paper's;
+* ``iterate_comparison.md``: input correction against output correction, per case the DLC error of
+  the rig with the original drive, with the drive iterated to each target, and of the output
+  correction, with the rig runs each costs (one ``--iterate`` folder per case and target).
 
 Each file ends in the line saying how it was measured (:mod:`scenarios.studies.results_page`):
 the command (with the duration and noise read from the results), the date of the result file,
@@ -36,10 +41,14 @@ from scenarios.studies.results_page import write_results_page
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: What writes the files (their first line says so).
 SCRIPT = "python benchmarks/docs_tables.py --paper DIR --validate DIR"
+#: What writes the iteration's table.
+ITERATE_SCRIPT = "python benchmarks/docs_tables.py --iterate DIR ..."
 
 TABLE2_HEADER = ("case", "road DLC (paper)", "rig DLC (paper)", "corrected, paper's method (paper)",
                  "corrected, this project", "road through the same low-pass", "NRMSE")
 DAMAGE_HEADER = ("case", "stress factor n = 4: road", "rig", "corrected", "DEL m = 5: road", "rig", "corrected")
+ITERATE_HEADER = ("case", "rig, original drive", "iterated drive, displacement target", "iterated drive, force target",
+                  "output-corrected")
 TABLE1_HEADER = ("", "road test", "rig test (nonlinear multibody)", "linearized model (route 2 T_a per wheel)",
                  "eq. 4 T_a", "route 2 whole linear plant")
 
@@ -158,6 +167,57 @@ def write_table1(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
                               TABLE1_HEADER, table1_rows(result), command, _date_of(source), note, SCRIPT)
 
 
+def _runs(n: int) -> str:
+    return f"{n} rig run{'s' if n != 1 else ''}"
+
+
+def iterate_rows(results: list[dict]) -> list[list[str]]:
+    """One row per scenario of the ``iteration.json`` documents ``results`` (in their first order):
+    the DLC error (%, mean of the four wheels) of the rig with the original drive, of each target's
+    iterated drive with its rig runs, and of the output correction of the original rig run; "-"
+    for a target not given."""
+    by: dict[str, dict[str, dict]] = {}
+    for r in results:
+        by.setdefault(r["scenario"], {})[r["target"]] = r["comparison"]
+    rows = []
+    for name, targets in by.items():
+        first = next(iter(targets.values()))
+        cells = [case_label(name), f"{100 * first['rig_original_drive']['dlc_error']:+.1f} %"]
+        for target in ("displacement", "force"):
+            it = targets.get(target, {}).get("rig_iterated_drive")
+            cells.append("-" if it is None else f"{100 * it['dlc_error']:+.1f} %, {_runs(it['rig_runs'])}")
+        out = first.get("output_corrected")
+        cells.append("-" if out is None else f"{100 * out['dlc_error']:+.1f} %, {_runs(out['rig_runs'])}")
+        rows.append(cells)
+    return rows
+
+
+def iterate_command(folders: list[pathlib.Path], results: list[dict]) -> str:
+    """The ``rigsim iterate`` command of the runs: the duration from the first run's ``drive.csv``
+    (its last time), the load-cell noise from its ``iteration.json``."""
+    command = "rigsim iterate CASE.toml --target displacement|force --out DIR"
+    drive = folders[0] / "drive.csv"
+    if drive.is_file():
+        last = drive.read_text().rstrip().rsplit("\n", 1)[-1]
+        command += f" --duration-s {round(float(last.split(',')[0]), 3):g}"
+    if "noise_N" in results[0]:
+        command += f" --noise-N {results[0]['noise_N']:g}"
+    return command
+
+
+def write_iterate(folders: list[pathlib.Path], out: pathlib.Path) -> pathlib.Path:
+    """``out/iterate_comparison.md`` from each ``folder/iteration.json``."""
+    sources = [f / "iteration.json" for f in folders]
+    results = [json.loads(s.read_text()) for s in sources]
+    note = ("DLC error against the road test, mean of the four wheels, on the samples where the output correction "
+            "has settled; rig forces with the load cells' noise. Rig runs: the original drive's, the "
+            "identification's and one per drive update for the iteration; the output correction corrects the "
+            "original drive's run (the rig's identification before the test not counted).")
+    return write_results_page(out, "iterate_comparison", "Input correction against output correction",
+                              ITERATE_HEADER, iterate_rows(results), iterate_command(folders, results),
+                              max(_date_of(s) for s in sources), note, ITERATE_SCRIPT)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -165,6 +225,8 @@ def main(argv=None) -> int:
                     help="output folder of rigsim paper (default out/paper)")
     ap.add_argument("--validate", type=pathlib.Path, default=pathlib.Path("out/validate"),
                     help="output folder of rigsim validate (default out/validate)")
+    ap.add_argument("--iterate", type=pathlib.Path, nargs="+", default=[], metavar="DIR",
+                    help="output folders of rigsim iterate, one per case and target (default none)")
     ap.add_argument("--out", type=pathlib.Path, default=ROOT / "docs" / "results",
                     help="folder of the written tables (default docs/results of this repository)")
     args = ap.parse_args(argv)
@@ -176,6 +238,13 @@ def main(argv=None) -> int:
             continue
         print(f"wrote {write(folder, args.out)}")
         written += 1
+    if args.iterate:
+        missing = [str(f / "iteration.json") for f in args.iterate if not (f / "iteration.json").is_file()]
+        if missing:
+            print(f"{', '.join(missing)}: no such file, the iteration's table is not written", file=sys.stderr)
+        else:
+            print(f"wrote {write_iterate(args.iterate, args.out)}")
+            written += 1
     return 0 if written else 1
 
 

@@ -16,19 +16,22 @@ and the NRMSE against the road force through the same 30 Hz band limit. Beside i
 floor (:func:`correction.output.floor.linear_floor`: the least-squares per-wheel FIR fitted on the road
 force itself, two-sided, +-0.15 s): a diagnostic, never used to correct.
 
-Prints a markdown table and one JSON line: the fractions of wheels within 2 % and within 1 % of
-the road DLC, the worst wheel, NRMSE and floor per case. Goals: every wheel within 2 % of the
-road DLC, at least 95 % of the wheels within 1 %.
+Writes the table and its summary (the fractions of wheels within 2 % and within 1 % of the road
+DLC, the worst wheel) to ``docs/results/generalization.md`` (``--results``: its folder), ending in
+the line that says how and where it was measured (:mod:`scenarios.studies.results_page`); prints
+that file and one JSON line. Goals: every wheel within 2 % of the road DLC, at least 95 % of the
+wheels within 1 %.
 
 Usage::
 
-    python benchmarks/generalization.py [--cases 24] [--duration-s 30] [--jobs N]
+    python benchmarks/generalization.py [--cases 24] [--duration-s 30] [--jobs N] [--results docs/results]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import pathlib
 import sys
 import time
 
@@ -41,6 +44,7 @@ from scenarios.core.pool import run_jobs
 from scenarios.core.rig import Rig
 from scenarios.core.run import run
 from scenarios.studies.identify.compute import identify_rig
+from scenarios.studies.results_page import script_command, write_results_page
 from scenarios.studies.scoring import BEST, NOISE_N, score_pair
 from scenarios.studies.suites import generalization_cases
 
@@ -48,6 +52,8 @@ FLOOR_TAPS = 150  # each side, samples at 1 kHz: +-0.15 s covers the truck's slo
 #: Goals: every wheel within GOAL_ALL_PCT (%) of the road DLC, at least GOAL_MOST_SHARE (1) of
 #: the wheels within GOAL_MOST_PCT (%).
 GOAL_ALL_PCT, GOAL_MOST_PCT, GOAL_MOST_SHARE = 2.0, 1.0, 0.95
+#: Where the results file goes by default: docs/results of this repository.
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 
 
 def evaluate(doc: dict) -> dict:
@@ -81,11 +87,50 @@ def evaluate(doc: dict) -> dict:
             "events": sorted(rig.events), "wall_s": round(time.perf_counter() - t0, 1)}
 
 
+HEADER = ("case", "road DLC", "rig vs road", "corrected vs road, per wheel (fl fr rl rr)", "of which band limit",
+          "NRMSE", "linear floor", "stress factor n=4, rig / corrected", "DEL m=5, rig / corrected", "rear lift-off")
+
+
+def table_rows(rows: list[dict]) -> list[list[str]]:
+    """The results table's cells, one row per case (:data:`HEADER`)."""
+    out = []
+    for r in rows:
+        e = " ".join(f"{v:+.1f}" for v in r["dlc_error_pct"].values())
+        lift = max(r["lift_off_share"][c] for c in ("rl", "rr"))
+        sf, dl = r["stress_factor_error_pct"], r["del_error_pct"]
+        out.append([r["case"], f"{r['dlc_road']:.4f}", f"{r['rig_error_pct']:+.1f} %", f"{e} %",
+                    f"{r['band_limit_pct']:+.1f} %", f"{r['nrmse']:.3f}", f"{r['floor']:.3f}",
+                    f"{sf['rig']:+.1f} / {sf['corrected']:+.1f} %", f"{dl['rig']:+.1f} / {dl['corrected']:+.1f} %",
+                    f"{100 * lift:.2f} %"])
+    return out
+
+
+def note(summary: dict) -> str:
+    """The text under the table: what the columns are, and the summary against the goals."""
+    w = summary["worst"]
+    return ("Corrected DLC against the road DLC per wheel, on the samples where the correction has settled; of "
+            "which band limit: the road force through the same 30 Hz low-pass against the road force (content no "
+            "band-limited correction restores); NRMSE against the band-limited road force, mean of the four "
+            "wheels, beside the linear floor (the least-squares per-wheel FIR fitted on the road force itself, "
+            f"+-{FLOOR_TAPS} samples); stress factor and DEL of rig and corrected against the road, means of the "
+            "four wheels; rear lift-off: the larger share of samples a rear tire of the rig test carries less than "
+            "1 % of its mean load.\n\n"
+            f"Summary: {100 * summary['within_2pct']:.0f} % of the {summary['wheels']} wheels within {GOAL_ALL_PCT:g} % "
+            f"of the road DLC, {100 * summary['within_1pct']:.0f} % within {GOAL_MOST_PCT:g} % (goals: all within "
+            f"{GOAL_ALL_PCT:g} %, {100 * GOAL_MOST_SHARE:.0f} % within {GOAL_MOST_PCT:g} %: "
+            f"{'met' if summary['goals_met'] else 'not met'}); mean error {summary['mean_error_pct']:+.1f} %; worst "
+            f"wheel {w['error_pct']:+.1f} % ({w['case']}, {w['corner']}); stress factor (n = 4) within 1 % on "
+            f"{100 * summary['stress_factor_within_1pct']:.0f} % of the cases, DEL (m = 5) within 3 % on "
+            f"{100 * summary['del_within_3pct']:.0f} %.")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cases", type=int, default=24, help="the suite's first N cases (1-24, default 24)")
     ap.add_argument("--duration-s", type=float, default=30.0, help="seconds per run (default 30)")
     ap.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS,
+                    help="folder of the results file generalization.md (default docs/results)")
     args = ap.parse_args(argv)
     try:
         docs = generalization_cases(args.cases, args.duration_s)
@@ -95,16 +140,6 @@ def main(argv=None) -> int:
     rows = run_jobs([(evaluate, (d,)) for d in docs], workers=args.jobs,
                     on_done=lambda i, r: print(f"[{r['case']}] {r['wall_s']} s", file=sys.stderr))
     errs = np.array([list(r["dlc_error_pct"].values()) for r in rows])
-    print("| case | road DLC | rig vs road | corrected vs road, per wheel (fl fr rl rr) | of which band limit | "
-          "NRMSE | linear floor | stress factor n=4, rig / corrected | DEL m=5, rig / corrected | rear lift-off |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for r in rows:
-        e = " ".join(f"{v:+.1f}" for v in r["dlc_error_pct"].values())
-        lift = max(r["lift_off_share"][c] for c in ("rl", "rr"))
-        print(f"| {r['case']} | {r['dlc_road']:.4f} | {r['rig_error_pct']:+.1f} % | {e} % | {r['band_limit_pct']:+.1f} % | "
-              f"{r['nrmse']:.3f} | {r['floor']:.3f} | {r['stress_factor_error_pct']['rig']:+.1f} / "
-              f"{r['stress_factor_error_pct']['corrected']:+.1f} % | {r['del_error_pct']['rig']:+.1f} / "
-              f"{r['del_error_pct']['corrected']:+.1f} % | {100 * lift:.2f} % |")
     k = np.unravel_index(int(np.argmax(np.abs(errs))), errs.shape)
     summary = {
         "cases": len(rows), "wheels": int(errs.size), "duration_s": args.duration_s,
@@ -119,6 +154,11 @@ def main(argv=None) -> int:
         "goals_met": bool(np.all(np.abs(errs) <= GOAL_ALL_PCT) and np.mean(np.abs(errs) <= GOAL_MOST_PCT) >= GOAL_MOST_SHARE),
         "wall_s": round(time.perf_counter() - t0, 1),
     }
+    page = write_results_page(args.results, "generalization",
+                              f"The linear correction on {len(rows)} case{'s' if len(rows) != 1 else ''} of the generalization suite, "
+                              f"{args.duration_s:g} s each", HEADER, table_rows(rows),
+                              script_command(__file__, argv), note=note(summary))
+    print(page.read_text(encoding="utf-8"))
     print(json.dumps(summary))
     return 0
 

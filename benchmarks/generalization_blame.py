@@ -3,6 +3,7 @@
 ::
 
     python benchmarks/generalization_blame.py [--cases 24] [--duration-s 30] [--jobs N] [--only gen01 gen02 ...]
+                                              [--results docs/results]
 
 For each case of the generalization suite (:func:`scenarios.studies.suites.generalization_cases`,
 as ``benchmarks/generalization.py`` runs it) the corrected DLC error (corrected against road, per
@@ -34,9 +35,11 @@ and not unique (the effects interact): read them as "what removing this cause, g
 before it are gone, changes". Per failing wheel (outside 1 %), the table names the largest share
 of the error's sign ("blame").
 
-Prints a markdown table (one row per case, means over the wheels that fail, or over all four
-when none does) and one JSON line with every share per wheel. A diagnostic: nothing here
-corrects anything in the project.
+Writes a table (one row per case, means over the wheels that fail, or over all four when none
+does) and the count of wheels blamed on each cause to ``docs/results/generalization_blame.md``
+(``--results``: its folder), ending in the line that says how and where it was measured
+(:mod:`scenarios.studies.results_page`); prints that file and one JSON line with every share per
+wheel. A diagnostic: nothing here corrects anything in the project.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import pathlib
 import sys
 import time
 
@@ -65,6 +69,7 @@ from scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 from scenarios.studies.identify.compute import identify_rig  # noqa: E402
+from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
 from scenarios.studies.suites import generalization_cases  # noqa: E402
 
 #: A wheel whose corrected DLC is further than this from the road DLC fails (%): the generalization
@@ -72,6 +77,8 @@ from scenarios.studies.suites import generalization_cases  # noqa: E402
 GOAL_MOST_PCT = 1.0
 #: The chain's causes, in the order they are removed.
 CAUSES = ("identification", "actuators", "friction", "band_limit", "rest")
+#: Where the results file goes by default: docs/results of this repository.
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 #: Kernel tail (sum |taps|) the exact linear corrections leave outside their margins, 1: their
 #: kernels carry T_a^-1's slow tail (the small-signal T_a's ~1 rad/s zero) for seconds; at the scoring's
 #: 1e-3 a 30 s run would keep ~10 s.
@@ -145,21 +152,38 @@ def analyse_job(doc: dict, runs: dict) -> dict:
             "blame": blame}
 
 
-def table(rows: list[dict]) -> str:
-    """Markdown: per case the error and the shares (means over the failing wheels, or all four)."""
-    head = ["case", "corrected vs road (fl fr rl rr)", "identification", "actuators", "friction",
-            "band limit", "rest", "blame (wheels outside 1 %)"]
-    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+HEADER = ("case", "corrected vs road (fl fr rl rr)", "identification", "actuators", "friction", "band limit", "rest",
+          "blame (wheels outside 1 %)")
+
+
+def table_rows(rows: list[dict]) -> list[list[str]]:
+    """Per case the error and the shares (means over the failing wheels, or all four): :data:`HEADER`'s cells."""
+    out = []
     for r in rows:
         failing = list(r["blame"]) or list(CORNERS)
         err = " ".join(f"{r['steps_pct']['identified'][c]:+.1f}" for c in CORNERS)
         shares = [f"{np.mean([r['shares_pct'][k][c] for c in failing]):+.2f}" for k in CAUSES]
         blame = ", ".join(f"{c} {k}" for c, k in r["blame"].items()) or "-"
-        lines.append(f"| {r['case']} | {err} % | " + " | ".join(shares) + f" | {blame} |")
-    lines.append("\nShares in percentage points of the corrected DLC error, along the chain identification -> "
-                 "actuators -> friction -> band limit + rest (module notes); means over the wheels outside "
-                 f"{GOAL_MOST_PCT:g} % (all four where none is).")
-    return "\n".join(lines)
+        out.append([r["case"], f"{err} %", *shares, blame])
+    return out
+
+
+def blame_counts(rows: list[dict]) -> dict[str, int]:
+    """Per cause: how many wheels outside 1 % it is blamed for."""
+    return {k: sum(1 for r in rows for b in r["blame"].values() if b == k) for k in CAUSES}
+
+
+def note(rows: list[dict]) -> str:
+    """The text under the table: what the shares are, and the wheels blamed on each cause."""
+    counts = blame_counts(rows)
+    scored = [r["scored_s"] for r in rows]
+    return ("Shares in percentage points of the corrected DLC error, along the chain identification -> "
+            "actuators -> friction -> band limit + rest, each step removing one cause with the rest kept; "
+            f"means over the wheels outside {GOAL_MOST_PCT:g} % (all four where none is); blame: per wheel "
+            "outside it, the largest share of the error's sign. Every step of a case on the same samples, where "
+            f"every correction of the chain has settled ({min(scored):.0f}-{max(scored):.0f} s per case).\n\n"
+            f"Wheels outside {GOAL_MOST_PCT:g} %: {sum(counts.values())}; blamed on "
+            + ", ".join(f"{k.replace('_', ' ')} {n}" for k, n in counts.items()) + ".")
 
 
 def main(argv=None) -> int:
@@ -168,6 +192,8 @@ def main(argv=None) -> int:
     ap.add_argument("--duration-s", type=float, default=30.0, help="seconds per run (default 30)")
     ap.add_argument("--only", nargs="+", help="parts of case names to analyse (default: every case)")
     ap.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS,
+                    help="folder of the results file generalization_blame.md (default docs/results)")
     args = ap.parse_args(argv)
     try:
         docs = generalization_cases(args.cases, args.duration_s)
@@ -187,8 +213,12 @@ def main(argv=None) -> int:
     for (_, (d, k, f)), r in zip(jobs, runs):
         by_case.setdefault(d["name"], {})[(k, f)] = r
     rows = run_jobs([(analyse_job, (d, by_case[d["name"]])) for d in docs], workers=args.jobs)
-    print(table(rows))
-    counts = {k: sum(1 for r in rows for b in r["blame"].values() if b == k) for k in CAUSES}
+    page = write_results_page(args.results, "generalization_blame",
+                              f"Where the corrected DLC error of {len(rows)} generalization case{'s' if len(rows) != 1 else ''} comes from, "
+                              f"{args.duration_s:g} s each", HEADER, table_rows(rows),
+                              script_command(__file__, argv), note=note(rows))
+    print(page.read_text(encoding="utf-8"))
+    counts = blame_counts(rows)
     print(json.dumps({"cases": len(rows), "duration_s": args.duration_s, "failing_wheels": sum(counts.values()),
                       "blamed": counts, "wall_s": round(time.perf_counter() - t0, 1), "rows": rows}))
     return 0

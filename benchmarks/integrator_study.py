@@ -32,12 +32,17 @@ configurations hold the drive's value at mid-step, t_k + h/2, instead (the road 
 h/2 and its odd samples taken). RK4 1e-4 s mid is a
 second, higher-order reference (DLC and FRF against it printed beside). The script also checks how each integrator
 advances the activations (one step from an off-equilibrium state against ``act + h act_dot``)
-and what ``actearly`` changes. Prints a markdown table, one JSON line and the cheapest
-configuration passing all three goals (by the wall time of the rig run).
+and what ``actearly`` changes. The table, the failures, the activations and the cheapest
+configuration passing all three goals (by the wall time of the rig run) go to
+``docs/results/integrator_study.md`` (``--results``: its folder), ending in the line that says how
+and where it was measured (:mod:`scenarios.studies.results_page`), and prints that file and one
+JSON line. About 7 min of CPU with the defaults (3 min with ``--dlc-s 1 --gen-s 0.5 --repeats 1``:
+the identification runs, 30 s each, are the fixed part); ``--workers`` spreads it over cores.
 
 Usage::
 
     python benchmarks/integrator_study.py [--workers 2] [--dlc-s 20] [--gen-s 5] [--repeats 3]
+                                          [--results docs/results]
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ import argparse
 import dataclasses
 import json
 import os
+import pathlib
 import sys
 import time
 
@@ -67,6 +73,7 @@ from scenarios.core.road_drive import road_drive  # noqa: E402
 from scenarios.core.rig import Rig  # noqa: E402
 from scenarios.core.watch import SimulationError  # noqa: E402
 from scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S, SEGMENT_S, identify_rig, matched_drive  # noqa: E402
+from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
 from scenarios.studies.suites import generalization_cases  # noqa: E402
 
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER, "RK4": mujoco.mjtIntegrator.mjINT_RK4,
@@ -82,6 +89,8 @@ REFERENCE, BASELINE, SECOND_REFERENCE = 0, 2, 4  # BASELINE: the costs' denomina
 NO_STABILITY = (REFERENCE, SECOND_REFERENCE)  # references, not candidates: no generalization runs
 DLC_GOAL_PCT, FRF_GOAL_DB, FRF_GOAL_DEG, FRF_MAX_HZ = 0.1, 0.1, 1.0, 30.0
 GEN_CASES, GEN_BATCH = 24, 6
+#: Where the results file goes by default: docs/results of this repository.
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 
 
 def label(i: int) -> str:
@@ -281,12 +290,56 @@ def frf_difference(a: dict, b: dict, key: str = "h") -> tuple[float, float]:
     return float(np.max(np.abs(20 * np.log10(np.abs(r))))), float(np.max(np.abs(np.degrees(np.angle(r)))))
 
 
+HEADER = ("config", "run s", "cost ratio", "bare steps/s", "bare ratio", "worst rig DLC err %", "FRF dB / deg",
+          "vs RK4 1e-4 mid: DLC % ; dB / deg", "own drive dB / deg", "its fit dB / deg", "stable", "passes")
+
+
+def table_rows(rows: list[dict]) -> list[list[str]]:
+    """The results table's cells, one row per configuration (:data:`HEADER`)."""
+    out = []
+    for r in rows:
+        if r["errors"]:
+            acc = ["failed: " + r["errors"][0][:60], "", "", "", ""]
+        else:
+            own = ([f"{r['own_frf_db']:.3f} / {r['own_frf_deg']:.2f}", f"{r['fit_db']:.3f} / {r['fit_deg']:.2f}"]
+                   if "own_frf_db" in r else ["n/a", "n/a"])
+            acc = [f"{r['worst_dlc_pct']:.3f}", f"{r['frf_db']:.3f} / {r['frf_deg']:.2f}",
+                   f"{r['worst_dlc_pct_vs_rk4']:.3f} ; {r['frf_db_vs_rk4']:.3f} / {r['frf_deg_vs_rk4']:.2f}", *own]
+        stable = "reference" if r["stable"] is None else f"{r['stable']}/{GEN_CASES}"
+        out.append([r["config"], f"{r['run_s']:.2f}", f"{r['cost_ratio']:.2f}", f"{r['bare_steps_per_s']:,.0f}",
+                    f"{r['bare_cost_ratio']:.2f}", *acc, stable, "yes" if r["passes"] else "no"])
+    return out
+
+
+def notes(rows: list[dict], acts: dict, best: dict | None, best_plain: dict | None) -> str:
+    """The text under the table: the goals, the failures and refusals of the linear check, the
+    activations' treatment, the cheapest passing configurations."""
+    parts = ["Goals: rig DLC within 0.1 % of the reference on every wheel of the three cases; H1 (same drive) "
+             "within 0.1 dB and 1 degree at every point (0.27 Hz apart) up to 30 Hz on every corner; 24/24 cases "
+             "stable. Below the table: per configuration, the first generalization cases that failed and what the "
+             "rig's linear stability check (Rig.check_stable at that integrator and step) said where it refused."]
+    failures = [f"- {r['config']}: {what}" for r in rows
+                for what in r["unstable_cases"][:3] + r["linear_check_failures"][:2]]
+    if failures:
+        parts.append("\n".join(failures))
+    parts.append("Activations, one step from a 2 mm x_ref step at 1e-4 s: max|act' - (act + h act_dot)| / "
+                 "max|h act_dot| (0 = explicit Euler on act), and the largest change of (qvel, act) with actearly "
+                 "set:\n\n" + "\n".join(f"- {name}: {a['act_vs_euler']:.3g}; actearly changes {a['actearly_change']:.3g}"
+                                        for name, a in acts.items()))
+    for what, b in (("Cheapest passing", best), ("Cheapest passing with the drive sampled at the steps", best_plain)):
+        parts.append(f"{what}: {b['config'] if b else 'none'}"
+                     + (f" (cost ratio {b['cost_ratio']:.2f} of {label(BASELINE)})." if b else "."))
+    return "\n\n".join(parts)
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--dlc-s", type=float, default=20.0, help="duration of each paper-case run, s")
     ap.add_argument("--gen-s", type=float, default=5.0, help="duration of each generalization run, s")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS,
+                    help="folder of the results file integrator_study.md (default docs/results)")
     args = ap.parse_args(argv)
     t_start = time.perf_counter()
     n = len(CONFIGS)
@@ -346,40 +399,16 @@ def main(argv=None) -> dict:
                              and row["frf_deg"] <= FRF_GOAL_DEG and row["stable"] == GEN_CASES)
         rows.append(row)
 
-    print(f"# Integrator study: against {label(REFERENCE)}; paper cases {args.dlc_s:g} s each (+2 s lead-in), "
-          f"FRF of paper case 0 ({IDENT_MIN_S:g} s analysed) to {FRF_MAX_HZ:g} Hz, {GEN_CASES} generalization "
-          f"cases of {args.gen_s:g} s; cost: median of {args.repeats}, ratio to {label(BASELINE)}\n")
-    print("| config | run s | cost ratio | bare steps/s | bare ratio | worst rig DLC err % | FRF dB / deg "
-          "| vs RK4 1e-4 mid: DLC % ; dB / deg | own drive dB / deg | its fit dB / deg | stable | passes |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |")
-    for r in rows:
-        if r["errors"]:
-            acc = "failed: " + r["errors"][0][:60] + " | | | | "
-        else:
-            own = (f"{r['own_frf_db']:.3f} / {r['own_frf_deg']:.2f} | {r['fit_db']:.3f} / {r['fit_deg']:.2f}"
-                   if "own_frf_db" in r else "n/a | n/a")
-            acc = (f"{r['worst_dlc_pct']:.3f} | {r['frf_db']:.3f} / {r['frf_deg']:.2f} | {r['worst_dlc_pct_vs_rk4']:.3f} ; "
-                   f"{r['frf_db_vs_rk4']:.3f} / {r['frf_deg_vs_rk4']:.2f} | {own}")
-        stable = "reference" if r["stable"] is None else f"{r['stable']}/{GEN_CASES}"
-        print(f"| {r['config']} | {r['run_s']:.2f} | {r['cost_ratio']:.2f} | {r['bare_steps_per_s']:,.0f} "
-              f"| {r['bare_cost_ratio']:.2f} | {acc} | {stable} | {'yes' if r['passes'] else 'no'} |")
-    print("\nGoals: rig DLC within 0.1 % of the reference on every wheel of the three cases; H1 (same drive) "
-          "within 0.1 dB and 1 degree at every point (0.27 Hz apart) up to 30 Hz on every corner; 24/24 cases stable.")
-    for r in rows:
-        for what in r["unstable_cases"][:3] + r["linear_check_failures"][:2]:
-            print(f"- {r['config']}: {what}")
-    print("\nActivations, one step from a 2 mm x_ref step at 1e-4 s: max|act' - (act + h act_dot)| / max|h act_dot| "
-          "(0 = explicit Euler on act), and the largest change of (qvel, act) with actearly set:")
-    for name, a in acts.items():
-        print(f"- {name}: {a['act_vs_euler']:.3g}; actearly changes {a['actearly_change']:.3g}")
     candidates = [r for i, r in enumerate(rows) if r["passes"] and i not in NO_STABILITY]
     best = min(candidates, key=lambda r: r["cost_ratio"]) if candidates else None
     plain = [r for r in candidates if not r["mid_step_drive"]]
     best_plain = min(plain, key=lambda r: r["cost_ratio"]) if plain else None
-    for what, b in (("Cheapest passing", best), ("Cheapest passing with the drive sampled at the steps",
-                                                 best_plain)):
-        print(f"\n{what}: {b['config'] if b else 'none'}"
-              + (f" (cost ratio {b['cost_ratio']:.2f} of {label(BASELINE)})" if b else ""))
+    title = (f"Integrator study: against {label(REFERENCE)}; paper cases {args.dlc_s:g} s each (+2 s lead-in), "
+             f"FRF of paper case 0 ({IDENT_MIN_S:g} s analysed) to {FRF_MAX_HZ:g} Hz, {GEN_CASES} generalization "
+             f"cases of {args.gen_s:g} s; cost: median of {args.repeats}, ratio to {label(BASELINE)}")
+    page = write_results_page(args.results, "integrator_study", title, HEADER, table_rows(rows),
+                              script_command(__file__, argv), note=notes(rows, acts, best, best_plain))
+    print(page.read_text(encoding="utf-8"))
     summary = {"reference": label(REFERENCE), "baseline": label(BASELINE), "cheapest_passing": best["config"] if best else None,
                "cheapest_passing_drive_at_steps": best_plain["config"] if best_plain else None,
                "dlc_s": args.dlc_s, "gen_s": args.gen_s, "activations": acts,

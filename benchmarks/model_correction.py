@@ -5,7 +5,7 @@
     python benchmarks/model_correction.py [--suite paper|generalization] [--duration-s 60]
                                           [--cases medium_72 high_48 high_72] [--workers N] [--noise-N 100]
                                           [--cab auto|held|fitted] [--plants rigid cab tire smooth]
-                                          [--tire-ratio 0.25]
+                                          [--tire-ratio 0.25] [--results docs/results]
 
 Suites (:func:`scenarios.studies.suites.pick_cases`): ``paper``, the paper's three scenarios (60 s
 by default; a per-wheel table per case with the fitted parameters); ``generalization``, the 24
@@ -55,8 +55,12 @@ Goals: NRMSE at most half the linear floor (mismatch off), below it (mismatch on
 within 1 % of the road DLC; calibration plus correction of a 60 s case within 5 minutes on 2
 cores (wall time, and CPU time of this process and its workers, are printed: the machine may be shared).
 Scored per wheel is what the method delivers: the model correction, or the linear correction where
-it falls back (:func:`scenarios.studies.model_suite.report.delivered`). Prints the tables (with the
-cab the calibration chose), the share of wheels meeting each goal, then one JSON line with every number.
+it falls back (:func:`scenarios.studies.model_suite.report.delivered`). Writes the suite's table
+(two rows per case, the plants side by side, the cab the calibration chose) and the share of wheels
+meeting each goal to ``docs/results/model_correction_<suite>.md`` (``--results``: its folder),
+ending in the line that says how and where it was measured (:mod:`scenarios.studies.results_page`);
+prints, for the paper's cases, a per-wheel table per case with the fitted parameters first, then
+that file and one JSON line with every number.
 """
 
 from __future__ import annotations
@@ -64,6 +68,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import pathlib
 import resource
 import sys
 import time
@@ -87,7 +92,9 @@ from scenarios.records.model.score import LOWPASS, MODE, band_rows  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.model_suite.plants import (TIRE_PLANT, mismatch, plant_job, plant_keys,  # noqa: E402
                                                   plant_name, plant_scenario, plant_truck, plant_variant)
-from scenarios.studies.model_suite.report import GOAL_S, goals, suite_table, summary, table  # noqa: E402
+from scenarios.studies.model_suite.report import (GOAL_S, goals, plants_line, suite_cells, suite_table,  # noqa: E402, F401
+                                                  summary, table)
+from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
 from scenarios.studies.suites import SUITES, case_name, model_plants, pick_cases  # noqa: E402
 
 #: The plants' catalogue offsets: factors on the XML's nominal values (payload: of the case's payload).
@@ -103,6 +110,8 @@ CAB_HZ = plant_truck("cab")["cab_mount_hz"]
 TIRE_RATIO = plant_truck(TIRE_PLANT)["tire_progressive_ratio"]
 #: The linear floor's FIR, samples ahead and behind (benchmarks/nrmse_decomposition.py's defaults at 1 kHz).
 LEAD, LAG = 50, 400
+#: Where the results file goes by default: docs/results of this repository.
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 
 
 def pick(suite: str, keys: list[str] | None, duration_s: float) -> list:
@@ -153,6 +162,17 @@ def analyse(case, duration_s, plant, road, rig, ident, noise_N, workers, cab: st
             "timings": dict(mc.timings)}
 
 
+def note(rows: list[dict], duration_s: float, cab: str) -> str:
+    """The text under the results table: what the columns are, which plant is which, the goals."""
+    return ("NRMSE against the road force through the 30 Hz band limit (zero-phase), on the samples where every "
+            f"method has settled; linear floor: per-wheel affine FIR (taps -{LEAD}..{LAG}) fitted on the road force "
+            "itself, in-sample; per axle, the worse of its two wheels; DLC error delivered: the model correction's, "
+            "or the linear correction's where it fell back, against the unfiltered road DLC on the same samples; "
+            "CPU: calibration plus correction, this process and its workers; cab: the calibrated model's (held "
+            "rigid, or its mount frequency fitted).\n\n" + plants_line(rows) + f"\n\nGoals (--cab {cab}):\n\n"
+            + goals(rows, duration_s))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--suite", choices=SUITES, default="paper",
@@ -174,6 +194,8 @@ def main(argv=None) -> int:
     ap.add_argument("--tire-ratio", type=float, default=TIRE_RATIO,
                     help=f"the tire plant's extra tire stiffness beyond the onset, 1 (default {TIRE_RATIO:g}: +"
                          f"{100 * TIRE_RATIO:g} %%)")
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS,
+                    help="folder of the results file model_correction_<suite>.md (default docs/results)")
     args = ap.parse_args(argv)
     duration = args.duration_s if args.duration_s is not None else (60.0 if args.suite == "paper" else 30.0)
     if not (duration >= scoring.MIN_DURATION_S and args.noise_N >= 0):
@@ -203,17 +225,20 @@ def main(argv=None) -> int:
             print(f"[{time.perf_counter() - t0:6.0f} s] {r['case']} {r['plant']} (mismatch {r['mismatch']}): "
                   f"{r['method']} correction, {r['wall_s']:.0f} s wall, {r['cpu_s']:.0f} s CPU",
                   file=sys.stderr, flush=True)
-    print(table(rows) if args.suite == "paper" else suite_table(rows))
-    print("\nNRMSE against the road force through the 30 Hz band limit (zero-phase), on the samples where every "
-          f"method has settled; linear floor: per-wheel affine FIR (taps -{LEAD}..{LAG}) fitted on the road force "
-          "itself, in-sample; DLC errors against the unfiltered road DLC on the same samples (the model correction "
-          "unfiltered, the linear one band-limited as the project scores it)"
-          + ("; fit NRMSE: the calibrated model against the measured F_rig on the calibration windows (load-cell "
-             "noise included), in brackets the model error, beyond the noise, that the fallback reads." if args.suite == "paper" else "; per axle, the worse of its two wheels; DLC error "
-             "delivered: the model correction's, or the linear correction's where it fell back; CPU: calibration "
-             "plus correction, this process and its workers; cab: the calibrated model's (held rigid, or its "
-             "mount frequency fitted)."))
-    print(f"\nGoals (--cab {args.cab}):\n" + goals(rows, duration))
+    if args.suite == "paper":
+        print(table(rows))
+        print("\nNRMSE against the road force through the 30 Hz band limit (zero-phase), on the samples where every "
+              f"method has settled; linear floor: per-wheel affine FIR (taps -{LEAD}..{LAG}) fitted on the road "
+              "force itself, in-sample; DLC errors against the unfiltered road DLC on the same samples (the model "
+              "correction unfiltered, the linear one band-limited as the project scores it); fit NRMSE: the "
+              "calibrated model against the measured F_rig on the calibration windows (load-cell noise included), "
+              "in brackets the model error, beyond the noise, that the fallback reads.")
+    heads, cells = suite_cells(rows)
+    page = write_results_page(args.results, f"model_correction_{args.suite}",
+                              f"The truck-model correction on the {args.suite} suite: {len(cases)} case{'s' if len(cases) != 1 else ''} of "
+                              f"{duration:g} s, {args.noise_N:g} N load-cell noise, --cab {args.cab}", heads, cells,
+                              script_command(__file__, argv), note=note(rows, duration, args.cab))
+    print(page.read_text(encoding="utf-8"))
     result = {"suite": args.suite, "duration_s": duration, "noise_N": args.noise_N, "plant_factors": PLANT_FACTORS,
               "plant_payload_shift_m": PLANT_PAYLOAD_SHIFT_M, "cab": args.cab, "plants": plants, "cab_hz": CAB_HZ,
               "tire_ratio": ratio, "goal_s": GOAL_S, "wall_time_s": round(time.perf_counter() - t0, 1),

@@ -3,7 +3,7 @@
 ::
 
     python benchmarks/model_correction.py --suite generalization > run.txt
-    python benchmarks/model_error.py run.txt [more runs...]
+    python benchmarks/model_error.py run.txt [more runs...] [--results docs/results]
 
 For every calibrated row of the runs' JSON lines (the last line of each file): the fit NRMSE per
 wheel (the calibrated model, pans following x_a, against the measured F_rig on the calibration
@@ -15,9 +15,11 @@ same noise, and read as the calibration reads it, :func:`correction.identificati
 ``differential.EXCESS_NRMSE_LIMIT``, reads); beside them the outcome against the road: the
 model correction's NRMSE over the linear floor and over the linear correction's NRMSE.
 
-Prints one line per wheel sorted by model error, then per plant the range of the model error,
-and where it exceeds 0.06 the ratio of the corrected NRMSE to it (how far the model error on the
-record predicts the correction's error against the road).
+Prints one line per wheel sorted by model error; writes per plant the range of the model error,
+and where it exceeds :data:`LARGE` the ratio of the corrected NRMSE to it (how far the model error
+on the record predicts the correction's error against the road), to ``docs/results/model_error.md``
+(``--results``: its folder), ending in the line that says how and where it was measured
+(:mod:`scenarios.studies.results_page`), and prints that file.
 """
 
 from __future__ import annotations
@@ -35,7 +37,15 @@ from scenarios.core.pool import run_jobs
 from scenarios.records.model.result import model_error
 from scenarios.studies import scoring
 from scenarios.studies.model_suite.plants import plant_job, plant_scenario
+from scenarios.studies.results_page import script_command, write_results_page
 from scenarios.studies.suites import case_name, pick_cases
+
+#: A model error above this (1) is large enough for the corrected NRMSE to follow it.
+LARGE = 0.06
+#: Where the results file goes by default: docs/results of this repository.
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
+HEADER = ("plant", "wheels", "model error", f"wheels above {LARGE:g}", "corrected NRMSE / model error there",
+          "median")
 
 
 def measured(case, duration_s: float, plant: str, tire_ratio: float, noise_N: float):
@@ -76,23 +86,40 @@ def wheels(run: dict) -> list[dict]:
     return out
 
 
+def table_rows(rows: list[dict]) -> list[list[str]]:
+    """Per plant (in the rows' order): its wheels, the range of their model error, and on the wheels
+    whose model error exceeds :data:`LARGE` the range and median of the corrected NRMSE over it."""
+    out = []
+    for plant in dict.fromkeys(o["plant"] for o in rows):
+        mine = [o for o in rows if o["plant"] == plant]
+        err = np.array([o["error"] for o in mine])
+        big = [o["model"] / o["error"] for o in mine if o["error"] > LARGE and np.isfinite(o["model"])]
+        out.append([plant, str(len(mine)), f"{err.min():.3f}-{err.max():.3f}", str(len(big)),
+                    f"{min(big):.2f}-{max(big):.2f}" if big else "-", f"{np.median(big):.2f}" if big else "-"])
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", type=pathlib.Path,
                     help="output files of benchmarks/model_correction.py (their last line: the JSON)")
-    rows = []
-    for p in ap.parse_args(argv).runs:
-        rows += wheels(json.loads(pathlib.Path(p).read_text().strip().splitlines()[-1]))
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS,
+                    help="folder of the results file model_error.md (default docs/results)")
+    args = ap.parse_args(argv)
+    rows, runs = [], []
+    for p in args.runs:
+        runs.append(json.loads(pathlib.Path(p).read_text().strip().splitlines()[-1]))
+        rows += wheels(runs[-1])
     for o in sorted(rows, key=lambda o: o["error"]):
         print(f"{o['case'][:30]:30s} {o['plant']:5s} {o['wheel']}  fit {o['fit']:.3f}  noise {o['noise']:.3f}  "
               f"model error {o['error']:.3f}  corrected / floor {o['over_floor']:.2f}  / linear {o['over_linear']:.2f}")
-    for plant in dict.fromkeys(o["plant"] for o in rows):
-        mine = [o for o in rows if o["plant"] == plant]
-        err = np.array([o["error"] for o in mine])
-        big = [o["model"] / o["error"] for o in mine if o["error"] > 0.06 and np.isfinite(o["model"])]
-        print(f"{plant}: {len(mine)} wheels, model error {err.min():.3f}-{err.max():.3f}"
-              + (f"; corrected NRMSE / model error {min(big):.2f}-{max(big):.2f} (median {np.median(big):.2f}) "
-                 f"on the {len(big)} wheels above 0.06" if big else ""))
+    what = "; ".join(f"{r['suite']} suite, {r['duration_s']:g} s, tire ratio {r['tire_ratio']:g}" for r in runs)
+    note = ("Model error: the calibrated model's fit NRMSE beyond the load cells' noise, sqrt(fit^2 - noise^2), "
+            "per wheel, what the fallback reads; corrected NRMSE: the model correction's against the band-limited "
+            f"road force. Runs of benchmarks/model_correction.py read: {what}.")
+    page = write_results_page(args.results, "model_error", "The model correction's error against the model's error "
+                              "on the record", HEADER, table_rows(rows), script_command(__file__, argv), note=note)
+    print(page.read_text(encoding="utf-8"))
     return 0
 
 

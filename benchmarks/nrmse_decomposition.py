@@ -3,7 +3,7 @@
 ::
 
     python benchmarks/nrmse_decomposition.py [--duration-s 60] [--cases medium_72 high_48 high_72]
-                                             [--lead-s 0.05] [--lag-s 0.4] [--workers N]
+                                             [--lead-s 0.05] [--lag-s 0.4] [--workers N] [--results docs/results]
 
 For each case it runs (in worker processes, one MuJoCo run each, :func:`scenarios.core.pool.run_jobs`)
 the road test, the rig's identification (:func:`scenarios.studies.identify.compute.identify_rig`,
@@ -53,8 +53,10 @@ the FIR "floor", so read the floor as a floor only where it lies below the corre
 
 NRMSE = rms(x - road_band) / std(road_band) (:func:`correction.metrics.dlc.nrmse`), road_band = the road
 force through ``band_limit(road, fs, "regularized", "zerophase")``; means over the four wheels.
-Prints a markdown table, one row per case and configuration, then one JSON line with every
-number (per wheel too). Nothing here corrects anything in the project: the floor is a diagnostic.
+Writes a table, one row per case and configuration, to ``docs/results/nrmse_decomposition.md``
+(``--results``: its folder), ending in the line that says how and where it was measured
+(:mod:`scenarios.studies.results_page`); prints that file, then one JSON line with every number
+(per wheel too). Nothing here corrects anything in the project: the floor is a diagnostic.
 The runs through the linearized plant and its exact correction are
 :mod:`scenarios.studies.decomposition`'s.
 """
@@ -92,6 +94,7 @@ from scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 from scenarios.studies.identify.compute import identify_rig  # noqa: E402
+from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
 from scenarios.studies.suites import paper_cases  # noqa: E402
 
 CONFIGS = tuple((k, f) for k in ("rig", "linear", "linear_mimo") for f in (True, False))
@@ -103,6 +106,8 @@ LIFTOFF_FRACTION = 0.01
 LIFTOFF_GUARD_S = 0.25
 #: Folds of the floors' cross-validation (out-of-fold NRMSE beside the in-sample one).
 FOLDS = 5
+#: Where the results file goes by default: docs/results of this repository.
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 
 
 def scenario_of(path: str, duration_s: float, friction: bool):
@@ -208,40 +213,46 @@ def analyse_job(path: str, duration_s: float, kind: str, friction: bool, road, m
 
 
 # ----------------------------------------------------------------------------- the table
-def table(rows: list[dict], taps: tuple[int, int], fs: float) -> str:
-    """The markdown table: one row per case and configuration, means over the wheels."""
-    head = ["case", "pans", "leaf friction", "corrected, identified T_a", "corrected, linearized T_a",
-            "linear floor per wheel (CV)", "linear floor 4x4 (CV)", "noise alone", "corrected away from lift-off",
-            "rear lift-off road / measured"]
-    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+HEADER = ("case", "pans", "leaf friction", "corrected, identified T_a", "corrected, linearized T_a",
+          "linear floor per wheel (CV)", "linear floor 4x4 (CV)", "noise alone", "corrected away from lift-off",
+          "rear lift-off road / measured")
+
+
+def table_rows(rows: list[dict]) -> list[list[str]]:
+    """The results table's cells, one row per case and configuration, means over the wheels (:data:`HEADER`)."""
+    out = []
     for r in rows:
         m = r["mean"]
         ident = f"{m['corrected_identified']:.4f}" if "corrected_identified" in m else "-"
         away = m.get("corrected_away_from_liftoff")
         away = "-" if away is None else f"{away:.4f} ({m['away_from_liftoff_s']:.0f} s)"
-        lines.append(f"| {r['case']} ({r['scored_s']:.0f} s) | {LABELS[r['configuration']]} | "
-                     f"{'on' if r['friction'] else 'off'} | "
-                     f"{ident} | {m['corrected_linear']:.4f} | {m['floor_per_wheel']:.4f} "
-                     f"({m['floor_per_wheel_cv']:.4f}) | {m['floor_4x4']:.4f} ({m['floor_4x4_cv']:.4f}) | "
-                     f"{m['noise']:.4f} | {away} | {m['liftoff_road']:.2%} / {m['liftoff_measured']:.2%} |")
+        out.append([f"{r['case']} ({r['scored_s']:.0f} s)", LABELS[r["configuration"]],
+                    "on" if r["friction"] else "off", ident, f"{m['corrected_linear']:.4f}",
+                    f"{m['floor_per_wheel']:.4f} ({m['floor_per_wheel_cv']:.4f})",
+                    f"{m['floor_4x4']:.4f} ({m['floor_4x4_cv']:.4f})", f"{m['noise']:.4f}", away,
+                    f"{m['liftoff_road']:.2%} / {m['liftoff_measured']:.2%}"])
+    return out
+
+
+def note(rows: list[dict], taps: tuple[int, int], fs: float) -> str:
+    """The text under the table: what the columns are, and the FIR length check per row."""
     lead, lag = taps
-    lines.append(
-        f"\nNRMSE against the road force through the 30 Hz band limit (zero-phase), mean of the four wheels, on the "
-        "samples where every correction of the row has settled (seconds after the case name). Identified T_a: the "
-        "project's correction (the rig characterized before the test, rigsim identify); linearized T_a: each "
-        "wheel's own path of the linearized plant, which the per-wheel linear rows' pans follow (there: the "
-        "exact inverse). Linear floor: the best affine FIR "
-        f"(lags -{lead}..{lag} samples: {lead / fs:g} s ahead, {lag / fs:g} s behind) fitted on the road force "
-        f"itself, in-sample (CV: {FOLDS}-fold out-of-fold). Noise alone: the {rows[0]['noise_N']:g} N load-cell "
-        "noise through the row's first correction. Away from lift-off: that correction on the samples farther than "
-        f"{LIFTOFF_GUARD_S:g} s from any rear tire below {LIFTOFF_FRACTION:.0%} of its static load.")
-    lines.append("FIR length check, per-wheel floor in-sample [CV] with half / these / twice the taps:")
+    text = ("NRMSE against the road force through the 30 Hz band limit (zero-phase), mean of the four wheels, on the "
+            "samples where every correction of the row has settled (seconds after the case name). Identified T_a: the "
+            "project's correction (the rig characterized before the test, rigsim identify); linearized T_a: each "
+            "wheel's own path of the linearized plant, which the per-wheel linear rows' pans follow (there: the "
+            "exact inverse). Linear floor: the best affine FIR "
+            f"(lags -{lead}..{lag} samples: {lead / fs:g} s ahead, {lag / fs:g} s behind) fitted on the road force "
+            f"itself, in-sample (CV: {FOLDS}-fold out-of-fold). Noise alone: the {rows[0]['noise_N']:g} N load-cell "
+            "noise through the row's first correction. Away from lift-off: that correction on the samples farther "
+            f"than {LIFTOFF_GUARD_S:g} s from any rear tire below {LIFTOFF_FRACTION:.0%} of its static load.")
+    check = ["FIR length check, per-wheel floor in-sample [CV] with half / these / twice the taps:", ""]
     for r in rows:
         m = r["mean"]
-        lines.append(f"- {r['case']}, {LABELS[r['configuration']]}, friction {'on' if r['friction'] else 'off'}: "
+        check.append(f"- {r['case']}, {LABELS[r['configuration']]}, friction {'on' if r['friction'] else 'off'}: "
                      + " / ".join(f"{m['floor_per_wheel' + k]:.4f} [{m['floor_per_wheel' + k + '_cv']:.4f}]"
                                   for k in ("_half", "", "_double")))
-    return "\n".join(lines)
+    return text + "\n\n" + "\n".join(check)
 
 
 def main(argv=None) -> int:
@@ -253,6 +264,8 @@ def main(argv=None) -> int:
     ap.add_argument("--noise-N", type=float, default=scoring.NOISE_N,
                     help=f"rms load-cell noise, N (default the scoring's {scoring.NOISE_N:g})")
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS,
+                    help="folder of the results file nrmse_decomposition.md (default docs/results)")
     args = ap.parse_args(argv)
     if not (args.duration_s > 0 and args.lead_s >= 0 and args.lag_s > 0 and args.noise_N >= 0):
         raise SystemExit("--duration-s and --lag-s must be > 0 s, --lead-s and --noise-N >= 0")
@@ -282,7 +295,10 @@ def main(argv=None) -> int:
               f"{'on' if r['friction'] else 'off'}", file=sys.stderr, flush=True)
 
     rows = run_jobs(analyses, workers=args.workers, on_done=analysed)
-    print(table(rows, (lead, lag), fs))
+    page = write_results_page(args.results, "nrmse_decomposition",
+                              f"Where the linear correction's NRMSE comes from: the paper's cases, {args.duration_s:g} s",
+                              HEADER, table_rows(rows), script_command(__file__, argv), note=note(rows, (lead, lag), fs))
+    print(page.read_text(encoding="utf-8"))
     result = {"duration_s": args.duration_s, "rate_hz": fs, "lead_samples": lead, "lag_samples": lag,
               "noise_N": args.noise_N, "liftoff_fraction_of_static": LIFTOFF_FRACTION,
               "wall_time_s": round(time.perf_counter() - t0, 1), "cpu_count": os.cpu_count(), "rows": rows}

@@ -32,11 +32,15 @@ baseline: the pans on their slide joints (``build_spec(variant)``), the XML's ex
    ``--repeats``, rounds interleaved; the wall time of ``Rig.run`` (of the loop for "loop"),
    as a ratio to "loop".
 
-Prints a markdown table, one JSON line and the cheapest configuration passing all goals.
+Writes the table, the failures and the cheapest configuration passing all goals to
+``docs/results/road_integrator_study.md`` (``--results``: its folder), ending in the line that
+says how and where it was measured (:mod:`scenarios.studies.results_page`), and prints that file
+and one JSON line. A few minutes of CPU; ``--workers`` spreads it over cores.
 
 Usage::
 
     python benchmarks/road_integrator_study.py [--workers 2] [--dlc-s 20] [--gen-s 5] [--repeats 3]
+                                               [--results docs/results]
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ import argparse
 import dataclasses
 import json
 import os
+import pathlib
 import sys
 import time
 import types
@@ -64,6 +69,7 @@ from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios,
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.core.rig import RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S, Rig, actuator_params  # noqa: E402
 from scenarios.core.watch import SimulationError, output_schedule  # noqa: E402
+from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
 from scenarios.studies.suites import generalization_cases  # noqa: E402
 
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER, "RK4": mujoco.mjtIntegrator.mjINT_RK4,
@@ -78,6 +84,8 @@ ADOPTED = CONFIGS.index((RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S))
 DLC_GOAL_PCT, OUTPUT_HZ = 0.1, 1000.0
 GEN_CASES, GEN_BATCH = 24, 6
 MAX_STEP_S = 1e-3  # the largest vehicle.timestep_s a scenario accepts (mjcf.build.BOUNDS)
+#: Where the results file goes by default: docs/results of this repository.
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 
 
 def scenario_at(scenario, dt_s: float, **changes):
@@ -275,12 +283,55 @@ def compare(run: dict, ref: dict, key: str = "f") -> dict:
     return {"dlc_pct": 100 * (dlc(run[key]) / dlc(f_ref) - 1), "nrmse": nrmse(run[key], f_ref), "drive_m": dx}
 
 
+HEADER = ("config", "road run s", "cost ratio", "worst DLC err %", "worst NRMSE", "vs RK4 1e-4: DLC % ; NRMSE",
+          "raw sensor: NRMSE ; DLC %", "pan at z_k, mean velocity: NRMSE ; DLC %", "stable", "passes")
+
+
+def table_rows(rows: list[dict]) -> list[list[str]]:
+    """The results table's cells, one row per configuration (:data:`HEADER`)."""
+    out = []
+    for r in rows:
+        if r["errors"]:
+            acc = ["failed: " + r["errors"][0][:60], "", "", "", ""]
+        else:
+            acc = [f"{r['worst_dlc_pct']:.4f}", f"{r['worst_nrmse']:.2e}",
+                   f"{r['worst_dlc_pct_vs_rk4']:.4f} ; {r['worst_nrmse_vs_rk4']:.2e}"]
+            acc += [f"{r['worst_' + k + '_nrmse']:.2e} ; {r['worst_' + k + '_dlc_pct']:.3f}"
+                    if "worst_raw_nrmse" in r else "n/a" for k in ("raw", "moved")]
+        stable = "reference" if r["stable"] is None else f"{r['stable']}/{GEN_CASES}"
+        stable += f" ({r['refused']} refused)" if r["refused"] else ""
+        note = "" if r["output_hz"] == OUTPUT_HZ else f" ({r['output_hz']:g} Hz record)"
+        out.append([f"{r['config']}{note}", f"{r['run_s']:.2f}", f"{r['cost_ratio']:.2f}", *acc, stable,
+                    "yes" if r["passes"] else "no"])
+    return out
+
+
+def notes(rows: list[dict], best: dict | None) -> str:
+    """The text under the table: the goals and columns, the failures, the cheapest passing configuration."""
+    lines = [f"Goals: road DLC within {DLC_GOAL_PCT:g} % of {label(REFERENCE)} on every wheel of the three cases; "
+             f"{GEN_CASES}/{GEN_CASES} cases stable; a {OUTPUT_HZ:g} Hz record. Worst: over wheels and cases; "
+             "NRMSE at the common output instants; raw sensor: the force MuJoCo applied (the pan at mid-step, "
+             "at its mean velocity over the step), and that force with the pan moved back to z_k only, both "
+             f"against {label(REFERENCE)}'s reconstructed force (pan at z_k, at the drive's velocity v_k); "
+             "refused: the scenario is refused before any step (ScenarioError). Largest difference of the drive "
+             f"at the common instants: {max(r.get('drive_difference_m', 0.0) for r in rows):.2g} m."]
+    failures = [f"- {r['config']}: {what}" for r in rows for what in r["unstable_cases"][:3] + r["errors"][:1]]
+    if failures:
+        lines.append("\n".join(failures))
+    lines.append(f"Cheapest passing: {best['config'] if best else 'none'}"
+                 + (f" (cost ratio {best['cost_ratio']:.2f} of {label(LOOP)})" if best else "")
+                 + f"; adopted (scenarios.core.rig): {label(ADOPTED)}.")
+    return "\n\n".join(lines)
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--dlc-s", type=float, default=20.0, help="duration of each paper-case run, s")
     ap.add_argument("--gen-s", type=float, default=5.0, help="duration of each generalization run, s")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS,
+                    help="folder of the results file road_integrator_study.md (default docs/results)")
     args = ap.parse_args(argv)
     t_start = time.perf_counter()
     n = len(CONFIGS)
@@ -333,41 +384,14 @@ def main(argv=None) -> dict:
                              and row["stable"] == GEN_CASES and row["output_hz"] == OUTPUT_HZ)
         rows.append(row)
 
-    print(f"# Road-test integrator study: against {label(REFERENCE)} and {label(SECOND_REFERENCE)}; paper cases "
-          f"{args.dlc_s:g} s each (+2 s lead-in), {GEN_CASES} generalization cases of {args.gen_s:g} s; "
-          f"cost: median of {args.repeats}, ratio to {label(LOOP)}\n")
-    print("| config | road run s | cost ratio | worst DLC err % | worst NRMSE | vs RK4 1e-4: DLC % ; NRMSE "
-          "| raw sensor: NRMSE ; DLC % | pan at z_k, mean velocity: NRMSE ; DLC % | stable | passes |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |")
-    for r in rows:
-        if r["errors"]:
-            acc = "failed: " + r["errors"][0][:60] + " | | | | "
-        else:
-            raw = " | ".join(f"{r['worst_' + k + '_nrmse']:.2e} ; {r['worst_' + k + '_dlc_pct']:.3f}"
-                             if "worst_raw_nrmse" in r else "n/a" for k in ("raw", "moved"))
-            acc = (f"{r['worst_dlc_pct']:.4f} | {r['worst_nrmse']:.2e} | {r['worst_dlc_pct_vs_rk4']:.4f} ; "
-                   f"{r['worst_nrmse_vs_rk4']:.2e} | {raw}")
-        stable = "reference" if r["stable"] is None else f"{r['stable']}/{GEN_CASES}"
-        stable += f" ({r['refused']} refused)" if r["refused"] else ""
-        note = "" if r["output_hz"] == OUTPUT_HZ else f" ({r['output_hz']:g} Hz record)"
-        print(f"| {r['config']}{note} | {r['run_s']:.2f} | {r['cost_ratio']:.2f} | {acc} | {stable} "
-              f"| {'yes' if r['passes'] else 'no'} |")
-    print(f"\nGoals: road DLC within {DLC_GOAL_PCT:g} % of {label(REFERENCE)} on every wheel of the three cases; "
-          f"{GEN_CASES}/{GEN_CASES} cases stable; a {OUTPUT_HZ:g} Hz record. Worst: over wheels and cases; "
-          "NRMSE at the common output instants; raw sensor: the force MuJoCo applied (the pan at mid-step, "
-          "at its mean velocity over the step), and that force with the pan moved back to z_k only, both "
-          f"against {label(REFERENCE)}'s reconstructed force (pan at z_k, at the drive's velocity v_k); "
-          "refused: the scenario is refused before any step (ScenarioError).")
-    drive = max(r.get("drive_difference_m", 0.0) for r in rows)
-    print(f"Largest difference of the drive at the common instants: {drive:.2g} m.")
-    for r in rows:
-        for what in r["unstable_cases"][:3] + r["errors"][:1]:
-            print(f"- {r['config']}: {what}")
     candidates = [r for i, r in enumerate(rows) if r["passes"] and i not in REFERENCES]
     best = min(candidates, key=lambda r: r["cost_ratio"]) if candidates else None
-    print(f"\nCheapest passing: {best['config'] if best else 'none'}"
-          + (f" (cost ratio {best['cost_ratio']:.2f} of {label(LOOP)})" if best else "")
-          + f"; adopted (scenarios.core.rig): {label(ADOPTED)}")
+    title = (f"Road-test integrator study: against {label(REFERENCE)} and {label(SECOND_REFERENCE)}; paper cases "
+             f"{args.dlc_s:g} s each (+2 s lead-in), {GEN_CASES} generalization cases of {args.gen_s:g} s; "
+             f"cost: median of {args.repeats}, ratio to {label(LOOP)}")
+    page = write_results_page(args.results, "road_integrator_study", title, HEADER, table_rows(rows),
+                              script_command(__file__, argv), note=notes(rows, best))
+    print(page.read_text(encoding="utf-8"))
     summary = {"reference": label(REFERENCE), "second_reference": label(SECOND_REFERENCE), "loop": label(LOOP),
                "adopted": label(ADOPTED), "cheapest_passing": best["config"] if best else None,
                "dlc_s": args.dlc_s, "gen_s": args.gen_s, "repeats": args.repeats,

@@ -15,11 +15,13 @@ import datetime
 import os
 import pathlib
 import platform
+import shlex
+import sys
 from collections.abc import Sequence
 
 from correction.io.atomic import atomic_write_text
 
-__all__ = ["configuration_line", "markdown_table", "results_page", "write_results_page"]
+__all__ = ["configuration_line", "markdown_table", "results_page", "script_command", "write_results_page"]
 
 
 def _rigsim_version() -> str:
@@ -56,6 +58,27 @@ def configuration_line(command: str, date: datetime.date | str | None = None) ->
     return (f"Measured by `{command}` on {day}, rigsim {_rigsim_version()}, "
             f"{platform.system()} {platform.machine()}, {cpus} CPU{'s' if cpus != 1 else ''}, "
             f"Python {platform.python_version()}.")
+
+
+def script_command(script, argv: Sequence[str] | None = None) -> str:
+    """The command line that runs a script of the repository, for :func:`configuration_line`.
+
+    Parameters
+    ----------
+    script : str or path-like
+        The script's file, e.g. ``__file__`` of ``benchmarks/generalization.py``.
+    argv : sequence of str, optional
+        Its arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    str
+        ``python <folder>/<file> <arguments>``, the arguments quoted as a POSIX shell needs them,
+        e.g. ``"python benchmarks/generalization.py --cases 4"``.
+    """
+    path = pathlib.Path(script)
+    args = list(sys.argv[1:] if argv is None else argv)
+    return " ".join(["python", f"{path.parent.name}/{path.name}", *([shlex.join(args)] if args else [])])
 
 
 def markdown_table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:

@@ -14,7 +14,7 @@ import numpy as np
 
 from mjcf.build import TruckVariant
 
-__all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR", "model_error"]
+__all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR", "model_error", "fitted_text"]
 
 #: The two answers of :func:`scenarios.records.model.differential.correct_with_model`.
 MODEL, LINEAR = "model", "linear"
@@ -156,7 +156,7 @@ class Calibration:
         lines = [head, "|" + " --- |" * (6 if truth else 4)]
         for name, unit, g, v, s, sr in zip(self.names, self.units, self.initial, self.fitted, self.sigma,
                                            self.sigma_robust):
-            row = f"| {name} | {unit} | {g:.5g} | {v:.5g} +- {s:.2g} ({sr:.2g}) |"
+            row = f"| {name} | {unit} | {g:.5g} | {fitted_text(v, s)} +- {s:.2g} ({sr:.2g}) |"
             if truth:
                 tv = truth.get(name)
                 if tv is None:
@@ -167,6 +167,29 @@ class Calibration:
                     row += f" {tv:.5g} | {(v / tv - 1) if tv else float('nan'):+.1%} |"
             lines.append(row)
         return "\n".join(lines)
+
+
+def fitted_text(value: float, sigma: float) -> str:
+    """A fitted value written to the digits its 1-sigma supports.
+
+    Parameters
+    ----------
+    value : float
+        The fitted value.
+    sigma : float
+        Its 1-sigma uncertainty, same unit.
+
+    Returns
+    -------
+    str
+        ``value`` to the decimal of ``sigma``'s second significant digit, at most 5 significant
+        digits (``format(value, ".5g")`` where ``value`` or ``sigma`` is zero or not finite):
+        0.0039416 +- 0.063 reads "0.004", 3657.65 +- 0.44 "3657.7".
+    """
+    if not (np.isfinite(value) and np.isfinite(sigma) and value != 0 and sigma > 0):
+        return f"{value:.5g}"
+    digits = int(np.floor(np.log10(abs(value)))) - int(np.floor(np.log10(sigma))) + 2
+    return f"{value:.{min(max(digits, 1), 5)}g}"
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ import numpy as np
 from mjcf.names import CORNERS
 
 __all__ = ["GOAL_S", "FLOOR_GOALS", "wheels", "delivered", "plants_of", "cab_cell", "table", "summary", "goals",
-           "suite_table"]
+           "suite_cells", "plants_line", "suite_table"]
 
 #: Wall-time goal of calibration plus correction of a 60 s case, s.
 GOAL_S = 300.0
@@ -139,14 +139,14 @@ def goals(rows: list[dict], duration_s: float) -> str:
     return "\n".join(out)
 
 
-def suite_table(rows: list[dict]) -> str:
-    """One markdown table, two rows per case (front, rear: the worse wheel of the axle), the plants side
-    by side in the rows' order ("a / b / c"), then which plant is which."""
+def suite_cells(rows: list[dict]) -> tuple[list[str], list[list[str]]]:
+    """The header and cells of :func:`suite_table`: two rows per case (front, rear: the worse wheel of
+    the axle), the plants side by side in the rows' order ("a / b / c")."""
     plants = plants_of(rows)
     keys = " / ".join(plants)
     heads = ["case", "wheels", f"linear floor, {keys}", f"linear correction, {keys}", f"model (x floor), {keys}",
              f"DLC error delivered, {keys}", f"cab, {keys}", f"CPU s, {keys}", "fallback"]
-    lines = ["| " + " | ".join(heads) + " |", "|" + " --- |" * len(heads)]
+    cells = []
     for case in dict.fromkeys(r["case"] for r in rows):
         by = {r["plant_key"]: r for r in rows if r["case"] == case}
 
@@ -165,11 +165,25 @@ def suite_table(rows: list[dict]) -> str:
                 return f"{e[np.argmax(np.abs(e))]:+.2%}"
 
             first = axle == "front"
-            cells = [case if first else "", axle, each(lambda r: f"{wheels(r, 'floor')[sel].max():.3f}"),
-                     each(lambda r: f"{wheels(r, 'linear')[sel].max():.3f}"), each(model), each(dlc_err),
-                     each(cab_cell) if first else "", each(lambda r: f"{r['cpu_s']:.0f}") if first else "",
-                     "; ".join(f"{p}: {r['reason']}" for p, r in by.items() if r["reason"]) if first else ""]
-            lines.append("| " + " | ".join(cells) + " |")
-    lines.append("\nPlants: " + "; ".join(f"{k}, {r['plant']} (mismatch {r['mismatch']})" for k, r in plants.items())
-                 + ".")
+            cells.append([case if first else "", axle, each(lambda r: f"{wheels(r, 'floor')[sel].max():.3f}"),
+                          each(lambda r: f"{wheels(r, 'linear')[sel].max():.3f}"), each(model), each(dlc_err),
+                          each(cab_cell) if first else "", each(lambda r: f"{r['cpu_s']:.0f}") if first else "",
+                          "; ".join(f"{p}: {r['reason']}" for p, r in by.items() if r["reason"]) if first else ""])
+    return heads, cells
+
+
+def plants_line(rows: list[dict]) -> str:
+    """Which plant is which: "Plants: rigid, rigid cab (mismatch off); ..."."""
+    return ("Plants: " + "; ".join(f"{k}, {r['plant']} (mismatch {r['mismatch']})" for k, r in plants_of(rows).items())
+            + ".")
+
+
+def suite_table(rows: list[dict]) -> str:
+    """One markdown table, two rows per case (front, rear: the worse wheel of the axle), the plants side
+    by side in the rows' order ("a / b / c"), then which plant is which (:func:`suite_cells`,
+    :func:`plants_line`)."""
+    heads, cells = suite_cells(rows)
+    lines = ["| " + " | ".join(heads) + " |", "|" + " --- |" * len(heads)]
+    lines += ["| " + " | ".join(c) + " |" for c in cells]
+    lines.append("\n" + plants_line(rows))
     return "\n".join(lines)

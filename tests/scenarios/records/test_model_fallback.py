@@ -12,7 +12,7 @@ import math
 import pytest
 
 from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, fallback_reason
-from scenarios.records.model.result import Calibration
+from scenarios.records.model.result import Calibration, fitted_text
 
 
 def _cal(fit, noise=(), converged=True) -> Calibration:
@@ -45,3 +45,18 @@ def test_the_limit_and_convergence():
     assert fallback_reason(_cal((just,) * 4)) == ""
     assert "limit" in fallback_reason(_cal((just * 1.01,) * 4))
     assert "did not converge" in fallback_reason(_cal((0.05,) * 4, converged=False))
+
+
+def test_the_fit_table_writes_each_value_to_the_digits_its_sigma_supports():
+    """To the decimal of sigma's second significant digit, at most 5 significant digits; .5g where sigma
+    or the value says nothing (zero, not finite)."""
+    assert fitted_text(0.0039416, 0.063) == "0.004"  # sigma 0.063: to 0.001
+    assert fitted_text(0.028863, 0.0099) == "0.0289"  # sigma 0.0099: to 0.0001
+    assert fitted_text(3657.65, 0.44) == "3657.7"  # 0.01 would be 6 digits: 5
+    assert fitted_text(8.9988e5, 47.0) == "8.9988e+05"
+    assert fitted_text(0.0, 5e-12) == "0" and fitted_text(1.25, 0.0) == "1.25" and fitted_text(2.5, math.nan) == "2.5"
+    cal = Calibration(names=("tire_progressive_ratio_rear",), units=("1",), initial=(0.2,), fitted=(0.0039416,),
+                      sigma=(0.063,), sigma_robust=(0.068,), fixed={}, fit_nrmse=(0.05,) * 4, initial_nrmse=(0.1,) * 4,
+                      windows_s=((0.0, 1.0),), weighted=True, evaluations=3, converged=True, message="ok",
+                      wall_time_s=1.0)
+    assert "| tire_progressive_ratio_rear | 1 | 0.2 | 0.004 +- 0.063 (0.068) |" in cal.table().splitlines()

@@ -23,6 +23,7 @@ from scenarios.studies.paper.table import PAPER_TABLE2
 from scenarios.studies.results_page import (
     configuration_line,
     markdown_table,
+    script_command,
     write_results_page,
 )
 
@@ -61,6 +62,13 @@ def _version():
 
 def test_configuration_line_defaults_to_today():
     assert f" on {datetime.date.today().isoformat()}, rigsim " in configuration_line("x")
+
+
+def test_script_command_names_the_script_and_its_arguments():
+    assert script_command("/any/where/benchmarks/generalization.py", ["--cases", "4"]) == \
+        "python benchmarks/generalization.py --cases 4"
+    assert script_command(pathlib.Path("benchmarks/step_rate.py"), []) == "python benchmarks/step_rate.py"
+    assert script_command("benchmarks/x.py", ["--only", "gen01 gen02"]) == "python benchmarks/x.py --only 'gen01 gen02'"
 
 
 def test_a_row_of_the_wrong_width_is_refused():
@@ -144,3 +152,46 @@ def test_the_pages_files_are_the_scripts():
     for name in ("paper_table2", "paper_damage", "validate_table1"):
         assert f"```{{include}} results/{name}.md" in page
         assert (ROOT / "docs" / "results" / f"{name}.md").read_text().splitlines()[-1].startswith("Measured by `rigsim ")
+
+
+def _fake_iteration(folder: pathlib.Path, target: str, iterated: float, runs: int) -> None:
+    """An iteration.json with rigsim iterate's keys (DLC errors, 1) and its drive.csv (20 s at 1 kHz)."""
+    folder.mkdir()
+    comparison = {"road": {"dlc": 0.25, "dlc_error": 0.0, "nrmse_vs_road": 0.0, "rig_runs": 0},
+                  "rig_original_drive": {"dlc": 0.2, "dlc_error": -0.2, "nrmse_vs_road": 0.3, "rig_runs": 1},
+                  "rig_iterated_drive": {"dlc": 0.25, "dlc_error": iterated, "nrmse_vs_road": 0.02, "rig_runs": runs},
+                  "output_corrected": {"dlc": 0.245, "dlc_error": -0.02, "nrmse_vs_road": 0.1, "rig_runs": 1}}
+    (folder / "iteration.json").write_text(json.dumps({"scenario": "paper-high-72kmh-3640kg", "target": target,
+                                                       "comparison": comparison, "noise_N": 100.0}))
+    (folder / "drive.csv").write_text("time_s,drive_fl_m\n0,0\n19.999,0.001\n20,0.002\n")
+
+
+def test_docs_tables_writes_the_iteration_table(tmp_path):
+    _fake_iteration(tmp_path / "disp", "displacement", -0.007, 6)
+    _fake_iteration(tmp_path / "force", "force", 0.004, 8)
+    out = tmp_path / "results"
+    assert _docs_tables().main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
+                                "--iterate", str(tmp_path / "disp"), str(tmp_path / "force"), "--out", str(out)]) == 0
+    lines = (out / "iterate_comparison.md").read_text().splitlines()
+    assert lines[0] == "<!-- written by `python benchmarks/docs_tables.py --iterate DIR ...`: do not edit by hand -->"
+    assert ("| high, 72 km/h, 3640 kg | -20.0 % | -0.7 %, 6 rig runs | +0.4 %, 8 rig runs | -2.0 %, 1 rig run |"
+            in lines)
+    assert lines[-1].startswith("Measured by `rigsim iterate CASE.toml --target displacement|force --out DIR "
+                                "--duration-s 20 --noise-N 100` on ")
+
+
+def test_every_results_file_is_included_and_every_include_exists():
+    """docs/results holds only files a page includes, each saying which command writes it, and every
+    include of a page names a file that is there."""
+    docs = ROOT / "docs"
+    pages = {p: p.read_text() for p in list(docs.glob("*.md")) + list(docs.glob("guide/*.md"))}
+    included = set()
+    for page, text in pages.items():
+        for line in text.splitlines():
+            if line.startswith("```{include}") and "results/" in line:
+                target = (page.parent / line.split(maxsplit=1)[1].strip()).resolve()
+                assert target.is_file(), f"{page.name} includes {target.name}, which is missing"
+                included.add(target)
+    for path in sorted((docs / "results").glob("*.md")):
+        assert path.resolve() in included, f"no page includes docs/results/{path.name}"
+        assert path.read_text().startswith("<!-- written by `"), f"{path.name} does not say what writes it"
