@@ -78,7 +78,7 @@ class RoadDrive:
         v, fs = self.speed_mps, self.fs_hz
         if v * nmax > fs / 2 * (1 + 1e-9):
             raise ValueError(f"fs_hz = {fs} Hz aliases the profile band (up to {nmax:.6g} cycle/m "
-                             f"= {v * nmax:.6g} Hz at {v} m/s); use fs_hz >= "
+                             f"= {v * nmax:.6g} Hz at {v:.4g} m/s); use fs_hz >= "
                              f"{2 * v * nmax:.6g} Hz or low-pass the profile.")
         if not np.isfinite(self.start_m) or self.start_m - self.wheelbase_m < x[0]:
             raise ValueError(f"start_m = {self.start_m} m puts the rear axle before the profile start "
