@@ -45,7 +45,9 @@ SCRIPT = "python benchmarks/docs_tables.py --paper DIR --validate DIR"
 ITERATE_SCRIPT = "python benchmarks/docs_tables.py --iterate DIR ..."
 
 TABLE2_HEADER = ("case", "road DLC (paper)", "rig DLC (paper)", "corrected, paper's method (paper)",
-                 "corrected, this project", "road through the same low-pass", "NRMSE")
+                 "its ceiling: road through T_F", "corrected, this project", "road through the same low-pass", "NRMSE")
+#: The model correction's columns (``rigsim paper --model``), appended when the result has them.
+MODEL_HEADER = ("corrected, truck model (vs road)", "its NRMSE")
 DAMAGE_HEADER = ("case", "stress factor n = 4: road", "rig", "corrected", "DEL m = 5: road", "rig", "corrected")
 ITERATE_HEADER = ("case", "rig, original drive", "iterated drive, displacement target", "iterated drive, force target",
                   "output-corrected")
@@ -67,17 +69,34 @@ def _with_paper(value: float, paper: float | None) -> str:
     return f"{value:.4f}" if paper is None else f"{value:.4f} ({paper:.4f})"
 
 
+def _over(value: float, ceiling: float) -> str:
+    """``^`` after a corrected DLC above its ceiling (an over-correction)."""
+    return "^" if value > ceiling else ""
+
+
 def table2_rows(result: dict) -> list[list[str]]:
-    """One row per case of ``paper.json``'s ``cases``, the paper's values in brackets."""
+    """One row per case of ``paper.json``'s ``cases``, the paper's values in brackets; the paper's
+    method's ceiling (the road force through its T_F), a corrected DLC above it marked ``^`` (the
+    paper's own: above its road); the model correction's DLC and NRMSE when the result has them."""
+    models = {m["case"]: m for m in result.get("model_correction") or []}
     rows = []
     for case in result["cases"]:
         paper = PAPER_TABLE2.get(case["case"]) or case.get("paper") or {}
-        rows.append([case_label(case["case"]),
-                     _with_paper(case["dlc_road"], paper.get("road")),
-                     _with_paper(case["dlc_rig"], paper.get("rig")),
-                     _with_paper(case["dlc_corrected_paper"], paper.get("corrected")),
-                     f"{case['dlc_corrected']:.4f}", f"{case['dlc_road_lowpassed']:.4f}",
-                     f"{case['nrmse_corrected']:.3f}"])
+        ceiling = case["dlc_road_lowpassed_paper"]
+        mark = _over(case["dlc_corrected_paper"], ceiling)
+        ref = paper.get("corrected")
+        ref_text = "" if ref is None else f" ({ref:.4f}{_over(ref, paper.get('road', float('inf')))})"
+        row = [case_label(case["case"]),
+               _with_paper(case["dlc_road"], paper.get("road")),
+               _with_paper(case["dlc_rig"], paper.get("rig")),
+               f"{case['dlc_corrected_paper']:.4f}{mark}{ref_text}", f"{ceiling:.4f}",
+               f"{case['dlc_corrected']:.4f}", f"{case['dlc_road_lowpassed']:.4f}",
+               f"{case['nrmse_corrected']:.3f}"]
+        if models:
+            m = models.get(case["case"], {}).get("mean")
+            row += (["-", "-"] if m is None else
+                    [f"{m['dlc']:.4f} ({100 * m['dlc_error']:+.1f} %)", f"{m['nrmse']:.3f}"])
+        rows.append(row)
     return rows
 
 
@@ -100,8 +119,13 @@ def damage_rows(result: dict) -> list[list[str]]:
 
 def paper_command(folder: pathlib.Path, result: dict) -> str:
     """The ``rigsim paper`` command of the result: its duration from the first case's road run
-    (``<case>/road/result.json``: samples over rate) when the folder has it, its noise."""
+    (``<case>/road/result.json``: samples over rate) when the folder has it, its noise, the
+    configuration (``--rig dyntrac`` when its scenarios are the fitted ones) and ``--model``."""
     command = "rigsim paper --out DIR"
+    if result.get("rig") == "dyntrac":
+        command += " --rig dyntrac"
+    if result.get("model_correction"):
+        command += " --model"
     cases = result.get("cases") or [{}]
     run = folder / str(cases[0].get("case")) / "road" / "result.json"
     if run.is_file():
@@ -112,16 +136,26 @@ def paper_command(folder: pathlib.Path, result: dict) -> str:
     return command
 
 
-def write_table2(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
-    """``out/paper_table2.md`` from ``folder/paper.json``."""
+def write_table2(folder: pathlib.Path, out: pathlib.Path, name: str = "paper_table2",
+                 title: str = "Table 2 analogue: DLC of the paper's cases") -> pathlib.Path:
+    """``out/<name>.md`` from ``folder/paper.json``."""
     source = folder / "paper.json"
     result = json.loads(source.read_text())
     note = ("DLC = std/mean of the wheel force, mean of the four wheels; the paper's Table 2 in brackets. "
             "Road and rig over the whole record, every corrected figure on the samples where its filters "
-            "have settled. NRMSE = rms(corrected - road through the low-pass) / std(road through the low-pass).")
-    return write_results_page(out, "paper_table2", "Table 2 analogue: DLC of the paper's cases", TABLE2_HEADER,
-                              table2_rows(result), paper_command(folder, result), _date_of(source), note,
-                              SCRIPT)
+            "have settled. The paper's method (eq. 4 under its 16/24 Hz T_F) can give back at most the road "
+            "force through T_F, its ceiling; ^ marks a value above it (the paper's own: above its road), an "
+            "over-correction. NRMSE = rms(corrected - road through the low-pass) / std(road through the "
+            "low-pass).")
+    header = TABLE2_HEADER + (MODEL_HEADER if result.get("model_correction") else ())
+    return write_results_page(out, name, title, header, table2_rows(result), paper_command(folder, result),
+                              _date_of(source), note, SCRIPT)
+
+
+def write_table2_dyntrac(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
+    """``out/paper_table2_dyntrac.md`` from a ``rigsim paper --rig dyntrac [--model]`` folder."""
+    return write_table2(folder, out, "paper_table2_dyntrac",
+                        "Table 2 analogue on the simulated DYNTRAC (the rig, roads and leaf friction fitted to the paper)")
 
 
 def write_damage(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
@@ -150,11 +184,13 @@ def table1_rows(result: dict) -> list[list[str]]:
              f"{paper['linearized_model']:.4f} ({paper_pct:+.2f} %)", "", ""]]
 
 
-def write_table1(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
-    """``out/validate_table1.md`` from ``folder/validate.json``."""
+def write_table1(folder: pathlib.Path, out: pathlib.Path, name: str = "validate_table1") -> pathlib.Path:
+    """``out/<name>.md`` from ``folder/validate.json``."""
     source = folder / "validate.json"
     result = json.loads(source.read_text())
     command = "rigsim validate --out DIR"
+    if name.endswith("_dyntrac"):
+        command += " --rig dyntrac"
     if "duration_s" in result:
         command += f" --duration-s {result['duration_s']:g}"
     if "ident_duration_s" in result:
@@ -162,7 +198,7 @@ def write_table1(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
     note = ("DLC = std/mean of the tire force, mean of the four wheels; in brackets each linearized model "
             "against the rig test. The rig test is the nonlinear multibody rig: it stands for both the "
             "paper's DYNTRAC test and its nonlinear model.")
-    return write_results_page(out, "validate_table1",
+    return write_results_page(out, name,
                               "Table 1 analogue: DLC of the rig and its linearized models (high roughness, 72 km/h, 3640 kg)",
                               TABLE1_HEADER, table1_rows(result), command, _date_of(source), note, SCRIPT)
 
@@ -225,14 +261,24 @@ def main(argv=None) -> int:
                     help="output folder of rigsim paper (default out/paper)")
     ap.add_argument("--validate", type=pathlib.Path, default=pathlib.Path("out/validate"),
                     help="output folder of rigsim validate (default out/validate)")
+    ap.add_argument("--paper-dyntrac", type=pathlib.Path, default=None, metavar="DIR",
+                    help="output folder of rigsim paper --rig dyntrac [--model] (paper_table2_dyntrac.md)")
+    ap.add_argument("--validate-dyntrac", type=pathlib.Path, default=None, metavar="DIR",
+                    help="output folder of rigsim validate --rig dyntrac (validate_table1_dyntrac.md)")
     ap.add_argument("--iterate", type=pathlib.Path, nargs="+", default=[], metavar="DIR",
                     help="output folders of rigsim iterate, one per case and target (default none)")
     ap.add_argument("--out", type=pathlib.Path, default=ROOT / "docs" / "results",
                     help="folder of the written tables (default docs/results of this repository)")
     args = ap.parse_args(argv)
     written = 0
-    for folder, fname, write in ((args.paper, "paper.json", write_table2), (args.paper, "paper.json", write_damage),
-                                 (args.validate, "validate.json", write_table1)):
+    jobs = [(args.paper, "paper.json", write_table2), (args.paper, "paper.json", write_damage),
+            (args.validate, "validate.json", write_table1)]
+    if args.paper_dyntrac is not None:
+        jobs.append((args.paper_dyntrac, "paper.json", write_table2_dyntrac))
+    if args.validate_dyntrac is not None:
+        jobs.append((args.validate_dyntrac, "validate.json",
+                     lambda folder, out: write_table1(folder, out, "validate_table1_dyntrac")))
+    for folder, fname, write in jobs:
         if not (folder / fname).is_file():
             print(f"{folder / fname}: no such file, its table is not written", file=sys.stderr)
             continue

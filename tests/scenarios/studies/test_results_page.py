@@ -84,21 +84,23 @@ def test_the_helper_is_light():
     assert done.stdout.strip() == "[]"
 
 
-CASE_KEYS = ("dlc_road", "dlc_rig", "dlc_corrected_paper", "dlc_corrected", "dlc_road_lowpassed", "nrmse_corrected")
+CASE_KEYS = ("dlc_road", "dlc_rig", "dlc_corrected_paper", "dlc_corrected", "dlc_road_lowpassed", "nrmse_corrected",
+             "dlc_road_lowpassed_paper")
 #: Damage figures of a case: stress factors (1) and damage-equivalent loads (N) of road, rig, corrected.
 DAMAGE = {"stress_factor_road": 1.25, "stress_factor_rig": 1.125, "stress_factor_corrected": 1.2,
           "del_road_N": 20000.0, "del_rig_N": 15000.0, "del_corrected_N": 19000.0}
 
 
-def _fake_paper(folder: pathlib.Path) -> None:
-    """A paper.json with rigsim paper's structure (two cases) and one case's road result.json."""
+def _fake_paper(folder: pathlib.Path, **extra) -> None:
+    """A paper.json with rigsim paper's structure (two cases) and one case's road result.json;
+    ``extra``: further top-level keys (``rig``, ``model_correction``)."""
     cases = []
     for k, name in enumerate(("paper-medium-72kmh-6360kg", "paper-high-48kmh-3640kg")):
         case = {key: 0.1 + 0.01 * k + 0.001 * i for i, key in enumerate(CASE_KEYS)}
         case.update(case=name, noise_N=100.0, paper=dict(PAPER_TABLE2[name]), **DAMAGE)
         cases.append(case)
     folder.mkdir()
-    (folder / "paper.json").write_text(json.dumps({"cases": cases, "methods": {}, "note": ""}))
+    (folder / "paper.json").write_text(json.dumps({"cases": cases, "methods": {}, "note": "", **extra}))
     run = folder / cases[0]["case"] / "road"
     run.mkdir(parents=True)
     (run / "result.json").write_text(json.dumps({"samples": 20001, "rate_hz": 1000.0}))
@@ -119,10 +121,11 @@ def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path):
     assert _docs_tables().main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "validate"),
                                 "--out", str(out)]) == 0
     table2 = (out / "paper_table2.md").read_text().splitlines()
-    assert "| medium, 72 km/h, 6360 kg | 0.1000 (0.0985) | 0.1010 (0.0854) | 0.1020 (0.0994) | 0.1030 | 0.1040 | 0.105 |" \
-        in table2
-    assert "| high, 48 km/h, 3640 kg | 0.1100 (0.1912) | 0.1110 (0.1497) | 0.1120 (0.1794) | 0.1130 | 0.1140 | 0.115 |" \
-        in table2
+    # The paper's own corrected 0.0994 lies above its road 0.0985 (^); 0.1794 below 0.1912.
+    assert ("| medium, 72 km/h, 6360 kg | 0.1000 (0.0985) | 0.1010 (0.0854) | 0.1020 (0.0994^) | 0.1060 | 0.1030 "
+            "| 0.1040 | 0.105 |") in table2
+    assert ("| high, 48 km/h, 3640 kg | 0.1100 (0.1912) | 0.1110 (0.1497) | 0.1120 (0.1794) | 0.1160 | 0.1130 "
+            "| 0.1140 | 0.115 |") in table2
     assert table2[-1].startswith("Measured by `rigsim paper --out DIR --duration-s 20 --noise-N 100` on ")
     # 1.125 / 1.25 - 1 = -10.0 %, 1.2 / 1.25 - 1 = -4.0 %; 15 / 20 - 1 = -25.0 %, 19 / 20 - 1 = -5.0 %
     damage = (out / "paper_damage.md").read_text().splitlines()
@@ -132,6 +135,23 @@ def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path):
     assert "| this model | 0.2500 | 0.2000 | 0.1990 (-0.50 %) | 0.1900 (-5.00 %) | 0.1995 (-0.25 %) |" in table1
     assert "| paper | 0.2105 | 0.1754 (nonlinear model 0.1748) | 0.1724 (-1.71 %) |  |  |" in table1
     assert table1[-1].startswith("Measured by `rigsim validate --out DIR --duration-s 20 --ident-duration-s 40` on ")
+
+
+def test_docs_tables_writes_the_dyntrac_table_with_the_model_column(tmp_path):
+    model = [{"case": "paper-medium-72kmh-6360kg", "mean": {"dlc": 0.0979, "dlc_error": -0.0091, "nrmse": 0.048}}]
+    _fake_paper(tmp_path / "paper", rig="dyntrac", model_correction=model)
+    folder = tmp_path / "paper"
+    result = json.loads((folder / "paper.json").read_text())
+    result["cases"][0]["dlc_corrected_paper"] = 0.2  # above its ceiling 0.106: marked
+    (folder / "paper.json").write_text(json.dumps(result))
+    out = tmp_path / "results"
+    assert _docs_tables().main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
+                                "--paper-dyntrac", str(folder), "--out", str(out)]) == 0
+    lines = (out / "paper_table2_dyntrac.md").read_text().splitlines()
+    assert "| 0.2000^ (0.0994^) | 0.1060 |" in next(x for x in lines if x.startswith("| medium"))
+    assert next(x for x in lines if x.startswith("| medium")).endswith("| 0.0979 (-0.9 %) | 0.048 |")
+    assert next(x for x in lines if x.startswith("| high")).endswith("| - | - |")
+    assert lines[-1].startswith("Measured by `rigsim paper --out DIR --rig dyntrac --model --duration-s 20 ")
 
 
 def test_docs_tables_skips_a_missing_folder(tmp_path, capsys):
