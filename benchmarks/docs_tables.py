@@ -41,6 +41,8 @@ from scenarios.studies.results_page import write_results_page
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: What writes the files (their first line says so).
 SCRIPT = "python benchmarks/docs_tables.py --paper DIR --validate DIR"
+#: What writes the simulated DYNTRAC's tables.
+DYNTRAC_SCRIPT = "python benchmarks/docs_tables.py --paper-dyntrac DIR --validate-dyntrac DIR"
 #: What writes the iteration's table.
 ITERATE_SCRIPT = "python benchmarks/docs_tables.py --iterate DIR ..."
 
@@ -122,7 +124,7 @@ def paper_command(folder: pathlib.Path, result: dict) -> str:
     (``<case>/road/result.json``: samples over rate) when the folder has it, its noise, the
     configuration (``--rig dyntrac`` when its scenarios are the fitted ones) and ``--model``."""
     command = "rigsim paper --out DIR"
-    if result.get("rig") == "dyntrac":
+    if result.get("configuration") == "dyntrac":
         command += " --rig dyntrac"
     if result.get("model_correction"):
         command += " --model"
@@ -137,7 +139,7 @@ def paper_command(folder: pathlib.Path, result: dict) -> str:
 
 
 def write_table2(folder: pathlib.Path, out: pathlib.Path, name: str = "paper_table2",
-                 title: str = "Table 2 analogue: DLC of the paper's cases") -> pathlib.Path:
+                 title: str = "Table 2 analogue: DLC of the paper's cases", script: str = SCRIPT) -> pathlib.Path:
     """``out/<name>.md`` from ``folder/paper.json``."""
     source = folder / "paper.json"
     result = json.loads(source.read_text())
@@ -149,13 +151,56 @@ def write_table2(folder: pathlib.Path, out: pathlib.Path, name: str = "paper_tab
             "low-pass).")
     header = TABLE2_HEADER + (MODEL_HEADER if result.get("model_correction") else ())
     return write_results_page(out, name, title, header, table2_rows(result), paper_command(folder, result),
-                              _date_of(source), note, SCRIPT)
+                              _date_of(source), note, script)
 
 
 def write_table2_dyntrac(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
     """``out/paper_table2_dyntrac.md`` from a ``rigsim paper --rig dyntrac [--model]`` folder."""
     return write_table2(folder, out, "paper_table2_dyntrac",
-                        "Table 2 analogue on the simulated DYNTRAC (the rig, roads and leaf friction fitted to the paper)")
+                        "Table 2 analogue on the simulated DYNTRAC (the rig, roads and leaf friction fitted to the paper)",
+                        DYNTRAC_SCRIPT)
+
+
+#: The markers around README.md's Table 2 block, which :func:`write_readme_table` rewrites.
+README_BEGIN = "<!-- table2: written by benchmarks/docs_tables.py --paper DIR --readme README.md -->"
+README_END = "<!-- table2 end -->"
+README_HEADER = ("case", "road DLC", "rig DLC", "corrected, paper's method", "corrected, linear (identified T_a)",
+                 "corrected, truck model", "NRMSE linear / model")
+
+
+def readme_rows(result: dict) -> list[list[str]]:
+    """README's Table 2: road, rig and the three corrections of each case, the paper's values in
+    brackets, the truck model's DLC against the road and both NRMSEs ("-" without ``--model``)."""
+    models = {m["case"]: m.get("mean") for m in result.get("model_correction") or []}
+    rows = []
+    for case in result["cases"]:
+        paper = PAPER_TABLE2.get(case["case"]) or case.get("paper") or {}
+        m = models.get(case["case"])
+        model = "-" if m is None else f"{m['dlc']:.4f} ({100 * m['dlc_error']:+.1f} % from road)"
+        nrmse = f"{case['nrmse_corrected']:.3f} / " + ("-" if m is None else f"{m['nrmse']:.3f}")
+        rows.append([case_label(case["case"]), _with_paper(case["dlc_road"], paper.get("road")),
+                     _with_paper(case["dlc_rig"], paper.get("rig")),
+                     _with_paper(case["dlc_corrected_paper"], paper.get("corrected")),
+                     f"{case['dlc_corrected']:.4f}", model, nrmse])
+    return rows
+
+
+def write_readme_table(folder: pathlib.Path, readme: pathlib.Path) -> pathlib.Path:
+    """Rewrite the block of ``readme`` between :data:`README_BEGIN` and :data:`README_END` with the
+    Table 2 of ``folder/paper.json`` and the command that measured it."""
+    from scenarios.studies.results_page import configuration_line, markdown_table
+
+    source = folder / "paper.json"
+    result = json.loads(source.read_text())
+    text = readme.read_text(encoding="utf-8")
+    if text.count(README_BEGIN) != 1 or text.count(README_END) != 1:
+        raise SystemExit(f"{readme}: needs one line {README_BEGIN!r} and one line {README_END!r}")
+    head, rest = text.split(README_BEGIN)
+    _, tail = rest.split(README_END)
+    block = (markdown_table(README_HEADER, readme_rows(result)) + "\n\n"
+             + configuration_line(paper_command(folder, result), _date_of(source)) + "\n")
+    readme.write_text(head + README_BEGIN + "\n" + block + README_END + tail, encoding="utf-8")
+    return readme
 
 
 def write_damage(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
@@ -184,7 +229,8 @@ def table1_rows(result: dict) -> list[list[str]]:
              f"{paper['linearized_model']:.4f} ({paper_pct:+.2f} %)", "", ""]]
 
 
-def write_table1(folder: pathlib.Path, out: pathlib.Path, name: str = "validate_table1") -> pathlib.Path:
+def write_table1(folder: pathlib.Path, out: pathlib.Path, name: str = "validate_table1",
+                 script: str = SCRIPT) -> pathlib.Path:
     """``out/<name>.md`` from ``folder/validate.json``."""
     source = folder / "validate.json"
     result = json.loads(source.read_text())
@@ -200,7 +246,7 @@ def write_table1(folder: pathlib.Path, out: pathlib.Path, name: str = "validate_
             "paper's DYNTRAC test and its nonlinear model.")
     return write_results_page(out, name,
                               "Table 1 analogue: DLC of the rig and its linearized models (high roughness, 72 km/h, 3640 kg)",
-                              TABLE1_HEADER, table1_rows(result), command, _date_of(source), note, SCRIPT)
+                              TABLE1_HEADER, table1_rows(result), command, _date_of(source), note, script)
 
 
 def _runs(n: int) -> str:
@@ -265,6 +311,8 @@ def main(argv=None) -> int:
                     help="output folder of rigsim paper --rig dyntrac [--model] (paper_table2_dyntrac.md)")
     ap.add_argument("--validate-dyntrac", type=pathlib.Path, default=None, metavar="DIR",
                     help="output folder of rigsim validate --rig dyntrac (validate_table1_dyntrac.md)")
+    ap.add_argument("--readme", type=pathlib.Path, default=None, metavar="README.md",
+                    help="also rewrite the Table 2 block of this README from --paper (a run with --model)")
     ap.add_argument("--iterate", type=pathlib.Path, nargs="+", default=[], metavar="DIR",
                     help="output folders of rigsim iterate, one per case and target (default none)")
     ap.add_argument("--out", type=pathlib.Path, default=ROOT / "docs" / "results",
@@ -277,13 +325,15 @@ def main(argv=None) -> int:
         jobs.append((args.paper_dyntrac, "paper.json", write_table2_dyntrac))
     if args.validate_dyntrac is not None:
         jobs.append((args.validate_dyntrac, "validate.json",
-                     lambda folder, out: write_table1(folder, out, "validate_table1_dyntrac")))
+                     lambda folder, out: write_table1(folder, out, "validate_table1_dyntrac", DYNTRAC_SCRIPT)))
     for folder, fname, write in jobs:
         if not (folder / fname).is_file():
             print(f"{folder / fname}: no such file, its table is not written", file=sys.stderr)
             continue
         print(f"wrote {write(folder, args.out)}")
         written += 1
+    if args.readme is not None and (args.paper / "paper.json").is_file():
+        print(f"wrote {write_readme_table(args.paper, args.readme)}")
     if args.iterate:
         missing = [str(f / "iteration.json") for f in args.iterate if not (f / "iteration.json").is_file()]
         if missing:

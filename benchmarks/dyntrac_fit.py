@@ -239,7 +239,7 @@ def main(argv=None) -> int:
     for row in values:
         print(" | ".join(row))
     verdict = "within" if worst <= GOAL else "NOT within"
-    print(f"\nworst error {100 * worst:.1f} %: {verdict} the +-{100 * GOAL:.0f} % goal")
+    print(f"\nworst error {100 * worst:.2f} %: {verdict} the +-{100 * GOAL:.0f} % goal")
     for row in values:
         if row[3] != "inside":
             print(f"warning: {row[0]} is at a bound of its range: the data want it beyond, so the fit lacks something")
@@ -247,7 +247,7 @@ def main(argv=None) -> int:
         cmd = script_command(__file__, argv)
         write_results_page(args.out, "dyntrac_fit", "The paper's Table 2 by the simulated DYNTRAC",
                            ("case", "column", "simulated", "paper", "error"), numbers, cmd,
-                           note=f"Worst error {100 * worst:.1f} % (goal +-{100 * GOAL:.0f} %).")
+                           note=f"Worst error {100 * worst:.2f} % (goal +-{100 * GOAL:.0f} %).")
         write_results_page(args.out, "dyntrac_values", "The fitted values of the simulated DYNTRAC",
                            ("unknown", "value", "range", "where", "source of the range"), values, cmd)
     return 0

@@ -113,7 +113,8 @@ def cmd_paper(args) -> int:
                            pose_rate_hz=pose_rate, on_done=progress,
                            case_jobs=functools.partial(case_figure_jobs, out=stage.path),
                            finish_run=functools.partial(write_case_run, out=stage.path),
-                           on_scored=None if model else report, rig=getattr(args, "rig", "design"))
+                           on_scored=None if model else report,
+                           configuration=getattr(args, "rig", "design"))
         if model:
             import dataclasses
 

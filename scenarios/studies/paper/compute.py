@@ -120,15 +120,15 @@ class PaperResult:
         rms of the measurement noise added to the rig forces.
     models : tuple of scenarios.studies.paper.model.ModelScore, optional
         With ``rigsim paper --model``: the third method, one per case in the same order.
-    rig : str
+    configuration : str
         The cases' configuration (:data:`scenarios.core.config.PAPER_CONFIGURATIONS`):
-        ``"design"`` or ``"dyntrac"``.
+        ``"design"`` or ``"dyntrac"`` (``rigsim paper --rig``).
     """
 
     cases: tuple
     noise_N: float
     models: tuple | None = None
-    rig: str = "design"
+    configuration: str = "design"
 
     def rows(self) -> list[dict]:
         """paper.json's entry of each case (:meth:`PaperCase.row`), worked out once per result: the
@@ -148,7 +148,7 @@ class PaperResult:
     def to_dict(self) -> dict:
         """Everything of ``paper.json``."""
         return {
-            "rig": self.rig,
+            "configuration": self.configuration,
             "cases": self.rows(),
             "methods": {m.name: m.description for m in METHODS},
             "note": ("means over the four wheels (per wheel under 'wheels'); the unfiltered road and rig DLC "
@@ -201,7 +201,7 @@ class PaperResult:
         lines.append("give back; ^: above it (the paper's value: above its road), eq. 4 over-corrected. corrected: T_a identified")
         lines.append("per corner (rigsim identify), 30 Hz low-pass; road LP: the road force through the same low-pass;")
         lines.append("NRMSE = rms(corrected - road LP) / std(road LP). Configuration: "
-                     + ("the simulated DYNTRAC fitted to the paper (--rig dyntrac)." if self.rig == "dyntrac"
+                     + ("the simulated DYNTRAC fitted to the paper (--rig dyntrac)." if self.configuration == "dyntrac"
                         else "the project's design rig (--rig design)."))
         return "\n".join(lines)
 
@@ -263,7 +263,7 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
               noise_N: float = NOISE_N, pose_rate_hz: float | None = None,
               on_done: Callable[[RunResult], None] | None = None, finish: Callable | None = None,
               finish_run: Callable | None = None, case_jobs: Callable | None = None,
-              on_scored: Callable | None = None, rig: str = "design") -> PaperResult:
+              on_scored: Callable | None = None, configuration: str = "design") -> PaperResult:
     """Run the cases of ``paths`` on the road and on the rig, and score each pair.
 
     The three runs of every case (identification, road, rig) are jobs of one process pool; a
@@ -299,8 +299,9 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
     finish_run : callable, optional
         ``finish_run(run_result)`` with each road and rig run, in the worker that ran it, as soon as
         it is done (picklable; e.g. writing the run's files while other runs go on).
-    rig : str
-        The configuration ``paths`` belong to, recorded in the result (:attr:`PaperResult.rig`).
+    configuration : str
+        The configuration ``paths`` belong to, recorded in the result
+        (:attr:`PaperResult.configuration`).
     """
     scenarios = [case_scenario(p, duration_s) for p in paths]
     calls = []
@@ -314,7 +315,8 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
     def assembled() -> PaperResult:
         cases = [PaperCase(scenario=sc, road=runs[3 * c + 1], rig=runs[3 * c + 2], identification=runs[3 * c],
                            score=scores[c]) for c, sc in enumerate(scenarios)]
-        return PaperResult(cases=tuple(cases), noise_N=float(noise_N), rig=rig)
+        return PaperResult(cases=tuple(cases), noise_N=float(noise_N),
+                           configuration=configuration)
 
     with local_executor(worker_count(workers, len(calls))) as ex:
         jobs = {ex.submit(fn, *args): ("run", i) for i, (fn, args) in enumerate(calls)}

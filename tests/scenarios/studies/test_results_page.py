@@ -93,7 +93,7 @@ DAMAGE = {"stress_factor_road": 1.25, "stress_factor_rig": 1.125, "stress_factor
 
 def _fake_paper(folder: pathlib.Path, **extra) -> None:
     """A paper.json with rigsim paper's structure (two cases) and one case's road result.json;
-    ``extra``: further top-level keys (``rig``, ``model_correction``)."""
+    ``extra``: further top-level keys (``configuration``, ``model_correction``)."""
     cases = []
     for k, name in enumerate(("paper-medium-72kmh-6360kg", "paper-high-48kmh-3640kg")):
         case = {key: 0.1 + 0.01 * k + 0.001 * i for i, key in enumerate(CASE_KEYS)}
@@ -139,7 +139,7 @@ def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path):
 
 def test_docs_tables_writes_the_dyntrac_table_with_the_model_column(tmp_path):
     model = [{"case": "paper-medium-72kmh-6360kg", "mean": {"dlc": 0.0979, "dlc_error": -0.0091, "nrmse": 0.048}}]
-    _fake_paper(tmp_path / "paper", rig="dyntrac", model_correction=model)
+    _fake_paper(tmp_path / "paper", configuration="dyntrac", model_correction=model)
     folder = tmp_path / "paper"
     result = json.loads((folder / "paper.json").read_text())
     result["cases"][0]["dlc_corrected_paper"] = 0.2  # above its ceiling 0.106: marked
@@ -215,3 +215,23 @@ def test_every_results_file_is_included_and_every_include_exists():
     for path in sorted((docs / "results").glob("*.md")):
         assert path.resolve() in included, f"no page includes docs/results/{path.name}"
         assert path.read_text().startswith("<!-- written by `"), f"{path.name} does not say what writes it"
+
+
+def test_docs_tables_rewrites_the_readme_block_only(tmp_path):
+    model = [{"case": "paper-medium-72kmh-6360kg", "mean": {"dlc": 0.0999, "dlc_error": 0.001, "nrmse": 0.009}}]
+    _fake_paper(tmp_path / "paper", model_correction=model)
+    mod = _docs_tables()
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# x\n\nbefore\n{mod.README_BEGIN}\nold table\n{mod.README_END}\nafter\n")
+    assert mod.main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "none"),
+                     "--readme", str(readme), "--out", str(tmp_path / "results")]) == 0
+    text = readme.read_text()
+    assert text.startswith("# x\n\nbefore\n") and text.endswith(f"{mod.README_END}\nafter\n")
+    assert "old table" not in text
+    assert ("| medium, 72 km/h, 6360 kg | 0.1000 (0.0985) | 0.1010 (0.0854) | 0.1020 (0.0994) | 0.1030 "
+            "| 0.0999 (+0.1 % from road) | 0.105 / 0.009 |") in text
+    assert "| high, 48 km/h, 3640 kg |" in text and text.count("| - |") == 1 and "0.115 / - |" in text  # no model row
+    assert "Measured by `rigsim paper --out DIR --model --duration-s 20 --noise-N 100` on " in text
+    readme.write_text("# no markers\n")
+    with pytest.raises(SystemExit, match="needs one line"):
+        mod.write_readme_table(tmp_path / "paper", readme)

@@ -1,0 +1,68 @@
+"""``benchmarks/dyntrac_fit.py``: the fit's pieces, and the shipped DYNTRAC configuration inside the
+physical ranges the fit declares (the fit itself runs minutes: ``--check`` re-measures it)."""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+
+import numpy as np
+import pytest
+
+from scenarios.core.config import load_scenario, paper_scenarios
+from scenarios.studies.paper.table import PAPER_TABLE2
+
+_PATH = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "dyntrac_fit.py"
+
+
+@pytest.fixture(scope="module")
+def fit():
+    spec = importlib.util.spec_from_file_location("benchmark_dyntrac_fit", _PATH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_shipped_value_lies_inside_its_range(fit):
+    x = fit.shipped_values(paper_scenarios("dyntrac"))
+    assert len(x) == len(fit.UNKNOWNS)
+    for u, v in zip(fit.UNKNOWNS, x):
+        assert u.lo < v < u.hi, u.name
+        assert u.source  # every range names where it comes from
+
+
+def test_the_shipped_cases_share_one_value_per_unknown(fit):
+    """One rig, one waviness, one friction for the three cases; one level per roughness word."""
+    cases = [load_scenario(p) for p in paper_scenarios("dyntrac")]
+    assert len({(c.actuator["kp_per_m"], c.actuator["kdp_per_Pa"], c.road.waviness,
+                 c.vehicle.spring_friction_rear_N, c.vehicle.spring_friction_front_N) for c in cases}) == 1
+    assert cases[1].road.gd_n0_m3 == cases[2].road.gd_n0_m3  # both "high": the same road section
+    assert cases[1].seed == cases[2].seed
+
+
+def test_configured_puts_each_value_where_it_belongs(fit):
+    path = paper_scenarios()[0]  # the medium case of the design rig
+    x = np.array([30.0, 2e-8, 2.5, 5e-5, 3e-4, 4000.0])
+    sc = fit.configured(load_scenario(path), x, 20.0)
+    assert sc.actuator["kp_per_m"] == 30.0 and sc.actuator["kdp_per_Pa"] == 2e-8
+    assert sc.road.waviness == 2.5 and sc.road.gd_n0_m3 == 5e-5 and sc.road.roughness is None  # medium's level
+    assert sc.vehicle.spring_friction_rear_N == 4000.0 and sc.vehicle.spring_friction_front_N == 2000.0
+    assert sc.duration_s == 20.0
+    high = fit.configured(load_scenario(paper_scenarios()[2]), x, 20.0)
+    assert high.road.gd_n0_m3 == 3e-4
+
+
+def test_targets_are_table_2_and_a_failed_run_counts_as_far_off(fit):
+    paths = paper_scenarios("dyntrac")
+    t = fit.targets(paths)
+    assert t.tolist() == [PAPER_TABLE2[load_scenario(p).name][k] for p in paths for k in ("road", "rig", "corrected")]
+    r = fit.relative_error(np.array([t[0] * 1.05, np.nan, *t[2:]]), t)
+    assert r[0] == pytest.approx(np.log(1.05)) and r[1] == 1.0 and np.all(r[2:] == 0)
+
+
+def test_a_value_at_its_bound_is_flagged(fit):
+    paths = paper_scenarios("dyntrac")
+    x = fit.shipped_values(paths)
+    x[0] = fit.UNKNOWNS[0].hi
+    _, values = fit.tables(paths, x, fit.targets(paths))
+    assert values[0][3] == "at its bound" and values[1][3] == "inside"
