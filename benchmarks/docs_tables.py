@@ -197,7 +197,7 @@ def write_readme_table(folder: pathlib.Path, readme: pathlib.Path) -> pathlib.Pa
         raise SystemExit(f"{readme}: needs one line {README_BEGIN!r} and one line {README_END!r}")
     head, rest = text.split(README_BEGIN)
     _, tail = rest.split(README_END)
-    block = (markdown_table(README_HEADER, readme_rows(result)) + "\n\n"
+    block = (markdown_table(README_HEADER, readme_rows(result)).rstrip("\n") + "\n\n"
              + configuration_line(paper_command(folder, result), _date_of(source)) + "\n")
     readme.write_text(head + README_BEGIN + "\n" + block + README_END + tail, encoding="utf-8")
     return readme
