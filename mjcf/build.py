@@ -136,6 +136,12 @@ class TruckVariant:
         Payload centre of mass along x in the chassis frame (mid-wheelbase = 0, forward
         positive; front axle at +2.5, rear at -2.5). The XML places it at -1.3 m (3.8 m
         behind the front axle).
+    payload_y_m : float, m, optional
+        Payload centre of mass across the truck (left positive), off the centreline where a load is
+        stacked or shifted to one side. The XML places it on the centreline (0). At most 0.8 m either
+        way: the centre stays inside the 2.2 m wide bed with 0.3 m to its edge, and at 6360 kg and
+        0.8 m the lighter side's wheels still carry over a quarter of the truck's weight. A plant
+        feature: the calibrated model family holds the payload on the centreline.
     tire_stiffness_front_N_per_m : float, N/m, optional
         Vertical stiffness of each front wheel station (one tire).
     tire_stiffness_rear_N_per_m : float, N/m, optional
@@ -209,6 +215,7 @@ class TruckVariant:
 
     payload_kg: float | None = None
     payload_x_m: float | None = None
+    payload_y_m: float | None = None
     tire_stiffness_front_N_per_m: float | None = None
     tire_stiffness_rear_N_per_m: float | None = None
     tire_damping_front_Ns_per_m: float | None = None
@@ -236,6 +243,12 @@ class TruckVariant:
                     raise ValueError(
                         f"vehicle.payload_x_m must lie on the truck (between -3.5 and 3.5 m), got {value!r}"
                     )
+                continue
+            if f.name == "payload_y_m":
+                if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                          or not math.isfinite(value) or abs(value) > 0.8):
+                    raise ValueError(f"vehicle.payload_y_m must lie within 0.8 m of the centreline "
+                                     f"(the bed is 2.2 m wide), got {value!r}")
                 continue
             zero_ok = f.name.startswith(("spring_friction", "tire_damping", "payload_kg", "tire_progressive"))
             _positive(f.name, value, allow_zero=zero_ok)
@@ -361,9 +374,11 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
 
     if v.payload_kg is not None:
         spec.geom("payload_box").mass = float(v.payload_kg)
-    if v.payload_x_m is not None:
+    if v.payload_x_m is not None or v.payload_y_m is not None:
         body = spec.body("payload")
-        body.pos = [float(v.payload_x_m), body.pos[1], body.pos[2]]
+        x = body.pos[0] if v.payload_x_m is None else float(v.payload_x_m)
+        y = body.pos[1] if v.payload_y_m is None else float(v.payload_y_m)
+        body.pos = [x, y, body.pos[2]]
     for corner in names.CORNERS:
         front = corner in names.FRONT
         set_tire(

@@ -245,3 +245,37 @@ def test_variant_validation_names_the_field():
         TruckVariant(tire_stiffness_front_N_per_m=float("nan"))
     with pytest.raises(ValueError, match="vehicle.timestep_s"):
         TruckVariant(timestep_s=0.01)
+
+
+@pytest.mark.parametrize("y_m", [0.2, -0.5])
+def test_payload_off_the_centreline_shifts_the_load_by_the_moment_balance(y_m):
+    """Static moment balance about the x axis (reference: statics, not the model): the tire forces'
+    moment about the centreline is the truck's weight times its centre of mass's lateral offset,
+    which the rolled truck carries further out than the payload's share alone."""
+    import mujoco
+
+    from mjcf import names
+    from mjcf.build import TruckVariant, build_model
+    from mjcf.physics import static_equilibrium, tire_forces
+
+    model = build_model(TruckVariant(payload_kg=5000.0, payload_y_m=y_m))
+    data = mujoco.MjData(model)
+    static_equilibrium(model, data)
+    force = tire_forces(model, data)
+    y = np.array([data.xpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"pan_{c}")][1]
+                  for c in names.CORNERS])
+    chassis = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "chassis")
+    weight = model.body_subtreemass[chassis] * 9.81
+    com_y = data.subtree_com[chassis][1]
+    assert force @ y == pytest.approx(weight * com_y, rel=5e-3)
+    assert abs(com_y) > 5000.0 * abs(y_m) / model.body_subtreemass[chassis]  # the truck rolls towards it
+    left, right = force[[0, 2]].sum(), force[[1, 3]].sum()
+    assert np.sign(left - right) == np.sign(y_m)  # the side under the payload carries more
+
+
+@pytest.mark.parametrize("bad", [0.81, -1.0, float("nan"), True, "0.2"])
+def test_payload_y_beyond_the_bed_is_refused(bad):
+    from mjcf.build import TruckVariant
+
+    with pytest.raises(ValueError, match="vehicle.payload_y_m must lie within 0.8 m"):
+        TruckVariant(payload_y_m=bad)
