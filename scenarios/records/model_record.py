@@ -29,7 +29,7 @@ __all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "cal_key", "calibra
            "plan_model", "run_model"]
 
 #: The fields the payload's first guess comes from the record for (a [vehicle] value is not used).
-FROM_STATIC_LOADS = ("payload_kg", "payload_x_m")
+FROM_STATIC_LOADS = ("payload_kg", "payload_x_m", "payload_y_m")
 #: How the model correction corrects, in a result's description.
 MODEL_TEXT = "the truck model calibrated on the record (F_rig + F_model(drive) - F_model(LVDT))"
 

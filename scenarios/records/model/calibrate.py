@@ -6,6 +6,8 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
 * ``payload_kg``, ``payload_x_m``: the ballast's mass and its position along the truck set the
   static loads and the body's bounce and pitch; the first guess comes from the measured static
   loads (:func:`~scenarios.records.model.first_guess.static_guess`), the fit refines them;
+  ``payload_y_m``, its centre across the truck, is held where the measured left/right moment puts it
+  (:func:`~scenarios.records.model.first_guess.static_lateral`): the four static loads pin it;
 * ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
   right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
   motion puts straight through the tire;
@@ -76,7 +78,7 @@ from correction.identification.noise import noise_rms
 from mjcf.build import BOUNDS, TruckVariant
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
-from scenarios.records.model.first_guess import catalogue, static_guess
+from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
 from scenarios.records.model.result import Calibration
@@ -329,7 +331,9 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         if not names:
             raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
                                 "name other fields to fit")
-    guess = {"payload_kg": payload, "payload_x_m": x, **catalogue(), **(fitted_guess or {})}
+    # The payload's centre across the truck: pinned by the measured left/right moment (held, not fitted).
+    y = static_lateral(force, base_scenario, payload, x)
+    guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, **catalogue(), **(fitted_guess or {})}
     for k in [k for k in FITTED if k == "cab_mount_hz" or k.startswith("tire_progressive")]:  # held: rigid cab, linear tire
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None

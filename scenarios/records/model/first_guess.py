@@ -25,7 +25,8 @@ from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "xml_nominal", "catalogue", "static_guess"]
+__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "xml_nominal", "catalogue", "static_guess",
+           "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
 #: lab's catalogue values are 10-30 % off the truck on its rig.
@@ -87,6 +88,67 @@ def catalogue() -> dict[str, float]:
 #: catalogue's axle and cab masses are not the plant's exactly), where its position is meaningless
 #: (measured on the generalization suite's four empty trucks: -11 to -6 kg, x -4.3 to -10.8 m).
 EMPTY_FRACTION = 0.01
+
+
+#: m: a payload centre the measured left/right moment puts closer to the centreline than this is on
+#: the centreline. The record's mean loads carry the load cells' offsets and the catalogue truck's
+#: own small asymmetries (millimetres of centre of mass); a payload stacked off-centre is off by
+#: tens of centimetres.
+LATERAL_FLOOR_M = 0.01
+
+
+@functools.lru_cache(maxsize=1)
+def _contact_y() -> np.ndarray:
+    """Lateral position (m, left positive) of each wheel's pan, in :data:`CORNERS` order."""
+    import mujoco
+
+    model = build_model(TruckVariant())
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    return np.array([data.xpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, mjnames.pan_body(c))][1]
+                     for c in CORNERS])
+
+
+def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_x_m: float) -> float:
+    """The payload's centre across the truck (m, left positive) from the measured static loads.
+
+    The record's mean wheel forces are the static loads; their moment about the centreline,
+    sum(F_i y_i), is the truck's weight times its centre of mass's lateral offset (moment balance
+    about the x axis). The truck rolls towards an off-centre payload, which carries its sprung mass
+    further out, so the moment is matched on the catalogue truck with this payload (mass and x)
+    by the secant method on its static equilibrium, not by the lever rule. Within
+    :data:`LATERAL_FLOOR_M` of the centreline: 0.
+
+    Raises
+    ------
+    ScenarioError
+        A moment no payload on the bed explains (more than 0.8 m off the centreline), in one sentence.
+    """
+    f = np.asarray(force_N, dtype=float).mean(axis=0)
+    y_c = _contact_y()
+    measured = float(f @ y_c)
+    if payload_kg <= 0.0:
+        return 0.0
+    cat = catalogue()
+
+    def moment(y: float) -> float:
+        return float(static_axle_loads(TruckVariant(payload_kg=payload_kg, payload_x_m=payload_x_m,
+                                                    payload_y_m=y, **cat), base_scenario) @ y_c)
+
+    y0, m0 = 0.0, moment(0.0)
+    y1 = 0.1
+    m1 = moment(y1)
+    for _ in range(2):  # the moment is nearly linear in y: two secant steps
+        if m1 == m0:
+            break
+        y2 = y1 + (measured - m1) * (y1 - y0) / (m1 - m0)
+        if abs(y2) > 0.8:
+            raise ScenarioError(f"the measured left/right load split ({measured / 1e3:.1f} kN m about the "
+                                f"centreline) puts the payload {abs(y2):.2f} m off the centreline, off the bed "
+                                "(at most 0.8 m): check which force channels are left and right")
+        y0, m0, y1 = y1, m1, y2
+        m1 = moment(y1)
+    return 0.0 if abs(y1) < LATERAL_FLOOR_M else float(y1)
 
 
 def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:

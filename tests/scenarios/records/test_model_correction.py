@@ -314,6 +314,27 @@ def test_an_empty_truck_is_held_empty_not_refused():
         static_guess(np.tile(empty - 500.0 * g / 4, (10, 1)), sc)
 
 
+def test_the_payloads_lateral_offset_comes_from_the_left_right_moment():
+    """The measured static loads' moment about the centreline pins the payload's lateral offset
+    (moment balance about the x axis, the truck rolled on its springs): the nominal truck's loads
+    with a payload 0.2 m left or 0.4 m right give it back on the catalogue truck to within 5 mm; a
+    centred payload, or one within LATERAL_FLOOR_M, is on the centreline; a moment no payload on
+    the bed explains (left and right channels swapped on one axle) is refused in one sentence."""
+    from scenarios.records.model.first_guess import LATERAL_FLOOR_M, static_guess, static_lateral
+    from scenarios.records.model.model_runs import static_axle_loads
+
+    sc = load_scenario(_paper("high_48"))
+    for y in (0.2, -0.4, 0.0, 0.5 * LATERAL_FLOOR_M):
+        loads = np.tile(static_axle_loads(TruckVariant(payload_kg=5000.0, payload_y_m=y), sc), (10, 1))
+        payload, x = static_guess(loads, sc)
+        got = static_lateral(loads, sc, payload, x)
+        assert got == (pytest.approx(y, abs=5e-3) if abs(y) >= LATERAL_FLOOR_M else 0.0)
+    loads = static_axle_loads(TruckVariant(payload_kg=5000.0, payload_y_m=0.3), sc)
+    swapped = np.tile(loads[[0, 1, 3, 2]] * np.array([1.0, 1.0, 3.0, 0.2]), (10, 1))
+    with pytest.raises(ScenarioError, match="off the centreline, off the bed"):
+        static_lateral(swapped, sc, 5000.0, -1.3)
+
+
 def test_a_twisted_first_pose_starts_on_its_plane_and_twists_in():
     """A record whose first pan pose is twisted beyond any static rest of the truck (a 45 mm
     diagonal twist: the frame is stiff in torsion, a diagonal pair of tires unloads; generalization
