@@ -2,8 +2,10 @@
 
 The script that measures a table writes it with :func:`write_results_page`: a title line, the
 table, and one line saying how and where it was measured (the command, the date, the rigsim
-version, the machine). A page of ``docs/`` includes the file (myst's ``{include}``), so the
-numbers on the page are the ones the script measured, never copied by hand.
+version, the machine). A command's terminal output goes the same way with
+:func:`write_output_page`: the command and what it printed in a code block, then that line. A
+page of ``docs/`` includes the file (myst's ``{include}``), so the numbers on the page are the
+ones the script measured, never copied by hand.
 
 Light imports only (standard library and :mod:`correction.io.atomic`): nothing here is on a
 simulation's or a correction's path.
@@ -21,7 +23,8 @@ from collections.abc import Sequence
 
 from correction.io.atomic import atomic_write_text
 
-__all__ = ["configuration_line", "markdown_table", "results_page", "script_command", "write_results_page"]
+__all__ = ["configuration_line", "markdown_table", "output_page", "results_page", "script_command",
+           "write_output_page", "write_results_page"]
 
 
 def _rigsim_version() -> str:
@@ -166,4 +169,78 @@ def write_results_page(folder, name: str, title: str, header: Sequence[str], row
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{name}.md"
     atomic_write_text(path, results_page(title, header, rows, command, date, note, script))
+    return path
+
+
+def output_page(commands: Sequence[str], output: str, command: str, date: datetime.date | str | None = None,
+                title: str = "", note: str = "", script: str = "") -> str:
+    """The text of a results file that shows a command's terminal output.
+
+    Parameters
+    ----------
+    commands : sequence of str
+        The commands, as a terminal shows them: each one's first line after ``$ ``, its further
+        lines (a here-document) after ``> ``.
+    output : str
+        What they printed (trailing blank lines are dropped).
+    command : str
+        The command that measured the output (:func:`configuration_line`), e.g. the script that
+        ran ``commands``.
+    date : datetime.date or str, optional
+        When it was measured (default: today).
+    title : str, optional
+        One line, written in bold above the code block, empty for none.
+    note : str, optional
+        A paragraph after the code block, empty for none.
+    script : str, optional
+        The command that writes the file, when it is not ``command`` itself.
+
+    Returns
+    -------
+    str
+        Markdown, starting with a comment that says which command writes the file, then a
+        ``text`` code block (its fence longer than any run of backticks in it).
+    """
+    lines = []
+    for c in commands:
+        first, *more = c.strip("\n").splitlines()
+        lines += [f"$ {first}"] + [f"> {m}" for m in more]
+    lines += output.rstrip().splitlines()
+    body = "\n".join(lines)
+    fence = "```"
+    while fence in body:
+        fence += "`"
+    parts = [f"<!-- written by `{script or command}`: do not edit by hand -->"]
+    if title:
+        parts.append(f"**{title}**")
+    parts.append(f"{fence}text\n{body}\n{fence}")
+    if note:
+        parts.append(note.strip())
+    parts.append(configuration_line(command, date))
+    return "\n\n".join(parts) + "\n"
+
+
+def write_output_page(folder, name: str, commands: Sequence[str], output: str, command: str,
+                      date: datetime.date | str | None = None, title: str = "", note: str = "",
+                      script: str = "") -> pathlib.Path:
+    """Write ``<folder>/<name>.md`` atomically (:func:`output_page`'s text).
+
+    Parameters
+    ----------
+    folder : str or path-like
+        Where the file goes, e.g. ``docs/results``; made if missing.
+    name : str
+        The file's name without ``.md``.
+    commands, output, command, date, title, note, script
+        As :func:`output_page`.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{name}.md"
+    atomic_write_text(path, output_page(commands, output, command, date, title, note, script))
     return path

@@ -24,6 +24,7 @@ from scenarios.studies.results_page import (
     configuration_line,
     markdown_table,
     script_command,
+    write_output_page,
     write_results_page,
 )
 
@@ -52,6 +53,20 @@ def test_the_helper_writes_title_table_and_configuration_line(tmp_path):
                          f"{platform.system()} {platform.machine()}, {cpus} CPU{'s' if cpus != 1 else ''}, "
                          f"Python {platform.python_version()}.")
     assert not list((tmp_path / "results").glob("*.tmp*")), "no temporary file left behind"
+
+
+def test_the_helper_writes_a_command_and_its_output(tmp_path):
+    """Each command after ``$ `` (its further lines after ``> ``, as a terminal shows a
+    here-document), the output verbatim (trailing blank lines dropped), in one text block; an
+    output holding a fence gets a longer one."""
+    path = write_output_page(tmp_path, "demo_out", ["rigsim demo", "python - <<'EOF'\n...\nEOF"],
+                             "line 1\n  line 2\n\n", "python benchmarks/demo.py", date=datetime.date(2026, 1, 2))
+    text = path.read_text()
+    assert text.startswith("<!-- written by `python benchmarks/demo.py`: do not edit by hand -->\n\n")
+    assert "```text\n$ rigsim demo\n$ python - <<'EOF'\n> ...\n> EOF\nline 1\n  line 2\n```\n" in text
+    assert text.splitlines()[-1].startswith("Measured by `python benchmarks/demo.py` on 2026-01-02, rigsim ")
+    fenced = write_output_page(tmp_path, "fenced", ["cat x.md"], "```\nx\n```", "c", title="T").read_text()
+    assert "**T**" in fenced and "````text\n$ cat x.md\n```\nx\n```\n````\n" in fenced
 
 
 def _version():
