@@ -146,6 +146,15 @@ def results_page(title: str, header: Sequence[str], rows: Sequence[Sequence[obje
     return "\n\n".join(parts) + "\n"
 
 
+def _write(folder, name: str, text: str) -> pathlib.Path:
+    """Write ``text`` to ``<folder>/<name>.md`` atomically (the folder made if missing)."""
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{name}.md"
+    atomic_write_text(path, text)
+    return path
+
+
 def write_results_page(folder, name: str, title: str, header: Sequence[str], rows: Sequence[Sequence[object]],
                        command: str, date: datetime.date | str | None = None, note: str = "",
                        script: str = "") -> pathlib.Path:
@@ -165,11 +174,7 @@ def write_results_page(folder, name: str, title: str, header: Sequence[str], row
     pathlib.Path
         The file written.
     """
-    folder = pathlib.Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}.md"
-    atomic_write_text(path, results_page(title, header, rows, command, date, note, script))
-    return path
+    return _write(folder, name, results_page(title, header, rows, command, date, note, script))
 
 
 def output_page(commands: Sequence[str], output: str, command: str, date: datetime.date | str | None = None,
@@ -239,8 +244,4 @@ def write_output_page(folder, name: str, commands: Sequence[str], output: str, c
     pathlib.Path
         The file written.
     """
-    folder = pathlib.Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}.md"
-    atomic_write_text(path, output_page(commands, output, command, date, title, note, script))
-    return path
+    return _write(folder, name, output_page(commands, output, command, date, title, note, script))
