@@ -1,7 +1,7 @@
 """The documentation site builds with warnings as errors: a broken page, a bad cross-reference, a
 docstring autodoc cannot parse or a gallery example that fails, fails the suite.
 
-The sources (``docs/``, ``examples/`` and ``mjcf/README.md``, which the truck page includes) are
+The sources (``docs/``, ``examples/`` and the ``mjcf`` package, whose README the truck page includes and whose models the gallery simulates) are
 copied into ``tmp_path`` first, so the build starts from a clean state and writes nothing into the
 repository (sphinx-gallery and autosummary generate files beside the sources). The API reference
 lists every function and class the correction toolkit and the records API export."""
@@ -58,8 +58,9 @@ def test_the_site_builds_with_warnings_as_errors(tmp_path):
     pytest.importorskip("sphinx", reason="the docs stack is not installed (pip install -e '.[docs]')")
     shutil.copytree(ROOT / "docs", tmp_path / "docs", ignore=shutil.ignore_patterns(*GENERATED))
     shutil.copytree(ROOT / "examples", tmp_path / "examples", ignore=shutil.ignore_patterns("__pycache__"))
-    (tmp_path / "mjcf").mkdir()
-    shutil.copy2(ROOT / "mjcf" / "README.md", tmp_path / "mjcf" / "README.md")
+    # The truck page includes mjcf/README.md; docs/conf.py puts the build's root first on sys.path,
+    # so mjcf/ there is the package the gallery's simulations import: the whole package, its XML too.
+    shutil.copytree(ROOT / "mjcf", tmp_path / "mjcf", ignore=shutil.ignore_patterns("__pycache__"))
     out = tmp_path / "html"
     done = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-E", "-q", "-b", "html",
                            str(tmp_path / "docs"), str(out)],
