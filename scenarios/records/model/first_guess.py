@@ -44,9 +44,10 @@ CATALOGUE_TIRE_RATIO = 0.2
 
 
 @functools.lru_cache(maxsize=1)
-def _nominal() -> tuple[dict, tuple[float, float]]:
-    """(the fitted fields' values, (front, rear) axle x in the chassis frame, m) of the compiled
-    nominal model, compiled once per process."""
+def _nominal() -> tuple[dict, tuple[float, float], np.ndarray]:
+    """(the fitted fields' values, (front, rear) axle x in the chassis frame (m), each wheel's pan
+    y (m, left positive, :data:`CORNERS` order)) of the compiled nominal model, compiled once per
+    process."""
     import mujoco
 
     model = build_model(TruckVariant())
@@ -67,7 +68,8 @@ def _nominal() -> tuple[dict, tuple[float, float]]:
               "spring_friction_front_N": float(model.tendon_frictionloss[ten[f]]),
               "spring_friction_rear_N": float(model.tendon_frictionloss[ten[r]])}
     axles = tuple(float(model.body_pos[body(mjnames.axle_body(c)), 0]) for c in (CORNERS[f], CORNERS[r]))
-    return values, axles
+    pans_y = np.array([model.body_pos[body(mjnames.pan_body(c)), 1] for c in CORNERS])  # children of the world
+    return values, axles, pans_y
 
 
 def xml_nominal() -> dict[str, float]:
@@ -97,18 +99,6 @@ EMPTY_FRACTION = 0.01
 LATERAL_FLOOR_M = 0.01
 
 
-@functools.lru_cache(maxsize=1)
-def _contact_y() -> np.ndarray:
-    """Lateral position (m, left positive) of each wheel's pan, in :data:`CORNERS` order."""
-    import mujoco
-
-    model = build_model(TruckVariant())
-    data = mujoco.MjData(model)
-    mujoco.mj_kinematics(model, data)
-    return np.array([data.xpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, mjnames.pan_body(c))][1]
-                     for c in CORNERS])
-
-
 def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_x_m: float) -> float:
     """The payload's centre across the truck (m, left positive) from the measured static loads.
 
@@ -124,11 +114,10 @@ def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_
     ScenarioError
         A moment no payload on the bed explains (more than 0.8 m off the centreline), in one sentence.
     """
-    f = np.asarray(force_N, dtype=float).mean(axis=0)
-    y_c = _contact_y()
-    measured = float(f @ y_c)
-    if payload_kg <= 0.0:
+    if payload_kg <= 0.0:  # an empty truck (static_guess): no payload to place
         return 0.0
+    y_c = _nominal()[2]
+    measured = float(np.asarray(force_N, dtype=float).mean(axis=0) @ y_c)
     cat = catalogue()
 
     def moment(y: float) -> float:
