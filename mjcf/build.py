@@ -117,6 +117,11 @@ CAB_DAMPING_RATIO = 0.3
 CAB_MOUNT_SPACING_M = 1.4
 
 
+#: The payload's position fields, signed (m): the largest |value| and where the field must lie.
+_SIGNED = {"payload_x_m": (3.5, "lie on the truck (between -3.5 and 3.5 m)"),
+           "payload_y_m": (0.8, "lie within 0.8 m of the centreline (the bed is 2.2 m wide)")}
+
+
 @dataclass(frozen=True)
 class TruckVariant:
     """Changes to the nominal truck and rig of ``truck_rig.xml``.
@@ -236,19 +241,11 @@ class TruckVariant:
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if f.name == "payload_x_m":
-                if value is not None and (
-                    not isinstance(value, (int, float)) or not math.isfinite(value) or abs(value) > 3.5
-                ):
-                    raise ValueError(
-                        f"vehicle.payload_x_m must lie on the truck (between -3.5 and 3.5 m), got {value!r}"
-                    )
-                continue
-            if f.name == "payload_y_m":
+            if f.name in _SIGNED:
+                limit, where = _SIGNED[f.name]
                 if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
-                                          or not math.isfinite(value) or abs(value) > 0.8):
-                    raise ValueError(f"vehicle.payload_y_m must lie within 0.8 m of the centreline "
-                                     f"(the bed is 2.2 m wide), got {value!r}")
+                                          or not math.isfinite(value) or abs(value) > limit):
+                    raise ValueError(f"vehicle.{f.name} must {where}, got {value!r}")
                 continue
             zero_ok = f.name.startswith(("spring_friction", "tire_damping", "payload_kg", "tire_progressive"))
             _positive(f.name, value, allow_zero=zero_ok)

@@ -279,3 +279,10 @@ def test_payload_y_beyond_the_bed_is_refused(bad):
 
     with pytest.raises(ValueError, match="vehicle.payload_y_m must lie within 0.8 m"):
         TruckVariant(payload_y_m=bad)
+
+
+@pytest.mark.parametrize("bad", [3.6, -4.0, float("inf"), True])
+def test_payload_x_off_the_truck_or_not_a_number_is_refused(bad):
+    """A bool is not a position: True would otherwise read as 1 m."""
+    with pytest.raises(ValueError, match=r"vehicle.payload_x_m must lie on the truck \(between -3.5 and 3.5 m\)"):
+        TruckVariant(payload_x_m=bad)
