@@ -12,7 +12,7 @@ import dataclasses
 import pathlib
 
 from correction.output.lowpass import BAND_HZ
-from scenarios.core.config import Scenario, load_scenario, paper_scenarios
+from scenarios.core.config import PAPER_CONFIGURATIONS, Scenario, load_scenario, paper_scenarios
 
 __all__ = [
     "BODE_RANGE_HZ", "COMPARE_MAX_HZ", "COHERENCE_MIN", "GOAL_FRF_DB", "GOAL_FRF_DEG", "GOAL_TABLE1_PCT",
@@ -55,7 +55,8 @@ def table1_scenario_path(configuration: str = "design") -> pathlib.Path:
     for p in paper_scenarios(configuration):
         if p.name == TABLE1_SCENARIO:
             return p
-    raise FileNotFoundError(f"scenarios/data/paper/{TABLE1_SCENARIO} is missing")  # pragma: no cover
+    raise FileNotFoundError(f"scenarios/data/{PAPER_CONFIGURATIONS[configuration]}/{TABLE1_SCENARIO} "
+                            "is missing")  # pragma: no cover
 
 
 def validation_scenario(path, duration_s: float | None = None, *, friction: bool = True) -> Scenario:
