@@ -67,3 +67,15 @@ def test_the_cli_takes_the_configuration():
     p = build_parser()
     assert p.parse_args(["paper", "--out", "x"]).rig == "design"
     assert p.parse_args(["paper", "--out", "x", "--rig", "dyntrac"]).rig == "dyntrac"
+
+
+def test_the_commands_offer_exactly_the_shipped_configurations():
+    """The CLI lists the choices literally (importing the scenarios for ``rigsim --help`` would load the
+    simulator): they must stay those of PAPER_CONFIGURATIONS."""
+    from scenarios.cli.main import build_parser
+
+    p = build_parser()
+    sub = next(a for a in p._actions if a.dest == "command" or a.__class__.__name__ == "_SubParsersAction")
+    for command in ("paper", "validate"):
+        rig = next(a for a in sub.choices[command]._actions if a.dest == "rig")
+        assert set(rig.choices) == set(PAPER_CONFIGURATIONS) and rig.default == "design"
