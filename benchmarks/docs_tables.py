@@ -230,13 +230,13 @@ def table1_rows(result: dict) -> list[list[str]]:
 
 
 def write_table1(folder: pathlib.Path, out: pathlib.Path, name: str = "validate_table1",
-                 script: str = SCRIPT) -> pathlib.Path:
-    """``out/<name>.md`` from ``folder/validate.json``."""
+                 script: str = SCRIPT, rig: str = "design") -> pathlib.Path:
+    """``out/<name>.md`` from ``folder/validate.json`` of a ``rigsim validate --rig RIG`` run."""
     source = folder / "validate.json"
     result = json.loads(source.read_text())
     command = "rigsim validate --out DIR"
-    if name.endswith("_dyntrac"):
-        command += " --rig dyntrac"
+    if rig != "design":
+        command += f" --rig {rig}"
     if "duration_s" in result:
         command += f" --duration-s {result['duration_s']:g}"
     if "ident_duration_s" in result:
@@ -247,6 +247,11 @@ def write_table1(folder: pathlib.Path, out: pathlib.Path, name: str = "validate_
     return write_results_page(out, name,
                               "Table 1 analogue: DLC of the rig and its linearized models (high roughness, 72 km/h, 3640 kg)",
                               TABLE1_HEADER, table1_rows(result), command, _date_of(source), note, script)
+
+
+def write_table1_dyntrac(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:
+    """``out/validate_table1_dyntrac.md`` from a ``rigsim validate --rig dyntrac`` folder."""
+    return write_table1(folder, out, "validate_table1_dyntrac", DYNTRAC_SCRIPT, rig="dyntrac")
 
 
 def _runs(n: int) -> str:
@@ -324,8 +329,7 @@ def main(argv=None) -> int:
     if args.paper_dyntrac is not None:
         jobs.append((args.paper_dyntrac, "paper.json", write_table2_dyntrac))
     if args.validate_dyntrac is not None:
-        jobs.append((args.validate_dyntrac, "validate.json",
-                     lambda folder, out: write_table1(folder, out, "validate_table1_dyntrac", DYNTRAC_SCRIPT)))
+        jobs.append((args.validate_dyntrac, "validate.json", write_table1_dyntrac))
     for folder, fname, write in jobs:
         if not (folder / fname).is_file():
             print(f"{folder / fname}: no such file, its table is not written", file=sys.stderr)

@@ -175,8 +175,10 @@ def fit(ex, paths, x0: np.ndarray, duration_s: float, iterations: int, say=print
         if np.max(np.abs(r)) <= np.log1p(GOAL) / 4:
             break
         steps = [np.clip(z + h * e, lo, hi) for e in np.eye(z.size)]
-        J = np.array([(relative_error(s, target) - r) / np.where(np.abs(zs - z).max() > 0, (zs - z).max(), h)
-                      for s, zs in zip(simulate(ex, paths, [np.exp(s) for s in steps], duration_s), steps)]).T
+        lengths = [float(np.max(zs - z)) for zs in steps]  # h, or less (0) at an upper bound
+        sims = simulate(ex, paths, [np.exp(zs) for zs in steps], duration_s)
+        J = np.array([(relative_error(sim_i, target) - r) / d if d > 0 else np.zeros_like(r)
+                      for sim_i, d in zip(sims, lengths)]).T
         weight = (np.abs(r) / np.max(np.abs(r))) ** 3 + 0.05
         Jw, rw = J * weight[:, None], r * weight
         improved = False
