@@ -83,7 +83,7 @@ REFERENCES = (REFERENCE, SECOND_REFERENCE)  # not candidates: no generalization 
 ADOPTED = CONFIGS.index((RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S))
 DLC_GOAL_PCT, OUTPUT_HZ = 0.1, 1000.0
 GEN_CASES, GEN_BATCH = 24, 6
-MAX_STEP_S = 1e-3  # the largest vehicle.timestep_s a scenario accepts (mjcf.build.BOUNDS)
+MAX_STEP_S = 1e-3  # the largest vehicle.timestep_s a scenario accepts (mjcf.variant.BOUNDS)
 #: Where the results file goes by default: docs/results of this repository.
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 

@@ -72,7 +72,7 @@ REAR_FIELDS = {"tire_progressive_ratio": "tire_progressive_ratio_rear",
 
 def axle_progressive(variant, front: bool) -> tuple[float, float] | None:
     """The stiffening (ratio, 1; onset, m) of one axle's tires in ``variant`` (a
-    :class:`mjcf.build.TruckVariant`), or None for linear tires. Every tire takes
+    :class:`mjcf.variant.TruckVariant`), or None for linear tires. Every tire takes
     ``tire_progressive_ratio`` and ``tire_progressive_onset_m`` (default
     :data:`TIRE_PROGRESSIVE_ONSET_M`); the rear tires take ``tire_progressive_ratio_rear`` and
     ``tire_progressive_onset_rear_m`` instead where those are given."""

@@ -155,7 +155,8 @@ def _cmd_run(args) -> int:
 def _cmd_model(args) -> int:
     import mujoco
 
-    from mjcf.build import TruckVariant, build_model
+    from mjcf.build import build_model
+    from mjcf.variant import TruckVariant
     from mjcf.names import CORNERS
     from mjcf.physics import modal_analysis, static_equilibrium, tire_forces
 

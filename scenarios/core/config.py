@@ -1,7 +1,7 @@
 """Scenario files: strict TOML into frozen, validated dataclasses.
 
 A scenario file names a road, a speed, a payload and a duration, and may override any
-parameter of the truck (``[vehicle]``, the fields of :class:`mjcf.build.TruckVariant`) or
+parameter of the truck (``[vehicle]``, the fields of :class:`mjcf.variant.TruckVariant`) or
 of the hydraulic actuators (``[actuator]``, the fields of
 :class:`hydraulics.params.ActuatorParams`). Every key is checked: an unknown key is an error
 that names it and the closest valid key; a wrong type or a value out of range names the
@@ -32,7 +32,7 @@ from types import MappingProxyType
 from typing import Any
 
 from correction.io.tomlfile import check_keys, number, read_toml
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 
 __all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios",
            "PAPER_CONFIGURATIONS"]

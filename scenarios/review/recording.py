@@ -52,13 +52,14 @@ APPLICATION_ID = "rigsim"
 def rest_track(result: RunResult, rate_hz: float = DEFAULT_POSE_RATE_HZ) -> PoseTrack:
     """A stand-in :class:`PoseTrack` when a run recorded no poses.
 
-    The nominal truck (:class:`mjcf.build.TruckVariant` defaults) stands still at its static
+    The nominal truck (:class:`mjcf.variant.TruckVariant` defaults) stands still at its static
     equilibrium; the pans move with the result's ``pan_m``, decimated to ``rate_hz``. The
     chassis and axles do not move: only a :class:`PoseRecorder` in the run can show that.
     """
     import mujoco
 
-    from mjcf.build import TruckVariant, build_model
+    from mjcf.build import build_model
+    from mjcf.variant import TruckVariant
     from mjcf.physics import static_equilibrium
 
     model = build_model(TruckVariant())

@@ -88,7 +88,8 @@ def quarter_truck_spec(corners=CORNERS, *, tire=1.0e6, unsprung=450.0, sprung=25
 def truck_spec() -> mujoco.MjSpec:
     """The project's truck on the rig (pan mass from the actuator parameters) with a keyframe
     at its static equilibrium on the pans at mid-stroke."""
-    from mjcf.build import TruckVariant, build_spec
+    from mjcf.build import build_spec
+    from mjcf.variant import TruckVariant
     from mjcf.physics import static_equilibrium
 
     variant = TruckVariant(pan_mass_kg=PARAMS.pan_mass_kg)

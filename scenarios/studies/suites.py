@@ -25,7 +25,7 @@ import types
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 from scenarios.core.config import paper_scenarios
 
 __all__ = ["SUITES", "SUITE_FILES", "Plant", "ModelPlants", "suite_file", "generalization_cases", "paper_cases",
@@ -173,7 +173,7 @@ class Plant:
     key : str
         Its name in the data (``rigid``, ``cab``, ``tire``, ``smooth``).
     truck : Mapping[str, float]
-        The :class:`mjcf.build.TruckVariant` fields it sets beyond the catalogue offsets
+        The :class:`mjcf.variant.TruckVariant` fields it sets beyond the catalogue offsets
         (SI units, as the fields' names say).
     outside_family : tuple of str
         The model's cab modes (:data:`scenarios.records.model.cab_choice.CAB_CHOICES`) under which
@@ -192,7 +192,7 @@ class ModelPlants:
     Attributes
     ----------
     factors : Mapping[str, float], 1
-        Per :class:`mjcf.build.TruckVariant` field, the factor on the XML's nominal value
+        Per :class:`mjcf.variant.TruckVariant` field, the factor on the XML's nominal value
         (``payload_kg``: on the case's own payload).
     payload_x_shift_m : float, m
         The payload's position against the XML's, forward positive.
@@ -217,7 +217,7 @@ def model_plants() -> ModelPlants:
     Raises
     ------
     ValueError
-        A file that names a field :class:`mjcf.build.TruckVariant` does not have, a cab mode
+        A file that names a field :class:`mjcf.variant.TruckVariant` does not have, a cab mode
         that does not exist, or a table or key this reader does not know.
     """
     from scenarios.records.model.cab_choice import CAB_CHOICES  # the model correction's imports: only here

@@ -19,8 +19,9 @@ import numpy as np
 import pytest
 
 from mjcf import names
-from mjcf.build import (CAB_DAMPING_RATIO, CAB_MASS_KG, CAB_MOUNT_SPACING_M, TruckVariant, build_model, build_spec,
-                        resource_path)
+from mjcf.build import build_model, build_spec, resource_path
+from mjcf.cab import CAB_DAMPING_RATIO, CAB_MASS_KG, CAB_MOUNT_SPACING_M
+from mjcf.variant import TruckVariant
 from mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, static_equilibrium, tire_forces
 from scenarios.core.config import ScenarioError, load_scenario, parse_scenario
 

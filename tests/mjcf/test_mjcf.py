@@ -12,7 +12,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf.build import TruckVariant, build_model, build_spec, resource_path
+from mjcf.build import build_model, build_spec, resource_path
+from mjcf.variant import TruckVariant
 from mjcf.names import CORNERS
 from mjcf.physics import RigIndex, modal_analysis, static_equilibrium, tire_forces
 
@@ -255,7 +256,8 @@ def test_payload_off_the_centreline_shifts_the_load_by_the_moment_balance(y_m):
     import mujoco
 
     from mjcf import names
-    from mjcf.build import TruckVariant, build_model
+    from mjcf.build import build_model
+    from mjcf.variant import TruckVariant
     from mjcf.physics import static_equilibrium, tire_forces
 
     model = build_model(TruckVariant(payload_kg=5000.0, payload_y_m=y_m))
@@ -275,7 +277,7 @@ def test_payload_off_the_centreline_shifts_the_load_by_the_moment_balance(y_m):
 
 @pytest.mark.parametrize("bad", [0.81, -1.0, float("nan"), True, "0.2"])
 def test_payload_y_beyond_the_bed_is_refused(bad):
-    from mjcf.build import TruckVariant
+    from mjcf.variant import TruckVariant
 
     with pytest.raises(ValueError, match="vehicle.payload_y_m must lie within 0.8 m"):
         TruckVariant(payload_y_m=bad)

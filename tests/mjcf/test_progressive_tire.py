@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from mjcf import names
-from mjcf.build import TruckVariant, build_model, build_spec, resource_path
+from mjcf.build import build_model, build_spec, resource_path
+from mjcf.variant import TruckVariant
 from mjcf.physics import RigIndex, static_equilibrium, tire_forces, tire_law
 from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import ScenarioError, parse_scenario

@@ -1,6 +1,6 @@
 """Calibrating the truck model from the rig's own signals (x_a and F_rig), never the road run.
 
-What is fitted, and why (:data:`FITTED`): the fields of :class:`mjcf.build.TruckVariant` that a
+What is fitted, and why (:data:`FITTED`): the fields of :class:`mjcf.variant.TruckVariant` that a
 lab does not know to better than ~10-30 % and that change the wheel forces:
 
 * ``payload_kg``, ``payload_x_m``: the ballast's mass and its position along the truck set the
@@ -36,7 +36,7 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   the model's.
 
 Not fitted: the chassis (5.2 t, its CoM and inertia), the axles' masses, the cab's mass (the
-model's :data:`mjcf.build.CAB_MASS_KG`) and the leaf springs' rate and viscous damping are held at
+model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate and viscous damping are held at
 their catalogue (XML) values; the tire free radius only moves
 the static ride height, and the pan mass does not enter a tire force whose pans follow a given
 motion, so neither can be identified from x_a and F_rig. How well each fitted field is pinned
@@ -75,7 +75,7 @@ import time
 import numpy as np
 
 from correction.identification.noise import noise_rms
-from mjcf.build import BOUNDS, TruckVariant
+from mjcf.variant import BOUNDS, TruckVariant
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral
@@ -106,7 +106,7 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m":
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
 DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
-#: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.build.BOUNDS`.
+#: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
 #: The onsets have none: their range is the loads measured on their axle (onset_load).
 RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
@@ -115,7 +115,7 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_
           "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
-#: :data:`mjcf.build.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
+#: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
 #: ratio, whose linear tire is ratio 0; the onsets are searched as loads, N, their range and span
 #: the loads measured on their axle (:mod:`~scenarios.records.model.onset_load`).
 ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",

@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs

@@ -18,7 +18,8 @@ import numpy as np
 
 from hydraulics.params import GRAVITY_M_S2
 from mjcf import names as mjnames
-from mjcf.build import BOUNDS, TruckVariant, build_model
+from mjcf.build import build_model
+from mjcf.variant import BOUNDS, TruckVariant
 from mjcf.names import CORNERS, FRONT
 from mjcf.physics import RigIndex, tire_stiffness
 from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
@@ -34,7 +35,7 @@ CATALOGUE_FACTORS = {"tire_stiffness_front_N_per_m": 0.85, "tire_stiffness_rear_
                      "tire_damping_front_Ns_per_m": 1.15, "tire_damping_rear_Ns_per_m": 0.85,
                      "spring_friction_front_N": 0.85, "spring_friction_rear_N": 1.15}
 #: Hz: the catalogue guess of the cab's mount frequency (the XML has a rigid cab, so there is no
-#: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (mjcf.build.BOUNDS);
+#: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (mjcf.variant.BOUNDS);
 #: its search range (:data:`~scenarios.records.model.calibrate.RANGES`) is 1-30 Hz.
 CATALOGUE_CAB_MOUNT_HZ = 2.5
 #: 1: the catalogue guess of the progressive tire's extra stiffness beyond its onset

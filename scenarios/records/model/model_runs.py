@@ -1,6 +1,6 @@
 """Truck-model runs driven by measured pan motion: the model half of the model correction.
 
-:func:`model_forces` is the road test of a truck variant (:class:`mjcf.build.TruckVariant`) whose
+:func:`model_forces` is the road test of a truck variant (:class:`mjcf.variant.TruckVariant`) whose
 wheelpans follow a given motion sampled at the output rate (a rig's drive x_ref or its LVDTs'
 x_a, 1 kHz): the motion is interpolated onto the road test's steps by a cubic spline
 (positions, velocities and the mid-step values each step holds, all from the one spline), the truck starts from static rest on the
@@ -20,7 +20,7 @@ import dataclasses
 
 import numpy as np
 
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 from mjcf.physics import EquilibriumError, tire_forces
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 
 __all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR", "model_error", "fitted_text"]
 
@@ -33,7 +33,7 @@ class Calibration:
     Attributes
     ----------
     names : tuple of str
-        The fitted :class:`mjcf.build.TruckVariant` fields.
+        The fitted :class:`mjcf.variant.TruckVariant` fields.
     units : tuple of str
         Their SI units ("kg", "m", "N/m", "N s/m", "N", "Hz").
     initial : tuple of float
@@ -78,7 +78,7 @@ class Calibration:
     bounds : tuple of (float, float)
         Each fitted field's search range, SI (its first guess times
         :data:`~scenarios.records.model.calibrate.RANGES`, clipped to
-        :data:`mjcf.build.BOUNDS`; a tire's onset: the loads measured on its axle over the fitted
+        :data:`mjcf.variant.BOUNDS`; a tire's onset: the loads measured on its axle over the fitted
         kt): a value at its edge was stopped there, not fitted.
     noise_nrmse : tuple of float
         Per wheel: the measured force's white noise (:func:`correction.identification.noise.noise_rms`, read above
@@ -116,7 +116,7 @@ class Calibration:
         return out
 
     def variant(self) -> TruckVariant:
-        """The fitted truck as a :class:`mjcf.build.TruckVariant`."""
+        """The fitted truck as a :class:`mjcf.variant.TruckVariant`."""
         return TruckVariant(**self.values())
 
     def at_edge(self, name: str, fraction: float = 0.02) -> bool:

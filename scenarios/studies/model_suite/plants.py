@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 from scenarios.core.config import Scenario, load_scenario, parse_scenario
 from scenarios.core.run import run
 from scenarios.studies.identify.compute import identify_rig
@@ -37,7 +37,7 @@ def plant_keys() -> tuple[str, ...]:
 
 
 def plant_truck(plant: str, tire_ratio: float | None = None) -> dict:
-    """The :class:`mjcf.build.TruckVariant` fields plant ``plant`` sets beyond the catalogue offsets.
+    """The :class:`mjcf.variant.TruckVariant` fields plant ``plant`` sets beyond the catalogue offsets.
 
     Parameters
     ----------
@@ -75,12 +75,12 @@ def plant_variant(case_payload_kg: float, plant: str = "rigid", tire_ratio: floa
 
     Returns
     -------
-    mjcf.build.TruckVariant
+    mjcf.variant.TruckVariant
 
     Raises
     ------
     ValueError
-        An unknown plant, or a field value :class:`~mjcf.build.TruckVariant` refuses.
+        An unknown plant, or a field value :class:`~mjcf.variant.TruckVariant` refuses.
     """
     from scenarios.records.model.first_guess import xml_nominal  # the model correction's imports: only here
 

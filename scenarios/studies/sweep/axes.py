@@ -30,7 +30,7 @@ MAX_CASES = 10_000
 def axis_keys() -> dict[str, tuple[str, ...]]:
     """The keys a grid may sweep: ``{"": top-level, "road": ..., "vehicle": ..., "actuator": ...}``."""
     from hydraulics.params import ActuatorParams
-    from mjcf.build import TruckVariant
+    from mjcf.variant import TruckVariant
 
     top = tuple(f.name for f in dataclasses.fields(Scenario) if f.name not in
                 ("name", "source", "road", "vehicle", "actuator"))

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from mjcf import names
-from mjcf.build import TruckVariant, build_spec
+from mjcf.build import build_spec
+from mjcf.variant import TruckVariant
 from mjcf.physics import RigIndex, static_equilibrium, tire_law
 from scenarios.core.config import parse_scenario
 from scenarios.core.rig import Rig

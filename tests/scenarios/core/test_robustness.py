@@ -23,7 +23,8 @@ import time
 import numpy as np
 import pytest
 
-from mjcf.build import BOUNDS, TruckVariant, build_model
+from mjcf.build import build_model
+from mjcf.variant import BOUNDS, TruckVariant
 from scenarios.cli.main import main
 from correction.io import atomic
 from scenarios.core import memory

@@ -11,7 +11,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from scenarios.core.pool import run_jobs
 from scenarios.core.run import run

@@ -88,8 +88,8 @@ def test_the_sigmas_go_through_the_mapping():
 
 def test_an_onset_stays_within_its_bounds_at_a_soft_kt():
     """A large load over a kt at the bottom of its search range would put the onset past
-    mjcf.build.BOUNDS (0.1 m), which TruckVariant refuses: the fields stop it there."""
-    from mjcf.build import BOUNDS
+    mjcf.variant.BOUNDS (0.1 m), which TruckVariant refuses: the fields stop it there."""
+    from mjcf.variant import BOUNDS
 
     names = ("tire_stiffness_front_N_per_m", FRONT)
     prob = problem(names, {"tire_stiffness_front_N_per_m": 7.65e5, FRONT: 0.03}, {FRONT: (40e3, 10e3)})

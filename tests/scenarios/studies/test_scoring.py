@@ -24,7 +24,7 @@ from correction.metrics.dlc import dlc, nrmse
 from correction.output.apply import band_limit, correct
 from correction.output.filters import design_correction, reference_filter
 from correction.output.transfer import apply_transfer_function
-from mjcf.build import TruckVariant
+from mjcf.variant import TruckVariant
 from scenarios.core.config import parse_scenario
 from scenarios.core.rig import Rig, actuator_params
 from scenarios.studies.identify.compute import identify_rig
