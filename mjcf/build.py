@@ -13,6 +13,7 @@ import mujoco
 
 from mjcf import names
 from mjcf.cab import CAB_MASS_KG, add_cab_mount
+from mjcf.stations import add_rebound_damping, apply_station_factors, set_masses
 from mjcf.tires import add_progressive_tire, axle_progressive, set_tire, tire_elements
 from mjcf.variant import TruckVariant
 
@@ -96,11 +97,10 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
 
     if v.payload_kg is not None:
         spec.geom("payload_box").mass = float(v.payload_kg)
-    if v.payload_x_m is not None or v.payload_y_m is not None:
-        body = spec.body("payload")
-        x = body.pos[0] if v.payload_x_m is None else float(v.payload_x_m)
-        y = body.pos[1] if v.payload_y_m is None else float(v.payload_y_m)
-        body.pos = [x, y, body.pos[2]]
+    body = spec.body("payload")
+    body.pos = [float(given) if given is not None else float(old)
+                for old, given in zip(body.pos, (v.payload_x_m, v.payload_y_m, v.payload_z_m))]
+    set_masses(spec, v)
     for corner in names.CORNERS:
         front = corner in names.FRONT
         set_tire(
@@ -110,12 +110,15 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
             v.tire_damping_front_Ns_per_m if front else v.tire_damping_rear_Ns_per_m,
             v.tire_free_radius_m,
         )
-        stiffening = axle_progressive(v, front)
-        if stiffening is not None:
-            add_progressive_tire(spec, corner, *stiffening, v.tire_progressive_spread_m)
         friction = v.spring_friction_front_N if front else v.spring_friction_rear_N
         if friction is not None:
             spec.tendon(names.spring_tendon(corner)).frictionloss = float(friction)
+        apply_station_factors(spec, corner, v)  # on the axle's values; before the progressive tire takes kt
+        stiffening = axle_progressive(v, front)
+        if stiffening is not None:
+            add_progressive_tire(spec, corner, *stiffening, v.tire_progressive_spread_m)
+        if v.damper_rebound_ratio is not None and v.damper_rebound_ratio != 1.0:
+            add_rebound_damping(spec, corner, v.damper_rebound_ratio)
         if v.pan_mass_kg is not None:
             spec.body(names.pan_body(corner)).mass = float(v.pan_mass_kg)
         if pans in ("fixed", "mocap"):

@@ -12,7 +12,7 @@ __all__ = [
     "CORNERS", "FRONT", "REAR", "TRUCK_BODIES",
     "pan_body", "pan_joint", "tire_actuator", "tire_sensor", "wheel_site", "hydraulic_actuator",
     "axle_body", "spring_tendon", "CAB_BODY", "CAB_JOINTS", "tire_tendon", "tire_length_sensor",
-    "tire_rate_sensor", "tire_progressive_actuator",
+    "tire_rate_sensor", "tire_progressive_actuator", "spring_rebound_actuator",
 ]
 
 #: Wheel stations, in the order every per-wheel array of this project uses:
@@ -105,3 +105,9 @@ def axle_body(corner: str) -> str:
 def spring_tendon(corner: str) -> str:
     """The leaf spring's tendon at ``corner`` (its rate, damping and interleaf friction)."""
     return f"spring_{_check(corner)}"
+
+
+def spring_rebound_actuator(corner: str) -> str:
+    """The leaf spring's rebound damping element (an actuator on the spring tendon, N, acting only
+    while the spring extends); only with ``TruckVariant.damper_rebound_ratio`` set."""
+    return f"spring_rebound_{_check(corner)}"

@@ -11,6 +11,8 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+from mjcf.names import CORNERS, FRONT
+from mjcf.stations import STATION_FACTORS, station_factor_field
 from mjcf.tires import check_progressive
 
 __all__ = ["TruckVariant", "BOUNDS"]
@@ -54,10 +56,25 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
                                   "than 5 cm is beyond a truck tire's working range"),
     "tire_progressive_ratio_rear": (0.0, 3.0, "1", "as tire_progressive_ratio's"),
     "tire_progressive_onset_rear_m": (0.0, 0.1, "m", "as tire_progressive_onset_m's"),
+    "payload_z_m": (0.2, 1.6, "m", "a load on the bed (top at 0.16 m) has its centre at least a few cm above it, "
+                    "and a 4 m tall truck's load (2.8 m above the bed) at most 1.4 m above it"),
+    "axle_mass_front_kg": (400.0, 1200.0, "kg", "a steer axle with hubs, brakes, wheels and tires weighs "
+                           "600-800 kg (truck_rig.xml)"),
+    "axle_mass_rear_kg": (700.0, 2000.0, "kg", "a drive axle with its differential, brakes and dual wheels "
+                          "weighs 1.0-1.6 t (truck_rig.xml)"),
+    "chassis_mass_kg": (3000.0, 9000.0, "kg", "the sprung mass of an empty two-axle truck (frame, cab, engine, "
+                        "body; truck_rig.xml: 5.2 t) is 4-7 t"),
+    "chassis_roll_inertia_kg_m2": (1300.0, 5200.0, "kg m^2", "half to twice truck_rig.xml's estimate"),
+    "chassis_pitch_inertia_kg_m2": (12_600.0, 50_400.0, "kg m^2", "half to twice truck_rig.xml's estimate"),
+    "damper_rebound_ratio": (1.0, 5.0, "1", "dampers are valved up to 2-4 times harder in rebound than in bump; "
+                             "1 is the XML's symmetric damper"),
     "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
                    "only cost time and memory; the defaults are 1e-4 s (road test) and 1e-3 s (rig test)"),
 }
 
+
+BOUNDS.update({station_factor_field(q, c): (lo, hi, "1", why)
+               for q, (lo, hi, why) in STATION_FACTORS.items() for c in CORNERS})
 
 #: The payload's position fields, signed (m): the largest |value| and where the field must lie.
 _SIGNED = {"payload_x_m": (3.5, "lie on the truck (between -3.5 and 3.5 m)"),
@@ -152,6 +169,41 @@ class TruckVariant:
         The rear tires' own ratio and onset (only with ``tire_progressive_ratio``, which then holds
         for the front tires; ranges as theirs); None: the all-wheel value. A steer tire and a
         rear dual differ in construction and load, and so in where and how much they stiffen.
+    payload_z_m : float, m, optional
+        Height of the payload's centre of mass in the chassis frame (the XML: 0.56 m, a 0.8 m stack
+        on the bed at 0.16 m). 0.2 to 1.6 m. A high load raises the truck's roll and pitch inertia
+        about the suspension and its overturning moment. A plant feature.
+    axle_mass_front_kg, axle_mass_rear_kg : float, kg, optional
+        Mass of each axle with its wheels (the unsprung mass; the XML: 700 and 1200 kg), its
+        inertia scaled with it. 400 to 1200 kg front, 700 to 2000 kg rear. Plant features.
+    chassis_mass_kg : float, kg, optional
+        Mass of the chassis body (frame, cab, engine; the XML: 5200 kg), its inertia kept unless
+        given. 3000 to 9000 kg. A plant feature.
+    chassis_roll_inertia_kg_m2, chassis_pitch_inertia_kg_m2 : float, kg m^2, optional
+        The chassis' roll and pitch moments of inertia about its centre of mass (the XML: 2600 and
+        25 200 kg m^2, estimates), half to twice them; the yaw moment, held by the rig, keeps its
+        ratio to their sum. Plant features.
+    damper_rebound_ratio : float, 1, optional
+        Each leaf-spring damper's rebound coefficient over its bump one, their mean kept at the
+        spring's viscous damping (:func:`mjcf.stations.rebound_coefficients`): a damper valved
+        harder in rebound (the spring extending) than in bump, as vehicle dampers are. ``None`` or
+        1: the XML's symmetric damper. 1 to 5. A plant feature the linear-damper model lacks: on a
+        rough road it also shifts the mean spring force (the damper "jacks down").
+    tire_stiffness_factor_fl, tire_stiffness_factor_fr, tire_stiffness_factor_rl, tire_stiffness_factor_rr : float, 1, optional
+        One wheel station's tire stiffness over its axle's (``tire_stiffness_front_N_per_m`` or
+        the rear one, or the XML's), 0.7 to 1.3: a tire at another pressure, worn, or of another
+        make. The progressive tire's ratio applies to the station's own stiffness.
+    tire_damping_factor_fl, tire_damping_factor_fr, tire_damping_factor_rl, tire_damping_factor_rr : float, 1, optional
+        One station's tire damping over its axle's, 0.5 to 2.
+    spring_rate_factor_fl, spring_rate_factor_fr, spring_rate_factor_rl, spring_rate_factor_rr : float, 1, optional
+        One leaf spring's rate over the XML's, 0.7 to 1.3 (manufacturing tolerance, a broken leaf);
+        its free length kept, so a softer spring sags.
+    spring_damping_factor_fl, spring_damping_factor_fr, spring_damping_factor_rl, spring_damping_factor_rr : float, 1, optional
+        One spring's viscous damping over the XML's, 0.3 to 2 (a worn or a new damper).
+    spring_friction_factor_fl, spring_friction_factor_fr, spring_friction_factor_rl, spring_friction_factor_rr : float, 1, optional
+        One spring's interleaf friction over its axle's (``spring_friction_front_N`` or the rear
+        one, or the XML's), 0.25 to 4 (lubrication, wear, corrosion). The per-station factors are
+        plant features (:mod:`mjcf.stations`): the model family holds an axle's stations equal.
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
@@ -179,6 +231,33 @@ class TruckVariant:
     tire_progressive_spread_m: float | None = None
     tire_progressive_ratio_rear: float | None = None
     tire_progressive_onset_rear_m: float | None = None
+    payload_z_m: float | None = None
+    axle_mass_front_kg: float | None = None
+    axle_mass_rear_kg: float | None = None
+    chassis_mass_kg: float | None = None
+    chassis_roll_inertia_kg_m2: float | None = None
+    chassis_pitch_inertia_kg_m2: float | None = None
+    damper_rebound_ratio: float | None = None
+    tire_stiffness_factor_fl: float | None = None
+    tire_stiffness_factor_fr: float | None = None
+    tire_stiffness_factor_rl: float | None = None
+    tire_stiffness_factor_rr: float | None = None
+    tire_damping_factor_fl: float | None = None
+    tire_damping_factor_fr: float | None = None
+    tire_damping_factor_rl: float | None = None
+    tire_damping_factor_rr: float | None = None
+    spring_rate_factor_fl: float | None = None
+    spring_rate_factor_fr: float | None = None
+    spring_rate_factor_rl: float | None = None
+    spring_rate_factor_rr: float | None = None
+    spring_damping_factor_fl: float | None = None
+    spring_damping_factor_fr: float | None = None
+    spring_damping_factor_rl: float | None = None
+    spring_damping_factor_rr: float | None = None
+    spring_friction_factor_fl: float | None = None
+    spring_friction_factor_fr: float | None = None
+    spring_friction_factor_rl: float | None = None
+    spring_friction_factor_rr: float | None = None
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -199,6 +278,23 @@ class TruckVariant:
             raise ValueError("vehicle.cab_mass_kg only applies to a suspended cab: set vehicle.cab_mount_hz too "
                              "(without it the cab is part of the chassis' mass)")
         check_progressive(self)
+        self._check_stations()
+
+    def _check_stations(self) -> None:
+        """Refuse a station factor that takes its tire past the bounds of its axle's given value
+        (the time step's stability limit, :data:`BOUNDS`)."""
+        for quantity, axle in (("tire_stiffness", "tire_stiffness_{}_N_per_m"), ("tire_damping", "tire_damping_{}_Ns_per_m")):
+            for corner in CORNERS:
+                factor = getattr(self, station_factor_field(quantity, corner))
+                field = axle.format("front" if corner in FRONT else "rear")
+                value = getattr(self, field)
+                if factor is None or value is None:
+                    continue
+                lo, hi, unit, why = BOUNDS[field]
+                if not lo <= value * factor <= hi:
+                    raise ValueError(f"vehicle.{field} x vehicle.{station_factor_field(quantity, corner)} = "
+                                     f"{value * factor:g} {unit} is outside {lo:g} to {hi:g} {unit}: {why}; "
+                                     "bring the factor nearer 1")
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:
