@@ -45,6 +45,7 @@ from correction.output.pipeline import SETTLING_TOLERANCE, correct_forces
 from hydraulics.linearization import eq4_parameters
 from hydraulics.params import GRAVITY_M_S2
 from scenarios.core.config import ScenarioError
+from scenarios.core.lab import LabChain, measure
 from scenarios.records.methods import BEST, METHODS, NOISE_N, PAPER, Method, method_named
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "MIN_DURATION_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
@@ -188,14 +189,12 @@ def check_noise(noise_N: float) -> None:
         raise ScenarioError(f"noise_N must be >= 0 N, got {noise_N!r}")
 
 
-def measured_force(rig, noise_N: float, seed: int) -> np.ndarray:
+def measured_force(rig, noise_N: float, seed: int, chain: LabChain | None = None) -> np.ndarray:
     """The rig run's tire forces as a load cell measures them: plus white noise of ``noise_N``
-    (N rms, >= 0: ScenarioError otherwise) from ``numpy.random.default_rng((seed, 8))``."""
+    (N rms, >= 0: ScenarioError otherwise) from ``numpy.random.default_rng((seed, 8))``, through
+    the lab's measurement ``chain`` (:func:`scenarios.core.lab.measure`; default: nothing more)."""
     check_noise(noise_N)
-    clean = np.asarray(rig.signals["tire_force_N"], dtype=float)
-    if noise_N == 0:
-        return clean.copy()
-    return clean + noise_N * np.random.default_rng((int(seed), 8)).standard_normal(clean.shape)
+    return measure(rig, chain or LabChain(), noise_N, seed).force_N
 
 
 #: The damage figures every score carries (:mod:`correction.metrics.damage`): the dynamic load stress
