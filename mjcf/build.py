@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib.resources
 
 import mujoco
+import numpy as np
 
 from mjcf import names
 from mjcf.cab import CAB_MASS_KG, add_cab_mount
@@ -17,7 +18,7 @@ from mjcf.stations import add_rebound_damping, apply_station_factors, set_masses
 from mjcf.tires import add_progressive_tire, axle_progressive, set_tire, tire_elements
 from mjcf.variant import TruckVariant
 
-__all__ = ["MODEL_FILE", "SCENE_FILE", "resource_path", "load_spec", "build_spec", "build_model"]
+__all__ = ["MODEL_FILE", "SCENE_FILE", "resource_path", "load_spec", "build_spec", "build_model", "nominal_values"]
 
 MODEL_FILE = "truck_rig.xml"
 SCENE_FILE = "scene.xml"
@@ -135,3 +136,36 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
 def build_model(variant: TruckVariant | None = None, *, pans: str = "slide") -> mujoco.MjModel:
     """Compile the truck on the rig with ``variant`` applied (see :func:`build_spec`)."""
     return build_spec(variant, pans=pans).compile()
+
+
+def nominal_values(model: mujoco.MjModel | None = None) -> dict[str, float]:
+    """The XML's value of each :class:`~mjcf.variant.TruckVariant` field that holds one number in the
+    nominal truck (SI; the axle fields read from the front-left and rear-left stations), read from the
+    compiled model (``model``: the caller's own compile of ``build_model()``, to spare a second): the
+    values a factor or an offset on "the catalogue truck" applies to."""
+    model = build_model() if model is None else model
+
+    def body(name: str) -> int:
+        return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+
+    def tire(corner: str) -> np.ndarray:
+        return model.actuator_biasprm[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, names.tire_actuator(corner))]
+
+    def friction(corner: str) -> float:
+        return float(model.tendon_frictionloss[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON,
+                                                                  names.spring_tendon(corner))])
+
+    payload, chassis = body("payload"), body("chassis")
+    front, rear = tire("fl"), tire("rl")
+    return {"payload_kg": float(model.body_mass[payload]), "payload_x_m": float(model.body_pos[payload, 0]),
+            "payload_y_m": float(model.body_pos[payload, 1]), "payload_z_m": float(model.body_pos[payload, 2]),
+            "tire_stiffness_front_N_per_m": float(-front[1]), "tire_stiffness_rear_N_per_m": float(-rear[1]),
+            "tire_damping_front_Ns_per_m": float(-front[2]), "tire_damping_rear_Ns_per_m": float(-rear[2]),
+            "tire_free_radius_m": float(front[0] / -front[1]),
+            "spring_friction_front_N": friction("fl"), "spring_friction_rear_N": friction("rl"),
+            "pan_mass_kg": float(model.body_mass[body(names.pan_body("fl"))]),
+            "axle_mass_front_kg": float(model.body_mass[body(names.axle_body("fl"))]),
+            "axle_mass_rear_kg": float(model.body_mass[body(names.axle_body("rl"))]),
+            "chassis_mass_kg": float(model.body_mass[chassis]),
+            "chassis_roll_inertia_kg_m2": float(model.body_inertia[chassis, 0]),
+            "chassis_pitch_inertia_kg_m2": float(model.body_inertia[chassis, 1])}

@@ -179,3 +179,18 @@ def test_a_station_factor_may_not_take_the_tire_past_its_axles_bounds():
         TruckVariant(tire_stiffness_front_N_per_m=9e7, tire_stiffness_factor_fl=1.2)
     with pytest.raises(ValueError, match="tire_damping_rear_Ns_per_m x vehicle.tire_damping_factor_rr"):
         TruckVariant(tire_damping_rear_Ns_per_m=4e4, tire_damping_factor_rr=2.0)
+
+
+def test_nominal_values_are_the_xmls():
+    """The XML's numbers as written in truck_rig.xml (tire law F = kt R0 - kt L - ct dL/dt)."""
+    from mjcf.build import nominal_values
+
+    v = nominal_values()
+    assert v == pytest.approx({"payload_kg": 3640.0, "payload_x_m": -1.3, "payload_y_m": 0.0, "payload_z_m": 0.56,
+                               "tire_stiffness_front_N_per_m": 9e5, "tire_stiffness_rear_N_per_m": 1.8e6,
+                               "tire_damping_front_Ns_per_m": 1500.0, "tire_damping_rear_Ns_per_m": 3000.0,
+                               "tire_free_radius_m": 0.527, "spring_friction_front_N": 1000.0,
+                               "spring_friction_rear_N": 2000.0, "pan_mass_kg": 500.0, "axle_mass_front_kg": 700.0,
+                               "axle_mass_rear_kg": 1200.0, "chassis_mass_kg": 5200.0,
+                               "chassis_roll_inertia_kg_m2": 2600.0, "chassis_pitch_inertia_kg_m2": 25200.0})
+    assert set(v) <= set(TruckVariant.field_names())

@@ -18,10 +18,9 @@ import numpy as np
 
 from hydraulics.params import GRAVITY_M_S2
 from mjcf import names as mjnames
-from mjcf.build import build_model
+from mjcf.build import build_model, nominal_values
 from mjcf.variant import BOUNDS, TruckVariant
 from mjcf.names import CORNERS, FRONT
-from mjcf.physics import RigIndex, tire_stiffness
 from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.records.model.model_runs import static_axle_loads
@@ -52,22 +51,16 @@ def _nominal() -> tuple[dict, tuple[float, float], np.ndarray]:
     import mujoco
 
     model = build_model(TruckVariant())
-    idx = RigIndex.of(model)
     f, r = CORNERS.index(FRONT[0]), CORNERS.index("rl")
-    stiffness = tire_stiffness(model, idx)
-    damping = -model.actuator_biasprm[idx.tire_actuator, 2]
+    nominal = nominal_values(model)
+    values = {k: nominal[k] for k in ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m",
+                                      "tire_stiffness_rear_N_per_m", "tire_damping_front_Ns_per_m",
+                                      "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
+                                      "spring_friction_rear_N")}
 
     def body(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
 
-    ten = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, mjnames.spring_tendon(c)) for c in CORNERS]
-    payload = body("payload")
-    values = {"payload_kg": float(model.body_mass[payload]),
-              "payload_x_m": float(model.body_pos[payload, 0]),
-              "tire_stiffness_front_N_per_m": float(stiffness[f]), "tire_stiffness_rear_N_per_m": float(stiffness[r]),
-              "tire_damping_front_Ns_per_m": float(damping[f]), "tire_damping_rear_Ns_per_m": float(damping[r]),
-              "spring_friction_front_N": float(model.tendon_frictionloss[ten[f]]),
-              "spring_friction_rear_N": float(model.tendon_frictionloss[ten[r]])}
     axles = tuple(float(model.body_pos[body(mjnames.axle_body(c)), 0]) for c in (CORNERS[f], CORNERS[r]))
     pans_y = np.array([model.body_pos[body(mjnames.pan_body(c)), 1] for c in CORNERS])  # children of the world
     return values, axles, pans_y
