@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LabChain", "LabMeasurement", "TYPICAL_LAB", "LAB_BOUNDS", "measure", "pan_acceleration"]
+__all__ = ["LabChain", "LabMeasurement", "TYPICAL_LAB", "LAB_BOUNDS", "measure", "measure_lvdt", "pan_acceleration"]
 
 #: Bounds of the :class:`LabChain` fields, ``{field: (low, high, unit, why)}``, inclusive.
 LAB_BOUNDS: dict[str, tuple[float, float, str, str]] = {
@@ -210,9 +210,17 @@ def measure(run, chain: LabChain, noise_N: float, seed: int) -> LabMeasurement:
         drift *= chain.drift_noise_N / math.sqrt((1.0 - pole) / (1.0 + pole))  # the first-order filter's rms gain
         force = force + drift
     force = _delayed(_filtered(force, chain.force_filter_hz, chain.filter_order, fs), chain.force_delay_s, fs)
-    if pan is None:
-        return LabMeasurement(force_N=force, pan_m=None)
+    return LabMeasurement(force_N=force, pan_m=None if pan is None else measure_lvdt(pan, fs, chain, seed))
+
+
+def measure_lvdt(pan_m, fs_hz: float, chain: LabChain, seed: int) -> np.ndarray:
+    """The pans' positions (m, (n, k)) at ``fs_hz`` (Hz) as the lab's LVDT channels give them: plus
+    ``chain.lvdt_noise_m`` of white noise from ``numpy.random.default_rng((seed, 11))``, through the
+    LVDT's anti-alias filter, delayed by its skew."""
+    pan = np.asarray(pan_m, dtype=float)
+    if chain.ideal:
+        return pan
+    chain.check_rate(fs_hz)
     if chain.lvdt_noise_m:
         pan = pan + chain.lvdt_noise_m * np.random.default_rng((int(seed), 11)).standard_normal(pan.shape)
-    pan = _delayed(_filtered(pan, chain.lvdt_filter_hz, chain.filter_order, fs), chain.lvdt_delay_s, fs)
-    return LabMeasurement(force_N=force, pan_m=pan)
+    return _delayed(_filtered(pan, chain.lvdt_filter_hz, chain.filter_order, fs_hz), chain.lvdt_delay_s, fs_hz)

@@ -10,7 +10,9 @@ The cases a study runs are data, not code: each suite is a TOML file under
   ``scenarios/data/suites/generalization.toml`` (:func:`generalization_cases`);
 * the model-correction study's plant trucks: the catalogue offsets of the truck on the rig
   from the XML's nominal one and the plants (rigid cab, cab on mounts, progressive tire,
-  gradually stiffening tire), ``scenarios/data/suites/model_plants.toml`` (:func:`model_plants`).
+  gradually stiffening tire), ``scenarios/data/suites/model_plants.toml`` (:func:`model_plants`);
+* the mismatch suite's ranges of real trucks, ``scenarios/data/suites/mismatch_plants.toml``
+  (:func:`scenarios.studies.model_suite.mismatch.plant_ranges`).
 
 :func:`pick_cases` picks cases of a suite by parts of their names, as a command line gives them.
 """
@@ -34,7 +36,7 @@ __all__ = ["SUITES", "SUITE_FILES", "Plant", "ModelPlants", "suite_file", "gener
 #: The suites of cases :func:`pick_cases` knows.
 SUITES = ("paper", "generalization")
 #: The data files of :mod:`scenarios.studies.suites`, under ``scenarios/data/suites/``.
-SUITE_FILES = ("generalization.toml", "model_plants.toml")
+SUITE_FILES = ("generalization.toml", "model_plants.toml", "mismatch_plants.toml")
 
 
 def suite_file(name: str):

@@ -21,6 +21,7 @@ from correction.identification.identify import h1_estimate
 from correction.output.lowpass import BAND_HZ
 from mjcf.names import CORNERS
 from scenarios.core.drive import IDENT_SEED, Drive, identification_drive
+from scenarios.core.lab import LabChain, measure_lvdt
 from scenarios.core.rig import Rig
 
 __all__ = ["IDENT_MIN_S", "IDENT_SKIP_S", "MATCH_BAND_HZ", "FIT_BAND_HZ", "RigIdentification", "band_rms",
@@ -128,7 +129,7 @@ class RigIdentification:
 
 
 def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float | None = None,
-                 seed: int = IDENT_SEED, rig: Rig | None = None) -> RigIdentification:
+                 seed: int = IDENT_SEED, rig: Rig | None = None, lab: LabChain | None = None) -> RigIdentification:
     """Run the identification on the simulated rig of ``scenario`` and fit T_a per corner.
 
     Parameters
@@ -142,6 +143,9 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     seed : int
     rig : Rig, optional
         The scenario's hydraulic rig, if already built.
+    lab : scenarios.core.lab.LabChain, optional
+        The lab's measurement of the LVDTs (:func:`scenarios.core.lab.measure_lvdt`, noise from
+        ``seed``); default: the pans' positions exactly.
 
     Raises
     ------
@@ -157,7 +161,8 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     rate = float(scenario.output_rate_hz)
     rec = rig.run(drive, rate_hz=rate)
     k0 = int(round(IDENT_SKIP_S * rate))
-    u, y = rec.x_ref_m[k0:], rec.pan_m[k0:]
+    pan = rec.pan_m if lab is None else measure_lvdt(rec.pan_m, rate, lab, seed)
+    u, y = rec.x_ref_m[k0:], pan[k0:]
     nperseg = int(min(round(SEGMENT_S * rate), u.shape[0] // 8))
     f, h, coh = h1_estimate(u, y, rate, nperseg)
     keep = f > 0

@@ -1,0 +1,137 @@
+"""One plant of the mismatch suite corrected as a user would, and judged against its road test.
+
+The rig test is measured through the lab's chain (:func:`scenarios.core.lab.measure`); the
+rig's T_a is identified on the same rig before the test, its LVDTs measured the same way
+(``rigsim identify``); the measured forces are corrected linearly by it (``rigsim correct
+--actuators``) and by the truck model calibrated on the record (``rigsim correct --model``: the
+model where its fallback keeps it, else the linear correction, with its reason). Beside them: the
+model correction forced where the fallback refused it (was the refusal right?) and the plant's
+linear floor (the best any per-wheel linear filter of the measured force can do, fitted on the
+road force itself). Every figure per wheel, on the samples where every method has settled.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from correction.output.apply import band_limit
+from correction.output.floor import linear_floor
+from correction.output.pipeline import correct_forces
+from scenarios.core.lab import LabChain, measure
+from scenarios.records.model.differential import correct_with_model, differential_correction, settled_mask
+from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
+
+__all__ = ["FLOOR_TAPS", "PlantScore", "score_plant"]
+
+#: The linear floor's FIR, samples ahead and behind at 1 kHz (benchmarks/nrmse_decomposition.py's).
+FLOOR_TAPS = (50, 400)
+
+
+@dataclass(frozen=True)
+class PlantScore:
+    """One plant's corrections against its road test, per wheel (``fl fr rl rr``).
+
+    Attributes
+    ----------
+    name : str
+        The case's name.
+    plant : Mapping[str, float]
+        The plant truck's TruckVariant fields.
+    method : {"model", "linear"}
+        What ``rigsim correct --model`` delivered.
+    reason : str
+        Why it fell back ("" when the model was kept).
+    nrmse, dlc_error : Mapping[str, numpy.ndarray]
+        Per correction (``linear``, ``delivered``, ``forced`` where a calibration exists), per wheel:
+        NRMSE against the band-limited road force (1) and DLC error against the road's (1).
+    floor : numpy.ndarray, (4,)
+        The linear floor's NRMSE per wheel (1).
+    wall_s, cpu_s : float, s
+        Calibration plus correction by the model: wall time and CPU (this process and its workers).
+    scored_s : float, s
+        Length of the scored samples.
+    fit_nrmse : numpy.ndarray or None, (4,)
+        The calibrated model's fit against the measured force (1), None without a calibration.
+    """
+
+    name: str
+    plant: Mapping[str, float]
+    method: str
+    reason: str
+    nrmse: Mapping[str, np.ndarray]
+    dlc_error: Mapping[str, np.ndarray]
+    floor: np.ndarray
+    wall_s: float
+    cpu_s: float
+    scored_s: float
+    fit_nrmse: np.ndarray | None = None
+    timings: Mapping[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "plant": dict(self.plant), "method": self.method, "reason": self.reason,
+                "nrmse": {k: v.tolist() for k, v in self.nrmse.items()},
+                "dlc_error": {k: v.tolist() for k, v in self.dlc_error.items()}, "floor": self.floor.tolist(),
+                "wall_s": self.wall_s, "cpu_s": self.cpu_s, "scored_s": self.scored_s,
+                "fit_nrmse": None if self.fit_nrmse is None else self.fit_nrmse.tolist(), "timings": dict(self.timings)}
+
+
+def _cpu_s() -> float:
+    import resource
+
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig, identification, *, lab: LabChain,
+                noise_N: float, seed: int, workers: int | None = None, cab: str = "auto") -> PlantScore:
+    """Correct one plant's rig test as a user would and judge it (see the module's description).
+
+    Parameters
+    ----------
+    name : str
+    plant : Mapping[str, float]
+    base_scenario : Scenario
+        The case with the plant (its rig and rate; the model never reads its truck).
+    road, rig : scenarios.core.results.RunResult
+        The road test (the reference) and the rig test.
+    identification : scenarios.studies.identify.compute.RigIdentification
+        T_a per corner identified before the test.
+    lab : LabChain
+        How the lab measures the rig test.
+    noise_N : float, N
+        White load-cell noise.
+    seed : int
+        The noises' seed.
+    workers : int, optional
+        The model calibration's worker processes.
+    cab : {"auto", "held", "fitted"}
+        The model's cab mode.
+    """
+    fs = float(rig.rate_hz)
+    measured = measure(rig, lab, noise_N, seed)
+    road_N = np.asarray(road.signals["tire_force_N"], dtype=float)
+    linear = correct_forces(measured.force_N, identification.actuators(), fs, lowpass=LOWPASS, mode=MODE)
+    wall0, cpu0 = time.perf_counter(), _cpu_s()
+    mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
+                            base_scenario=base_scenario, workers=workers, cab=cab)
+    forced = mc.corrected_N
+    if forced is None and mc.calibration is not None:
+        forced = differential_correction(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"], measured.pan_m,
+                                         measured.force_N, base_scenario=base_scenario, workers=workers)
+    wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
+    rows = band_rows(road_N.shape[0], fs) & np.asarray(linear.settled, dtype=bool) & settled_mask(rig.t_s)
+    scores = {"linear": score_correction(linear.corrected_N, road_N, fs, rows)}
+    if forced is not None:
+        scores["forced"] = score_correction(forced, road_N, fs, rows)
+    scores["delivered"] = scores["forced"] if mc.method == "model" else scores["linear"]
+    floor = linear_floor(measured.force_N, band_limit(road_N, fs, LOWPASS, MODE), *FLOOR_TAPS, rows=rows).nrmse
+    fit = None if mc.calibration is None else np.asarray(mc.calibration.fit_nrmse, dtype=float)
+    return PlantScore(name=name, plant=dict(plant), method=mc.method, reason=mc.reason,
+                      nrmse={k: np.asarray(v["nrmse"]) for k, v in scores.items()},
+                      dlc_error={k: np.asarray(v["dlc_error"]) for k, v in scores.items()},
+                      floor=np.asarray(floor, dtype=float), wall_s=round(wall, 1), cpu_s=round(cpu, 1),
+                      scored_s=float(scores["linear"]["scored_s"]), fit_nrmse=fit, timings=dict(mc.timings))
