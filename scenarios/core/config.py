@@ -33,6 +33,7 @@ from typing import Any
 
 from correction.io.tomlfile import check_keys, number, read_toml
 from mjcf.variant import TruckVariant
+from scenarios.core.lab import LabChain
 
 __all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios",
            "PAPER_CONFIGURATIONS"]
@@ -109,6 +110,9 @@ class Scenario:
         so the run starts from rest and the statistics see no start-up transient.
     output_rate_hz : float, Hz
         Rate of the written time series (a divisor of the simulation rate, >= 1 kHz).
+    lab : scenarios.core.lab.LabChain
+        How the lab measures the rig test (``[lab]``, the fields of
+        :class:`~scenarios.core.lab.LabChain`; default: the ideal load cell and LVDT).
     source : pathlib.Path, optional
         The file the scenario was read from (for relative paths).
     """
@@ -122,6 +126,7 @@ class Scenario:
     actuator: Mapping = field(default_factory=lambda: MappingProxyType({}))
     lead_in_s: float = 2.0
     output_rate_hz: float = 1000.0
+    lab: LabChain = field(default_factory=LabChain)
     source: pathlib.Path | None = None
 
     @property
@@ -143,7 +148,8 @@ class Scenario:
         return tuple(p for p in (self.source, self.profile_path) if p is not None)
 
 
-_TOP_KEYS = {"name", "description", "speed_kmh", "duration_s", "seed", "lead_in_s", "output_rate_hz", "road", "vehicle", "actuator"}
+_TOP_KEYS = {"name", "description", "speed_kmh", "duration_s", "seed", "lead_in_s", "output_rate_hz", "road", "vehicle",
+             "actuator", "lab"}
 _ROAD_KEYS = {f.name for f in dataclasses.fields(RoadConfig)}
 _TRACKS = ("identical", "independent", "coherent")
 
@@ -253,6 +259,13 @@ def parse_scenario(doc: Mapping, *, source: pathlib.Path | None = None) -> Scena
         except (TypeError, ValueError) as exc:
             raise ScenarioError(str(exc)) from None
         kw["actuator"] = MappingProxyType(overrides)
+    if "lab" in doc:
+        try:
+            lab = LabChain(**_dataclass_overrides(doc["lab"], LabChain, "lab"))
+            lab.check_rate(kw.get("output_rate_hz", 1000.0))
+        except ValueError as exc:
+            raise ScenarioError(str(exc)) from None
+        kw["lab"] = lab
     return Scenario(**kw)
 
 

@@ -230,7 +230,7 @@ def _actuators(method: Method, rig_model, force_N: np.ndarray, identified) -> li
 
 
 def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_N: float = NOISE_N,
-               seed: int = 0, settling_tolerance: float = SETTLING_TOLERANCE) -> PairScore:
+               seed: int = 0, settling_tolerance: float = SETTLING_TOLERANCE, lab: LabChain | None = None) -> PairScore:
     """Correct ``rig``'s wheel forces by each method and compare them with ``road``'s.
 
     Parameters
@@ -248,6 +248,9 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
         Seed of the noise.
     settling_tolerance : float, 1
         Samples inside the filters' transients at this tolerance are not scored.
+    lab : scenarios.core.lab.LabChain, optional
+        How the lab measures the rig force (:func:`measured_force`); default: the scenario's of
+        ``rig_model`` (``[lab]``).
 
     Raises
     ------
@@ -261,7 +264,9 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
     check_noise(noise_N)
     fs = road.rate_hz
     road_f = np.asarray(road.signals["tire_force_N"], dtype=float)
-    rig_f = measured_force(rig, noise_N, seed)
+    if lab is None and hasattr(rig_model, "scenario"):
+        lab = rig_model.scenario.lab
+    rig_f = measured_force(rig, noise_N, seed, lab)
     n = road_f.shape[0]
     scores = {}
     for m in methods:

@@ -145,7 +145,7 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
         The scenario's hydraulic rig, if already built.
     lab : scenarios.core.lab.LabChain, optional
         The lab's measurement of the LVDTs (:func:`scenarios.core.lab.measure_lvdt`, noise from
-        ``seed``); default: the pans' positions exactly.
+        ``seed``); default: the scenario's (``[lab]``).
 
     Raises
     ------
@@ -161,7 +161,7 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     rate = float(scenario.output_rate_hz)
     rec = rig.run(drive, rate_hz=rate)
     k0 = int(round(IDENT_SKIP_S * rate))
-    pan = rec.pan_m if lab is None else measure_lvdt(rec.pan_m, rate, lab, seed)
+    pan = measure_lvdt(rec.pan_m, rate, scenario.lab if lab is None else lab, seed)
     u, y = rec.x_ref_m[k0:], pan[k0:]
     nperseg = int(min(round(SEGMENT_S * rate), u.shape[0] // 8))
     f, h, coh = h1_estimate(u, y, rate, nperseg)

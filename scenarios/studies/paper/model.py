@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scenarios.core.lab import measure_lvdt
 from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, correct_with_model
 from scenarios.records.model.result import ModelCorrection
 from scenarios.records.model.score import score_correction
@@ -72,7 +73,8 @@ class ModelScore:
 def _score_case(case, workers: int | None) -> ModelScore:
     rig, road, score = case.rig, case.road, case.score
     best = score.methods["best"]
-    mc = correct_with_model(rig.t_s, rig.signals["profile_m"], rig.signals["pan_m"], score.rig_N,
+    lvdt = measure_lvdt(rig.signals["pan_m"], rig.rate_hz, case.scenario.lab, case.scenario.seed)
+    mc = correct_with_model(rig.t_s, rig.signals["profile_m"], lvdt, score.rig_N,
                             base_scenario=case.scenario, workers=workers)
     figures = None
     if not mc.use_linear:

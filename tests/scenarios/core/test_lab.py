@@ -117,3 +117,16 @@ def test_each_field_is_bounded_and_named(field):
 def test_a_filter_corner_above_nyquist_is_refused_before_any_work():
     with pytest.raises(ValueError, match="lab.force_filter_hz = 600 Hz must lie below half the record's rate"):
         measure(_run(), LabChain(force_filter_hz=600.0), 0.0, 0)
+
+
+def test_a_scenarios_lab_table_is_read_and_checked():
+    from scenarios.core.config import ScenarioError, parse_scenario
+
+    base = {"name": "x", "speed_kmh": 60, "duration_s": 10, "road": {"roughness": "medium"}}
+    assert parse_scenario(base).lab == LabChain()
+    sc = parse_scenario(base | {"lab": {"cell_mass_kg": 250, "compensation_kg": 257.5, "force_filter_hz": 200}})
+    assert sc.lab == LabChain(cell_mass_kg=250.0, compensation_kg=257.5, force_filter_hz=200.0)
+    with pytest.raises(ScenarioError, match="lab.force_filter_hz = 600 Hz must lie below half the record's rate"):
+        parse_scenario(base | {"lab": {"force_filter_hz": 600}})
+    with pytest.raises(ScenarioError, match="lab"):
+        parse_scenario(base | {"lab": {"cell_mas_kg": 250}})
