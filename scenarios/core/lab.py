@@ -115,12 +115,13 @@ class LabChain:
 
 #: A servo-hydraulic lab's measurement (estimates): 250 kg of pan plate above the load cell, the lab
 #: compensating 3 % too much mass; a 0.02 m/s^2 accelerometer; 20 micrometres of LVDT noise (about
-#: 0.03 % of a 7.6 cm half-stroke); 4th-order anti-alias filters at 200 Hz (force) and 100 Hz (LVDT,
-#: its demodulator) for 1 kHz sampling; the force 0.5 ms behind the LVDT (multiplexing); 50 N of
-#: load-cell drift below 1 Hz.
+#: 0.03 % of a 7.6 cm half-stroke); 4th-order anti-alias filters for 1 kHz sampling, 200 Hz on the
+#: load cell's bridge amplifier and 150 Hz on the LVDT's demodulator (their group delays differ by
+#: 0.7 ms); the force sampled 0.2 ms after the LVDT (a multiplexed converter); 50 N of load-cell
+#: drift below 1 Hz.
 TYPICAL_LAB = LabChain(cell_mass_kg=250.0, compensation_kg=257.5, accelerometer_noise_m_s2=0.02,
-                       lvdt_noise_m=20e-6, force_filter_hz=200.0, lvdt_filter_hz=100.0, filter_order=4,
-                       force_delay_s=0.0005, lvdt_delay_s=0.0, drift_noise_N=50.0, drift_corner_hz=1.0)
+                       lvdt_noise_m=20e-6, force_filter_hz=200.0, lvdt_filter_hz=150.0, filter_order=4,
+                       force_delay_s=0.0002, lvdt_delay_s=0.0, drift_noise_N=50.0, drift_corner_hz=1.0)
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, 
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.result import LINEAR, MODEL, ModelCorrection
 
-__all__ = ["START_S", "EXCESS_NRMSE_LIMIT", "differential_correction", "settled_mask", "correct_with_model",
+__all__ = ["START_S", "EXCESS_NRMSE_LIMIT", "model_force_pair", "differential_correction", "settled_mask", "correct_with_model",
            "fallback_reason"]
 
 #: The model runs' start-up transient, s: samples before it are not settled. Measured on the
@@ -67,6 +67,17 @@ def settled_mask(t_s, start_s: float = START_S) -> np.ndarray:
     return (t - t[0]) >= start_s - 1e-9
 
 
+def model_force_pair(variant: TruckVariant, t_s, x_ref_m, x_a_m, *, base_scenario: Scenario,
+                     workers: int | None = None, executor=None) -> tuple[np.ndarray, np.ndarray]:
+    """The model truck's wheel forces (N, (n, 4)) on pans following the drive and following the
+    measured pans: ``(F_model(x_ref), F_model(x_a))``; parameters as :func:`differential_correction`'s."""
+    t, _ = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m})
+    base = portable(base_scenario)
+    jobs = [(window_job, (variant, t, np.asarray(x, float), base, SETTLE_S)) for x in (x_ref_m, x_a_m)]
+    f_ref, f_a = run_jobs(jobs, workers=workers, executor=executor)
+    return f_ref, f_a
+
+
 def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                             workers: int | None = None, executor=None) -> np.ndarray:
     """F_rig + F_model(x_ref) - F_model(x_a) per wheel, N, (n, 4).
@@ -88,10 +99,9 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
     executor : concurrent.futures.Executor, optional
         A running pool to use instead.
     """
-    t, _ = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
-    base = portable(base_scenario)
-    jobs = [(window_job, (variant, t, np.asarray(x, float), base, SETTLE_S)) for x in (x_ref_m, x_a_m)]
-    f_ref, f_a = run_jobs(jobs, workers=workers, executor=executor)
+    check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
+    f_ref, f_a = model_force_pair(variant, t_s, x_ref_m, x_a_m, base_scenario=base_scenario, workers=workers,
+                                  executor=executor)
     return np.asarray(force_N, dtype=float) + f_ref - f_a
 
 

@@ -22,7 +22,7 @@ from correction.output.apply import band_limit
 from correction.output.floor import linear_floor
 from correction.output.pipeline import correct_forces
 from scenarios.core.lab import LabChain, measure
-from scenarios.records.model.differential import correct_with_model, differential_correction, settled_mask
+from scenarios.records.model.differential import correct_with_model, model_force_pair, settled_mask
 from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
 
 __all__ = ["FLOOR_TAPS", "PlantScore", "score_plant"]
@@ -46,7 +46,10 @@ class PlantScore:
     reason : str
         Why it fell back ("" when the model was kept).
     nrmse, dlc_error : Mapping[str, numpy.ndarray]
-        Per correction (``linear``, ``delivered``, ``forced`` where a calibration exists), per wheel:
+        Per correction (``linear``, ``delivered``, and where a calibration exists ``forced``, the
+        differential model correction F_rig + F_model(x_ref) - F_model(x_a) whatever the fallback
+        said, and ``hybrid``, F_model(x_ref) + L(F_rig - F_model(x_a)) with L the linear correction:
+        the model's residual corrected for the actuators too), per wheel:
         NRMSE against the band-limited road force (1) and DLC error against the road's (1).
     floor : numpy.ndarray, (4,)
         The linear floor's NRMSE per wheel (1).
@@ -118,15 +121,19 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     wall0, cpu0 = time.perf_counter(), _cpu_s()
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
                             base_scenario=base_scenario, workers=workers, cab=cab)
-    forced = mc.corrected_N
-    if forced is None and mc.calibration is not None:
-        forced = differential_correction(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"], measured.pan_m,
-                                         measured.force_N, base_scenario=base_scenario, workers=workers)
     wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
+    forced = hybrid = None
+    if mc.calibration is not None:
+        f_ref, f_a = model_force_pair(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"], measured.pan_m,
+                                      base_scenario=base_scenario, workers=workers)
+        forced = measured.force_N + f_ref - f_a
+        residual = correct_forces(measured.force_N - f_a, identification.actuators(), fs, lowpass=LOWPASS, mode=MODE)
+        hybrid = f_ref + residual.corrected_N
     rows = band_rows(road_N.shape[0], fs) & np.asarray(linear.settled, dtype=bool) & settled_mask(rig.t_s)
     scores = {"linear": score_correction(linear.corrected_N, road_N, fs, rows)}
     if forced is not None:
         scores["forced"] = score_correction(forced, road_N, fs, rows)
+        scores["hybrid"] = score_correction(hybrid, road_N, fs, rows)
     scores["delivered"] = scores["forced"] if mc.method == "model" else scores["linear"]
     floor = linear_floor(measured.force_N, band_limit(road_N, fs, LOWPASS, MODE), *FLOOR_TAPS, rows=rows).nrmse
     fit = None if mc.calibration is None else np.asarray(mc.calibration.fit_nrmse, dtype=float)
