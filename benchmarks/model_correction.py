@@ -44,7 +44,8 @@ plant after the other in this process (the calibration starts its own pool of ``
 do not nest), the model correction of the measured rig force
 (100 N rms load-cell noise on), :func:`scenarios.records.model.differential.correct_with_model`:
 calibration from x_a and F_rig only (first guess from the static loads and catalogue values, never
-the plant's), then F_rig + F_model(x_ref) - F_model(x_a). Scored per wheel on the samples where
+the plant's), then F_model(x_ref) + L(F_rig - F_model(x_a)), L the linear correction by the identified T_a.
+Scored per wheel on the samples where
 every method has settled (the model's start-up, the linear correction's filter transients, the
 band limit's): NRMSE against the road force through the 30 Hz band limit, and DLC against the road
 DLC; beside them the linear floor (:func:`correction.output.floor.linear_floor`, per wheel, taps -50..400
@@ -141,7 +142,7 @@ def analyse(case, duration_s, plant, road, rig, ident, noise_N, workers, cab: st
     best = score.methods[scoring.BEST.name]
     wall0, cpu0 = time.perf_counter(), cpu_s()
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], rig.signals["pan_m"], rig_N, base_scenario=sc,
-                            workers=workers, cab=cab)
+                            workers=workers, cab=cab, linear=scoring.linear_correction(ident.actuators(), fs))
     wall, cpu = time.perf_counter() - wall0, cpu_s() - cpu0
     road_b = band_limit(road_f, fs, LOWPASS, MODE)
     rows = band_rows(road_f.shape[0], fs) & best.settled & settled_mask(rig.t_s)

@@ -11,8 +11,9 @@ The truck model (the project's truck, ``truck_rig.xml``) is calibrated on ``IN``
 corner the drive x_ref and the LVDT x_a (``--pairs``, the syntax of ``rigsim identify
 --from-file``; lengths, converted to m) and the wheel force F_rig (the force channel whose name
 holds the corner as a token, or ``--map``'s; converted to N); then
-F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
-(:func:`scenarios.records.model.differential.correct_with_model`). ``TRUCK.toml`` is a
+F_corrected = F_model(x_ref) + L(F_rig - F_model(x_a)) per wheel, L the linear correction
+T_a^-1 T_F with ``--actuator``/``--actuators`` if given, else T_a identified per corner from the
+``--pairs`` channels (:func:`scenarios.records.model.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
 and its ``[vehicle]`` tire stiffness, tire damping, tire stiffening (``tire_progressive_ratio``,
 ``tire_progressive_onset_m``, and the rear tires' ``_ratio_rear`` / ``_onset_rear_m``, which
@@ -24,11 +25,10 @@ frequency fitted (from that value or 2.5 Hz), and the clearly better fit is kept
 (:func:`scenarios.records.model.cab_choice.calibrate_cab`); ``--cab held`` or
 ``--cab fitted`` calibrates once. Every fitted value is only a starting guess.
 
-Where the model cannot be trusted on this record (it does not reproduce F_rig, or its calibration
-did not converge or could not run) the linear correction is used instead, with ``--actuator`` /
-``--actuators`` if given, else T_a identified per corner from the ``--pairs`` channels
-(:func:`scenarios.records.recorded.identify_record`), and the reason is printed and
-written to the output's metadata. ``OUT`` is the file :meth:`scenarios.records.corrected.CorrectionResult.write`
+Where the model cannot be trusted on this record (its calibration did not converge or could not
+run, or it does not reproduce F_rig on any wheel) L alone corrects the record; where it does not
+reproduce F_rig on some wheels, L alone corrects those; the reason is printed and written to the
+output's metadata. ``OUT`` is the file :meth:`scenarios.records.corrected.CorrectionResult.write`
 writes: ``<channel>_corrected`` in N (``settled`` with ``--transient mark``; the model runs' first
 :data:`~scenarios.records.model.differential.START_S` are not settled), with metadata:
 the method (and why), the calibration (fitted values with units and 1-sigma, fit NRMSE per
@@ -57,7 +57,8 @@ def add_model_arguments(parser) -> None:
     g = parser.add_argument_group(
         "correction by a truck model calibrated on the record (instead of T_a^-1 T_F)")
     g.add_argument("--model", metavar="TRUCK.toml",
-                   help="correct each wheel as F_rig + F_model(drive) - F_model(LVDT), the truck model calibrated "
+                   help="correct each wheel as F_model(drive) + L(F_rig - F_model(LVDT)), L the linear correction, "
+                        "the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
                         "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
                         "tire per axle), the cab's mount frequency where it fits clearly better (--cab); minutes of "
@@ -66,9 +67,9 @@ def add_model_arguments(parser) -> None:
                         "leaf-friction values (tire_progressive_ratio and _onset_m included) are only the "
                         "starting guess (default: catalogue values; payload and position start from the record's "
                         "static loads). Needs --pairs and at least 6.5 s of record (the windows are spread over "
-                        "it). Where the model does not reproduce the forces, the linear correction is used "
-                        "(--actuator or --actuators if given, else T_a identified per corner from --pairs; "
-                        "--lowpass, --lowpass-hz, --mode apply) and the reason is printed and written to OUT")
+                        "it). L: --actuator or --actuators if given, else T_a identified per corner from --pairs; "
+                        "--lowpass, --lowpass-hz, --mode apply. On the wheels where the model does not reproduce "
+                        "the forces L alone is used, and the reason is printed and written to OUT")
     g.add_argument("--pairs", metavar="fl=DRIVE:LVDT,...",
                    help="with --model: per corner (fl, fr, rl, rr) the drive and the pan displacement (LVDT) "
                         "channels, named without their [unit] as for rigsim identify --from-file; lengths from "
@@ -121,6 +122,8 @@ def cmd_correct_model(args, naming) -> int:
     cal, meta = result.calibration, result.metadata
     if result.method == "linear":
         print(f"linear correction used: {result.reason}")
+    elif result.reason:
+        print(f"truck model used on {meta['model_wheels']}: {result.reason}")
     if cal is not None:
         print(cal.table())
         print(f"fit NRMSE per wheel (calibrated model against the measured force): {meta['cal_fit_nrmse']}; "
@@ -131,10 +134,10 @@ def cmd_correct_model(args, naming) -> int:
     result.write(args.out, overwrite=args.force)
     if result.settled.any():
         print(result.table())
-    what, kind = ((f"by {result.description}", "start-up") if result.method == "model"
-                  else (f"by the linear correction ({result.description})", "transient"))
+    what = (f"by {result.description}" if result.method == "model"
+            else f"by the linear correction ({result.description})")
     print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz {what}; "
-          f"{result.transient_samples} {kind} samples {'dropped' if args.transient == 'drop' else 'kept'}; "
+          f"{result.transient_samples} transient samples {'dropped' if args.transient == 'drop' else 'kept'}; "
           f"wrote {args.out}")
     return 0
 

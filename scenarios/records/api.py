@@ -44,8 +44,9 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
     Give exactly one source of T_a (``actuator``, ``actuators`` or ``identify``) for the linear
     correction ``F_corrected = T_a^-1 T_F F_measured``, or ``model`` and ``pairs`` for the
     correction by a truck model calibrated on the record,
-    ``F_corrected = F_rig + F_model(x_ref) - F_model(x_a)`` (minutes of CPU; where the model does
-    not reproduce the forces the linear correction is used, and the result says why).
+    ``F_corrected = F_model(x_ref) + L(F_rig - F_model(x_a))`` with L the linear correction (minutes
+    of CPU; on the wheels where the model does not reproduce the forces L alone is used, and the
+    result says why).
 
     Parameters
     ----------
@@ -55,12 +56,12 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
         One T_a for every force channel: an actuator file (``[transfer_function] num, den`` or
         eq. 4's ``[parameters]``, :mod:`correction.io.actuator_file`), or ``(num, den)`` in
         descending powers of s (s in rad/s), an ``ActuatorFit`` or a ``control.TransferFunction``.
-        With ``model``: the linear fallback's T_a.
+        With ``model``: L's T_a.
     actuators : str, os.PathLike or Mapping[str, T_a], optional
         One T_a per corner: a per-corner actuator file (``rigsim identify``'s ``actuators.toml``)
         or corner -> T_a; each corner corrects the force channel whose name holds the corner as
         a token (``tire_force_fl_N``, ``Fz_FL``) or the one ``corner_map`` gives. With ``model``:
-        the linear fallback's, one for each of fl, fr, rl, rr.
+        L's, one for each of fl, fr, rl, rr (default: identified per corner from ``pairs``).
     identify : (str, str) or str, optional
         The drive and pan displacement channels (lengths) T_a is fitted from
         (:func:`correction.identification.actuator_fit.fit_actuator`), ``("drive", "lvdt")`` or ``"drive,lvdt"``.

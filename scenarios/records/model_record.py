@@ -3,17 +3,17 @@
 The truck model (the project's truck, ``truck_rig.xml``) is calibrated on the record alone: per
 corner the drive x_ref and the LVDT x_a (``pairs``; lengths in m) and the wheel force F_rig (the
 force channel whose name holds the corner as a token, or ``corner_map``'s; in N); then
-F_corrected = F_rig + F_model(x_ref) - F_model(x_a) per wheel
+F_corrected = F_model(x_ref) + L(F_rig - F_model(x_a)) per wheel, L the linear correction
+``T_a^-1 T_F`` with the given T_a, else T_a identified per corner from the ``pairs`` channels
 (:func:`scenarios.records.model.differential.correct_with_model`). The scenario's rig (actuator
 stroke) is used, and its ``[vehicle]`` tire and leaf-friction values, where given, are the
 calibration's first guesses (:func:`first_guess`); the payload and its position always start
 from the record's static loads.
 
-Where the model cannot be trusted on this record (it does not reproduce F_rig, or its calibration
-did not converge or could not run) the linear correction is used instead
-(:func:`scenarios.records.linear.linear_result`), with the given fallback T_a, else T_a
-identified per corner from the ``pairs`` channels (:func:`scenarios.records.recorded.identify_record`),
-and the reason goes into the result and the file's metadata (:func:`model_metadata`: the method
+Where the model cannot be trusted on this record (its calibration did not converge or could not
+run, or it does not reproduce F_rig on any wheel) the linear correction L is used instead
+(:func:`scenarios.records.linear.linear_result`); where it does not reproduce F_rig on some wheels,
+those are corrected by L alone; the reason goes into the result and the file's metadata (:func:`model_metadata`: the method
 and why, the calibration's fitted values with units and 1-sigma, the fit NRMSE per wheel).
 Imports nothing heavy at module level.
 """
@@ -23,7 +23,7 @@ from __future__ import annotations
 from scenarios.records.channels import LENGTH_UNITS, plan_channels, resolver, unit_text
 from scenarios.records.corrected import CorrectionResult, channel_loads
 from scenarios.records.linear import linear_result, ta_text
-from scenarios.records.output import linear_metadata, rigsim_version
+from scenarios.records.output import linear_correction, linear_metadata, lowpass_filter, rigsim_version
 
 __all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "cal_key", "calibration_meta", "model_metadata",
            "plan_model", "run_model"]
@@ -31,7 +31,7 @@ __all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "cal_key", "calibra
 #: The fields the payload's first guess comes from the record for (a [vehicle] value is not used).
 FROM_STATIC_LOADS = ("payload_kg", "payload_x_m", "payload_y_m")
 #: How the model correction corrects, in a result's description.
-MODEL_TEXT = "the truck model calibrated on the record (F_rig + F_model(drive) - F_model(LVDT))"
+MODEL_TEXT = "the truck model calibrated on the record (F_model(drive) + L(F_rig - F_model(LVDT)))"
 
 
 def _error(message: str):
@@ -137,7 +137,8 @@ def calibration_meta(cal) -> dict[str, str]:
 def model_metadata(settings, record, pairs, force_cols, model_result, fallback_source: str | None) -> dict[str, str]:
     """How the output was made; ``model_result`` the ModelCorrection (None: every key the file may
     carry, with the longest sentences, to check an output before the work)."""
-    from scenarios.records.model.differential import START_S
+    from mjcf.names import CORNERS
+    from scenarios.records.model.differential import HYBRID_FORMULA, START_S
 
     method = "probe" if model_result is None else model_result.method
     meta = {"made_by": "rigsim correct --model", "rigsim_version": rigsim_version(), "input": str(record.path),
@@ -148,10 +149,11 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
     meta.update({"corners": ",".join(f"{k}={c}" for k, c in zip(pairs, force_cols)),
                  "pairs": ",".join(f"{k}={d}:{x}" for k, (d, x) in pairs.items())})
     if method in ("model", "probe"):
-        meta.update({"correction": "F_corrected = F_rig + F_model(x_ref) - F_model(x_a)", "force_unit": "N",
+        meta.update({"correction": f"F_corrected = {HYBRID_FORMULA}, L = T_a^-1 T_F", "force_unit": "N",
                      "start_up_s": f"{START_S:g} (model runs' start-up: not settled)",
-                     "transient": settings.transient})
-    if method in ("linear", "probe"):
+                     "transient": settings.transient,
+                     "model_wheels": ",".join(CORNERS if model_result is None else model_result.wheels) or "none"})
+    if method in ("linear", "model", "probe"):
         meta.update({"ta_source": fallback_source or "x",
                      **linear_metadata(lowpass=settings.lowpass, lowpass_hz=settings.lowpass_hz, mode=settings.mode,
                                        transient=settings.transient, normalize_dc=settings.normalize_dc)})
@@ -188,9 +190,25 @@ def run_model(plan, progress=None) -> CorrectionResult:
     say(f"model correction of {str(record.path)!r} ({forces.shape[0] / fs:.4g} s at {fs:.6g} Hz): calibrating "
         f"the truck model on {windows} window(s) of {WINDOW_LEAD_S + WINDOW_S:g} s, at most {max_nfev} fit "
         f"evaluations, {s.workers} worker process(es); this takes minutes")
+    if s.ta is not None:
+        tas, source = s.ta, ta_text(s.ta_source)
+    else:
+        from scenarios.records.recorded import identify_record
+
+        say("identifying T_a per corner from the drive and LVDT channels for the linear correction L")
+        fits = identify_record(record, pairs=pairs, naming=s.naming).fits
+        tas, source = [fits[c] for c in pairs], "identified per corner from the drive and LVDT channels"
+
+    def linear(f):
+        res = linear_correction(f, tas, fs, list(plan.channels), list(pairs), lowpass=lowpass_filter(s.lowpass, s.lowpass_hz),
+                                mode=s.mode, normalize_dc=s.normalize_dc, transient=s.transient,
+                                lowpass_hz=s.lowpass_hz, naming=s.naming)
+        return res.corrected_N, res.settled
+
     res = correct_with_model(record.time_s, record.array([d for d, _ in pairs.values()]),
                              record.array([x for _, x in pairs.values()]), forces, base_scenario=s.scenario,
-                             workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab)
+                             workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
+                             linear=linear)
     cal = res.calibration
     if cal is not None:
         say(f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
@@ -201,17 +219,9 @@ def run_model(plan, progress=None) -> CorrectionResult:
         loads = channel_loads(plan.channels, forces[settled], res.corrected_N[settled], fs) if settled.any() else ()
         return CorrectionResult(
             channels=plan.channels, corners=plan.corners, time_s=record.time_s, measured_N=forces,
-            corrected_N=res.corrected_N, settled=settled, fs_hz=float(fs), method="model", reason="",
-            description=MODEL_TEXT, transient=s.transient,
-            metadata=model_metadata(s, record, pairs, plan.channels, res, None), loads=loads, calibration=cal,
+            corrected_N=res.corrected_N, settled=settled, fs_hz=float(fs), method="model", reason=res.reason,
+            description=f"{MODEL_TEXT}, L with T_a {source}", transient=s.transient,
+            metadata=model_metadata(s, record, pairs, plan.channels, res, source), loads=loads, calibration=cal,
             inputs=plan.inputs)
-    if s.ta is not None:
-        tas, source = s.ta, ta_text(s.ta_source)
-    else:
-        from scenarios.records.recorded import identify_record
-
-        say(f"the model is not used; identifying T_a per corner from {s.naming('pairs')} for the linear correction")
-        fits = identify_record(record, pairs=pairs, naming=s.naming).fits
-        tas, source = [fits[c] for c in pairs], f"identified per corner from {s.naming('pairs')}"
     return linear_result(plan, tas, source, corners=list(pairs), reason=res.reason, calibration=cal,
                          metadata=model_metadata(s, record, pairs, plan.channels, res, source))

@@ -49,7 +49,8 @@ from scenarios.core.lab import LabChain, measure
 from scenarios.records.methods import BEST, METHODS, NOISE_N, PAPER, Method, method_named
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "MIN_DURATION_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
-           "PairScore", "score_pair", "SETTLING_TOLERANCE", "check_noise", "measured_force", "shortest_scorable_s"]
+           "PairScore", "score_pair", "SETTLING_TOLERANCE", "check_noise", "measured_force", "shortest_scorable_s",
+           "linear_correction"]
 
 #: Fewer settled seconds than this cannot give a meaningful DLC, s.
 MIN_SCORED_S = 0.25
@@ -292,3 +293,13 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
                                      actuators=actuators, figures=figures, scored_s=scored_s, cycles=cycles)
     return PairScore(t_s=road.t_s, road_N=road_f, rig_N=rig_f, noise_N=float(noise_N), dlc_road=dlc(road_f),
                      dlc_rig=dlc(rig_f), methods=scores, corners=tuple(road.corners))
+
+
+def linear_correction(actuators, fs_hz: float):
+    """The project's linear correction with T_a ``actuators`` (one per wheel) at ``fs_hz`` (Hz), as the
+    model correction's ``linear``: forces (N, (n, 4)) -> (corrected (N), settled (bool, (n,)))."""
+    def correct(forces):
+        res = correct_forces(forces, actuators, fs_hz, lowpass=BEST.lowpass, mode=BEST.mode)
+        return res.corrected_N, res.settled
+
+    return correct

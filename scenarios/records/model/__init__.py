@@ -1,4 +1,4 @@
-"""Output correction by a rig-calibrated truck model: F_corr = F_rig + F_model(x_ref) - F_model(x_a).
+"""Output correction by a rig-calibrated truck model: F_corr = F_model(x_ref) + L(F_rig - F_model(x_a)).
 
 * :mod:`.model_runs`: :func:`~.model_runs.model_forces`, the truck model's tire forces with its pans
   following a measured motion (x_ref or x_a, 1 kHz);
@@ -8,9 +8,10 @@
   towards the frequencies the correction uses the model at;
 * :mod:`.cab_choice`: :func:`~.cab_choice.calibrate_cab`, the cab held, fitted, or (default) both
   calibrated and the clearly better fit kept;
-* :mod:`.differential`: :func:`~.differential.differential_correction` and
-  :func:`~.differential.correct_with_model` (calibrate, check, correct, or fall back to the linear
-  correction with one sentence why);
+* :mod:`.differential`: :func:`~.differential.correct_with_model` (calibrate, check, correct with
+  the linear correction L of the model's residual, or fall back to L on the wheels the model does
+  not reproduce, with one sentence why) and the differential form
+  :func:`~.differential.differential_correction`;
 * :mod:`.score`: the NRMSE / DLC of a corrected force against the road force;
 * :mod:`.result`: :class:`~.result.Calibration`, :class:`~.result.ModelCorrection`.
 

@@ -1,10 +1,17 @@
-"""The differential model correction, F_corr = F_rig + F_model(x_ref) - F_model(x_a), and where it stops.
+"""The model correction: a truck model calibrated on the record predicts what the rig did to the force.
 
 A truck model driven by the rig's measured pan motion x_a should reproduce the measured wheel
-force F_rig; driven by the drive x_ref (the road profile) it predicts the road force. Used as a
-difference, the model only has to predict the change the actuators' error x_a - x_ref causes:
-its own errors largely cancel. Per wheel, on the measured (noisy) F_rig, unfiltered
-(no low-pass is needed: nothing is inverted).
+force F_rig; driven by the drive x_ref (the road profile) it predicts the road force. Two ways
+to use it:
+
+* the differential correction, F_rig + F_model(x_ref) - F_model(x_a): the model only has to
+  predict the change the actuators' error x_a - x_ref causes, its own errors largely cancel;
+  unfiltered (nothing is inverted);
+* with the record's linear correction L (``T_a^-1 T_F`` per wheel), F_model(x_ref) +
+  L(F_rig - F_model(x_a)): the part of the rig force the model does not explain (a left/right
+  asymmetry, a damper's nonlinearity, the lab's channels) is corrected for the actuators too
+  instead of being kept as the rig made it. It equals L(F_rig) plus the model's estimate of L's
+  own error, so it tends to the linear correction as the model explains less.
 
 Both model runs start from rest while the truck on the rig was already moving at the record's
 first sample; the two start-up errors largely cancel, but not wholly (the road's and the rig's
@@ -16,7 +23,7 @@ linear correction's filter transients are not.
 (:func:`scenarios.records.model.calibrate.calibrate`) and corrects, or says in one
 sentence why the linear correction is to be used instead: the calibration did not converge, could
 not run, or the calibrated model does not reproduce F_rig beyond the load cells' noise
-(:data:`EXCESS_NRMSE_LIMIT`).
+(:data:`EXCESS_NRMSE_LIMIT`), on every wheel or (with L) on the wheels it names.
 """
 
 from __future__ import annotations
@@ -35,7 +42,7 @@ from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, 
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.result import LINEAR, MODEL, ModelCorrection
 
-__all__ = ["START_S", "EXCESS_NRMSE_LIMIT", "model_force_pair", "differential_correction", "settled_mask", "correct_with_model",
+__all__ = ["START_S", "EXCESS_NRMSE_LIMIT", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "settled_mask", "correct_with_model",
            "fallback_reason"]
 
 #: The model runs' start-up transient, s: samples before it are not settled. Measured on the
@@ -121,9 +128,38 @@ def fallback_reason(calibration, excess_limit: float = EXCESS_NRMSE_LIMIT) -> st
     return ""
 
 
+#: The model correction with the linear correction L of the model's residual (``linear`` given).
+HYBRID_FORMULA = "F_model(x_ref) + L(F_rig - F_model(x_a))"
+#: The differential model correction (no ``linear``).
+DIFFERENTIAL_FORMULA = "F_rig + F_model(x_ref) - F_model(x_a)"
+
+
+def wheels_reason(calibration, holds, excess_limit: float = EXCESS_NRMSE_LIMIT) -> str:
+    """One sentence naming the wheels whose model error exceeds the limit (``holds`` False), "" if none."""
+    bad = [i for i, ok in enumerate(holds) if not ok]
+    if not bad:
+        return ""
+    figures = ", ".join(f"{CORNERS[i]} {calibration.fit_nrmse[i]:.3f} (model error {calibration.excess_nrmse[i]:.3f})"
+                        for i in bad)
+    return (f"the calibrated truck model reproduces the measured wheel force only to NRMSE {figures} (limit "
+            f"{excess_limit:g} beyond the load cells' noise), so {'that wheel is' if len(bad) == 1 else 'those wheels are'} "
+            "corrected linearly.")
+
+
 def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario, workers: int | None = None,
-                       excess_limit: float = EXCESS_NRMSE_LIMIT, cab: str = AUTO, **calibrate_kw) -> ModelCorrection:
+                       excess_limit: float = EXCESS_NRMSE_LIMIT, cab: str = AUTO, linear=None,
+                       **calibrate_kw) -> ModelCorrection:
     """Calibrate the truck model on the record, then correct it, or say why the linear correction is to be used.
+
+    With ``linear`` (the record's linear correction L, ``T_a^-1 T_F`` per wheel) the corrected force
+    is F_model(x_ref) + L(F_rig - F_model(x_a)): the model predicts the road force and what the rig
+    made of it, and the part of the rig force the model does not explain is corrected for the
+    actuators as the linear correction corrects the whole. Where the model is exact this is the
+    model's road force plus the corrected noise; where it explains nothing it is L(F_rig); in
+    between, L(F_rig) plus the model's estimate of L's own error. A wheel whose model error exceeds
+    ``excess_limit`` is corrected by L alone, the others by the model (the sentence in ``reason``
+    names them). Without ``linear``: F_rig + F_model(x_ref) - F_model(x_a) on every wheel, or the
+    linear correction for all of them.
 
     Parameters
     ----------
@@ -139,6 +175,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     cab : {"auto", "held", "fitted"}
         Whether the model's cab is held, fitted, or (default) chosen by the two fits
         (:func:`~scenarios.records.model.cab_choice.calibrate_cab`).
+    linear : callable, optional
+        ``linear(forces)`` -> ``(corrected, settled)``: the linear correction of (n, 4) forces (N) and
+        its settled samples (bool, (n,)).
     **calibrate_kw
         Passed to :func:`~scenarios.records.model.calibrate.calibrate` (windows, max_nfev,
         fitted_guess...).
@@ -146,7 +185,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     Returns
     -------
     ModelCorrection
-        ``method`` "model" with the corrected forces, or "linear" with one sentence why.
+        ``method`` "model" with the corrected forces (and the wheels the model corrects), or
+        "linear" with one sentence why.
 
     Raises
     ------
@@ -173,14 +213,25 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                            "so the linear correction is to be used.", None, wall0, timings)
         timings["calibration_s"] = cal.wall_time_s
         reason = fallback_reason(cal, excess_limit)
-        if reason:
+        holds = np.asarray(cal.excess_nrmse) <= excess_limit
+        if reason and (linear is None or not cal.converged or not holds.any()):
             return _linear(reason, cal, wall0, timings)
         t1 = time.perf_counter()
-        corrected = differential_correction(cal.variant(), t, x_ref_m, x_a_m, force_N, base_scenario=base_scenario,
-                                            executor=ex)
+        f_ref, f_a = model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex)
+        force = np.asarray(force_N, dtype=float)
+        if linear is None:
+            corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
+        else:
+            residual, settled = linear(force - f_a)
+            corrected, formula = f_ref + residual, HYBRID_FORMULA
+            if not holds.all():
+                corrected[:, ~holds] = linear(force)[0][:, ~holds]
+            settled = settled_mask(t) & np.asarray(settled, dtype=bool)
         timings["correction_s"] = round(time.perf_counter() - t1, 3)
-    return ModelCorrection(method=MODEL, reason="", calibration=cal, corrected_N=corrected, settled=settled_mask(t),
-                           wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings)
+    return ModelCorrection(method=MODEL, reason=wheels_reason(cal, holds, excess_limit) if linear is not None else "",
+                           calibration=cal, corrected_N=corrected, settled=settled,
+                           wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings,
+                           wheels=tuple(c for c, ok in zip(CORNERS, holds) if ok or linear is None), formula=formula)
 
 
 def _linear(reason: str, cal, wall0: float, timings: dict) -> ModelCorrection:

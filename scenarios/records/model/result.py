@@ -199,7 +199,7 @@ class ModelCorrection:
     Attributes
     ----------
     method : {"model", "linear"}
-        "model": :attr:`corrected_N` holds F_rig + F_model(x_ref) - F_model(x_a); "linear": the
+        "model": :attr:`corrected_N` holds the model correction (:attr:`formula`); "linear": the
         model cannot be trusted on this record and the linear correction is to be used.
     reason : str
         With "linear": one sentence saying why; "" otherwise.
@@ -213,6 +213,11 @@ class ModelCorrection:
         Calibration plus correction.
     timings : Mapping[str, float]
         Wall time of each stage, s.
+    wheels : tuple of str
+        The wheels the model corrects (method "model"); the others are corrected linearly and
+        :attr:`reason` says why.
+    formula : str
+        How :attr:`corrected_N` was made, e.g. ``F_model(x_ref) + L(F_rig - F_model(x_a))``.
     """
 
     method: str
@@ -222,6 +227,8 @@ class ModelCorrection:
     settled: np.ndarray | None = None
     wall_time_s: float = 0.0
     timings: Mapping = field(default_factory=dict)
+    wheels: tuple = ()
+    formula: str = ""
 
     @property
     def use_linear(self) -> bool:
@@ -234,4 +241,5 @@ class ModelCorrection:
         if self.settled is not None:
             settled_s = int(np.count_nonzero(self.settled))
         return {"method": self.method, "reason": self.reason, "calibration": self.calibration,
-                "settled_samples": settled_s, "wall_time_s": self.wall_time_s, "timings": dict(self.timings)}
+                "settled_samples": settled_s, "wall_time_s": self.wall_time_s, "timings": dict(self.timings),
+                "wheels": list(self.wheels), "formula": self.formula}

@@ -24,6 +24,7 @@ from correction.output.pipeline import correct_forces
 from scenarios.core.lab import LabChain, measure
 from scenarios.records.model.differential import correct_with_model, model_force_pair, settled_mask
 from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
+from scenarios.studies.scoring import linear_correction
 
 __all__ = ["FLOOR_TAPS", "PlantScore", "score_plant"]
 
@@ -120,7 +121,8 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     linear = correct_forces(measured.force_N, identification.actuators(), fs, lowpass=LOWPASS, mode=MODE)
     wall0, cpu0 = time.perf_counter(), _cpu_s()
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
-                            base_scenario=base_scenario, workers=workers, cab=cab)
+                            base_scenario=base_scenario, workers=workers, cab=cab,
+                            linear=linear_correction(identification.actuators(), fs))
     wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
     forced = hybrid = None
     if mc.calibration is not None:
@@ -134,7 +136,8 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     if forced is not None:
         scores["forced"] = score_correction(forced, road_N, fs, rows)
         scores["hybrid"] = score_correction(hybrid, road_N, fs, rows)
-    scores["delivered"] = scores["forced"] if mc.method == "model" else scores["linear"]
+    scores["delivered"] = (score_correction(mc.corrected_N, road_N, fs, rows) if mc.method == "model"
+                           else scores["linear"])
     floor = linear_floor(measured.force_N, band_limit(road_N, fs, LOWPASS, MODE), *FLOOR_TAPS, rows=rows).nrmse
     fit = None if mc.calibration is None else np.asarray(mc.calibration.fit_nrmse, dtype=float)
     return PlantScore(name=name, plant=dict(plant), method=mc.method, reason=mc.reason,

@@ -3,9 +3,9 @@
 For each case, after its road and rig runs and the project's linear correction: the truck model is
 calibrated on the rig record's own signals (drive x_ref, LVDT x_a and the measured force F_rig
 with its load-cell noise; never the road run, never the plant's parameters) and the record is
-corrected differentially, F_rig + F_model(x_ref) - F_model(x_a)
-(:func:`scenarios.records.model.differential.correct_with_model`). Where the model cannot
-be trusted the case keeps the linear correction and says why in one sentence. Scored like the other
+corrected by it, F_model(x_ref) + L(F_rig - F_model(x_a)) with L the project's linear correction
+by the identified T_a (:func:`scenarios.records.model.differential.correct_with_model`). Where the
+model cannot be trusted on a wheel that wheel keeps the linear correction, and one sentence says why. Scored like the other
 methods against the road force: DLC on the unfiltered force, NRMSE against the band-limited one,
 on the samples where both the model's start-up and the linear method's filters have settled.
 
@@ -74,8 +74,11 @@ def _score_case(case, workers: int | None) -> ModelScore:
     rig, road, score = case.rig, case.road, case.score
     best = score.methods["best"]
     lvdt = measure_lvdt(rig.signals["pan_m"], rig.rate_hz, case.scenario.lab, case.scenario.seed)
+    from scenarios.studies.scoring import linear_correction
+
+    linear = linear_correction(case.identification.actuators(), rig.rate_hz)
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], lvdt, score.rig_N,
-                            base_scenario=case.scenario, workers=workers)
+                            base_scenario=case.scenario, workers=workers, linear=linear)
     figures = None
     if not mc.use_linear:
         figures = score_correction(mc.corrected_N, road.signals["tire_force_N"], rig.rate_hz,
