@@ -165,6 +165,41 @@ def test_fallback_is_the_linear_correction_with_its_reason(record, tmp_path, cap
         np.testing.assert_allclose(got.data[n], ref.data[n], rtol=1e-6, atol=1e-3)
 
 
+def test_a_wheel_the_model_cannot_reproduce_is_corrected_linearly_the_others_by_the_model(record, tmp_path, capsys):
+    """Pure noise on rr only, the calibration run to convergence: the front wheels keep the model
+    correction; rr (and rl, where the noisy wheel has pulled the rear axle's shared parameters off)
+    is the linear correction alone, the one ``rigsim identify --from-file`` + ``rigsim correct
+    --actuators`` gives, and the sentence names the wheels."""
+    noisy = record["raw_N"].copy()
+    noisy[:, 3] = noisy[:, 3].mean() + np.random.default_rng(3).normal(0.0, 3e3, noisy.shape[0])
+    csv = tmp_path / "noisy.csv"
+    _write_csv(csv, record["t"], noisy, record["drive_m"], record["lvdt_m"])
+    out = tmp_path / "per_wheel.csv"
+    assert main(["correct", str(csv), "--model", str(record["scenario"]), "--pairs", PAIRS, "-o", str(out), "--quiet",
+                 "--calibration-windows", "1", "--cab", "held"]) == 0
+    printed = capsys.readouterr()[0]
+    meta = _metadata(out)
+    model_wheels = meta["model_wheels"].split(",")
+    assert meta["method"] == "model" and {"fl", "fr"} <= set(model_wheels) and "rr" not in model_wheels, meta
+    linear_wheels = [c for c in CORNERS if c not in model_wheels]
+    assert all(f"{c} " in meta["fallback_reason"] for c in linear_wheels)
+    assert not any(f"{c} " in meta["fallback_reason"] for c in model_wheels)
+    assert printed.splitlines()[0] == f"truck model used on {meta['model_wheels']}: {meta['fallback_reason']}"
+    ident, by_hand = tmp_path / "ident", tmp_path / "by_hand.csv"
+    assert main(["identify", "--from-file", str(csv), "--pairs", PAIRS, "--out", str(ident)]) == 0
+    assert main(["correct", str(csv), "--actuators", str(ident / "actuators.toml"), "--map",
+                 "fl=Fz_FL,fr=Fz_FR,rl=Fz_RL,rr=Fz_RR", "-o", str(by_hand)]) == 0
+    got, ref = read_channels(out), read_channels(by_hand)
+    keep = np.isin(np.round(got.time_s, 9), np.round(ref.time_s, 9))
+    back = np.isin(np.round(ref.time_s, 9), np.round(got.time_s, 9))
+    for c in linear_wheels:
+        n = f"Fz_{c.upper()}_corrected"
+        np.testing.assert_allclose(got.data[n][keep], ref.data[n][back], rtol=1e-6, atol=1e-3)
+    for c in model_wheels:  # the model's wheels are not the linear correction
+        n = f"Fz_{c.upper()}_corrected"
+        assert np.max(np.abs(got.data[n][keep] - ref.data[n][back])) > 100.0, c
+
+
 def _refusals(record):
     csv, sc, d = str(record["csv"]), str(record["scenario"]), record["folder"]
     base = ["correct", csv, "--model", sc, "--pairs", PAIRS]
