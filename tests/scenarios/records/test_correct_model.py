@@ -133,14 +133,20 @@ def test_model_correction_end_to_end(record, tmp_path, capsys):
     assert "calibrating the truck model on 1 window(s)" in progress and "calibrated in" in progress
 
 
+def _rr_noise_csv(record, folder):
+    """The record with its rr force replaced by its mean plus 3 kN rms of noise (seeded), as a CSV."""
+    noisy = record["raw_N"].copy()
+    noisy[:, 3] = noisy[:, 3].mean() + np.random.default_rng(3).normal(0.0, 3e3, noisy.shape[0])
+    csv = folder / "noisy.csv"
+    _write_csv(csv, record["t"], noisy, record["drive_m"], record["lvdt_m"])
+    return csv
+
+
 def test_fallback_is_the_linear_correction_with_its_reason(record, tmp_path, capsys):
     """A force channel of pure noise (right mean, no dynamics): the model cannot reproduce it
     (fit NRMSE > 0.5), so the file is corrected linearly with T_a identified per corner, exactly
     as ``rigsim identify --from-file`` + ``rigsim correct --actuators`` do it."""
-    noisy = record["raw_N"].copy()
-    noisy[:, 3] = noisy[:, 3].mean() + np.random.default_rng(3).normal(0.0, 3e3, noisy.shape[0])
-    csv = tmp_path / "noisy.csv"
-    _write_csv(csv, record["t"], noisy, record["drive_m"], record["lvdt_m"])
+    csv = _rr_noise_csv(record, tmp_path)
     out = tmp_path / "fallback.csv"
     assert main(["correct", str(csv), "--model", str(record["scenario"]), "--pairs", PAIRS, "-o", str(out), "--quiet",
                  "--calibration-windows", "1", "--max-evaluations", "1", "--cab", "held"]) == 0
@@ -170,10 +176,7 @@ def test_a_wheel_the_model_cannot_reproduce_is_corrected_linearly_the_others_by_
     correction; rr (and rl, where the noisy wheel has pulled the rear axle's shared parameters off)
     is the linear correction alone, the one ``rigsim identify --from-file`` + ``rigsim correct
     --actuators`` gives, and the sentence names the wheels."""
-    noisy = record["raw_N"].copy()
-    noisy[:, 3] = noisy[:, 3].mean() + np.random.default_rng(3).normal(0.0, 3e3, noisy.shape[0])
-    csv = tmp_path / "noisy.csv"
-    _write_csv(csv, record["t"], noisy, record["drive_m"], record["lvdt_m"])
+    csv = _rr_noise_csv(record, tmp_path)
     out = tmp_path / "per_wheel.csv"
     assert main(["correct", str(csv), "--model", str(record["scenario"]), "--pairs", PAIRS, "-o", str(out), "--quiet",
                  "--calibration-windows", "1", "--cab", "held"]) == 0
