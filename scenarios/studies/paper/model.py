@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenarios.core.lab import measure_lvdt
-from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, correct_with_model
+from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, HYBRID_FORMULA, correct_with_model
 from scenarios.records.model.result import ModelCorrection
 from scenarios.records.model.score import score_correction
 
@@ -125,10 +125,12 @@ def model_table(scores) -> str:
             lines.append(f"{s.case:28s} {np.mean(f['dlc_road']):7.4f} {np.mean(f['dlc']):11.4f} "
                          f"{100 * np.mean(f['dlc_error']):+6.1f}% {np.mean(f['nrmse']):11.3f} "
                          f"{np.mean(s.linear_nrmse):7.3f} {fit} {err} {cab:>5s} {s.correction.wall_time_s:7.0f}")
+            if s.reason:
+                lines.append(f"{'':28s} {s.reason}")
         else:
             lines.append(f"{s.case:28s} linear correction kept: {s.reason}")
-    lines.append("model-corr.: F_rig + F_model(x_ref) - F_model(x_a), the truck model calibrated on the rig record's own")
-    lines.append("signals; DLC and its error against the road on the same samples; linear: the project's correction's NRMSE;")
+    lines.append(f"model-corr.: {HYBRID_FORMULA}, L the linear correction, the truck model calibrated on the rig")
+    lines.append("record's own signals; DLC and its error against the road on the same samples; linear: L's NRMSE;")
     lines.append("fit NRMSE: the calibrated model, pans following x_a, against the measured F_rig (mean of the wheels);")
     lines.append("model err.: the worst wheel's fit NRMSE beyond the load cells' noise (the fallback's measure, limit "
                  f"{EXCESS_NRMSE_LIMIT:g}); cab: held rigid or fitted on its mounts.")
