@@ -84,6 +84,11 @@ def catalogue() -> dict[str, float]:
 #: catalogue's axle and cab masses are not the plant's exactly), where its position is meaningless
 #: (measured on the generalization suite's four empty trucks: -11 to -6 kg, x -4.3 to -10.8 m).
 EMPTY_FRACTION = 0.01
+#: An estimated payload down to this fraction of the empty truck's weight below zero (1) is an empty
+#: truck lighter than the catalogue's: a real truck's body, tanks, axles and equipment put its empty
+#: weight some per cent either side of the catalogue's (the mismatch suite's trucks: chassis +-10 %,
+#: axles +-15 %). Further below, the loads are refused as no truck (a channel's scale or sign).
+LIGHTER_FRACTION = 0.1
 
 
 #: m: a payload centre the measured left/right moment puts closer to the centreline than this is on
@@ -140,8 +145,9 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
     The record's mean wheel force is the static load (the dynamic forces average out over the
     record); the catalogue truck without payload gives its own static loads; the difference is
     the payload's weight, and the front axle's share of it places it between the axles. A payload
-    within :data:`EMPTY_FRACTION` of the empty truck's weight is an empty truck: (0, the XML's x),
-    which :func:`calibrate` holds instead of fitting.
+    within :data:`EMPTY_FRACTION` of the empty truck's weight, or below zero by at most
+    :data:`LIGHTER_FRACTION` of it (an empty truck lighter than the catalogue's), is an empty truck:
+    (0, the XML's x), which :func:`calibrate` holds instead of fitting.
 
     Raises
     ------
@@ -155,7 +161,8 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
     d_total = float(f.sum() - empty.sum())
     d_front = float(f[front].sum() - empty[front].sum())
     payload = d_total / GRAVITY_M_S2
-    if abs(payload) <= EMPTY_FRACTION * empty.sum() / GRAVITY_M_S2:
+    empty_kg = empty.sum() / GRAVITY_M_S2
+    if -LIGHTER_FRACTION * empty_kg <= payload <= EMPTY_FRACTION * empty_kg:
         return 0.0, float(xml_nominal()["payload_x_m"])
     lo, hi = BOUNDS["payload_kg"][:2]
     if not (lo < payload <= hi) or d_total <= 0:
