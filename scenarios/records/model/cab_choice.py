@@ -34,7 +34,10 @@ import numpy as np
 
 from scenarios.core.config import ScenarioError
 from scenarios.core.pool import local_executor
-from scenarios.records.model.calibrate import DEFAULT_NAMES, FITTED, calibrate
+from scenarios.records.model.calibrate import DEFAULT_NAMES, calibrate
+
+#: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
+WITH_CAB = DEFAULT_NAMES + ("cab_mount_hz",)
 from scenarios.records.model.result import Calibration
 
 __all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "choose", "check_cab", "calibrate_cab"]
@@ -119,9 +122,9 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         if names is not None:
             return run(names)
         if cab != AUTO:
-            return run(FITTED if cab == FITTED_CAB else DEFAULT_NAMES)
+            return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
         held = run(DEFAULT_NAMES)
-        fitted = run(FITTED)
+        fitted = run(WITH_CAB)
     chosen, why = choose(held, fitted)
     return dataclasses.replace(chosen, cab_choice=why,
                                wall_time_s=round(held.wall_time_s + fitted.wall_time_s, 3))

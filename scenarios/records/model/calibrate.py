@@ -85,26 +85,32 @@ from scenarios.records.model.result import Calibration
 from scenarios.records.model.uncertainty import uncertainties
 from scenarios.records.model.weighting import differential_kernel
 
-__all__ = ["FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES", "fit_windows", "calibrate",
+__all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES", "fit_windows", "calibrate",
            "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
 
+#: Each axle's left station over its right one, fitted on request only (``names``): the left wheel's
+#: tire stiffness and leaf-spring rate factors (:mod:`mjcf.stations`; the right ones held at 1, the
+#: axle's values fitted as usual), the per-wheel differences of a real truck that the record's four
+#: forces can tell apart.
+STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
+                  "spring_rate_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
-          "tire_progressive_onset_rear_m", "cab_mount_hz")
+          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED
 UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
          "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "tire_progressive_ratio_rear": "1",
-         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz"}
+         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz", **dict.fromkeys(STATION_FITTED, "1")}
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
 #: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
-DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
+DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz" and k not in STATION_FITTED)
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
 #: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
 #: The onsets have none: their range is the loads measured on their axle (onset_load).
@@ -112,7 +118,8 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
           "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 4.0),
           "spring_friction_rear_N": (0.05, 4.0), "tire_progressive_ratio": 0.5,
-          "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0)}
+          "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0),
+          **dict.fromkeys(STATION_FITTED, (0.7, 1.3))}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
@@ -333,8 +340,10 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                                 "name other fields to fit")
     # The payload's centre across the truck: pinned by the measured left/right moment (held, not fitted).
     y = static_lateral(force, base_scenario, payload, x)
-    guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, **catalogue(), **(fitted_guess or {})}
-    for k in [k for k in FITTED if k == "cab_mount_hz" or k.startswith("tire_progressive")]:  # held: rigid cab, linear tire
+    guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, **catalogue(),
+             **dict.fromkeys(STATION_FITTED, 1.0), **(fitted_guess or {})}
+    held = [k for k in FITTED if k == "cab_mount_hz" or k.startswith("tire_progressive") or k in STATION_FITTED]
+    for k in held:  # held: rigid cab, linear tire, left and right stations alike
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper, loads = [], [], {}
