@@ -24,6 +24,11 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   (:mod:`~scenarios.records.model.onset_load`, which says why: an onset beyond every
   measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0,
   where the onset is not identifiable and does not matter;
+* ``tire_stiffness_factor_fl``, ``tire_stiffness_factor_rl``, ``spring_rate_factor_fl``,
+  ``spring_rate_factor_rl`` (:data:`STATION_FITTED`): each axle's left tire and leaf spring over its
+  right one (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another
+  pressure, a spring with a broken leaf), and a model whose axles are symmetric puts the difference
+  into both wheels' errors, in opposite directions;
 * ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
   cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
   bounce and pitch that loads the front wheels. A model without it absorbs a suspended cab's mode
@@ -36,8 +41,8 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   the model's.
 
 Not fitted: the chassis (5.2 t, its CoM and inertia), the axles' masses, the cab's mass (the
-model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate and viscous damping are held at
-their catalogue (XML) values; the tire free radius only moves
+model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate (but for the left/right factors)
+and viscous damping are held at their catalogue (XML) values; the tire free radius only moves
 the static ride height, and the pan mass does not enter a tire force whose pans follow a given
 motion, so neither can be identified from x_a and F_rig. How well each fitted field is pinned
 shows in its 1-sigma (:class:`~scenarios.records.model.result.Calibration`); the onset of a tire
@@ -88,10 +93,10 @@ from scenarios.records.model.weighting import differential_kernel
 __all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES", "fit_windows", "calibrate",
            "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
 
-#: Each axle's left station over its right one, fitted on request only (``names``): the left wheel's
-#: tire stiffness and leaf-spring rate factors (:mod:`mjcf.stations`; the right ones held at 1, the
-#: axle's values fitted as usual), the per-wheel differences of a real truck that the record's four
-#: forces can tell apart.
+#: Each axle's left station over its right one: the left wheel's tire stiffness and leaf-spring rate
+#: factors (:mod:`mjcf.stations`; the right ones held at 1, the axle's values fitted as usual), the
+#: per-wheel differences of a real truck that the record's four forces can tell apart (a tire at
+#: another pressure, a spring with a broken leaf); fitted by default.
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
                   "spring_rate_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
@@ -110,7 +115,7 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m":
 #: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
-DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz" and k not in STATION_FITTED)
+DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
 #: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
 #: The onsets have none: their range is the loads measured on their axle (onset_load).

@@ -124,7 +124,7 @@ def test_the_cab_is_fitted_only_on_request():
     """The default family holds the cab rigid (a smooth road may not pin its mount frequency: see
     calibrate.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
     assert "cab_mount_hz" in FITTED and "cab_mount_hz" not in DEFAULT_NAMES
-    assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz"} - set(STATION_FITTED)
+    assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz"}
 
 
 def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
@@ -167,8 +167,9 @@ def test_calibration_recovers_a_cab_mount_frequency():
     sc = dataclasses.replace(sc, vehicle=plant)
     road = run(sc, "road")
     force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
-    held = {k: getattr(plant, k) for k in FITTED if k != "cab_mount_hz" and not k.startswith("tire_progressive")}
-    assert all(v is not None for v in held.values())
+    held = {k: getattr(plant, k) for k in FITTED
+            if k != "cab_mount_hz" and not k.startswith("tire_progressive") and k not in STATION_FITTED}
+    assert all(v is not None for v in held.values())  # the stations: held symmetric, the plant's
     cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=("cab_mount_hz",),
                     fitted_guess=held, windows=1, window_s=3.0, lead_s=2.0, max_nfev=6, workers=2)
     assert cal.initial == (CATALOGUE_CAB_MOUNT_HZ,)
@@ -202,7 +203,7 @@ def test_calibration_recovers_a_progressive_tire():
 
 
 def test_calibration_recovers_a_left_right_difference_of_the_tires_and_springs():
-    """The per-station family (calibrate.STATION_FITTED, on request): the road test of the medium case's
+    """The per-station family (calibrate.STATION_FITTED, fitted by default): the road test of the medium case's
     plant with its front-left tire 15 % softer and its rear-left spring 10 % stiffer than their right
     neighbours, 100 N of noise; the two left factors fitted from 1 (a symmetric truck), the axles' and
     every other value held at the plant's: both recovered within 3 %, and the fit NRMSE falls by more
@@ -213,7 +214,7 @@ def test_calibration_recovers_a_left_right_difference_of_the_tires_and_springs()
     road = run(sc, "road")
     force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
     names = ("tire_stiffness_factor_fl", "spring_rate_factor_rl")
-    assert set(names) <= set(STATION_FITTED) and not set(STATION_FITTED) & set(DEFAULT_NAMES)
+    assert set(names) <= set(STATION_FITTED) <= set(DEFAULT_NAMES)
     held = {k: getattr(plant, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
     cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names, fitted_guess=held,
                     windows=1, window_s=3.0, lead_s=2.0, max_nfev=20, workers=2)
