@@ -61,7 +61,7 @@ def add_model_arguments(parser) -> None:
                         "the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
                         "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
-                        "tire per axle), the cab's mount frequency where it fits clearly better (--cab); minutes of "
+                        "tire per axle), each axle's left tire and leaf spring against its right one, the cab's mount frequency where it fits clearly better (--cab); minutes of "
                         "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "
                         "cab_mount_hz is the cab's mount (held, or the first guess of its fit), and its tire and "
                         "leaf-friction values (tire_progressive_ratio and _onset_m included) are only the "
