@@ -93,10 +93,7 @@ from scenarios.records.model.weighting import differential_kernel
 __all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES", "fit_windows", "calibrate",
            "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
 
-#: Each axle's left station over its right one: the left wheel's tire stiffness and leaf-spring rate
-#: factors (:mod:`mjcf.stations`; the right ones held at 1, the axle's values fitted as usual), the
-#: per-wheel differences of a real truck that the record's four forces can tell apart (a tire at
-#: another pressure, a spring with a broken leaf); fitted by default.
+#: Each axle's left tire stiffness and leaf-spring rate over its right one (the module's description).
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
                   "spring_rate_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
@@ -154,8 +151,6 @@ MAX_NFEV = 60
 #: Block of the robust uncertainty, s: longer than the fit residual's correlation (the truck's
 #: slowest modes, ~0.6 s period), short enough for a few dozen blocks in the windows.
 BLOCK_S = 0.5
-
-
 
 
 def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
