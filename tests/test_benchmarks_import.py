@@ -11,7 +11,6 @@ The benchmarks are scripts on top of the installed package, never a second libra
 from __future__ import annotations
 
 import ast
-import importlib.util
 import pathlib
 
 import pytest
@@ -66,12 +65,10 @@ def offences(source: str, benchmarks: set[str]) -> list[str]:
 
 
 @pytest.mark.parametrize("path", BENCHMARKS, ids=lambda p: p.stem)
-def test_benchmark_imports_and_has_a_main(path):
+def test_benchmark_imports_and_has_a_main(path, load_benchmark):
     """Every file of benchmarks/ is a script: it imports (with the package installed, nothing else
     on the path) and has a ``main()`` that its ``__main__`` block runs."""
-    spec = importlib.util.spec_from_file_location(f"benchmark_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = load_benchmark(path.stem)
     assert 'if __name__ == "__main__":' in path.read_text(), f"{path.name} is no script (no __main__ block)"
     assert callable(getattr(module, "main", None)), f"{path.name} has no main()"
 

@@ -3,8 +3,6 @@ physical ranges the fit declares (the fit itself runs minutes: ``--check`` re-me
 
 from __future__ import annotations
 
-import importlib.util
-import pathlib
 
 import numpy as np
 import pytest
@@ -12,15 +10,11 @@ import pytest
 from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.studies.paper.table import PAPER_TABLE2
 
-_PATH = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "dyntrac_fit.py"
 
 
 @pytest.fixture(scope="module")
-def fit():
-    spec = importlib.util.spec_from_file_location("benchmark_dyntrac_fit", _PATH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def fit(load_benchmark):
+    return load_benchmark("dyntrac_fit")
 
 
 def test_every_shipped_value_lies_inside_its_range(fit):

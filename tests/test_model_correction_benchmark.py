@@ -7,25 +7,19 @@ shares and cells below are counted by hand from the synthetic rows.
 
 from __future__ import annotations
 
-import importlib.util
-import pathlib
 
 import pytest
 
 from mjcf.names import CORNERS
 from scenarios.records.model.result import Calibration
 
-_PATH = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "model_correction.py"
 _NAMES = {"rigid": "rigid cab", "cab": "cab on 2 Hz mounts", "tire": "progressive tire +25 %",
           "smooth": "tire stiffening +50 % over 2 cm"}
 
 
 @pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("benchmark_model_correction", _PATH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def bench(load_benchmark):
+    return load_benchmark("model_correction")
 
 
 def _cal(names=("payload_kg",), fitted=(4000.0,), cab_choice=""):

@@ -9,7 +9,6 @@ CPU count and Python of this interpreter), and the rows of a small fake ``paper.
 from __future__ import annotations
 
 import datetime
-import importlib.util
 import json
 import os
 import pathlib
@@ -31,11 +30,9 @@ from scenarios.studies.results_page import (
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 
 
-def _docs_tables():
-    spec = importlib.util.spec_from_file_location("benchmark_docs_tables", ROOT / "benchmarks" / "docs_tables.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+@pytest.fixture()
+def docs_tables(load_benchmark):
+    return load_benchmark("docs_tables")
 
 
 def test_the_helper_writes_title_table_and_configuration_line(tmp_path):
@@ -129,11 +126,11 @@ def _fake_validate(folder: pathlib.Path) -> None:
     (folder / "validate.json").write_text(json.dumps({"duration_s": 20.0, "ident_duration_s": 40.0, "table1": table1}))
 
 
-def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path):
+def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path, docs_tables):
     _fake_paper(tmp_path / "paper")
     _fake_validate(tmp_path / "validate")
     out = tmp_path / "results"
-    assert _docs_tables().main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "validate"),
+    assert docs_tables.main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "validate"),
                                 "--out", str(out)]) == 0
     table2 = (out / "paper_table2.md").read_text().splitlines()
     # The paper's own corrected 0.0994 lies above its road 0.0985 (^); 0.1794 below 0.1912.
@@ -152,7 +149,7 @@ def test_docs_tables_writes_the_rows_of_paper_and_validate(tmp_path):
     assert table1[-1].startswith("Measured by `rigsim validate --out DIR --duration-s 20 --ident-duration-s 40` on ")
 
 
-def test_docs_tables_writes_the_dyntrac_table_with_the_model_column(tmp_path):
+def test_docs_tables_writes_the_dyntrac_table_with_the_model_column(tmp_path, docs_tables):
     model = [{"case": "paper-medium-72kmh-6360kg", "mean": {"dlc": 0.0979, "dlc_error": -0.0091, "nrmse": 0.048}}]
     _fake_paper(tmp_path / "paper", configuration="dyntrac", model_correction=model)
     folder = tmp_path / "paper"
@@ -160,7 +157,7 @@ def test_docs_tables_writes_the_dyntrac_table_with_the_model_column(tmp_path):
     result["cases"][0]["dlc_corrected_paper"] = 0.2  # above its ceiling 0.106: marked
     (folder / "paper.json").write_text(json.dumps(result))
     out = tmp_path / "results"
-    assert _docs_tables().main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
+    assert docs_tables.main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
                                 "--paper-dyntrac", str(folder), "--out", str(out)]) == 0
     lines = (out / "paper_table2_dyntrac.md").read_text().splitlines()
     assert "| 0.2000^ (0.0994^) | 0.1060 |" in next(x for x in lines if x.startswith("| medium"))
@@ -169,14 +166,14 @@ def test_docs_tables_writes_the_dyntrac_table_with_the_model_column(tmp_path):
     assert lines[-1].startswith("Measured by `rigsim paper --out DIR --rig dyntrac --model --duration-s 20 ")
 
 
-def test_docs_tables_skips_a_missing_folder(tmp_path, capsys):
+def test_docs_tables_skips_a_missing_folder(tmp_path, capsys, docs_tables):
     _fake_paper(tmp_path / "paper")
     out = tmp_path / "results"
-    assert _docs_tables().main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "none"),
+    assert docs_tables.main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "none"),
                                 "--out", str(out)]) == 0
     assert (out / "paper_table2.md").is_file() and not (out / "validate_table1.md").exists()
     assert "validate.json: no such file" in capsys.readouterr().err
-    assert _docs_tables().main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
+    assert docs_tables.main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
                                 "--out", str(out)]) == 1
 
 
@@ -201,11 +198,11 @@ def _fake_iteration(folder: pathlib.Path, target: str, iterated: float, runs: in
     (folder / "drive.csv").write_text("time_s,drive_fl_m\n0,0\n19.999,0.001\n20,0.002\n")
 
 
-def test_docs_tables_writes_the_iteration_table(tmp_path):
+def test_docs_tables_writes_the_iteration_table(tmp_path, docs_tables):
     _fake_iteration(tmp_path / "disp", "displacement", -0.007, 6)
     _fake_iteration(tmp_path / "force", "force", 0.004, 8)
     out = tmp_path / "results"
-    assert _docs_tables().main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
+    assert docs_tables.main(["--paper", str(tmp_path / "none"), "--validate", str(tmp_path / "none"),
                                 "--iterate", str(tmp_path / "disp"), str(tmp_path / "force"), "--out", str(out)]) == 0
     lines = (out / "iterate_comparison.md").read_text().splitlines()
     assert lines[0] == "<!-- written by `python benchmarks/docs_tables.py --iterate DIR ...`: do not edit by hand -->"
@@ -232,10 +229,10 @@ def test_every_results_file_is_included_and_every_include_exists():
         assert path.read_text().startswith("<!-- written by `"), f"{path.name} does not say what writes it"
 
 
-def test_docs_tables_rewrites_the_readme_block_only(tmp_path):
+def test_docs_tables_rewrites_the_readme_block_only(tmp_path, docs_tables):
     model = [{"case": "paper-medium-72kmh-6360kg", "mean": {"dlc": 0.0999, "dlc_error": 0.001, "nrmse": 0.009}}]
     _fake_paper(tmp_path / "paper", model_correction=model)
-    mod = _docs_tables()
+    mod = docs_tables
     readme = tmp_path / "README.md"
     readme.write_text(f"# x\n\nbefore\n{mod.README_BEGIN}\nold table\n{mod.README_END}\nafter\n")
     assert mod.main(["--paper", str(tmp_path / "paper"), "--validate", str(tmp_path / "none"),
