@@ -7,13 +7,14 @@ made here by editing an :class:`mujoco.MjSpec`, never by copying XML.
 
 from __future__ import annotations
 
+import functools
 import importlib.resources
 
 import mujoco
-import numpy as np
 
 from mjcf import names
 from mjcf.cab import CAB_MASS_KG, add_cab_mount
+from mjcf.physics import RigIndex, tire_stiffness
 from mjcf.stations import add_rebound_damping, apply_station_factors, set_masses
 from mjcf.tires import add_progressive_tire, axle_progressive, set_tire, tire_elements
 from mjcf.variant import TruckVariant
@@ -141,27 +142,34 @@ def build_model(variant: TruckVariant | None = None, *, pans: str = "slide") -> 
 def nominal_values(model: mujoco.MjModel | None = None) -> dict[str, float]:
     """The XML's value of each :class:`~mjcf.variant.TruckVariant` field that holds one number in the
     nominal truck (SI; the axle fields read from the front-left and rear-left stations), read from the
-    compiled model (``model``: the caller's own compile of ``build_model()``, to spare a second): the
-    values a factor or an offset on "the catalogue truck" applies to."""
-    model = build_model() if model is None else model
+    compiled model (``model``: the caller's own compile of ``build_model()``; without it the XML is
+    compiled once per process): the values a factor or an offset on "the catalogue truck" applies to."""
+    return dict(_xml_values() if model is None else _values(model))
 
+
+@functools.cache
+def _xml_values() -> dict[str, float]:
+    return _values(build_model())
+
+
+def _values(model: mujoco.MjModel) -> dict[str, float]:
     def body(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-
-    def tire(corner: str) -> np.ndarray:
-        return model.actuator_biasprm[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, names.tire_actuator(corner))]
 
     def friction(corner: str) -> float:
         return float(model.tendon_frictionloss[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON,
                                                                   names.spring_tendon(corner))])
 
+    index = RigIndex.of(model)
+    f, r = names.CORNERS.index("fl"), names.CORNERS.index("rl")
+    stiffness = tire_stiffness(model, index)
+    tire = model.actuator_biasprm[index.tire_actuator]  # kt R0, -kt, -ct per station
     payload, chassis = body("payload"), body("chassis")
-    front, rear = tire("fl"), tire("rl")
     return {"payload_kg": float(model.body_mass[payload]), "payload_x_m": float(model.body_pos[payload, 0]),
             "payload_y_m": float(model.body_pos[payload, 1]), "payload_z_m": float(model.body_pos[payload, 2]),
-            "tire_stiffness_front_N_per_m": float(-front[1]), "tire_stiffness_rear_N_per_m": float(-rear[1]),
-            "tire_damping_front_Ns_per_m": float(-front[2]), "tire_damping_rear_Ns_per_m": float(-rear[2]),
-            "tire_free_radius_m": float(front[0] / -front[1]),
+            "tire_stiffness_front_N_per_m": float(stiffness[f]), "tire_stiffness_rear_N_per_m": float(stiffness[r]),
+            "tire_damping_front_Ns_per_m": float(-tire[f, 2]), "tire_damping_rear_Ns_per_m": float(-tire[r, 2]),
+            "tire_free_radius_m": float(tire[f, 0] / stiffness[f]),
             "spring_friction_front_N": friction("fl"), "spring_friction_rear_N": friction("rl"),
             "pan_mass_kg": float(model.body_mass[body(names.pan_body("fl"))]),
             "axle_mass_front_kg": float(model.body_mass[body(names.axle_body("fl"))]),
