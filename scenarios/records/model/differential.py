@@ -231,7 +231,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     return ModelCorrection(method=MODEL, reason=wheels_reason(cal, holds, excess_limit) if linear is not None else "",
                            calibration=cal, corrected_N=corrected, settled=settled,
                            wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings,
-                           wheels=tuple(c for c, ok in zip(CORNERS, holds) if ok or linear is None), formula=formula)
+                           wheels=tuple(c for c, ok in zip(CORNERS, holds) if ok or linear is None), formula=formula,
+                           model_N=(f_ref, f_a))
 
 
 def _linear(reason: str, cal, wall0: float, timings: dict) -> ModelCorrection:

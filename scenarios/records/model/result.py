@@ -218,6 +218,9 @@ class ModelCorrection:
         :attr:`reason` says why.
     formula : str
         How :attr:`corrected_N` was made, e.g. ``F_model(x_ref) + L(F_rig - F_model(x_a))``.
+    model_N : tuple of numpy.ndarray or None, N, (n, 4) each
+        ``(F_model(x_ref), F_model(x_a))``, the calibrated model's two runs the correction used
+        (method "model" only).
     """
 
     method: str
@@ -229,6 +232,7 @@ class ModelCorrection:
     timings: Mapping = field(default_factory=dict)
     wheels: tuple = ()
     formula: str = ""
+    model_N: tuple | None = None
 
     @property
     def use_linear(self) -> bool:

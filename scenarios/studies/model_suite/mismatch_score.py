@@ -20,7 +20,6 @@ import numpy as np
 
 from correction.output.apply import band_limit
 from correction.output.floor import linear_floor
-from correction.output.pipeline import correct_forces
 from scenarios.core.lab import LabChain, measure
 from scenarios.records.model.differential import correct_with_model, model_force_pair, settled_mask
 from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
@@ -118,21 +117,20 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     fs = float(rig.rate_hz)
     measured = measure(rig, lab, noise_N, seed)
     road_N = np.asarray(road.signals["tire_force_N"], dtype=float)
-    linear = correct_forces(measured.force_N, identification.actuators(), fs, lowpass=LOWPASS, mode=MODE)
+    lin = linear_correction(identification.actuators(), fs)
+    linear_N, linear_settled = lin(measured.force_N)
     wall0, cpu0 = time.perf_counter(), _cpu_s()
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
-                            base_scenario=base_scenario, workers=workers, cab=cab,
-                            linear=linear_correction(identification.actuators(), fs))
+                            base_scenario=base_scenario, workers=workers, cab=cab, linear=lin)
     wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
     forced = hybrid = None
-    if mc.calibration is not None:
-        f_ref, f_a = model_force_pair(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"], measured.pan_m,
-                                      base_scenario=base_scenario, workers=workers)
+    if mc.calibration is not None:  # the model's two runs: the correction's, else run for the forced forms
+        f_ref, f_a = mc.model_N or model_force_pair(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"],
+                                                    measured.pan_m, base_scenario=base_scenario, workers=workers)
         forced = measured.force_N + f_ref - f_a
-        residual = correct_forces(measured.force_N - f_a, identification.actuators(), fs, lowpass=LOWPASS, mode=MODE)
-        hybrid = f_ref + residual.corrected_N
-    rows = band_rows(road_N.shape[0], fs) & np.asarray(linear.settled, dtype=bool) & settled_mask(rig.t_s)
-    scores = {"linear": score_correction(linear.corrected_N, road_N, fs, rows)}
+        hybrid = f_ref + lin(measured.force_N - f_a)[0]
+    rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
+    scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
     if forced is not None:
         scores["forced"] = score_correction(forced, road_N, fs, rows)
         scores["hybrid"] = score_correction(hybrid, road_N, fs, rows)

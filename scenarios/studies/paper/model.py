@@ -24,6 +24,7 @@ from scenarios.core.lab import measure_lvdt
 from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, HYBRID_FORMULA, correct_with_model
 from scenarios.records.model.result import ModelCorrection
 from scenarios.records.model.score import score_correction
+from scenarios.studies.scoring import linear_correction
 
 __all__ = ["ModelScore", "model_scores", "model_table"]
 
@@ -74,8 +75,6 @@ def _score_case(case, workers: int | None) -> ModelScore:
     rig, road, score = case.rig, case.road, case.score
     best = score.methods["best"]
     lvdt = measure_lvdt(rig.signals["pan_m"], rig.rate_hz, case.scenario.lab, case.scenario.seed)
-    from scenarios.studies.scoring import linear_correction
-
     linear = linear_correction(case.identification.actuators(), rig.rate_hz)
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], lvdt, score.rig_N,
                             base_scenario=case.scenario, workers=workers, linear=linear)
