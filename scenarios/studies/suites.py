@@ -31,7 +31,7 @@ from mjcf.variant import TruckVariant
 from scenarios.core.config import paper_scenarios
 
 __all__ = ["SUITES", "SUITE_FILES", "Plant", "ModelPlants", "suite_file", "generalization_cases", "paper_cases",
-           "pick_cases", "case_name", "model_plants"]
+           "pick_cases", "case_name", "case_scenario", "case_payload_kg", "model_plants"]
 
 #: The suites of cases :func:`pick_cases` knows.
 SUITES = ("paper", "generalization")
@@ -164,6 +164,22 @@ def pick_cases(suite: str, keys: Sequence[str] | None = None, duration_s: float 
 def case_name(case) -> str:
     """A case's name: a scenario document's ``name`` (dict) or a scenario file's stem (path)."""
     return str(case["name"]) if isinstance(case, Mapping) else pathlib.Path(case).stem
+
+
+def case_scenario(case):
+    """A case as a :class:`scenarios.core.config.Scenario`: a scenario document parsed (dict), a
+    scenario file read (path)."""
+    from scenarios.core.config import load_scenario, parse_scenario
+
+    return parse_scenario(case) if isinstance(case, Mapping) else load_scenario(case)
+
+
+def case_payload_kg(scenario) -> float:
+    """The payload (kg) a case's scenario carries: its ``[vehicle] payload_kg``, else the XML's."""
+    from mjcf.build import nominal_values
+
+    given = scenario.vehicle.payload_kg
+    return float(given) if given is not None else nominal_values()["payload_kg"]
 
 
 @dataclass(frozen=True)

@@ -23,10 +23,10 @@ from mjcf.build import nominal_values
 from mjcf.names import CORNERS
 from mjcf.stations import STATION_FACTORS, station_factor_field
 from mjcf.variant import TruckVariant
-from scenarios.core.config import Scenario, parse_scenario
+from scenarios.core.config import Scenario
 from scenarios.core.run import run
 from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.suites import suite_file
+from scenarios.studies.suites import case_payload_kg, case_scenario, suite_file
 
 __all__ = ["MISMATCH_FILE", "PlantRanges", "plant_ranges", "draw_plant", "mismatch_plants", "mismatch_scenario",
            "mismatch_job", "describe"]
@@ -135,30 +135,20 @@ def draw_plant(case_payload_kg: float, rng: np.random.Generator) -> dict[str, fl
     return out
 
 
-def _payload(sc: Scenario) -> float:
-    return sc.vehicle.payload_kg if sc.vehicle.payload_kg is not None else nominal_values()["payload_kg"]
-
-
 def mismatch_plants(cases, seed: int = 0) -> list[dict[str, float]]:
     """Plant ``i`` of ``cases`` (scenario documents or files): :func:`draw_plant` of case ``i``'s
     payload from ``numpy.random.default_rng((seed, PLANT_STREAM, i))``; each a valid TruckVariant."""
     plants = []
     for i, case in enumerate(cases):
-        values = draw_plant(_payload(_scenario(case)), np.random.default_rng((int(seed), PLANT_STREAM, i)))
+        values = draw_plant(case_payload_kg(case_scenario(case)), np.random.default_rng((int(seed), PLANT_STREAM, i)))
         TruckVariant(**values)  # refused here, before any run
         plants.append(values)
     return plants
 
 
-def _scenario(case) -> Scenario:
-    from scenarios.core.config import load_scenario
-
-    return parse_scenario(case) if isinstance(case, dict) else load_scenario(case)
-
-
 def mismatch_scenario(case, plant: Mapping[str, float], duration_s: float) -> Scenario:
     """The case with plant truck ``plant`` (its TruckVariant fields), ``duration_s`` s long."""
-    return dataclasses.replace(_scenario(case), duration_s=float(duration_s), vehicle=TruckVariant(**plant))
+    return dataclasses.replace(case_scenario(case), duration_s=float(duration_s), vehicle=TruckVariant(**plant))
 
 
 def mismatch_job(case, plant: Mapping[str, float], duration_s: float, kind: str, lab=None):

@@ -19,10 +19,10 @@ from __future__ import annotations
 import dataclasses
 
 from mjcf.variant import TruckVariant
-from scenarios.core.config import Scenario, load_scenario, parse_scenario
+from scenarios.core.config import Scenario
 from scenarios.core.run import run
 from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.suites import model_plants
+from scenarios.studies.suites import case_payload_kg, case_scenario, model_plants
 
 __all__ = ["TIRE_PLANT", "plant_keys", "plant_truck", "plant_variant", "plant_name", "mismatch", "plant_scenario",
            "plant_job"]
@@ -130,14 +130,9 @@ def plant_scenario(case, duration_s: float, plant: str = "rigid", tire_ratio: fl
     tire_ratio : float, 1, optional
         See :func:`plant_truck`.
     """
-    sc = parse_scenario(case) if isinstance(case, dict) else load_scenario(case)
-    if sc.vehicle.payload_kg is not None:
-        payload = sc.vehicle.payload_kg
-    else:
-        from scenarios.records.model.first_guess import xml_nominal
-
-        payload = xml_nominal()["payload_kg"]
-    return dataclasses.replace(sc, duration_s=float(duration_s), vehicle=plant_variant(payload, plant, tire_ratio))
+    sc = case_scenario(case)
+    return dataclasses.replace(sc, duration_s=float(duration_s),
+                               vehicle=plant_variant(case_payload_kg(sc), plant, tire_ratio))
 
 
 def plant_job(case, duration_s: float, plant: str, kind: str, tire_ratio: float | None = None):
