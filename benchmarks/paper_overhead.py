@@ -8,7 +8,10 @@
    RK4 at 1e-3 s, the lead-in plus the duration) and the rig's identification
    (:func:`scenarios.studies.identify.compute.identify_rig`'s drive, RK4).
 2. Times ``rigsim paper --out TMP --jobs J --quiet`` end to end (a subprocess: imports, compiling
-   or loading the hydraulic callbacks, the runs, the scoring, the report and its figures).
+   or loading the hydraulic callbacks, the runs, the scoring, the report and its figures). The
+   packages are byte-compiled first, as ``pip install`` leaves an installed package (a checkout
+   run with ``PYTHONDONTWRITEBYTECODE`` set would otherwise compile every module's source in
+   every run).
 3. Times bare MuJoCo stepping the same number of steps on the same J cores: J worker processes,
    each stepping its share of the steps with ``mujoco.rollout`` on the truck on the pans with a
    stiff built-in position servo per pan instead of the hydraulics, replaying the pan motion of
@@ -105,6 +108,14 @@ def time_bare(steps: dict, jobs: int) -> dict:
     return {"wall_s": max(per_worker), "cpu_s": sum(r["cpu_s"] for r in res)}
 
 
+def byte_compile() -> None:
+    """Byte-compile the four packages (``__pycache__``, as ``pip install`` does for an installed one)."""
+    import compileall
+
+    for package in ("mjcf", "hydraulics", "correction", "scenarios"):
+        compileall.compile_dir(str(ROOT / package), quiet=1)
+
+
 def time_paper(jobs: int, duration_s: float | None) -> dict:
     out = pathlib.Path(tempfile.mkdtemp(prefix="paper_overhead_")) / "paper"
     argv = [sys.executable, "-m", "scenarios.cli.main", "paper", "--out", str(out), "--jobs", str(jobs), "--quiet"]
@@ -131,6 +142,7 @@ def main(argv=None) -> int:
     if args.jobs < 1 or args.repeats < 1:
         raise SystemExit("--jobs and --repeats must be at least 1")
     steps = paper_steps(args.duration_s)
+    byte_compile()
     papers, bares = [], []
     for _ in range(args.repeats):
         papers.append(time_paper(args.jobs, args.duration_s))

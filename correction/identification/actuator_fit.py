@@ -2,7 +2,7 @@
 
 A lab that does not know its hydraulic parameters can still correct: the H1 estimate of the
 drive-to-pan frequency response (:func:`correction.identification.identify.h1_estimate`) is fitted with a
-stable rational function (:func:`correction.identification.identify.fit_rational`, Sanathanan-Koerner) and made
+stable rational function (:func:`correction.identification.identify.fit_rational_coefficients`, Sanathanan-Koerner) and made
 usable as an inverse. Every caller (``rigsim correct --identify``, ``rigsim identify``, the
 studies' ``identified`` method) uses this one policy:
 
@@ -45,12 +45,11 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-import control
 import numpy as np
 
 from correction.identification.actuator_fit_rules import (CANDIDATE_ORDERS, ActuatorFitError, choose_orders, held_out_error,
                                  rational_response, usable_actuator)
-from correction.identification.identify import fit_rational, h1_estimate
+from correction.identification.identify import fit_rational_coefficients, h1_estimate
 from correction.output.lowpass import BAND_HZ
 from correction.output.transfer import describe_roots, transfer_bandwidth_hz
 
@@ -192,8 +191,7 @@ def _fit(f, h, w, orders, resolution, anchor_weight):
     ff = np.concatenate([fa, f])
     hh = np.concatenate([np.ones(fa.size, dtype=complex), h])
     ww = np.concatenate([np.full(fa.size, anchor_weight), w])
-    tf = fit_rational(ff, hh, orders[0], orders[1], weight=ww)
-    raw = np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])
+    raw = fit_rational_coefficients(ff, hh, orders[0], orders[1], weight=ww)
     return raw, usable_actuator(*raw, resolution, float(f[0]))
 
 
@@ -283,7 +281,7 @@ def fit_frequency_response(f_hz, h, coherence, *, band_hz=(0.1, 60.0), orders=No
                                f"{fb.size} points in {_band_label(*band)}; record a longer drive on every post")
     chosen, non_minimum_phase = choose_orders(scores)
     _, (num, den) = _fit(fb, hb, w, chosen, resolution, anchor_weight)
-    bandwidth = transfer_bandwidth_hz(control.tf(num, den))
+    bandwidth = transfer_bandwidth_hz((num, den))
     return ActuatorFit(num=num, den=den, orders=tuple(chosen), f_hz=f, h=hv, coherence=coh, band_hz=band,
                        held_out_error=float(scores[chosen]["held_out_error"]),
                        band_errors=_band_errors(num, den, fb, hb, cb, band, coherence_min),

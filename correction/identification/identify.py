@@ -21,7 +21,7 @@ import numpy as np
 if TYPE_CHECKING:  # python-control and scipy.signal are imported where they are used
     import control
 
-__all__ = ["h1_estimate", "fit_rational"]
+__all__ = ["h1_estimate", "fit_rational", "fit_rational_coefficients"]
 
 
 def _as_columns(x, name: str) -> tuple[np.ndarray, bool]:
@@ -154,6 +154,25 @@ def fit_rational(f_hz, h, num_order: int, den_order: int, weight=None, f_max: fl
                  ) -> control.TransferFunction:
     """Fit a stable continuous-time ``N(s) / D(s)`` to a frequency response.
 
+    :func:`fit_rational_coefficients`, returned as a ``control.TransferFunction``; the
+    parameters are the same.
+
+    Returns
+    -------
+    control.TransferFunction
+        Stable (all poles with negative real part), s in rad/s.
+    """
+    import control
+
+    return control.tf(*fit_rational_coefficients(f_hz, h, num_order, den_order, weight, f_max, f_min=f_min,
+                                                 iterations=iterations, tol=tol))
+
+
+def fit_rational_coefficients(f_hz, h, num_order: int, den_order: int, weight=None, f_max: float | None = None, *,
+                              f_min: float | None = None, iterations: int = 30, tol: float = 1e-10
+                              ) -> tuple[np.ndarray, np.ndarray]:
+    """Fit a stable continuous-time ``N(s) / D(s)`` to a frequency response: its coefficients.
+
     Minimises ``sum_k w_k^2 |N(s_k) / D(s_k) - H_k|^2`` over ``s_k = j 2 pi f_k`` by
     Sanathanan-Koerner iterations (each a linear least-squares problem in the coefficients,
     weighted by the previous ``1 / |D|``, with ``D`` monic and frequencies scaled by their
@@ -183,8 +202,9 @@ def fit_rational(f_hz, h, num_order: int, den_order: int, weight=None, f_max: fl
 
     Returns
     -------
-    control.TransferFunction
-        Stable (all poles with negative real part), s in rad/s.
+    (numpy.ndarray, numpy.ndarray)
+        ``(num, den)`` in descending powers of s (rad/s), leading zero coefficients dropped;
+        stable (all poles with negative real part).
 
     Raises
     ------
@@ -245,6 +265,10 @@ def fit_rational(f_hz, h, num_order: int, den_order: int, weight=None, f_max: fl
     # Back to s: x = s / w0. Multiply through by w0^na so that D stays monic in s.
     num = np.array([n_asc[i] * w0 ** (den_order - i) for i in range(num_order + 1)])[::-1]
     den = np.array([d[i] * w0 ** (den_order - i) for i in range(den_order + 1)])[::-1]
-    import control
+    return _leading_zeros_dropped(num), _leading_zeros_dropped(den)
 
-    return control.tf(num, den)
+
+def _leading_zeros_dropped(c: np.ndarray) -> np.ndarray:
+    """``c`` without its leading exact zeros (one zero if all are), as python-control keeps them."""
+    nz = np.flatnonzero(c != 0)
+    return c[nz[0]:].astype(float) if nz.size else np.zeros(1)

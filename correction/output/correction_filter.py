@@ -19,11 +19,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import control
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy import signal
 
 from correction.output.lowpass import LowPass
+
+if TYPE_CHECKING:  # python-control is imported where it is used (it loads matplotlib)
+    import control
 
 __all__ = ["CorrectionFilter", "SETTLING_TOLERANCE"]
 
@@ -88,6 +92,8 @@ class CorrectionFilter:
     # ------------------------------------------------------------------ transfer functions
     def tf(self) -> control.TransferFunction:
         """The continuous product ``T_a^-1(s) T_F(s)`` as one proper ``control.TransferFunction``."""
+        import control
+
         num = np.real_if_close(self.gain * np.poly(self.zeros)) if len(self.zeros) else np.array([self.gain])
         den = np.real_if_close(np.poly(self.poles))
         return control.tf(np.real(num), np.real(den))

@@ -31,12 +31,17 @@ from __future__ import annotations
 import dataclasses
 import math
 
-import control
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy import signal
 
 from correction.output.correction_filter import CorrectionFilter, transient_lengths
 from correction.output.lowpass import as_lowpass
+from correction.output.transfer import is_transfer_function
+
+if TYPE_CHECKING:  # python-control is imported where it is used (it loads matplotlib)
+    import control
 
 __all__ = ["actuator_coefficients", "design_correction", "reference_filter"]
 
@@ -63,7 +68,7 @@ def actuator_coefficients(ta) -> tuple[np.ndarray, np.ndarray]:
         If ``ta`` is not one of the accepted forms, is discrete-time or MIMO, has non-finite
         coefficients, or has a zero numerator or denominator.
     """
-    if isinstance(ta, control.TransferFunction):
+    if is_transfer_function(ta):
         if ta.ninputs != 1 or ta.noutputs != 1:
             raise ValueError(f"T_a must be single-input single-output, got a {ta.noutputs}x{ta.ninputs} "
                              "transfer function; pass one actuator at a time")

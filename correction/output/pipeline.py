@@ -14,13 +14,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import control
 import numpy as np
 
 from correction.identification.actuator_fit import ActuatorFit
 from correction.output.apply import correct
 from correction.output.correction_filter import SETTLING_TOLERANCE
 from correction.output.filters import design_correction, reference_filter
+from correction.output.transfer import is_transfer_function
 
 __all__ = ["CorrectedForces", "CorrectionError", "correct_forces", "SETTLING_TOLERANCE"]
 
@@ -91,7 +91,7 @@ def _one(ta):
 
 
 def _actuator_list(actuators, k: int) -> list:
-    if isinstance(actuators, (ActuatorFit, control.TransferFunction)) or _is_pair(actuators):
+    if isinstance(actuators, ActuatorFit) or is_transfer_function(actuators) or _is_pair(actuators):
         return [_one(actuators)]
     if not isinstance(actuators, Sequence) or isinstance(actuators, str):
         raise ValueError(f"actuators must be one T_a or a sequence of {k} (num, den), ActuatorFit or "

@@ -15,6 +15,7 @@ wheel forces needs). Frequencies are in Hz at the interfaces, rad/s inside Lapla
 from __future__ import annotations
 
 import math
+import sys
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,6 +32,7 @@ __all__ = [
     "bandwidth_hz",
     "transfer_bandwidth_hz",
     "describe_roots",
+    "is_transfer_function",
     "apply_transfer_function",
 ]
 
@@ -99,8 +101,9 @@ def frequency_response_hz(system, f_hz) -> np.ndarray:
 
     Parameters
     ----------
-    system : control.TransferFunction or control.StateSpace
-        Continuous (evaluated at ``s = j 2 pi f``) or discrete (``z = exp(j 2 pi f dt)``).
+    system : control.TransferFunction or control.StateSpace, or (num, den)
+        Continuous (evaluated at ``s = j 2 pi f``) or discrete (``z = exp(j 2 pi f dt)``); a
+        tuple of two coefficient arrays (descending powers of s) is a continuous SISO one.
     f_hz : array_like, Hz
         Frequencies.
 
@@ -111,6 +114,9 @@ def frequency_response_hz(system, f_hz) -> np.ndarray:
     """
     f = np.atleast_1d(np.asarray(f_hz, dtype=float))
     w = 2.0 * np.pi * f
+    if isinstance(system, tuple):
+        num, den = system
+        return np.polyval(num, 1j * w) / np.polyval(den, 1j * w)
     if system.isdtime(strict=True):
         x = np.exp(1j * w * system.dt)
     else:
@@ -212,8 +218,9 @@ def transfer_bandwidth_hz(system, *, drop_db: float = 3.0, f_min_hz: float = 1e-
 
     Parameters
     ----------
-    system : control.TransferFunction or control.StateSpace
-        SISO, continuous or discrete, with a finite non-zero static gain.
+    system : control.TransferFunction or control.StateSpace, or (num, den)
+        SISO, continuous or discrete, with a finite non-zero static gain; a tuple of two
+        coefficient arrays (descending powers of s) is a continuous transfer function.
     drop_db : float, dB
     f_min_hz, f_max_hz : float, Hz
         Search range (log grid, then Brent's method on the first bracket).
@@ -225,10 +232,16 @@ def transfer_bandwidth_hz(system, *, drop_db: float = 3.0, f_min_hz: float = 1e-
     """
     from scipy import optimize
 
-    dc = abs(complex(np.squeeze(system.dcgain())))
+    if isinstance(system, tuple):
+        num, den = (np.atleast_1d(np.asarray(c, dtype=float)) for c in system)
+        system = (num, den)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dc = abs(num[-1] / den[-1]) if den[-1] != 0 else math.inf
+    else:
+        dc = abs(complex(np.squeeze(system.dcgain())))
     if not (math.isfinite(dc) and dc > 0):
         raise ValueError("the system needs a finite, non-zero static gain")
-    if system.isdtime(strict=True):
+    if not isinstance(system, tuple) and system.isdtime(strict=True):
         f_max_hz = min(f_max_hz, 0.5 / system.dt * (1 - 1e-9))
     f = np.geomspace(f_min_hz, f_max_hz, 4000)
     mag = np.abs(frequency_response_hz(system, f))
@@ -244,6 +257,13 @@ def transfer_bandwidth_hz(system, *, drop_db: float = 3.0, f_min_hz: float = 1e-
         return abs(frequency_response_hz(system, [x])[0]) - target
 
     return float(optimize.brentq(g, f[i - 1], f[i], xtol=1e-9))
+
+
+def is_transfer_function(obj) -> bool:
+    """Whether ``obj`` is a ``control.TransferFunction``, without importing python-control (and
+    with it matplotlib) for the question: an object can only be one once the package is loaded."""
+    control = sys.modules.get("control")
+    return control is not None and isinstance(obj, control.TransferFunction)
 
 
 def describe_roots(roots, dt_s: float | None = None) -> list[dict]:

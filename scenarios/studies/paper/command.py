@@ -70,6 +70,13 @@ def cmd_paper(args) -> int:
     # worker, traverses them again (~0.1 s per case's figures otherwise).
     gc.disable()
     try:
+        # matplotlib too: every worker draws figures; imported once here, it is shared by the
+        # forked workers instead of imported by each of them.
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot  # noqa: F401
+
         from scenarios.core.config import load_scenario, paper_scenarios
         from scenarios.core.files import to_json
         from scenarios.core.outputs import staged_output
