@@ -128,7 +128,8 @@ def cmd_correct_model(args, naming) -> int:
         print(cal.table())
         print(f"fit NRMSE per wheel (calibrated model against the measured force): {meta['cal_fit_nrmse']}; "
               f"{meta['cal_runs']}")
-        print(f"model error per wheel (fit NRMSE beyond the load cells' noise): {meta['cal_model_error']}")
+        print(f"model error per wheel (dynamic fit NRMSE in the correction's band beyond the load cells' noise): "
+              f"{meta['cal_model_error']}")
         if cal.cab_choice:
             print(cal.cab_choice[0].upper() + cal.cab_choice[1:])
     result.write(args.out, overwrite=args.force)

@@ -83,6 +83,7 @@ from correction.identification.noise import noise_rms
 from mjcf.variant import BOUNDS, TruckVariant
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
+from scenarios.records.model.band_error import band_errors
 from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
@@ -386,7 +387,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     def per_wheel(model_N):
         return tuple(float(v) for v in np.sqrt(np.mean(prob.plain(model_N) ** 2, axis=0)) / prob.norm)
 
-    noise = noise_rms(force, fs) / prob.norm  # the load cells' share of the fit NRMSE (whole record)
+    noise = noise_rms(force, fs)  # the load cells' white noise (whole record), N
+    band, band_noise = band_errors(m_opt, force, wins, fs, noise)
 
     return Calibration(names=names, units=tuple(UNITS[k] for k in names),
                        initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
@@ -397,5 +399,6 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                        message=str(res.message) + "".join(f"; {k} set to 0 (its onset lies beyond every measured load)"
                                                           for k in linear), wall_time_s=round(time.perf_counter() - wall0, 3),
                        bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)),
-                       noise_nrmse=tuple(float(v) for v in noise))
+                       noise_nrmse=tuple(float(v) for v in noise / prob.norm), band_nrmse=band,
+                       band_noise_nrmse=band_noise)
 

@@ -84,6 +84,12 @@ class Calibration:
         Per wheel: the measured force's white noise (:func:`correction.identification.noise.noise_rms`, read above
         the truck's band) over the same std as :attr:`fit_nrmse`, 1: the part of the fit NRMSE no
         model can remove; () when not estimated.
+    band_nrmse : tuple of float
+        Per wheel: the fit's dynamic residual inside the correction's band, over the band-limited
+        measured force's std (:func:`scenarios.records.model.band_error.band_errors`), 1; () when not
+        measured.
+    band_noise_nrmse : tuple of float
+        Per wheel: the white noise's share of :attr:`band_nrmse`, 1.
     cab_choice : str
         Where the calibration chose whether to fit the cab's mount
         (:func:`scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
@@ -108,6 +114,8 @@ class Calibration:
     bounds: tuple = ()
     cab_choice: str = ""
     noise_nrmse: tuple = ()
+    band_nrmse: tuple = ()
+    band_noise_nrmse: tuple = ()
 
     def values(self) -> dict[str, float]:
         """The whole model truck: fitted and fixed fields, SI."""
@@ -136,8 +144,12 @@ class Calibration:
 
     @property
     def excess_nrmse(self) -> tuple:
-        """Per wheel: the fit NRMSE beyond the load cells' noise (:func:`model_error`; the fit NRMSE
-        itself where the noise was not estimated): the model's own error on the record, 1."""
+        """Per wheel: the model's own error on the record, 1: the fit's residual in the correction's
+        band beyond the load cells' noise there (:attr:`band_nrmse`, :attr:`band_noise_nrmse`,
+        :func:`model_error`); where those were not measured, the fit NRMSE beyond the noise (or the
+        fit NRMSE itself where the noise was not estimated)."""
+        if self.band_nrmse:
+            return model_error(self.band_nrmse, self.band_noise_nrmse)
         return model_error(self.fit_nrmse, self.noise_nrmse) if self.noise_nrmse else tuple(self.fit_nrmse)
 
     @property

@@ -131,6 +131,6 @@ def model_table(scores) -> str:
     lines.append(f"model-corr.: {HYBRID_FORMULA}, L the linear correction, the truck model calibrated on the rig")
     lines.append("record's own signals; DLC and its error against the road on the same samples; linear: L's NRMSE;")
     lines.append("fit NRMSE: the calibrated model, pans following x_a, against the measured F_rig (mean of the wheels);")
-    lines.append("model err.: the worst wheel's fit NRMSE beyond the load cells' noise (the fallback's measure, limit "
-                 f"{EXCESS_NRMSE_LIMIT:g}); cab: held rigid or fitted on its mounts.")
+    lines.append("model err.: the worst wheel's dynamic fit NRMSE in the correction's band beyond the load cells' noise")
+    lines.append(f"(the fallback's measure, limit {EXCESS_NRMSE_LIMIT:g}); cab: held rigid or fitted on its mounts.")
     return "\n".join(lines)

@@ -154,7 +154,7 @@ def test_fallback_is_the_linear_correction_with_its_reason(record, tmp_path, cap
     assert progress == ""  # --quiet
     first = printed.splitlines()[0]
     assert first.startswith("linear correction used: the calibrated truck model reproduces the measured wheel force "
-                            "of rr only to NRMSE"), first
+                            "of rr in the correction's band only to NRMSE"), first
     meta = _metadata(out)
     assert meta["method"] == "linear" and meta["fallback_reason"] == first.split(": ", 1)[1]
     assert meta["ta_source"] == "identified per corner from the drive and LVDT channels"

@@ -15,11 +15,23 @@ from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, fallback_re
 from scenarios.records.model.result import Calibration, fitted_text
 
 
-def _cal(fit, noise=(), converged=True) -> Calibration:
+def _cal(fit, noise=(), converged=True, band=(), band_noise=()) -> Calibration:
     return Calibration(names=("payload_kg",), units=("kg",), initial=(1.0,), fitted=(1.0,), sigma=(0.0,),
                        sigma_robust=(0.0,), fixed={}, fit_nrmse=tuple(fit), initial_nrmse=(1.0,) * 4,
                        windows_s=((0.0, 1.0),), weighted=True, evaluations=3, converged=converged, message="stopped",
-                       wall_time_s=1.0, noise_nrmse=tuple(noise))
+                       wall_time_s=1.0, noise_nrmse=tuple(noise), band_nrmse=tuple(band), band_noise_nrmse=tuple(band_noise))
+
+
+def test_the_model_error_is_read_in_the_correction_band_where_measured():
+    """A whole-band fit of 0.30 whose noise estimate failed (0.01, read behind an anti-alias filter) but
+    whose band-limited residual is 0.05 (noise there 0.01): the model holds; the sentence says where."""
+    cal = _cal((0.30,) * 4, (0.01,) * 4, band=(0.05, 0.05, 0.20, 0.05), band_noise=(0.01,) * 4)
+    assert cal.excess_nrmse == pytest.approx((math.sqrt(0.05 ** 2 - 0.01 ** 2),) * 2 + (math.sqrt(0.2 ** 2 - 0.01 ** 2),)
+                                             + (math.sqrt(0.05 ** 2 - 0.01 ** 2),))
+    why = fallback_reason(cal)
+    assert why.startswith("the calibrated truck model reproduces the measured wheel force of rl in the correction's "
+                          "band only to NRMSE 0.200")
+    assert fallback_reason(_cal((0.30,) * 4, (0.01,) * 4, band=(0.05,) * 4, band_noise=(0.01,) * 4)) == ""
 
 
 def test_the_excess_is_the_fit_beyond_independent_noise():

@@ -1,0 +1,69 @@
+"""The calibrated model's error where the correction uses it: in the correction's band.
+
+The correction passes every force through its low-pass (the regularized ``T_F``, 30 Hz): an error
+of the model above that band never reaches the corrected force, and neither does the load cells'
+noise there. The fit NRMSE over the whole band (:attr:`Calibration.fit_nrmse`) counts both; the
+model error the fallback reads is the dynamic one inside the band: the residual (model force, pans
+following the measured x_a, minus the measured force; its mean on each window, a static bias the
+model correction cancels, taken out) and the measured force passed through the
+correction's own band limit (:func:`correction.output.apply.band_limit`, zero-phase), the rms of
+the one over the std of the other on the calibration windows. The noise that is left in the band
+is the white noise's level (:func:`correction.identification.noise.noise_rms`) through the
+low-pass's noise bandwidth, over the same std: a few percent of the noise's whole-band power,
+so an estimate that a lab's anti-alias filter biases (it reads the noise where the filter has
+attenuated it) moves the model error little.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from correction.output.apply import band_limit
+from correction.output.lowpass import as_lowpass
+
+__all__ = ["BAND_LOWPASS", "band_errors", "noise_bandwidth_hz"]
+
+#: The band limit of the model error: the correction's own low-pass (``rigsim correct``'s default).
+BAND_LOWPASS = "regularized"
+
+
+def noise_bandwidth_hz(fs: float, lowpass=BAND_LOWPASS) -> float:
+    """Equivalent noise bandwidth of the band limit applied zero-phase, Hz: the integral of
+    ``|T_F(f)|^2`` from 0 to ``fs / 2`` (zero-phase filtering applies ``|T_F|``; float, Hz)."""
+    f = np.linspace(0.0, fs / 2.0, 20_001)
+    h2 = np.abs(as_lowpass(lowpass).response(f)) ** 2
+    return float((h2.sum() - 0.5 * (h2[0] + h2[-1])) * (f[1] - f[0]))  # the trapezoidal rule
+
+
+def band_errors(model_N, force_N, windows, fs: float, noise_N) -> tuple[tuple, tuple]:
+    """Per wheel: the model's error and the white noise left in the correction's band, 1.
+
+    Parameters
+    ----------
+    model_N : sequence of numpy.ndarray, N
+        The model's force on each window, from the window's lead-in start (``(e - a) x 4``).
+    force_N : numpy.ndarray, N
+        The measured force of the whole record (``n x 4``).
+    windows : sequence of (int, int, int)
+        Each window's lead-in start, scored start and end, samples (``a, s, e``).
+    fs : float, Hz
+    noise_N : array_like, N
+        The white noise's rms per wheel over the whole band (``noise_rms``).
+
+    Returns
+    -------
+    (tuple of float, tuple of float)
+        The band-limited residual's rms (its mean on each window taken out: a static bias the
+        correction cancels), and the noise's share of it, each over the std of the band-limited
+        measured force on the windows' scored samples.
+    """
+    residual, force = [], []
+    for m, (a, s, e) in zip(model_N, windows):
+        err = m[s - a:] - force_N[s:e]
+        residual.append(band_limit(err - err.mean(axis=0), fs, BAND_LOWPASS, "zerophase"))
+        force.append(band_limit(force_N[s:e], fs, BAND_LOWPASS, "zerophase"))
+    residual, force = np.concatenate(residual), np.concatenate(force)
+    std = force.std(axis=0)
+    fit = np.sqrt(np.mean(residual ** 2, axis=0)) / std
+    noise = np.asarray(noise_N, float) * np.sqrt(noise_bandwidth_hz(fs) / (fs / 2.0)) / std
+    return tuple(float(v) for v in fit), tuple(float(v) for v in noise)
