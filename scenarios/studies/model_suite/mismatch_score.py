@@ -59,6 +59,10 @@ class PlantScore:
         Length of the scored samples.
     fit_nrmse : numpy.ndarray or None, (4,)
         The calibrated model's fit against the measured force (1), None without a calibration.
+    model_error : numpy.ndarray or None, (4,)
+        What the fallback reads (:attr:`~scenarios.records.model.result.Calibration.excess_nrmse`:
+        the dynamic residual in the correction's band beyond the noise there, 1), None without a
+        calibration.
     """
 
     name: str
@@ -72,6 +76,7 @@ class PlantScore:
     cpu_s: float
     scored_s: float
     fit_nrmse: np.ndarray | None = None
+    model_error: np.ndarray | None = None
     timings: Mapping[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -79,7 +84,9 @@ class PlantScore:
                 "nrmse": {k: v.tolist() for k, v in self.nrmse.items()},
                 "dlc_error": {k: v.tolist() for k, v in self.dlc_error.items()}, "floor": self.floor.tolist(),
                 "wall_s": self.wall_s, "cpu_s": self.cpu_s, "scored_s": self.scored_s,
-                "fit_nrmse": None if self.fit_nrmse is None else self.fit_nrmse.tolist(), "timings": dict(self.timings)}
+                "fit_nrmse": None if self.fit_nrmse is None else self.fit_nrmse.tolist(),
+                "model_error": None if self.model_error is None else self.model_error.tolist(),
+                "timings": dict(self.timings)}
 
 
 def _cpu_s() -> float:
@@ -137,9 +144,12 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     scores["delivered"] = (score_correction(mc.corrected_N, road_N, fs, rows) if mc.method == "model"
                            else scores["linear"])
     floor = linear_floor(measured.force_N, band_limit(road_N, fs, LOWPASS, MODE), *FLOOR_TAPS, rows=rows).nrmse
-    fit = None if mc.calibration is None else np.asarray(mc.calibration.fit_nrmse, dtype=float)
+    cal = mc.calibration
+    fit = None if cal is None else np.asarray(cal.fit_nrmse, dtype=float)
+    error = None if cal is None else np.asarray(cal.excess_nrmse, dtype=float)
     return PlantScore(name=name, plant=dict(plant), method=mc.method, reason=mc.reason,
                       nrmse={k: np.asarray(v["nrmse"]) for k, v in scores.items()},
                       dlc_error={k: np.asarray(v["dlc_error"]) for k, v in scores.items()},
                       floor=np.asarray(floor, dtype=float), wall_s=round(wall, 1), cpu_s=round(cpu, 1),
-                      scored_s=float(scores["linear"]["scored_s"]), fit_nrmse=fit, timings=dict(mc.timings))
+                      scored_s=float(scores["linear"]["scored_s"]), fit_nrmse=fit, model_error=error,
+                      timings=dict(mc.timings))

@@ -1,0 +1,34 @@
+"""``benchmarks/mismatch_suite.py``'s table and goals from hand-made plant scores: the model error
+column, and a fallback counted wrong where the model correction it refused (the hybrid, forced)
+beats the linear correction on every wheel, whatever the differential form did."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from scenarios.studies.model_suite.mismatch_score import PlantScore
+
+
+@pytest.fixture(scope="module")
+def suite(load_benchmark):
+    return load_benchmark("mismatch_suite")
+
+
+def _score(name, method, linear, hybrid, forced, error):
+    n = {"linear": np.full(4, linear), "hybrid": np.full(4, hybrid), "forced": np.full(4, forced)}
+    n["delivered"] = n["hybrid"] if method == "model" else n["linear"]
+    return PlantScore(name=name, plant={"payload_y_m": 0.1}, method=method, reason="" if method == "model" else "why",
+                      nrmse=n, dlc_error={k: np.full(4, 0.005) for k in n}, floor=np.full(4, 0.1), wall_s=10.0,
+                      cpu_s=20.0, scored_s=20.0, fit_nrmse=np.full(4, error), model_error=np.array([0.1, error, 0.1, 0.1]))
+
+
+def test_a_fallback_is_wrong_where_the_refused_hybrid_was_better(suite):
+    scores = [_score("kept", "model", 0.2, 0.05, 0.3, 0.05),
+              _score("right", "linear", 0.2, 0.25, 0.1, 0.3),  # the differential better, the hybrid not: right
+              _score("wrong", "linear", 0.2, 0.1, 0.3, 0.18)]  # the hybrid better: wrong
+    head, rows, text, numbers = suite.rows_and_goals(scores)
+    assert numbers["wrong_fallbacks"] == ["wrong"] and numbers["fallbacks"] == 2
+    col = head.index("model error (worst)")
+    assert [r[col] for r in rows] == ["0.100", "0.300", "0.180"]
+    assert "where the forced model correction (hybrid) was better on every wheel: 1 (wrong)" in text
