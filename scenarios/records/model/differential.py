@@ -22,8 +22,9 @@ linear correction's filter transients are not.
 :func:`correct_with_model` calibrates the model from the record
 (:func:`scenarios.records.model.calibrate.calibrate`) and corrects, or says in one
 sentence why the linear correction is to be used instead: the calibration did not converge, could
-not run, or the calibrated model does not reproduce F_rig beyond the load cells' noise
-(:data:`EXCESS_NRMSE_LIMIT`), on every wheel or (with L) on the wheels it names.
+not run, or the calibrated model does not reproduce F_rig's dynamic part in the correction's band
+beyond the load cells' noise (:data:`EXCESS_NRMSE_LIMIT`), on every wheel or (with L) on the
+wheels it names.
 """
 
 from __future__ import annotations
@@ -51,9 +52,11 @@ __all__ = ["START_S", "EXCESS_NRMSE_LIMIT", "HYBRID_FORMULA", "DIFFERENTIAL_FORM
 #: after 5 s, against the load cells' 25 N rms through the 30 Hz band limit.
 START_S = 3.0
 
-#: Largest per-wheel excess fit NRMSE (:attr:`Calibration.excess_nrmse`: the model's force, pans
-#: following x_a, against the measured F_rig on the calibration windows, with the load cells' white
-#: noise taken out) for which the model correction is used, 1. The differential correction's own
+#: Largest per-wheel model error (:attr:`Calibration.excess_nrmse`: the model's force, pans
+#: following x_a, against the measured F_rig on the calibration windows, its dynamic part in the
+#: correction's band, the load cells' white noise there taken out) for which the model correction
+#: is used, 1. Derived on the whole-band excess, which equals it where the model's error lies in the
+#: band and the noise estimate holds (the band's noise share is small). The differential correction's own
 #: error against the road follows that excess (with a progressive tire the model lacks: the
 #: corrected NRMSE 0.78-1.27 x the excess wherever it exceeds 0.06, 67 wheels,
 #: benchmarks/model_error.py), so past the linear correction's typical error (0.11-0.20 on the
