@@ -31,17 +31,12 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from scipy import signal
 
 from correction.output.correction_filter import CorrectionFilter, transient_lengths
 from correction.output.lowpass import as_lowpass
 from correction.output.transfer import is_transfer_function
-
-if TYPE_CHECKING:  # python-control is imported where it is used (it loads matplotlib)
-    import control
 
 __all__ = ["actuator_coefficients", "design_correction", "reference_filter"]
 

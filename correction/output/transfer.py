@@ -235,8 +235,7 @@ def transfer_bandwidth_hz(system, *, drop_db: float = 3.0, f_min_hz: float = 1e-
     if isinstance(system, tuple):
         num, den = (np.atleast_1d(np.asarray(c, dtype=float)) for c in system)
         system = (num, den)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            dc = abs(num[-1] / den[-1]) if den[-1] != 0 else math.inf
+        dc = abs(num[-1] / den[-1]) if den[-1] != 0 else math.inf
     else:
         dc = abs(complex(np.squeeze(system.dcgain())))
     if not (math.isfinite(dc) and dc > 0):

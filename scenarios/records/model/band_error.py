@@ -57,12 +57,13 @@ def band_errors(model_N, force_N, windows, fs: float, noise_N) -> tuple[tuple, t
         correction cancels), and the noise's share of it, each over the std of the band-limited
         measured force on the windows' scored samples.
     """
-    residual, force = [], []
+    both = []  # per window: the residual's columns, then the force's, band-limited together
     for m, (a, s, e) in zip(model_N, windows):
         err = m[s - a:] - force_N[s:e]
-        residual.append(band_limit(err - err.mean(axis=0), fs, BAND_LOWPASS, "zerophase"))
-        force.append(band_limit(force_N[s:e], fs, BAND_LOWPASS, "zerophase"))
-    residual, force = np.concatenate(residual), np.concatenate(force)
+        both.append(band_limit(np.hstack([err - err.mean(axis=0), force_N[s:e]]), fs, BAND_LOWPASS, "zerophase"))
+    both = np.concatenate(both)
+    k = force_N.shape[1]
+    residual, force = both[:, :k], both[:, k:]
     std = force.std(axis=0)
     fit = np.sqrt(np.mean(residual ** 2, axis=0)) / std
     noise = np.asarray(noise_N, float) * np.sqrt(noise_bandwidth_hz(fs) / (fs / 2.0)) / std

@@ -35,12 +35,12 @@ import numpy as np
 from scenarios.core.config import ScenarioError
 from scenarios.core.pool import local_executor
 from scenarios.records.model.calibrate import DEFAULT_NAMES, calibrate
-
-#: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
-WITH_CAB = DEFAULT_NAMES + ("cab_mount_hz",)
 from scenarios.records.model.result import Calibration
 
 __all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "choose", "check_cab", "calibrate_cab"]
+
+#: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
+WITH_CAB = DEFAULT_NAMES + ("cab_mount_hz",)
 
 #: The cab modes: choose by the fits (default), hold the cab (rigid or the scenario's mount), fit it.
 AUTO, HELD, FITTED_CAB = "auto", "held", "fitted"

@@ -115,19 +115,12 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
     return np.asarray(force_N, dtype=float) + f_ref - f_a
 
 
-def _fit_figures(calibration) -> tuple[str, tuple, tuple]:
-    """What the model error is read from: where, the NRMSE per wheel and the noise's share of it."""
-    if calibration.band_nrmse:
-        return " in the correction's band", calibration.band_nrmse, calibration.band_noise_nrmse
-    return "", calibration.fit_nrmse, calibration.noise_nrmse
-
-
 def fallback_reason(calibration, excess_limit: float = EXCESS_NRMSE_LIMIT) -> str:
     """One sentence why the linear correction is to be used with this calibration, "" if not."""
     excess = calibration.excess_nrmse
     worst = int(np.argmax(excess))
     if excess[worst] > excess_limit:
-        where, fit, noise_share = _fit_figures(calibration)
+        where, fit, noise_share = calibration.error_figures()
         noise = (f" beyond the load cells' noise ({noise_share[worst]:.3f}; limit {excess_limit:g})"
                  if noise_share else f" (limit {excess_limit:g})")
         return (f"the calibrated truck model reproduces the measured wheel force of {CORNERS[worst]}{where} only to "
@@ -150,7 +143,7 @@ def wheels_reason(calibration, holds, excess_limit: float = EXCESS_NRMSE_LIMIT) 
     bad = [i for i, ok in enumerate(holds) if not ok]
     if not bad:
         return ""
-    where, fit, _ = _fit_figures(calibration)
+    where, fit, _ = calibration.error_figures()
     figures = ", ".join(f"{CORNERS[i]} {fit[i]:.3f} (model error {calibration.excess_nrmse[i]:.3f})" for i in bad)
     return (f"the calibrated truck model reproduces the measured wheel force{where} only to NRMSE {figures} (limit "
             f"{excess_limit:g} beyond the load cells' noise), so {'that wheel is' if len(bad) == 1 else 'those wheels are'} "

@@ -142,15 +142,21 @@ class Calibration:
 
         return bool(v - lo <= tol(lo) or hi - v <= tol(hi))
 
+    def error_figures(self) -> tuple[str, tuple, tuple]:
+        """What :attr:`excess_nrmse` is read from: where (" in the correction's band", or "" for the
+        whole band), the NRMSE per wheel and the noise's share of it (() where not estimated)."""
+        if self.band_nrmse:
+            return " in the correction's band", self.band_nrmse, self.band_noise_nrmse
+        return "", self.fit_nrmse, self.noise_nrmse
+
     @property
     def excess_nrmse(self) -> tuple:
         """Per wheel: the model's own error on the record, 1: the fit's residual in the correction's
         band beyond the load cells' noise there (:attr:`band_nrmse`, :attr:`band_noise_nrmse`,
         :func:`model_error`); where those were not measured, the fit NRMSE beyond the noise (or the
         fit NRMSE itself where the noise was not estimated)."""
-        if self.band_nrmse:
-            return model_error(self.band_nrmse, self.band_noise_nrmse)
-        return model_error(self.fit_nrmse, self.noise_nrmse) if self.noise_nrmse else tuple(self.fit_nrmse)
+        _, fit, noise = self.error_figures()
+        return model_error(fit, noise) if noise else tuple(fit)
 
     @property
     def fitted_cab_hz(self) -> float | None:
