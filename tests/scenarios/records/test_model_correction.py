@@ -157,16 +157,30 @@ def test_a_malformed_record_is_refused_before_any_run(record):
         calibrate(record["t"][:2000], record["x_a"][:2000], record["F_rig"][:2000], base_scenario=record["sc"])
 
 
+def _road_record(**changes):
+    """The road test of the medium case's plant with ``changes`` to its truck, and the force its load
+    cells measure (100 N of noise): ``(scenario, road run, force)``."""
+    sc = plant_scenario()
+    sc = dataclasses.replace(sc, vehicle=dataclasses.replace(sc.vehicle, **changes))
+    road = run(sc, "road")
+    return sc, road, scoring.measured_force(road, scoring.NOISE_N, sc.seed)
+
+
+def _fit_window(sc, road, force, names, guess=None, **options):
+    """``names`` calibrated on one 3 s window (2 s lead-in) of the road record, every other field of
+    FITTED but the cab's held at the plant's (``guess`` on top)."""
+    held = {k: getattr(sc.vehicle, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
+    return calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names,
+                     fitted_guess=held | (guess or {}), windows=1, window_s=3.0, lead_s=2.0, workers=2, **options)
+
+
 def test_calibration_recovers_a_cab_mount_frequency():
     """A short synthetic record: the road test (pans following the road exactly) of the medium case's plant
     with its cab on 2 Hz mounts, plus the load cells' 100 N noise. The cab's mount frequency fitted alone
     from the catalogue guess (2.5 Hz, 25 % off), the other fields held at the plant's (``fitted_guess``):
     recovered within 2 % from one 3 s window, and the fit NRMSE against F_rig falls by more than half."""
-    sc = plant_scenario()
-    plant = dataclasses.replace(sc.vehicle, cab_mount_hz=2.0)
-    sc = dataclasses.replace(sc, vehicle=plant)
-    road = run(sc, "road")
-    force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
+    sc, road, force = _road_record(cab_mount_hz=2.0)
+    plant = sc.vehicle
     held = {k: getattr(plant, k) for k in FITTED
             if k != "cab_mount_hz" and not k.startswith("tire_progressive") and k not in STATION_FITTED}
     assert all(v is not None for v in held.values())  # the stations: held symmetric, the plant's
@@ -185,15 +199,9 @@ def test_calibration_recovers_a_progressive_tire():
     the plant's: both recovered within 3 % from one 3 s window (measured 0.3954 and 3.000 cm; stopped at
     4 residual evaluations the ratio is still at 0.25, at 6 at 0.38), and the fit NRMSE falls by more
     than half (0.34-0.44 to 0.05-0.06, the noise's share)."""
-    sc = plant_scenario()
-    plant = dataclasses.replace(sc.vehicle, tire_progressive_ratio=0.4, tire_progressive_onset_m=0.03)
-    sc = dataclasses.replace(sc, vehicle=plant)
-    road = run(sc, "road")
-    force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
-    names = ("tire_progressive_ratio", "tire_progressive_onset_m")
-    held = {k: getattr(plant, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
-    cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names, fitted_guess=held,
-                    windows=1, window_s=3.0, lead_s=2.0, max_nfev=20, workers=2)
+    sc, road, force = _road_record(tire_progressive_ratio=0.4, tire_progressive_onset_m=0.03)
+    plant = sc.vehicle
+    cal = _fit_window(sc, road, force, ("tire_progressive_ratio", "tire_progressive_onset_m"), max_nfev=20)
     # the onset starts at the front wheels' median load over the 3 s scored (2-5 s): their static deflection
     static_m = np.median(force[2000:5000, :2]) / plant.tire_stiffness_front_N_per_m
     assert cal.initial == pytest.approx((CATALOGUE_TIRE_RATIO, static_m), rel=1e-12) and CATALOGUE_TIRE_RATIO == 0.2
@@ -208,16 +216,10 @@ def test_calibration_recovers_a_left_right_difference_of_the_tires_and_springs()
     neighbours, 100 N of noise; the two left factors fitted from 1 (a symmetric truck), the axles' and
     every other value held at the plant's: both recovered within 3 %, and the fit NRMSE falls by more
     than half (the noise's share is left)."""
-    sc = plant_scenario()
-    plant = dataclasses.replace(sc.vehicle, tire_stiffness_factor_fl=0.85, spring_rate_factor_rl=1.1)
-    sc = dataclasses.replace(sc, vehicle=plant)
-    road = run(sc, "road")
-    force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
+    sc, road, force = _road_record(tire_stiffness_factor_fl=0.85, spring_rate_factor_rl=1.1)
     names = ("tire_stiffness_factor_fl", "spring_rate_factor_rl")
     assert set(names) <= set(STATION_FITTED) <= set(DEFAULT_NAMES)
-    held = {k: getattr(plant, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
-    cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names, fitted_guess=held,
-                    windows=1, window_s=3.0, lead_s=2.0, max_nfev=20, workers=2)
+    cal = _fit_window(sc, road, force, names, max_nfev=20)
     assert cal.initial == (1.0, 1.0)
     assert cal.converged, cal.message
     np.testing.assert_allclose(cal.fitted, (0.85, 1.1), rtol=0.03)
@@ -231,17 +233,12 @@ def test_calibration_recovers_each_axles_stiffening():
     the rest held at the plant's: all four within 3 % (measured 0.394, 3.000 cm, 0.248, 2.192 cm; stopped
     at 4 residual evaluations the front ratio is still at 0.25, at 6 at 0.38), the fit NRMSE more than
     halved."""
-    sc = plant_scenario()
-    plant = dataclasses.replace(sc.vehicle, tire_progressive_ratio=0.4, tire_progressive_onset_m=0.03,
-                                tire_progressive_ratio_rear=0.25, tire_progressive_onset_rear_m=0.022)
-    sc = dataclasses.replace(sc, vehicle=plant)
-    road = run(sc, "road")
-    force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
+    sc, road, force = _road_record(tire_progressive_ratio=0.4, tire_progressive_onset_m=0.03,
+                                   tire_progressive_ratio_rear=0.25, tire_progressive_onset_rear_m=0.022)
+    plant = sc.vehicle
     names = ("tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
              "tire_progressive_onset_rear_m")
-    held = {k: getattr(plant, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
-    cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names, fitted_guess=held,
-                    windows=1, window_s=3.0, lead_s=2.0, max_nfev=20, workers=2)
+    cal = _fit_window(sc, road, force, names, max_nfev=20)
     static_m = np.median(force[2000:5000, :2]) / plant.tire_stiffness_front_N_per_m, \
         np.median(force[2000:5000, 2:]) / plant.tire_stiffness_rear_N_per_m  # each axle's median load (2-5 s)
     assert cal.initial == pytest.approx((0.2, static_m[0], 0.2, static_m[1]), rel=1e-12)
@@ -257,18 +254,12 @@ def test_an_onset_given_beyond_the_measured_loads_starts_at_the_static_load():
     recovers the plant's +25 % at 2.2 cm within 3 % (measured 0.247, 2.191 cm; rear fit NRMSE 0.13 ->
     0.055). Searched in metres from 4 cm, the onset would never move (measured: 0.2 and 4 cm, "gtol"
     after one residual and its Jacobian, rear fit NRMSE 0.29 as it starts)."""
-    sc = plant_scenario()
-    plant = dataclasses.replace(sc.vehicle, tire_progressive_ratio_rear=0.25, tire_progressive_onset_rear_m=0.022,
-                                tire_progressive_ratio=0.0)
-    sc = dataclasses.replace(sc, vehicle=plant)
-    road = run(sc, "road")
-    force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
+    sc, road, force = _road_record(tire_progressive_ratio_rear=0.25, tire_progressive_onset_rear_m=0.022,
+                                   tire_progressive_ratio=0.0)
+    plant = sc.vehicle
     assert force[2000:5000, 2:].max() < 0.04 * plant.tire_stiffness_rear_N_per_m  # the guess lies beyond them
-    names = ("tire_progressive_ratio_rear", "tire_progressive_onset_rear_m")
-    held = {k: getattr(plant, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
-    cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names,
-                    fitted_guess=held | {"tire_progressive_onset_rear_m": 0.04},
-                    windows=1, window_s=3.0, lead_s=2.0, max_nfev=20, workers=2)
+    cal = _fit_window(sc, road, force, ("tire_progressive_ratio_rear", "tire_progressive_onset_rear_m"),
+                      guess={"tire_progressive_onset_rear_m": 0.04}, max_nfev=20)
     static_m = np.median(force[2000:5000, 2:]) / plant.tire_stiffness_rear_N_per_m
     assert cal.initial == pytest.approx((0.2, static_m), rel=1e-12)
     np.testing.assert_allclose(cal.fitted, (0.25, 0.022), rtol=0.03)
@@ -290,13 +281,8 @@ def test_a_stiffening_beyond_every_measured_load_is_held_linear(monkeypatch):
         return res
 
     monkeypatch.setattr(scipy.optimize, "least_squares", to_the_top)
-    sc = plant_scenario()
-    road = run(sc, "road")
-    force = scoring.measured_force(road, scoring.NOISE_N, sc.seed)
-    names = ("tire_progressive_ratio", "tire_progressive_onset_m")
-    held = {k: getattr(sc.vehicle, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
-    cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=names, fitted_guess=held,
-                    windows=1, window_s=3.0, lead_s=2.0, workers=2)
+    sc, road, force = _road_record()
+    cal = _fit_window(sc, road, force, ("tire_progressive_ratio", "tire_progressive_onset_m"))
     assert cal.fitted[0] == 0.0 and cal.fitted[1] == pytest.approx(cal.bounds[1][1])
     assert "tire_progressive_ratio set to 0 (its onset lies beyond every measured load)" in cal.message
 
