@@ -102,7 +102,7 @@ def plan_model(settings, record, as_read=None):
 def first_guess(scenario) -> tuple[dict, list[str]]:
     """(fitted fields' first guesses from the scenario's [vehicle], its other given fields: not used)."""
     from mjcf.tires import REAR_FIELDS
-    from scenarios.records.model.calibrate import FITTED
+    from scenarios.records.model.family import FITTED
 
     given = {k: getattr(scenario.vehicle, k) for k in type(scenario.vehicle).field_names()
              if getattr(scenario.vehicle, k) is not None}
@@ -159,7 +159,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
                                        transient=settings.transient, normalize_dc=settings.normalize_dc)})
     cal = None if model_result is None else model_result.calibration
     if model_result is None:
-        from scenarios.records.model.calibrate import FITTED, UNITS
+        from scenarios.records.model.family import FITTED, UNITS
 
         meta.update({cal_key(n): f"0 {UNITS[n]}" for n in FITTED})
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})

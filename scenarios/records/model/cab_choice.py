@@ -32,9 +32,11 @@ import dataclasses
 
 import numpy as np
 
+from mjcf.names import CORNERS
 from scenarios.core.config import ScenarioError
 from scenarios.core.pool import local_executor
-from scenarios.records.model.calibrate import DEFAULT_NAMES, calibrate
+from scenarios.records.model.calibrate import calibrate
+from scenarios.records.model.family import DEFAULT_NAMES
 from scenarios.records.model.result import Calibration
 
 __all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "choose", "check_cab", "calibrate_cab"]
@@ -54,7 +56,8 @@ EDGE = 0.02
 
 
 def _mean_square(cal: Calibration) -> float:
-    return float(np.mean(np.square(cal.fit_nrmse)))
+    """Mean square fit NRMSE of the wheels the calibration fitted (:attr:`Calibration.wheels`), 1."""
+    return float(np.mean([e * e for c, e in zip(CORNERS, cal.fit_nrmse) if c in cal.wheels]))
 
 
 def choose(held: Calibration, fitted: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
@@ -89,7 +92,7 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         The record, as for :func:`~scenarios.records.model.calibrate.calibrate`: time
         (s), measured pan displacement (m, (n, 4)), measured wheel force (N, (n, 4)).
     cab : {"auto", "held", "fitted"}
-        "held": :data:`~scenarios.records.model.calibrate.DEFAULT_NAMES` (the cab rigid,
+        "held": :data:`~scenarios.records.model.family.DEFAULT_NAMES` (the cab rigid,
         or at ``fitted_guess["cab_mount_hz"]``); "fitted": the cab's mount frequency fitted too
         (from that value or 2.5 Hz); "auto": both, and :func:`choose`.
     fitted_guess : dict, optional

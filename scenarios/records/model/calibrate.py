@@ -1,56 +1,6 @@
 """Calibrating the truck model from the rig's own signals (x_a and F_rig), never the road run.
 
-What is fitted, and why (:data:`FITTED`): the fields of :class:`mjcf.variant.TruckVariant` that a
-lab does not know to better than ~10-30 % and that change the wheel forces:
-
-* ``payload_kg``, ``payload_x_m``: the ballast's mass and its position along the truck set the
-  static loads and the body's bounce and pitch; the first guess comes from the measured static
-  loads (:func:`~scenarios.records.model.first_guess.static_guess`), the fit refines them;
-  ``payload_y_m``, its centre across the truck, is held where the measured left/right moment puts it
-  (:func:`~scenarios.records.model.first_guess.static_lateral`): the four static loads pin it;
-* ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
-  right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
-  motion puts straight through the tire;
-* ``spring_friction_front/rear_N``: the leaf springs' interleaf friction per axle, the truck's
-  main nonlinearity (it locks the springs at small amplitude);
-* ``tire_progressive_ratio``, ``tire_progressive_onset_m`` (front tires) and
-  ``tire_progressive_ratio_rear``, ``tire_progressive_onset_rear_m``: each axle's tire stiffening, a
-  bilinear tire (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection,
-  (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model
-  whose tire is linear cannot follow it (docs/model_correction.md). The ratio from a catalogue
-  guess of +20 % (:mod:`~scenarios.records.model.first_guess`), searched additively
-  (:data:`ADDITIVE`: 0-0.7); the onset as the wheel load where the tire stiffens, within the loads
-  the windows measure on its axle, from the axle's static load
-  (:mod:`~scenarios.records.model.onset_load`, which says why: an onset beyond every
-  measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0,
-  where the onset is not identifiable and does not matter;
-* ``tire_stiffness_factor_fl``, ``tire_stiffness_factor_rl``, ``spring_rate_factor_fl``,
-  ``spring_rate_factor_rl`` (:data:`STATION_FITTED`): each axle's left tire and leaf spring over its
-  right one (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another
-  pressure, a spring with a broken leaf), and a model whose axles are symmetric puts the difference
-  into both wheels' errors, in opposite directions;
-* ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
-  cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
-  bounce and pitch that loads the front wheels. A model without it absorbs a suspended cab's mode
-  into the front leaf friction and misses the front wheels' road DLC. Fitted through its
-  compliance (:data:`COMPLIANCE`), 1-30 Hz from a 2.5 Hz guess; on the paper's rough roads a rigid
-  cab fits to the top, 30 Hz, at no loss, but on a smooth road at low speed the fit can wander to
-  the bottom and spoil the front wheels (:data:`DEFAULT_NAMES`), which is why it is not fitted by
-  default. The cab's mass is never fitted: it is locally identifiable on a suspended cab but not
-  on a rigid one; the price is a larger front-wheel error where the plant's cab mass differs from
-  the model's.
-
-Not fitted: the chassis (5.2 t, its CoM and inertia), the axles' masses, the cab's mass (the
-model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate (but for the left/right factors)
-and viscous damping are held at their catalogue (XML) values; the tire free radius only moves
-the static ride height, and the pan mass does not enter a tire force whose pans follow a given
-motion, so neither can be identified from x_a and F_rig. How well each fitted field is pinned
-shows in its 1-sigma (:class:`~scenarios.records.model.result.Calibration`); the onset of a tire
-that does not stiffen (ratio fitted to ~0) changes nothing, and its sigma says so. A tire whose
-wheels never leave the stiff branch (the heavy truck's front tires) trades its stiffness against
-its ratio; that is why each axle has its own ratio and onset: one ratio shared by both axles
-settles at a compromise that bends both axles' tire stiffnesses and leaves one axle's wheels far
-from the plant's forces.
+The fields fitted, their units and search ranges: :mod:`scenarios.records.model.family`.
 
 First guess: :mod:`scenarios.records.model.first_guess` (payload from the record's
 static loads, the rest a catalogue guess that never reads a plant).
@@ -80,10 +30,12 @@ import time
 import numpy as np
 
 from correction.identification.noise import noise_rms
+from mjcf.names import CORNERS
 from mjcf.variant import BOUNDS, TruckVariant
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.records.model.band_error import band_errors
+from scenarios.records.model.family import ADDITIVE, COMPLIANCE, DEFAULT_NAMES, FITTED, RANGES, STATION_FITTED, UNITS
 from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
@@ -91,49 +43,9 @@ from scenarios.records.model.result import Calibration
 from scenarios.records.model.uncertainty import uncertainties
 from scenarios.records.model.weighting import differential_kernel
 
-__all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES", "fit_windows", "calibrate",
+__all__ = ["fit_windows", "calibrate",
            "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "FD_STEP", "MAX_NFEV", "BLOCK_S"]
 
-#: Each axle's left tire stiffness and leaf-spring rate over its right one (the module's description).
-STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
-                  "spring_rate_factor_rl")
-#: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
-FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
-          "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
-          "spring_friction_rear_N", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
-          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED
-UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
-         "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
-         "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
-         "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "tire_progressive_ratio_rear": "1",
-         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz", **dict.fromkeys(STATION_FITTED, "1")}
-#: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
-#: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
-#: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
-#: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
-#: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
-#: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
-DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
-#: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
-#: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
-#: The onsets have none: their range is the loads measured on their axle (onset_load).
-RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
-          "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
-          "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 4.0),
-          "spring_friction_rear_N": (0.05, 4.0), "tire_progressive_ratio": 0.5,
-          "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0),
-          **dict.fromkeys(STATION_FITTED, (0.7, 1.3))}
-#: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
-#: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
-#: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
-#: ratio, whose linear tire is ratio 0; the onsets are searched as loads, N, their range and span
-#: the loads measured on their axle (:mod:`~scenarios.records.model.onset_load`).
-ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
-            "tire_progressive_onset_rear_m")
-#: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
-#: mount's frequency, whose effect on the wheel forces fades as 1 / f^2 towards a rigid cab (a
-#: frequency scale would crawl along that flat valley).
-COMPLIANCE = ("cab_mount_hz",)
 #: Windows of the record fitted: how many, scored seconds each, measured lead-in before each (s).
 #: The lead-in: a model run started at rest on a moving truck's record carries the start's state
 #: error for ~3 s (leaf friction makes it slow: at 2.5 s it is down to ~10 % of the fit's residual
@@ -182,8 +94,10 @@ class _Problem:
     its first guess (the payload's x: offset by metres), but for the fields of :data:`COMPLIANCE`:
     theta = (guess / value)^2, the mount's compliance over the guess's."""
 
-    def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None, loads=None):
+    def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None, loads=None,
+                 use=None):
         self.names, self.t, self.x_a, self.force, self.windows = names, t, x_a, force, windows
+        self.use = np.ones(force.shape[1], bool) if use is None else np.asarray(use, bool)  # the wheels fitted
         self.base, self.fixed, self.executor, self.kernel = portable(base), fixed, executor, kernel
         loads = loads or {}  # onset name: (first-guess load, span), N (onset_load)
         start = {k: loads[k] if k in loads else (guess[k], RANGES[k]) for k in names if k in ADDITIVE}
@@ -248,14 +162,14 @@ class _Problem:
 
     def residual(self, model_N) -> np.ndarray:
         if self.kernel is None:
-            return (self.plain(model_N) / self.norm).ravel()
+            return (self.plain(model_N) / self.norm)[:, self.use].ravel()
         from scipy.signal import fftconvolve
 
         parts = []
         for m, (a, s, e) in zip(model_N, self.windows):
             err = fftconvolve(m - self.force[a:e], self.kernel[:, None], mode="same", axes=0)
             parts.append(err[s - a:e - a - self.half])
-        return (np.concatenate(parts) / self.norm).ravel()
+        return (np.concatenate(parts) / self.norm)[:, self.use].ravel()
 
     def fun(self, theta) -> np.ndarray:
         key = tuple(np.asarray(theta, float))
@@ -273,7 +187,7 @@ class _Problem:
 
 
 def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, names=DEFAULT_NAMES,
-              fitted_guess: dict | None = None,
+              fitted_guess: dict | None = None, wheels=CORNERS,
               windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
               workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None) -> Calibration:
     """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
@@ -300,6 +214,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         for a field held (not in ``names``), the value it is held at, where ``cab_mount_hz: None``
         holds the XML's rigid cab (the model family without the cab's mounts) and
         ``tire_progressive_ratio: None`` its linear tire.
+    wheels : sequence of str
+        The corners whose measured forces the fit uses (default all four): a channel the model
+        cannot reproduce (a broken load cell, a wheel unlike the model's) left out keeps it from
+        pulling the others' parameters. An axle with a wheel left out has its left/right factors
+        (:data:`STATION_FITTED`) held at 1: one wheel cannot tell left from right.
     windows, window_s, lead_s : int, s, s
         See :func:`fit_windows`.
     workers : int, optional
@@ -329,6 +248,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     if tire_only and "tire_progressive_ratio" not in names and (fitted_guess or {}).get("tire_progressive_ratio") is None:
         raise ScenarioError(f"{tire_only[0]} is the progressive tire's: fit tire_progressive_ratio too, or give its "
                             "value in fitted_guess")
+    wheels = tuple(wheels)
+    if not wheels or set(wheels) - set(CORNERS) or len(set(wheels)) != len(wheels):
+        raise ScenarioError(f"wheels must be distinct corners of {', '.join(CORNERS)}, got {', '.join(wheels) or 'none'}")
+    use = np.array([c in wheels for c in CORNERS])
+    names = tuple(k for k in names if k not in STATION_FITTED or use[[c[0] == k[-2] for c in CORNERS]].all())
     t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
     x_a, force = np.asarray(x_a_m, float), np.asarray(force_N, float)
     kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
@@ -366,7 +290,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         lower.append(a)
         upper.append(b)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
-        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads)
+        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads, use)
         lb, ub = prob.thetas(lower, upper)
         theta0 = np.ones(len(names))
         prob.fun(theta0)
@@ -400,5 +324,5 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                                                           for k in linear), wall_time_s=round(time.perf_counter() - wall0, 3),
                        bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)),
                        noise_nrmse=tuple(float(v) for v in noise / prob.norm), band_nrmse=band,
-                       band_noise_nrmse=band_noise)
+                       band_noise_nrmse=band_noise, wheels=tuple(c for c in CORNERS if c in wheels))
 

@@ -32,10 +32,12 @@ __all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO"
 #: lab's catalogue values are 10-30 % off the truck on its rig.
 CATALOGUE_FACTORS = {"tire_stiffness_front_N_per_m": 0.85, "tire_stiffness_rear_N_per_m": 1.15,
                      "tire_damping_front_Ns_per_m": 1.15, "tire_damping_rear_Ns_per_m": 0.85,
-                     "spring_friction_front_N": 0.85, "spring_friction_rear_N": 1.15}
+                     "spring_friction_front_N": 0.85, "spring_friction_rear_N": 1.15,
+                     # a truck's axle weights are on its specification and its weighbridge ticket
+                     "axle_mass_front_kg": 1.0, "axle_mass_rear_kg": 1.0}
 #: Hz: the catalogue guess of the cab's mount frequency (the XML has a rigid cab, so there is no
 #: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (mjcf.variant.BOUNDS);
-#: its search range (:data:`~scenarios.records.model.calibrate.RANGES`) is 1-30 Hz.
+#: its search range (:data:`~scenarios.records.model.family.RANGES`) is 1-30 Hz.
 CATALOGUE_CAB_MOUNT_HZ = 2.5
 #: 1: the catalogue guess of the progressive tire's extra stiffness beyond its onset
 #: (``TruckVariant.tire_progressive_ratio``; the XML's tire is linear, ratio 0): radial truck tires
@@ -56,7 +58,7 @@ def _nominal() -> tuple[dict, tuple[float, float], np.ndarray]:
     values = {k: nominal[k] for k in ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m",
                                       "tire_stiffness_rear_N_per_m", "tire_damping_front_Ns_per_m",
                                       "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
-                                      "spring_friction_rear_N")}
+                                      "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg")}
 
     def body(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)

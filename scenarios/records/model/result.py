@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mjcf.names import CORNERS
 from mjcf.variant import TruckVariant
 
 __all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR", "model_error", "fitted_text"]
@@ -77,7 +78,7 @@ class Calibration:
     wall_time_s : float, s
     bounds : tuple of (float, float)
         Each fitted field's search range, SI (its first guess times
-        :data:`~scenarios.records.model.calibrate.RANGES`, clipped to
+        :data:`~scenarios.records.model.family.RANGES`, clipped to
         :data:`mjcf.variant.BOUNDS`; a tire's onset: the loads measured on its axle over the fitted
         kt): a value at its edge was stopped there, not fitted.
     noise_nrmse : tuple of float
@@ -90,6 +91,8 @@ class Calibration:
         measured.
     band_noise_nrmse : tuple of float
         Per wheel: the white noise's share of :attr:`band_nrmse`, 1.
+    wheels : tuple of str
+        The corners whose measured forces were fitted (all four unless one was left out).
     cab_choice : str
         Where the calibration chose whether to fit the cab's mount
         (:func:`scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
@@ -116,6 +119,7 @@ class Calibration:
     noise_nrmse: tuple = ()
     band_nrmse: tuple = ()
     band_noise_nrmse: tuple = ()
+    wheels: tuple = CORNERS
 
     def values(self) -> dict[str, float]:
         """The whole model truck: fitted and fixed fields, SI."""

@@ -16,7 +16,7 @@ from scenarios.core.run import run
 from scenarios.studies import scoring
 from scenarios.records.model.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
                                                            check_cab, choose)
-from scenarios.records.model.calibrate import DEFAULT_NAMES, FITTED
+from scenarios.records.model.family import DEFAULT_NAMES, FITTED
 from scenarios.records.model.first_guess import catalogue, xml_nominal
 from scenarios.records.model.result import Calibration
 

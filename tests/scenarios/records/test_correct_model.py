@@ -172,9 +172,10 @@ def test_fallback_is_the_linear_correction_with_its_reason(record, tmp_path, cap
 
 
 def test_a_wheel_the_model_cannot_reproduce_is_corrected_linearly_the_others_by_the_model(record, tmp_path, capsys):
-    """Pure noise on rr only, the calibration run to convergence: the front wheels keep the model
-    correction; rr (and rl, where the noisy wheel has pulled the rear axle's shared parameters off)
-    is the linear correction alone, the one ``rigsim identify --from-file`` + ``rigsim correct
+    """Pure noise on rr only, the calibration run to convergence: rr's model error, far past every
+    other wheel's, has it left out of a second calibration (differential.outlier_wheel), so its noise
+    does not pull the parameters the others share; the front wheels keep the model correction, rr is
+    the linear correction alone, the one ``rigsim identify --from-file`` + ``rigsim correct
     --actuators`` gives, and the sentence names the wheels."""
     csv = _rr_noise_csv(record, tmp_path)
     out = tmp_path / "per_wheel.csv"
@@ -188,6 +189,7 @@ def test_a_wheel_the_model_cannot_reproduce_is_corrected_linearly_the_others_by_
     assert all(f"{c} " in meta["fallback_reason"] for c in linear_wheels)
     assert not any(f"{c} " in meta["fallback_reason"] for c in model_wheels)
     assert printed.splitlines()[0] == f"truck model used on {meta['model_wheels']}: {meta['fallback_reason']}"
+    assert "rr, alone far past it, was left out of the calibration" in meta["fallback_reason"]
     ident, by_hand = tmp_path / "ident", tmp_path / "by_hand.csv"
     assert main(["identify", "--from-file", str(csv), "--pairs", PAIRS, "--out", str(ident)]) == 0
     assert main(["correct", str(csv), "--actuators", str(ident / "actuators.toml"), "--map",
@@ -288,7 +290,7 @@ def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
     back: the format's header records hold a key of at most 32 bytes (correction/io/rpc3.py, as MTS's
     RPC III layout), which ``cal_tire_progressive_onset_rear_m`` (33) would exceed; keys stay distinct."""
     from correction.io.rpc3 import read_rpc3, write_rpc3
-    from scenarios.records.model.calibrate import FITTED, UNITS
+    from scenarios.records.model.family import FITTED, UNITS
 
     meta = {cal_key(n): f"0 {UNITS[n]}" for n in FITTED}
     assert len(meta) == len(FITTED) and cal_key("tire_progressive_onset_rear_m") == "cal_tire_prog_onset_rear_m"

@@ -16,7 +16,8 @@ from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from scenarios.core.pool import run_jobs
 from scenarios.core.run import run
 from scenarios.studies import scoring
-from scenarios.records.model.calibrate import DEFAULT_NAMES, FITTED, STATION_FITTED, calibrate
+from scenarios.records.model.calibrate import calibrate
+from scenarios.records.model.family import DEFAULT_NAMES, FITTED, STATION_FITTED
 from scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                             xml_nominal)
 from scenarios.records.model.differential import (EXCESS_NRMSE_LIMIT, correct_with_model,
@@ -122,7 +123,7 @@ def test_calibration_recovers_the_plant_from_rig_signals(record):
 
 def test_the_cab_is_fitted_only_on_request():
     """The default family holds the cab rigid (a smooth road may not pin its mount frequency: see
-    calibrate.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
+    family.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
     assert "cab_mount_hz" in FITTED and "cab_mount_hz" not in DEFAULT_NAMES
     assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz"}
 
@@ -211,7 +212,7 @@ def test_calibration_recovers_a_progressive_tire():
 
 
 def test_calibration_recovers_a_left_right_difference_of_the_tires_and_springs():
-    """The per-station family (calibrate.STATION_FITTED, fitted by default): the road test of the medium case's
+    """The per-station family (family.STATION_FITTED, fitted by default): the road test of the medium case's
     plant with its front-left tire 15 % softer and its rear-left spring 10 % stiffer than their right
     neighbours, 100 N of noise; the two left factors fitted from 1 (a symmetric truck), the axles' and
     every other value held at the plant's: both recovered within 3 %, and the fit NRMSE falls by more

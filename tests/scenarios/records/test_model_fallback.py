@@ -7,11 +7,12 @@ runs that produce a real fallback are tests/scenarios/records/test_model_correct
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
 
-from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, fallback_reason
+from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, OUTLIER_RATIO, fallback_reason, outlier_wheel, wheels_reason
 from scenarios.records.model.result import Calibration, fitted_text
 
 
@@ -59,6 +60,25 @@ def test_the_limit_and_convergence():
     assert "did not converge" in fallback_reason(_cal((0.05,) * 4, converged=False))
 
 
+def test_one_wheel_far_past_every_other_is_the_outlier_left_out():
+    """outlier_wheel: past the limit and OUTLIER_RATIO times the next wheel (rr 0.76 against rl 0.30, ratio 2);
+    two wheels alike past the limit, or one past the ratio but inside the limit, name none."""
+    assert outlier_wheel(_cal((0.05, 0.06, 0.30, 0.76))) == 3
+    assert outlier_wheel(_cal((0.05, 0.06, 0.30, 0.30 * OUTLIER_RATIO * 0.99))) is None
+    assert outlier_wheel(_cal((0.40, 0.41, 0.05, 0.05))) is None
+    assert outlier_wheel(_cal((0.01, 0.01, 0.01, EXCESS_NRMSE_LIMIT))) is None
+
+
+def test_a_wheel_left_out_of_the_calibration_is_named_as_such():
+    """The sentence for a per-wheel fallback names the wheel the calibration left out (Calibration.wheels)."""
+    cal = dataclasses.replace(_cal((0.03, 0.03, 0.04, 2.5)), wheels=("fl", "fr", "rl"))
+    why = wheels_reason(cal, (True, True, True, False))
+    assert why == ("the calibrated truck model reproduces the measured wheel force only to NRMSE rr 2.500 (model error "
+                   f"2.500) (limit {EXCESS_NRMSE_LIMIT:g} beyond the load cells' noise); rr, alone far past it, was "
+                   "left out of the calibration, so that wheel is corrected linearly.")
+    assert "left out" not in wheels_reason(_cal((0.03, 0.03, 0.04, 0.5)), (True, True, True, False))
+
+
 def test_the_fit_table_writes_each_value_to_the_digits_its_sigma_supports():
     """To the decimal of sigma's second significant digit, at most 5 significant digits; .5g where sigma
     or the value says nothing (zero, not finite)."""
@@ -72,3 +92,12 @@ def test_the_fit_table_writes_each_value_to_the_digits_its_sigma_supports():
                       windows_s=((0.0, 1.0),), weighted=True, evaluations=3, converged=True, message="ok",
                       wall_time_s=1.0)
     assert "| tire_progressive_ratio_rear | 1 | 0.2 | 0.004 +- 0.063 (0.068) |" in cal.table().splitlines()
+
+
+@pytest.mark.parametrize("wheels", [(), ("fl", "fl"), ("fl", "xx")])
+def test_the_wheels_to_fit_are_checked_before_any_run(wheels):
+    from scenarios.core.config import ScenarioError
+    from scenarios.records.model.calibrate import calibrate
+
+    with pytest.raises(ScenarioError, match="wheels must be distinct corners of fl, fr, rl, rr"):
+        calibrate([0.0, 0.001], [[0.0] * 4] * 2, [[1e4] * 4] * 2, base_scenario=None, wheels=wheels)

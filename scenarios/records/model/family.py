@@ -1,0 +1,109 @@
+"""The model family: which fields of the truck model the calibration can fit, their units and search ranges.
+
+What is fitted, and why (:data:`FITTED`): the fields of :class:`mjcf.variant.TruckVariant` that a
+lab does not know to better than ~10-30 % and that change the wheel forces:
+
+* ``payload_kg``, ``payload_x_m``: the ballast's mass and its position along the truck set the
+  static loads and the body's bounce and pitch; the first guess comes from the measured static
+  loads (:func:`~scenarios.records.model.first_guess.static_guess`), the fit refines them;
+  ``payload_y_m``, its centre across the truck, is held where the measured left/right moment puts it
+  (:func:`~scenarios.records.model.first_guess.static_lateral`): the four static loads pin it;
+* ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
+  right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
+  motion puts straight through the tire;
+* ``spring_friction_front/rear_N``: the leaf springs' interleaf friction per axle, the truck's
+  main nonlinearity (it locks the springs at small amplitude); searched from 0.05 to 8 times the
+  catalogue guess, since a worn or dry multi-leaf spring sticks far harder than a new one;
+* ``axle_mass_front/rear_kg``: the unsprung masses, which set the wheel-hop frequencies with the
+  tire stiffness (the two are told apart by the hop mode's force through the tire against the
+  pan's motion); the first guess is the truck's specification (:mod:`~scenarios.records.model.first_guess`),
+  searched 0.6-1.8 times it within :data:`mjcf.variant.BOUNDS` (a heavy drive axle with dual
+  wheels and drum brakes weighs far more than a light steer axle);
+* ``tire_progressive_ratio``, ``tire_progressive_onset_m`` (front tires) and
+  ``tire_progressive_ratio_rear``, ``tire_progressive_onset_rear_m``: each axle's tire stiffening, a
+  bilinear tire (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection,
+  (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model
+  whose tire is linear cannot follow it (docs/model_correction.md). The ratio from a catalogue
+  guess of +20 % (:mod:`~scenarios.records.model.first_guess`), searched additively
+  (:data:`ADDITIVE`: 0-0.7); the onset as the wheel load where the tire stiffens, within the loads
+  the windows measure on its axle, from the axle's static load
+  (:mod:`~scenarios.records.model.onset_load`, which says why: an onset beyond every
+  measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0,
+  where the onset is not identifiable and does not matter;
+* ``tire_stiffness_factor_fl``, ``tire_stiffness_factor_rl``, ``spring_rate_factor_fl``,
+  ``spring_rate_factor_rl`` (:data:`STATION_FITTED`): each axle's left tire and leaf spring over its
+  right one (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another
+  pressure, a spring with a broken leaf), and a model whose axles are symmetric puts the difference
+  into both wheels' errors, in opposite directions;
+* ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
+  cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
+  bounce and pitch that loads the front wheels. A model without it absorbs a suspended cab's mode
+  into the front leaf friction and misses the front wheels' road DLC. Fitted through its
+  compliance (:data:`COMPLIANCE`), 1-30 Hz from a 2.5 Hz guess; on the paper's rough roads a rigid
+  cab fits to the top, 30 Hz, at no loss, but on a smooth road at low speed the fit can wander to
+  the bottom and spoil the front wheels (:data:`DEFAULT_NAMES`), which is why it is not fitted by
+  default. The cab's mass is never fitted: it is locally identifiable on a suspended cab but not
+  on a rigid one; the price is a larger front-wheel error where the plant's cab mass differs from
+  the model's.
+
+Not fitted: the chassis (5.2 t, its CoM and inertia), the cab's mass (the
+model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate (but for the left/right factors)
+and viscous damping are held at their catalogue (XML) values; the tire free radius only moves
+the static ride height, and the pan mass does not enter a tire force whose pans follow a given
+motion, so neither can be identified from x_a and F_rig. How well each fitted field is pinned
+shows in its 1-sigma (:class:`~scenarios.records.model.result.Calibration`); the onset of a tire
+that does not stiffen (ratio fitted to ~0) changes nothing, and its sigma says so. A tire whose
+wheels never leave the stiff branch (the heavy truck's front tires) trades its stiffness against
+its ratio; that is why each axle has its own ratio and onset: one ratio shared by both axles
+settles at a compromise that bends both axles' tire stiffnesses and leaves one axle's wheels far
+from the plant's forces.
+
+The fit itself: :mod:`scenarios.records.model.calibrate`.
+"""
+
+from __future__ import annotations
+
+__all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
+
+#: Each axle's left tire stiffness and leaf-spring rate over its right one (the module's description).
+STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
+                  "spring_rate_factor_rl")
+#: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
+FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
+          "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
+          "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED
+UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
+         "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
+         "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
+         "axle_mass_front_kg": "kg", "axle_mass_rear_kg": "kg",
+         "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "tire_progressive_ratio_rear": "1",
+         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz", **dict.fromkeys(STATION_FITTED, "1")}
+#: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
+#: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
+#: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
+#: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
+#: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
+#: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
+DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
+#: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
+#: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
+#: The onsets have none: their range is the loads measured on their axle (onset_load).
+RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
+          "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
+          "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 8.0),
+          "spring_friction_rear_N": (0.05, 8.0), "axle_mass_front_kg": (0.6, 1.8), "axle_mass_rear_kg": (0.6, 1.8),
+          "tire_progressive_ratio": 0.5,
+          "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0),
+          **dict.fromkeys(STATION_FITTED, (0.7, 1.3))}
+#: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
+#: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
+#: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
+#: ratio, whose linear tire is ratio 0; the onsets are searched as loads, N, their range and span
+#: the loads measured on their axle (:mod:`~scenarios.records.model.onset_load`).
+ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+            "tire_progressive_onset_rear_m")
+#: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
+#: mount's frequency, whose effect on the wheel forces fades as 1 / f^2 towards a rigid cab (a
+#: frequency scale would crawl along that flat valley).
+COMPLIANCE = ("cab_mount_hz",)
