@@ -3,7 +3,7 @@
 ::
 
     python benchmarks/dyntrac_fit.py [--duration-s 60] [--iterations 10] [--workers 2] [--check]
-                                     [--linear-weight 1] [--out docs/results]
+                                     [--linear-weight 1] [--out docs/results] [--name dyntrac]
 
 The paper publishes nine numbers of its rig (Table 2: the road, DYNTRAC and DYNTRAC corrected by
 its eq. 4 method, DLC of three cases) but not the rig's loop gains, the roads' spectra or its
@@ -33,7 +33,7 @@ tables of the nine numbers (simulated, paper, error, goal), of the linear correc
 of the unknowns (fitted value, range, source), the goals missed, and a warning for any value at a
 bound of its range (the data want it beyond: a sign that something the fit lacks is being
 absorbed). With ``--out`` it writes them as ``dyntrac_fit.md``, ``dyntrac_linear.md`` and
-``dyntrac_values.md`` (:mod:`scenarios.studies.results_page`).
+``dyntrac_values.md`` (:mod:`scenarios.studies.results_page`; ``--name`` replaces ``dyntrac``).
 
 Table 1's linearized-model column is measured by ``rigsim validate`` on the same scenario
 (``benchmarks/docs_tables.py`` writes its table).
@@ -79,6 +79,10 @@ class Unknown(NamedTuple):
     source: str
 
 
+#: N: the static load on one rear leaf spring of the paper's truck at its 3640 kg payload (the rear
+#: axle's static load less the axle's weight, halved; ``rigsim model --payload-kg 3640``), the
+#: scale of the leaf friction's sourced range.
+REAR_SPRING_LOAD_N = 23_800.0
 #: The unknowns, in the order of the fit's vector. Each is applied to a paper scenario by
 #: :func:`configured`.
 UNKNOWNS = (
@@ -97,14 +101,14 @@ UNKNOWNS = (
             "(scenarios/core/roads.py)"),
     Unknown("road.gd_n0_m3 (high)", "m^3", 32e-6, 512e-6,
             "ISO 8608 classes B-C: 'high' by IRI is B, by the paper's DLC C (scenarios/core/roads.py)"),
-    Unknown("vehicle.spring_friction_rear_N", "N", 400.0, 10000.0,
+    Unknown("vehicle.spring_friction_rear_N", "N", 0.03 * REAR_SPRING_LOAD_N, REAR_SPRING_LOAD_N / 3.0,
             "interleaf friction of a rear multi-leaf spring (the front spring half of it, as in "
             "mjcf/truck_rig.xml): friction bands of steel leaf springs from a few % to about a third of "
             "the static spring load (Fancher et al. 1980, UMTRI; Cebon 1999, Handbook of Vehicle-Road "
-            "Interaction): 23.8 kN per rear spring at 3640 kg"),
-    Unknown("vehicle.axle_mass_front_kg", "kg", *BOUNDS["axle_mass_front_kg"][:2],
+            "Interaction), 3 % to a third of 23.8 kN per rear spring at 3640 kg"),
+    Unknown("vehicle.axle_mass_front_kg", "kg", 600.0, 800.0,
             "the paper's truck's steer axle is not weighed: " + BOUNDS["axle_mass_front_kg"][3]),
-    Unknown("vehicle.axle_mass_rear_kg", "kg", *BOUNDS["axle_mass_rear_kg"][:2],
+    Unknown("vehicle.axle_mass_rear_kg", "kg", 1000.0, 1600.0,
             "the paper's truck's drive axle is not weighed: " + BOUNDS["axle_mass_rear_kg"][3]),
 )
 
@@ -311,6 +315,7 @@ def main(argv=None) -> int:
     ap.add_argument("--linear-weight", type=float, default=1.0,
                     help="weight of the linear correction's goals in the fit (0: fit the paper's numbers only)")
     ap.add_argument("--out", default=None, help="also write dyntrac_fit.md into this folder (e.g. docs/results)")
+    ap.add_argument("--name", default="dyntrac", help="the written pages' names: NAME_fit.md, NAME_linear.md, NAME_values.md")
     args = ap.parse_args(argv)
     paths = paper_scenarios("dyntrac")
     x0 = shipped_values(paths)
@@ -354,11 +359,11 @@ def main(argv=None) -> int:
         note = (f"Worst Table 2 error {100 * worst:.2f} % (goal +-{100 * GOAL:.0f} %; Table 1's road and DYNTRAC "
                 f"test +-{100 * TABLE1_GOAL:.0f} %). " + ("Every goal met." if not missed else
                                                           "Goals missed: " + "; ".join(missed) + "."))
-        write_results_page(args.out, "dyntrac_fit", "The paper's Table 2 by the simulated DYNTRAC",
+        write_results_page(args.out, f"{args.name}_fit", "The paper's Table 2 by the simulated DYNTRAC",
                            ("case", "column", "simulated", "paper", "error", "goal"), numbers, cmd, note=note)
-        write_results_page(args.out, "dyntrac_linear", "This project's linear correction on the simulated DYNTRAC",
+        write_results_page(args.out, f"{args.name}_linear", "This project's linear correction on the simulated DYNTRAC",
                            ("case", "linear correction", "road through its low-pass", "error", "goal"), linear, cmd)
-        write_results_page(args.out, "dyntrac_values", "The fitted values of the simulated DYNTRAC",
+        write_results_page(args.out, f"{args.name}_values", "The fitted values of the simulated DYNTRAC",
                            ("unknown", "value", "range", "where", "source of the range"), values, cmd)
     return 0
 

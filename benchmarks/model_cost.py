@@ -1,0 +1,122 @@
+"""What the truck-model correction costs a user: ``rigsim correct --model`` timed on a lab's file.
+
+::
+
+    python benchmarks/model_cost.py [--duration-s 60] [--case high_72kmh_3640kg] [--cab held auto]
+                                    [--workers 2] [--results docs/results]
+
+The rig test of a paper case (``scenarios/data/paper``, the design rig) is written as a lab's CSV
+(forces in kN with 100 N rms of load-cell noise, seeded; each post's drive and LVDT in mm), then
+corrected as a user would, each command a fresh process, timed from start to exit (wall and the
+children's CPU):
+
+* the baseline, ``rigsim correct --actuators`` after ``rigsim identify --from-file`` (the linear
+  correction, T_a identified from the same file), measured in the same run;
+* ``rigsim correct --model SCENARIO --pairs ...`` with each ``--cab`` asked for: the calibration of
+  the truck model on the file and its correction.
+
+The goal (the model correction's cost): a record calibrated and corrected within its own duration
+on 2 cores, i.e. wall / record length <= 1 (:data:`GOAL`). Prints one row per command (wall s, CPU
+s, wall over the record's length, over the linear correction's) and writes them to
+``docs/results/model_cost.md`` (``--results``: its folder).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import pathlib
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from mjcf.names import CORNERS
+from scenarios.core.config import load_scenario, paper_scenarios
+from scenarios.core.run import run
+from scenarios.studies.results_page import script_command, write_results_page
+
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
+#: The goal: the model correction's wall time over the record's length, 1.
+GOAL = 1.0
+PAIRS = ",".join(f"{c}=Soll_{c.upper()}:Weg_{c.upper()}" for c in CORNERS)
+FORCES = ",".join(f"{c}=Fz_{c.upper()}" for c in CORNERS)
+
+
+def write_record(path: pathlib.Path, scenario_path: pathlib.Path, duration_s: float, noise_N: float = 100.0) -> None:
+    """The rig test of ``scenario_path`` (``duration_s``, s) as a lab's CSV at ``path``."""
+    sc = dataclasses.replace(load_scenario(scenario_path), duration_s=duration_s)
+    rig = run(sc, "rig")
+    force = rig.signals["tire_force_N"] + np.random.default_rng(7).normal(0.0, noise_N, rig.signals["tire_force_N"].shape)
+    cols = {"time [s]": np.asarray(rig.t_s)}
+    for i, c in enumerate(CORNERS):
+        cols[f"Fz_{c.upper()} [kN]"] = force[:, i] / 1e3
+        cols[f"Soll_{c.upper()} [mm]"] = rig.signals["profile_m"][:, i] * 1e3
+        cols[f"Weg_{c.upper()} [mm]"] = rig.signals["pan_m"][:, i] * 1e3
+    np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="",
+               fmt="%.9g")
+
+
+def timed(argv: list[str], env: dict) -> tuple[float, float]:
+    """Run ``argv`` to its end: (wall s, CPU s of it and its children). Exits on a failed command."""
+    cpu0 = sum(resource.getrusage(resource.RUSAGE_CHILDREN)[:2])
+    t0 = time.perf_counter()
+    done = subprocess.run(argv, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if done.returncode != 0:
+        sys.exit(f"{' '.join(argv)} failed ({done.returncode}): {done.stderr.strip() or done.stdout.strip()}")
+    return wall, sum(resource.getrusage(resource.RUSAGE_CHILDREN)[:2]) - cpu0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration-s", type=float, default=60.0, help="the record's length, s")
+    ap.add_argument("--case", default="high_72kmh_3640kg", help="the paper case (a file stem of scenarios/data/paper)")
+    ap.add_argument("--cab", nargs="+", default=["held", "auto"], choices=("held", "fitted", "auto"),
+                    help="the --cab of each model correction timed")
+    ap.add_argument("--workers", type=int, default=2, help="worker processes of the model correction (--jobs)")
+    ap.add_argument("--results", default=str(RESULTS), help="folder of model_cost.md")
+    args = ap.parse_args(argv)
+    paths = {p.stem: p for p in paper_scenarios()}
+    if args.case not in paths:
+        ap.error(f"--case must be one of {', '.join(paths)}")
+    rigsim = str(pathlib.Path(sys.executable).with_name("rigsim"))
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = pathlib.Path(tmp)
+        rec = folder / "messung.csv"
+        write_record(rec, paths[args.case], args.duration_s)
+        ident = timed([rigsim, "identify", "--from-file", str(rec), "--pairs", PAIRS, "--out", str(folder / "ident")],
+                      env)
+        corr = timed([rigsim, "correct", str(rec), "--actuators", str(folder / "ident" / "actuators.toml"), "--map",
+                      FORCES, "-o", str(folder / "linear.csv"), "--quiet"], env)
+        base = (ident[0] + corr[0], ident[1] + corr[1])
+        rows.append(["linear: identify --from-file + correct --actuators", base])
+        for cab in args.cab:
+            out = folder / f"model_{cab}.csv"
+            cost = timed([rigsim, "correct", str(rec), "--model", str(paths[args.case]), "--pairs", PAIRS, "-o",
+                          str(out), "--quiet", "--cab", cab, "--jobs", str(args.workers)], env)
+            rows.append([f"model: correct --model --cab {cab}", cost])
+    table = [[what, f"{wall:.1f}", f"{cpu:.1f}", f"{wall / args.duration_s:.2f}", f"{wall / base[0]:.1f}"]
+             for what, (wall, cpu) in rows]
+    head = ("command", "wall s", "CPU s", "wall / record length", "wall / linear")
+    print(" | ".join(head))
+    for r in table:
+        print(" | ".join(r))
+    worst = max(wall for what, (wall, _) in rows[1:]) / args.duration_s if len(rows) > 1 else 0.0
+    note = (f"A {args.duration_s:g} s record of `scenarios/data/paper/{args.case}.toml` (design rig, 100 N load-cell "
+            f"noise) on {args.workers} cores; goal: the model correction within the record's length (wall / record "
+            f"length <= {GOAL:g}): {'met' if worst <= GOAL else 'not met'} (worst {worst:.2f}).")
+    print(note)
+    write_results_page(args.results, "model_cost", "What the truck-model correction costs: one record, each command "
+                       "a fresh process", head, table, script_command(__file__, argv), note=note)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
