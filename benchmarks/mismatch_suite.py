@@ -62,6 +62,42 @@ def _pct(x: float) -> str:
     return f"{100 * x:+.2f} %"
 
 
+def limit_evidence(scores) -> dict:
+    """Where the fallback's limit belongs, wheel by wheel: each wheel's model error (what the fallback
+    reads) against whether the hybrid model correction, forced, beat the linear correction's NRMSE
+    there. ``beats_up_to``: the largest model error of a wheel where it beat; ``loses_from``: the
+    smallest where it did not (None where no wheel did not); a limit between them (when the first is
+    below the second) separates the wheels; otherwise the wheels between them overlap, counted in
+    ``overlap``."""
+    err, beat = [], []
+    for s in scores:
+        if s.model_error is None or "hybrid" not in s.nrmse:
+            continue
+        err.extend(np.asarray(s.model_error, float))
+        beat.extend(np.asarray(s.nrmse["hybrid"]) < np.asarray(s.nrmse["linear"]))
+    err, beat = np.asarray(err), np.asarray(beat, bool)
+    if not err.size:
+        return {"wheels": 0, "beats_up_to": None, "loses_from": None, "overlap": 0}
+    up_to = float(err[beat].max()) if beat.any() else None
+    loses = float(err[~beat].min()) if (~beat).any() else None
+    overlap = 0 if up_to is None or loses is None else int(np.sum((err >= loses) & (err <= up_to)))
+    return {"wheels": int(err.size), "beats_up_to": up_to, "loses_from": loses, "overlap": overlap,
+            "beats": int(beat.sum())}
+
+
+def _limit_text(ev: dict) -> str:
+    if not ev["wheels"]:
+        return "- the fallback's limit: no calibrated wheel to read it from"
+    where = (f"beat the linear correction on {ev['beats']} of {ev['wheels']} wheels; the largest model error where it "
+             f"beat: {ev['beats_up_to']:.3f}" if ev["beats_up_to"] is not None else
+             f"beat the linear correction on none of {ev['wheels']} wheels")
+    where += (f", the smallest where it did not: {ev['loses_from']:.3f}" if ev["loses_from"] is not None else
+              ", on every wheel")
+    if ev["loses_from"] is not None and ev["beats_up_to"] is not None:
+        where += (f" ({ev['overlap']} wheels between them)" if ev["overlap"] else ": a limit between them separates them")
+    return f"- the forced hybrid {where} (the fallback's limit: {EXCESS_NRMSE_LIMIT:g})"
+
+
 def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
     """The table (one row per plant), the goals' text and their numbers."""
     head = ["case", "plant", "method", "model error (worst)", "worst DLC error", "NRMSE / floor (worst)",
@@ -88,7 +124,7 @@ def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
     numbers = {"wheels": int(d.size), "share_good": float(good), "worst_dlc_error": float(np.max(np.abs(d))),
                "worst_above_linear": float(np.max(above)), "fallbacks": len(fallbacks),
                "fallbacks_without_reason": sum(1 for s in fallbacks if not s.reason), "wrong_fallbacks": wrong,
-               "median_wall_s": float(np.median([s.wall_s for s in scores]))}
+               "median_wall_s": float(np.median([s.wall_s for s in scores])), "limit": limit_evidence(scores)}
     met = {"share": good >= SHARE, "dlc": numbers["worst_dlc_error"] <= DLC_ALL,
            "linear": numbers["worst_above_linear"] <= ABOVE_LINEAR,
            "fallbacks": not wrong and not numbers["fallbacks_without_reason"]}
@@ -102,6 +138,7 @@ def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
         f"- fallbacks: {len(fallbacks)}, without a reason: {numbers['fallbacks_without_reason']}, where the forced "
         f"model correction (hybrid) was better on every wheel: {len(wrong)} ({', '.join(wrong) or 'none'}): "
         f"{'met' if met['fallbacks'] else 'NOT met'}",
+        _limit_text(numbers["limit"]),
         f"- median wall time of a calibration and correction: {numbers['median_wall_s']:.0f} s"])
     return head, rows, text, numbers | {"met": met}
 

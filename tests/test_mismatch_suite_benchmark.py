@@ -4,6 +4,8 @@ beats the linear correction on every wheel, whatever the differential form did."
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -32,3 +34,20 @@ def test_a_fallback_is_wrong_where_the_refused_hybrid_was_better(suite):
     col = head.index("model error (worst)")
     assert [r[col] for r in rows] == ["0.100", "0.300", "0.180"]
     assert "where the forced model correction (hybrid) was better on every wheel: 1 (wrong)" in text
+
+
+def test_the_limit_is_read_where_the_hybrid_stops_beating_the_linear_correction(suite):
+    """Wheel by wheel (each plant's wheels at model error 0.1 but one): the hybrid better at 0.05 and
+    0.18, worse at 0.3 and on the 0.1 wheels of that plant: the ten wheels from 0.1 to 0.18 overlap;
+    with that plant's wheels all at 0.3, a limit in [0.18, 0.3) separates them."""
+    scores = [_score("kept", "model", 0.2, 0.05, 0.3, 0.05),
+              _score("right", "linear", 0.2, 0.25, 0.1, 0.3),
+              _score("wrong", "linear", 0.2, 0.1, 0.3, 0.18)]
+    ev = suite.limit_evidence(scores)
+    assert ev == {"wheels": 12, "beats_up_to": 0.18, "loses_from": 0.1, "overlap": 10, "beats": 8}
+    # "right"'s hybrid is worse on every wheel, three of them at model error 0.1: with all four at 0.3
+    scores[1] = dataclasses.replace(scores[1], model_error=np.full(4, 0.3))
+    ev = suite.limit_evidence(scores)
+    assert ev["beats_up_to"] == 0.18 and ev["loses_from"] == 0.3 and ev["overlap"] == 0
+    text = suite.rows_and_goals(scores)[2]
+    assert "the largest model error where it beat: 0.180, the smallest where it did not: 0.300: a limit between" in text
