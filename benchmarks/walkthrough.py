@@ -31,8 +31,8 @@ says how and where it was measured (:func:`scenarios.studies.results_page.write_
   stderr left out, as the page says);
 * ``walkthrough_fallback.md``: the same command on the walk-through's file cut to 20 s with
   ``Fz_RR`` replaced by its mean plus 3 kN rms of noise (seeded), which the truck model cannot
-  reproduce and which pulls its calibration off on the other wheels too, so the file is corrected
-  linearly;
+  reproduce: rr is left out of a second calibration and corrected linearly, the other wheels by
+  the model;
 * ``walkthrough_dlc.md`` (a table, :func:`scenarios.studies.results_page.write_results_page`):
   the DLC of the measured and corrected forces against the road run's on the samples each
   correction keeps.
