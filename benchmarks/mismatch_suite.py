@@ -43,7 +43,7 @@ from scenarios.core.files import to_json  # noqa: E402
 from scenarios.core.lab import TYPICAL_LAB, LabChain  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
-from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT  # noqa: E402
+from scenarios.records.model.differential import HYBRID_LIMIT  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.model_suite.mismatch import (describe, mismatch_job, mismatch_plants,  # noqa: E402
                                                     mismatch_scenario)
@@ -95,7 +95,7 @@ def _limit_text(ev: dict) -> str:
               ", on every wheel")
     if ev["loses_from"] is not None and ev["beats_up_to"] is not None:
         where += (f" ({ev['overlap']} wheels between them)" if ev["overlap"] else ": a limit between them separates them")
-    return f"- the forced hybrid {where} (the fallback's limit: {EXCESS_NRMSE_LIMIT:g})"
+    return f"- the forced hybrid {where} (the fallback's limit: {HYBRID_LIMIT:g})"
 
 
 def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
@@ -183,7 +183,7 @@ def main(argv=None) -> int:
     title = (f"The model correction on {len(scores)} random real trucks ({args.duration_s:g} s records, lab "
              f"measurement: {args.lab}, {args.noise_N:g} N white load-cell noise, --cab {args.cab})")
     note = ("Per plant the worse wheel: the model error the fallback reads (the calibrated model's dynamic "
-            f"residual in the correction's band beyond the load cells' noise; limit {EXCESS_NRMSE_LIMIT:g}); DLC error of what "
+            f"residual in the correction's band beyond the load cells' noise; limit {HYBRID_LIMIT:g}); DLC error of what "
             "`rigsim correct --model` delivered (the model, or the linear correction where it fell back) against the "
             "road DLC; NRMSE against the road force through the 30 Hz band limit, over the plant's linear floor "
             "(per-wheel affine FIR fitted on the road force itself); the linear correction's (identified T_a); the "

@@ -12,7 +12,7 @@ calibration's own ``noise_nrmse`` where the run recorded it; where it did not, t
 test is run again (:func:`scenarios.studies.model_suite.plants.plant_job`), the same seed so the
 same noise, and read as the calibration reads it, :func:`correction.identification.noise.noise_rms`) and the model error beyond it, sqrt(fit^2 - noise^2)
 (:func:`~scenarios.records.model.result.model_error`, what the fallback,
-``differential.EXCESS_NRMSE_LIMIT``, reads); beside them the outcome against the road: the
+``differential.HYBRID_LIMIT``, reads); beside them the outcome against the road: the
 model correction's NRMSE over the linear floor and over the linear correction's NRMSE.
 
 Prints one line per wheel sorted by model error; writes per plant the range of the model error,

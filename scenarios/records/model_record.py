@@ -122,13 +122,13 @@ def cal_key(name: str) -> str:
 def calibration_meta(cal) -> dict[str, str]:
     """The calibration in metadata: one key per fitted value (unit, 1-sigma, first guess), fit NRMSE per wheel."""
     from mjcf.names import CORNERS
-    from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT
+    from scenarios.records.model.differential import HYBRID_LIMIT
 
     meta = {cal_key(n): f"{v:.6g} {u} +- {s:.2g} (robust {sr:.2g}; first guess {g:.6g})"
             for n, u, g, v, s, sr in zip(cal.names, cal.units, cal.initial, cal.fitted, cal.sigma, cal.sigma_robust)}
     meta["cal_fit_nrmse"] = ", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.fit_nrmse))
     meta["cal_model_error"] = (", ".join(f"{c} {v:.3f}" for c, v in zip(CORNERS, cal.excess_nrmse))
-                               + f" (limit {EXCESS_NRMSE_LIMIT:g})")
+                               + f" (limit {HYBRID_LIMIT:g})")
     meta["cal_windows_s"] = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in cal.windows_s)
     meta["cal_runs"] = f"{cal.evaluations} truck variants, {'converged' if cal.converged else 'not converged'}"
     return meta

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenarios.core.lab import measure_lvdt
-from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, HYBRID_FORMULA, correct_with_model
+from scenarios.records.model.differential import HYBRID_LIMIT, HYBRID_FORMULA, correct_with_model
 from scenarios.records.model.result import ModelCorrection
 from scenarios.records.model.score import score_correction
 from scenarios.studies.scoring import linear_correction
@@ -132,5 +132,5 @@ def model_table(scores) -> str:
     lines.append("record's own signals; DLC and its error against the road on the same samples; linear: L's NRMSE;")
     lines.append("fit NRMSE: the calibrated model, pans following x_a, against the measured F_rig (mean of the wheels);")
     lines.append("model err.: the worst wheel's dynamic fit NRMSE in the correction's band beyond the load cells' noise")
-    lines.append(f"(the fallback's measure, limit {EXCESS_NRMSE_LIMIT:g}); cab: held rigid or fitted on its mounts.")
+    lines.append(f"(the fallback's measure, limit {HYBRID_LIMIT:g}); cab: held rigid or fitted on its mounts.")
     return "\n".join(lines)

@@ -20,7 +20,7 @@ from scenarios.records.model.calibrate import calibrate
 from scenarios.records.model.family import DEFAULT_NAMES, FITTED, STATION_FITTED
 from scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                             xml_nominal)
-from scenarios.records.model.differential import (EXCESS_NRMSE_LIMIT, correct_with_model,
+from scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, correct_with_model,
                                                              differential_correction, settled_mask)
 from scenarios.records.model.model_runs import pan_motion_drive
 from scenarios.records.model.score import score_correction
@@ -139,7 +139,7 @@ def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
                              names=("payload_kg", "spring_friction_front_N"), windows=1, window_s=2.0, lead_s=2.0,
                              max_nfev=2)
     assert out.use_linear and out.corrected_N is None
-    assert out.calibration is not None and max(out.calibration.excess_nrmse) > EXCESS_NRMSE_LIMIT
+    assert out.calibration is not None and max(out.calibration.excess_nrmse) > DIFFERENTIAL_LIMIT
     assert out.reason.endswith("so the linear correction is to be used.")
     assert out.reason.count(". ") == 0 and out.reason[0].islower()
 

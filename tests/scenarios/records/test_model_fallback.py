@@ -12,7 +12,8 @@ import math
 
 import pytest
 
-from scenarios.records.model.differential import EXCESS_NRMSE_LIMIT, OUTLIER_RATIO, fallback_reason, outlier_wheel, wheels_reason
+from scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, HYBRID_LIMIT, OUTLIER_RATIO, fallback_reason,
+                                                  outlier_wheel, wheels_reason)
 from scenarios.records.model.result import Calibration, fitted_text
 
 
@@ -24,15 +25,15 @@ def _cal(fit, noise=(), converged=True, band=(), band_noise=()) -> Calibration:
 
 
 def test_the_model_error_is_read_in_the_correction_band_where_measured():
-    """A whole-band fit of 0.30 whose noise estimate failed (0.01, read behind an anti-alias filter) but
+    """A whole-band fit of 0.50 whose noise estimate failed (0.01, read behind an anti-alias filter) but
     whose band-limited residual is 0.05 (noise there 0.01): the model holds; the sentence says where."""
-    cal = _cal((0.30,) * 4, (0.01,) * 4, band=(0.05, 0.05, 0.20, 0.05), band_noise=(0.01,) * 4)
-    assert cal.excess_nrmse == pytest.approx((math.sqrt(0.05 ** 2 - 0.01 ** 2),) * 2 + (math.sqrt(0.2 ** 2 - 0.01 ** 2),)
+    cal = _cal((0.50,) * 4, (0.01,) * 4, band=(0.05, 0.05, 0.30, 0.05), band_noise=(0.01,) * 4)
+    assert cal.excess_nrmse == pytest.approx((math.sqrt(0.05 ** 2 - 0.01 ** 2),) * 2 + (math.sqrt(0.3 ** 2 - 0.01 ** 2),)
                                              + (math.sqrt(0.05 ** 2 - 0.01 ** 2),))
     why = fallback_reason(cal)
     assert why.startswith("the calibrated truck model reproduces the measured wheel force of rl in the correction's "
-                          "band only to NRMSE 0.200")
-    assert fallback_reason(_cal((0.30,) * 4, (0.01,) * 4, band=(0.05,) * 4, band_noise=(0.01,) * 4)) == ""
+                          "band only to NRMSE 0.300")
+    assert fallback_reason(_cal((0.50,) * 4, (0.01,) * 4, band=(0.05,) * 4, band_noise=(0.01,) * 4)) == ""
 
 
 def test_the_excess_is_the_fit_beyond_independent_noise():
@@ -45,18 +46,20 @@ def test_the_excess_is_the_fit_beyond_independent_noise():
 def test_a_noisy_record_is_not_taken_for_a_bad_model():
     """A fit NRMSE of 0.20 made mostly of noise (0.16) leaves a model error of 0.12: the model is used;
     the same fit with little noise is a model error of 0.199: the linear correction, one sentence why."""
-    assert fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.16, 0.03, 0.03))) == ""
-    why = fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.02, 0.03, 0.03)))
+    assert fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.16, 0.03, 0.03)), DIFFERENTIAL_LIMIT) == ""
+    why = fallback_reason(_cal((0.05, 0.20, 0.05, 0.05), (0.03, 0.02, 0.03, 0.03)), DIFFERENTIAL_LIMIT)
     assert why.startswith("the calibrated truck model reproduces the measured wheel force of fr only to NRMSE 0.200")
     assert (f"0.200: a model error of {math.sqrt(0.2 ** 2 - 0.02 ** 2):.3f} beyond the load cells' noise "
-            f"(0.020; limit {EXCESS_NRMSE_LIMIT:g})") in why
+            f"(0.020; limit {DIFFERENTIAL_LIMIT:g})") in why
     assert why.endswith("so the linear correction is to be used.") and why.count(". ") == 0
 
 
 def test_the_limit_and_convergence():
-    just = EXCESS_NRMSE_LIMIT
-    assert fallback_reason(_cal((just,) * 4)) == ""
-    assert "limit" in fallback_reason(_cal((just * 1.01,) * 4))
+    """The hybrid's limit by default, the differential form's lower one when given (differential.py says why)."""
+    assert DIFFERENTIAL_LIMIT < HYBRID_LIMIT
+    for just, kw in ((HYBRID_LIMIT, {}), (DIFFERENTIAL_LIMIT, {"excess_limit": DIFFERENTIAL_LIMIT})):
+        assert fallback_reason(_cal((just,) * 4), **kw) == ""
+        assert f"limit {just:g})" in fallback_reason(_cal((just * 1.01,) * 4), **kw)
     assert "did not converge" in fallback_reason(_cal((0.05,) * 4, converged=False))
 
 
@@ -66,7 +69,7 @@ def test_one_wheel_far_past_every_other_is_the_outlier_left_out():
     assert outlier_wheel(_cal((0.05, 0.06, 0.30, 0.76))) == 3
     assert outlier_wheel(_cal((0.05, 0.06, 0.30, 0.30 * OUTLIER_RATIO * 0.99))) is None
     assert outlier_wheel(_cal((0.40, 0.41, 0.05, 0.05))) is None
-    assert outlier_wheel(_cal((0.01, 0.01, 0.01, EXCESS_NRMSE_LIMIT))) is None
+    assert outlier_wheel(_cal((0.01, 0.01, 0.01, HYBRID_LIMIT))) is None
 
 
 def test_a_wheel_left_out_of_the_calibration_is_named_as_such():
@@ -74,7 +77,7 @@ def test_a_wheel_left_out_of_the_calibration_is_named_as_such():
     cal = dataclasses.replace(_cal((0.03, 0.03, 0.04, 2.5)), wheels=("fl", "fr", "rl"))
     why = wheels_reason(cal, (True, True, True, False))
     assert why == ("the calibrated truck model reproduces the measured wheel force only to NRMSE rr 2.500 (model error "
-                   f"2.500) (limit {EXCESS_NRMSE_LIMIT:g} beyond the load cells' noise); rr, alone far past it, was "
+                   f"2.500) (limit {HYBRID_LIMIT:g} beyond the load cells' noise); rr, alone far past it, was "
                    "left out of the calibration, so that wheel is corrected linearly.")
     assert "left out" not in wheels_reason(_cal((0.03, 0.03, 0.04, 0.5)), (True, True, True, False))
 
