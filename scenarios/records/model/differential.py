@@ -142,8 +142,8 @@ def fallback_reason(calibration, excess_limit: float = HYBRID_LIMIT) -> str:
                 f"NRMSE {fit[worst]:.3f}: a model error of {excess[worst]:.3f}{noise}, so the linear "
                 "correction is to be used.")
     if not calibration.converged:
-        return (f"the truck model's calibration did not converge within {calibration.evaluations} model evaluations "
-                f"({calibration.message.rstrip('.')}), so the linear correction is to be used.")
+        return (f"the truck model's calibration did not converge within its evaluation limit ({calibration.evaluations} "
+                f"truck variants run; {calibration.message.rstrip('.')}), so the linear correction is to be used.")
     return ""
 
 
