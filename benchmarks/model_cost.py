@@ -32,9 +32,11 @@ import subprocess
 import sys
 import tempfile
 import time
+from types import SimpleNamespace
 
 import numpy as np
 
+from correction.io.measured import write_channels
 from mjcf.names import CORNERS
 from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.core.run import run
@@ -52,13 +54,13 @@ def write_record(path: pathlib.Path, scenario_path: pathlib.Path, duration_s: fl
     sc = dataclasses.replace(load_scenario(scenario_path), duration_s=duration_s)
     rig = run(sc, "rig")
     force = rig.signals["tire_force_N"] + np.random.default_rng(7).normal(0.0, noise_N, rig.signals["tire_force_N"].shape)
-    cols = {"time [s]": np.asarray(rig.t_s)}
+    data, units = {}, {}
     for i, c in enumerate(CORNERS):
-        cols[f"Fz_{c.upper()} [kN]"] = force[:, i] / 1e3
-        cols[f"Soll_{c.upper()} [mm]"] = rig.signals["profile_m"][:, i] * 1e3
-        cols[f"Weg_{c.upper()} [mm]"] = rig.signals["pan_m"][:, i] * 1e3
-    np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="",
-               fmt="%.9g")
+        for name, values, unit in ((f"Fz_{c.upper()}", force[:, i] / 1e3, "kN"),
+                                   (f"Soll_{c.upper()}", rig.signals["profile_m"][:, i] * 1e3, "mm"),
+                                   (f"Weg_{c.upper()}", rig.signals["pan_m"][:, i] * 1e3, "mm")):
+            data[name], units[name] = values, unit
+    write_channels(path, SimpleNamespace(time_s=np.asarray(rig.t_s), data=data, units=units), metadata={})
 
 
 def timed(argv: list[str], env: dict) -> tuple[float, float]:

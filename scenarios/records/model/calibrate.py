@@ -30,7 +30,7 @@ import time
 import numpy as np
 
 from correction.identification.noise import noise_rms
-from mjcf.names import CORNERS
+from mjcf.names import CORNERS, FRONT, REAR
 from mjcf.variant import BOUNDS, TruckVariant
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
@@ -282,7 +282,9 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     if not wheels or set(wheels) - set(CORNERS) or len(set(wheels)) != len(wheels):
         raise ScenarioError(f"wheels must be distinct corners of {', '.join(CORNERS)}, got {', '.join(wheels) or 'none'}")
     use = np.array([c in wheels for c in CORNERS])
-    names = tuple(k for k in names if k not in STATION_FITTED or use[[c[0] == k[-2] for c in CORNERS]].all())
+    # a left/right factor (named by its axle's left corner) needs both wheels of its axle
+    names = tuple(k for k in names if k not in STATION_FITTED
+                  or set(FRONT if k.endswith(FRONT[0]) else REAR) <= set(wheels))
     t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
     x_a, force = np.asarray(x_a_m, float), np.asarray(force_N, float)
     kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)

@@ -41,7 +41,7 @@ from scenarios.core.watch import SimulationError
 from scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
 from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
-from scenarios.records.model.result import LINEAR, MODEL, ModelCorrection
+from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 
 __all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "settled_mask", "correct_with_model",
            "fallback_reason"]
@@ -55,8 +55,9 @@ START_S = 3.0
 #: Largest per-wheel model error (:attr:`Calibration.excess_nrmse`: the model's force, pans
 #: following x_a, against the measured F_rig on the calibration windows, its dynamic part in the
 #: correction's band, the load cells' white noise there taken out) for which the differential
-#: correction (no ``linear``) is used, 1. Derived on the whole-band excess, which equals it where the model's error lies in the
-#: band and the noise estimate holds (the band's noise share is small). The differential correction's own
+#: correction (no ``linear``) is used, 1. Derived on the whole-band excess, which equals it where
+#: the model's error lies in the band and the noise estimate holds (the band's noise share is
+#: small). The differential correction's own
 #: error against the road follows that excess (with a progressive tire the model lacks: the
 #: corrected NRMSE 0.78-1.27 x the excess wherever it exceeds 0.06, 67 wheels,
 #: benchmarks/model_error.py), so past the linear correction's typical error (0.11-0.20 on the
@@ -80,8 +81,8 @@ HYBRID_LIMIT = 0.25
 #: of a second calibration (:func:`outlier_wheel`), 1: a broken channel, or one wheel unlike the
 #: model's, pulls the parameters the other wheels share (a channel of pure noise on rr, 20 s of the
 #: high 72 km/h case: model errors fl 0.20, fr 0.19, rl 0.76, rr 4.7 against 0.015-0.019 with rr
-#: left out); two or more
-#: wheels alike past the limit are a model that does not fit, which a second calibration cannot mend.
+#: left out); two or more wheels alike past the limit are a model that does not fit, which a
+#: second calibration cannot mend.
 OUTLIER_RATIO = 2.0
 
 
@@ -236,9 +237,12 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                                           ("lead_s", WINDOW_LEAD_S))))
     timings = {}
     with local_executor(workers) as ex:
+        def calibrated(**wheels) -> Calibration:
+            return calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
+                                 executor=ex, **wheels, **calibrate_kw)
+
         try:
-            cal = calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
-                                executor=ex, **calibrate_kw)
+            cal = calibrated()
         except ScenarioError as exc:
             return _linear(f"the truck model could not be calibrated on this record ({str(exc).rstrip('.')}), "
                            "so the linear correction is to be used.", None, wall0, timings)
@@ -250,9 +254,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         bad = outlier_wheel(cal, excess_limit) if reason and linear is not None and cal.converged else None
         if bad is not None:  # one wheel the model cannot reproduce: calibrated again on the others
             try:
-                again = calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
-                                      executor=ex, wheels=tuple(c for c in CORNERS if c != CORNERS[bad]),
-                                      **calibrate_kw)
+                again = calibrated(wheels=tuple(c for c in CORNERS if c != CORNERS[bad]))
             except (ScenarioError, SimulationError):
                 again = None
             if again is not None and again.converged:

@@ -33,7 +33,7 @@ __all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO"
 CATALOGUE_FACTORS = {"tire_stiffness_front_N_per_m": 0.85, "tire_stiffness_rear_N_per_m": 1.15,
                      "tire_damping_front_Ns_per_m": 1.15, "tire_damping_rear_Ns_per_m": 0.85,
                      "spring_friction_front_N": 0.85, "spring_friction_rear_N": 1.15,
-                     # a truck's axle weights are on its specification and its weighbridge ticket
+                     # the axles' masses taken as the truck's specification gives them (the XML's)
                      "axle_mass_front_kg": 1.0, "axle_mass_rear_kg": 1.0}
 #: Hz: the catalogue guess of the cab's mount frequency (the XML has a rigid cab, so there is no
 #: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (mjcf.variant.BOUNDS);
