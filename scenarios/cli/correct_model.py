@@ -130,6 +130,7 @@ def cmd_correct_model(args, naming) -> int:
               f"{meta['cal_runs']}")
         print(f"model error per wheel (dynamic fit NRMSE in the correction's band beyond the load cells' noise): "
               f"{meta['cal_model_error']}")
+        print(f"load cells' mass: {meta['cal_cell_mass']}")
         if cal.cab_choice:
             print(cal.cab_choice[0].upper() + cal.cab_choice[1:])
     result.write(args.out, overwrite=args.force)

@@ -131,6 +131,8 @@ def calibration_meta(cal) -> dict[str, str]:
                                + f" (limit {HYBRID_LIMIT:g})")
     meta["cal_windows_s"] = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in cal.windows_s)
     meta["cal_runs"] = f"{cal.evaluations} truck variants, {'converged' if cal.converged else 'not converged'}"
+    meta["cal_cell_mass"] = (f"{cal.cell_mass_kg:.3g} kg +- {cal.cell_mass_sigma_kg:.2g}: the load cells' mass beyond "
+                             "the lab's compensation, fitted with the truck and taken out of the force")
     return meta
 
 
@@ -163,6 +165,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
 
         meta.update({cal_key(n): f"0 {UNITS[n]}" for n in FITTED})
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})
+        meta["cal_cell_mass"] = "x " * 60
         meta["cal_cab"] = "x " * 150
     elif cal is not None:
         meta.update(calibration_meta(cal))

@@ -35,6 +35,7 @@ from mjcf.variant import BOUNDS, TruckVariant
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.records.model.band_error import band_errors
+from scenarios.records.model.cell_mass import band_acceleration, band_limited, mass_of, mass_sigma
 from scenarios.records.model.family import ADDITIVE, COMPLIANCE, DEFAULT_NAMES, FITTED, RANGES, STATION_FITTED, UNITS
 from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
@@ -104,7 +105,7 @@ class _Problem:
     theta = (guess / value)^2, the mount's compliance over the guess's."""
 
     def __init__(self, names, t, x_a, force, windows, base, guess, fixed, executor, kernel=None, loads=None,
-                 use=None):
+                 use=None, acc=None):
         self.names, self.t, self.x_a, self.force, self.windows = names, t, x_a, force, windows
         self.use = np.ones(force.shape[1], bool) if use is None else np.asarray(use, bool)  # the wheels fitted
         self.base, self.fixed, self.executor, self.kernel = portable(base), fixed, executor, kernel
@@ -118,6 +119,13 @@ class _Problem:
                         fixed.get(ONSET_STIFFNESS[k])) for i, k in enumerate(names) if k in loads]
         self.norm = np.concatenate([force[s:e] for _, s, e in windows]).std(axis=0)
         self.half = 0 if kernel is None else kernel.size // 2
+        # the pans' acceleration (whole record), weighted as the residual, for the cells' mass
+        self.acc = acc
+        self.acc_w = self.acc_t = None
+        if acc is not None:  # the regressor and its test vector, band-limited once more (cell_mass)
+            fs = 1.0 / (t[1] - t[0])
+            self.acc_w, self.acc_t = (self.weighted([x[a:e] for a, _, e in windows], subtract=False)
+                                      for x in (acc, band_limited(acc, fs)))
         self.evaluations, self.cache = 0, {}
         self.last = None  # (theta, residual, Jacobian, Broyden updates in a row) of the last Jacobian
 
@@ -170,16 +178,35 @@ class _Problem:
         """Unweighted residual (scored samples x 4), N."""
         return np.concatenate([m[s - a:] - self.force[s:e] for m, (a, s, e) in zip(model_N, self.windows)])
 
-    def residual(self, model_N) -> np.ndarray:
+    def weighted(self, model_N, subtract: bool = True) -> np.ndarray:
+        """The residual (model less measured force, or the windows' ``model_N`` alone), weighted
+        (rows x 4), N."""
         if self.kernel is None:
-            return (self.plain(model_N) / self.norm)[:, self.use].ravel()
+            return np.concatenate([m[s - a:] - (self.force[s:e] if subtract else 0.0)
+                                   for m, (a, s, e) in zip(model_N, self.windows)])
         from scipy.signal import fftconvolve
 
         parts = []
         for m, (a, s, e) in zip(model_N, self.windows):
-            err = fftconvolve(m - self.force[a:e], self.kernel[:, None], mode="same", axes=0)
+            err = fftconvolve(m - (self.force[a:e] if subtract else 0.0), self.kernel[:, None], mode="same", axes=0)
             parts.append(err[s - a:e - a - self.half])
-        return (np.concatenate(parts) / self.norm)[:, self.use].ravel()
+        return np.concatenate(parts)
+
+    def mass(self, model_N) -> float:
+        """The load cells' uncompensated mass that best explains the weighted residual, kg
+        (:mod:`~scenarios.records.model.cell_mass`); 0 without the pans' acceleration."""
+        return 0.0 if self.acc is None else mass_of(self.weighted(model_N), self.acc_w, self.use / self.norm ** 2, self.acc_t)
+
+    def as_measured(self, model_N) -> list[np.ndarray]:
+        """The model's force on each window as the load cells read it (with the cells' mass), N."""
+        mass = self.mass(model_N)
+        return [m + mass * self.acc[a:e] for m, (a, _, e) in zip(model_N, self.windows)] if mass else model_N
+
+    def residual(self, model_N) -> np.ndarray:
+        err = self.weighted(model_N)
+        if self.acc is not None:  # variable projection: the cells' mass solved for and taken out
+            err = err + mass_of(err, self.acc_w, self.use / self.norm ** 2, self.acc_t) * self.acc_w
+        return (err / self.norm)[:, self.use].ravel()
 
     def fun(self, theta) -> np.ndarray:
         key = tuple(np.asarray(theta, float))
@@ -219,7 +246,7 @@ class _Problem:
 def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, names=DEFAULT_NAMES,
               fitted_guess: dict | None = None, wheels=CORNERS,
               windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
-              workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None) -> Calibration:
+              workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None, cell_mass: bool = True) -> Calibration:
     """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
 
     Parameters
@@ -257,6 +284,9 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         Most residual evaluations.
     executor : concurrent.futures.Executor, optional
         A running pool to use instead of starting one.
+    cell_mass : bool
+        Fit the load cells' uncompensated mass too (:mod:`~scenarios.records.model.cell_mass`,
+        default); False holds it at 0 (a lab whose mass compensation is known to be exact).
 
     Returns
     -------
@@ -322,15 +352,19 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         lower.append(a)
         upper.append(b)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
-        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads, use)
+        acc = band_acceleration(x_a, fs) if cell_mass else None
+        prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads, use, acc)
         lb, ub = prob.thetas(lower, upper)
         theta0 = np.ones(len(names))
         prob.fun(theta0)
-        m_init = prob.cache[tuple(theta0)][1]
+        m_init = prob.as_measured(prob.cache[tuple(theta0)][1])
         res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, lb, ub), bounds=(lb, ub), method="trf",
                             x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
         jac = prob.final_jac(res.x, lb, ub)
-        f_opt, m_opt = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
+        f_opt, m_run = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
+        m_opt, mass = prob.as_measured(m_run), prob.mass(m_run)
+        mass_1s = 0.0 if acc is None else mass_sigma(prob.weighted(m_run) + mass * prob.acc_w, prob.acc_w,
+                                                     use / prob.norm ** 2, int(round(BLOCK_S * fs)), prob.acc_t)
     sigma, robust = uncertainties(jac, f_opt, int(round(BLOCK_S * fs)), prob.mapping(res.x), int(use.sum()))
     fitted, linear = prob.fields(res.x), []
     for i, j, kt in prob.onsets:
@@ -357,5 +391,6 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                                                           for k in linear), wall_time_s=round(time.perf_counter() - wall0, 3),
                        bounds=tuple((float(a), float(b)) for a, b in zip(lower, upper)),
                        noise_nrmse=tuple(float(v) for v in noise / prob.norm), band_nrmse=band,
-                       band_noise_nrmse=band_noise, wheels=tuple(c for c in CORNERS if c in wheels))
+                       band_noise_nrmse=band_noise, wheels=tuple(c for c in CORNERS if c in wheels),
+                       cell_mass_kg=float(mass), cell_mass_sigma_kg=mass_1s)
 

@@ -39,6 +39,7 @@ from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.core.watch import SimulationError
 from scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
+from scenarios.records.model.cell_mass import band_acceleration
 from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
@@ -266,13 +267,15 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         t1 = time.perf_counter()
         f_ref, f_a = model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex)
         force = np.asarray(force_N, dtype=float)
+        if cal.cell_mass_kg:  # the load cells' uncompensated mass, fitted with the truck, taken out
+            force = force - cal.cell_mass_kg * band_acceleration(x_a_m, 1.0 / (t[1] - t[0]))
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
             residual, settled = linear(force - f_a)
             corrected, formula = f_ref + residual, HYBRID_FORMULA
             if not holds.all():
-                corrected[:, ~holds] = linear(force)[0][:, ~holds]
+                corrected[:, ~holds] = linear(np.asarray(force_N, dtype=float))[0][:, ~holds]
             settled = settled_mask(t) & np.asarray(settled, dtype=bool)
         timings["correction_s"] = round(time.perf_counter() - t1, 3)
     return ModelCorrection(method=MODEL, reason=wheels_reason(cal, holds, excess_limit) if linear is not None else "",

@@ -93,6 +93,12 @@ class Calibration:
         Per wheel: the white noise's share of :attr:`band_nrmse`, 1.
     wheels : tuple of str
         The corners whose measured forces were fitted (all four unless one was left out).
+    cell_mass_kg : float, kg
+        The mass the load cells weigh with their pans' acceleration beyond the lab's compensation,
+        fitted with the truck (:mod:`scenarios.records.model.cell_mass`; negative: the lab
+        compensates too much); 0 where not fitted.
+    cell_mass_sigma_kg : float, kg
+        Its block-robust 1-sigma given the truck's fitted values.
     cab_choice : str
         Where the calibration chose whether to fit the cab's mount
         (:func:`scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
@@ -120,6 +126,8 @@ class Calibration:
     band_nrmse: tuple = ()
     band_noise_nrmse: tuple = ()
     wheels: tuple = CORNERS
+    cell_mass_kg: float = 0.0
+    cell_mass_sigma_kg: float = 0.0
 
     def values(self) -> dict[str, float]:
         """The whole model truck: fitted and fixed fields, SI."""
