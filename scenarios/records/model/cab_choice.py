@@ -119,15 +119,18 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     names = calibrate_kw.pop("names", None)
     check_cab(cab, names)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
-        def run(names) -> Calibration:
-            return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, executor=ex, **calibrate_kw)
+        def run(names, start=None) -> Calibration:
+            return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, start=start, executor=ex,
+                             **calibrate_kw)
 
         if names is not None:
             return run(names)
         if cab != AUTO:
             return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
         held = run(DEFAULT_NAMES)
-        fitted = run(WITH_CAB)
+        # the cab's fit starts where the held cab's ended (its mount at its guess): the values both
+        # fit move only as far as the cab's mode moves them
+        fitted = run(WITH_CAB, start=dict(zip(held.names, held.fitted)))
     chosen, why = choose(held, fitted)
-    return dataclasses.replace(chosen, cab_choice=why,
+    return dataclasses.replace(chosen, cab_choice=why, evaluations=held.evaluations + fitted.evaluations,
                                wall_time_s=round(held.wall_time_s + fitted.wall_time_s, 3))

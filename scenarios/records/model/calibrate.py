@@ -159,6 +159,20 @@ class _Problem:
         lo[c], hi[c] = (self.scale[c] / np.array(upper, float)[c]) ** 2, (self.scale[c] / np.array(lower, float)[c]) ** 2
         return lo, hi
 
+    def theta_of(self, values, lower, upper) -> np.ndarray:
+        """theta of the fields' ``values`` (SI; a field not given: 1, its first guess), clipped into
+        the bounds ``lower``, ``upper`` on theta (an onset at the kt this theta gives)."""
+        theta = np.ones(len(self.names))
+        for i, k in enumerate(self.names):
+            if values.get(k) is not None and k not in ONSET_STIFFNESS:
+                v = float(values[k])
+                theta[i] = (self.scale[i] / v) ** 2 if self.compliance[i] else (v - self.offset[i]) / self.scale[i]
+        for i, j, kt in self.onsets:  # onset = load / kt, load = offset + scale theta
+            if values.get(self.names[i]) is not None:
+                stiffness = self.fields(theta)[j] if j is not None else kt
+                theta[i] = (float(values[self.names[i]]) * stiffness - self.offset[i]) / self.scale[i]
+        return np.clip(theta, lower, upper)
+
     def values(self, theta) -> dict[str, float]:
         return dict(zip(self.names, self.fields(theta).tolist()))
 
@@ -244,7 +258,7 @@ class _Problem:
 
 
 def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, names=DEFAULT_NAMES,
-              fitted_guess: dict | None = None, wheels=CORNERS,
+              fitted_guess: dict | None = None, start: dict | None = None, wheels=CORNERS,
               windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
               workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None, cell_mass: bool = True) -> Calibration:
     """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
@@ -271,6 +285,10 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         for a field held (not in ``names``), the value it is held at, where ``cab_mount_hz: None``
         holds the XML's rigid cab (the model family without the cab's mounts) and
         ``tire_progressive_ratio: None`` its linear tire.
+    start : dict, optional
+        Values (SI) of fitted fields to start the search from instead of their first guess (a fit of
+        the same record with fewer fields, say); the search ranges stay the first guess's, and a
+        value outside its range starts at the range's edge.
     wheels : sequence of str
         The corners whose measured forces the fit uses (default all four): a channel the model
         cannot reproduce (a broken load cell, a wheel unlike the model's) left out keeps it from
@@ -355,7 +373,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         acc = band_acceleration(x_a, fs) if cell_mass else None
         prob = _Problem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads, use, acc)
         lb, ub = prob.thetas(lower, upper)
-        theta0 = np.ones(len(names))
+        theta0 = prob.theta_of(start or {}, lb, ub)
         prob.fun(theta0)
         m_init = prob.as_measured(prob.cache[tuple(theta0)][1])
         res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, lb, ub), bounds=(lb, ub), method="trf",

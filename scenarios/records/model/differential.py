@@ -29,6 +29,7 @@ without), on every wheel or (with L) on the wheels it names.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -260,6 +261,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                 again = None
             if again is not None and again.converged:
                 timings["calibration_s"] = round(cal.wall_time_s + again.wall_time_s, 3)
+                again = dataclasses.replace(again, evaluations=cal.evaluations + again.evaluations,
+                                            wall_time_s=timings["calibration_s"])
                 cal, reason = again, fallback_reason(again, excess_limit)
         holds = (np.asarray(cal.excess_nrmse) <= excess_limit) & np.isin(CORNERS, cal.wheels)
         if (reason or not holds.all()) and (linear is None or not cal.converged or not holds.any()):

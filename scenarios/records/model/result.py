@@ -61,7 +61,7 @@ class Calibration:
         force, pans following the measured x_a, against the measured rig force, on the windows'
         scored samples (the load cells' noise included).
     initial_nrmse : tuple of float
-        The same for the first guess.
+        The same where the search started (the first guess, or the ``start`` given).
     windows_s : tuple of (float, float)
         Scored span of each window, s on the record's time axis (each run starts its lead-in
         before it).
@@ -69,7 +69,9 @@ class Calibration:
         The residual was weighted towards where the correction uses the model
         (:mod:`scenarios.records.model.weighting`); :attr:`fit_nrmse` is unweighted.
     evaluations : int
-        Truck variants run (each on every window), the Jacobians' perturbed ones included.
+        Truck variants run (each on every window), the Jacobians' perturbed ones included, by every
+        calibration behind this one (with the cab's choice both families'; with a wheel left out,
+        the first calibration's too), as :attr:`wall_time_s` counts their time.
     converged : bool
         The least squares met a tolerance (not its evaluation limit).
     message : str
