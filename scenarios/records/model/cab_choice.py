@@ -20,9 +20,9 @@ rigid-cab truck 0.095 held against 0.35 fitted (gen00) or 0.057 against 0.057 (g
 at the range's top, 30 Hz): the two families are far apart where the cab matters and level where
 it does not, so the choice does not hinge on the exact threshold.
 
-The price is a second calibration, and the dearer one: on a rigid-cab truck the mount's fit crawls
-to the range's top (measured on the README's walk-through file, 30 s: 108 s of CPU for both
-against 30 s for the cab held alone).
+The price is a second calibration. It starts where the cab-held one ended, the mount at its guess
+(``calibrate(start=...)``; the search ranges stay the first guess's), so that it only has to move
+what the cab's mode moves; ``benchmarks/model_cost.py`` times both against the cab held alone.
 """
 
 from __future__ import annotations
