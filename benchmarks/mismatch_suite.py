@@ -4,7 +4,7 @@
 
     python benchmarks/mismatch_suite.py [--plants 24] [--duration-s 30] [--seed 0] [--lab typical|ideal]
                                         [--cab auto|held|fitted] [--workers N] [--noise-N 100]
-                                        [--results docs/results]
+                                        [--results docs/results] [--from-json RUN.txt]
 
 Plant ``i`` (:func:`scenarios.studies.model_suite.mismatch.mismatch_plants`, seeded) is a truck
 drawn from ``scenarios/data/suites/mismatch_plants.toml``: payload mass and position, each wheel
@@ -47,7 +47,7 @@ from scenarios.records.model.differential import HYBRID_LIMIT  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.model_suite.mismatch import (describe, mismatch_job, mismatch_plants,  # noqa: E402
                                                     mismatch_scenario)
-from scenarios.studies.model_suite.mismatch_score import score_plant  # noqa: E402
+from scenarios.studies.model_suite.mismatch_score import PlantScore, score_plant  # noqa: E402
 from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
 from scenarios.studies.suites import case_name, pick_cases  # noqa: E402
 
@@ -117,6 +117,7 @@ def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
     d = np.concatenate([s.dlc_error["delivered"] for s in scores])
     ratio = np.concatenate([s.nrmse["delivered"] / s.floor for s in scores])
     above = np.concatenate([s.nrmse["delivered"] - s.nrmse["linear"] for s in scores])
+    lin = np.concatenate([s.dlc_error["linear"] for s in scores])
     good = np.mean((np.abs(d) <= DLC_GOOD) & (ratio <= FLOOR_RATIO))
     fallbacks = [s for s in scores if s.method != "model"]
     # the model correction the fallback refused is the hybrid (what --model delivers where the model holds)
@@ -138,6 +139,10 @@ def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
         f"- fallbacks: {len(fallbacks)}, without a reason: {numbers['fallbacks_without_reason']}, where the forced "
         f"model correction (hybrid) was better on every wheel: {len(wrong)} ({', '.join(wrong) or 'none'}): "
         f"{'met' if met['fallbacks'] else 'NOT met'}",
+        f"- the two goals apart: within {100 * DLC_GOOD:g} % of the road DLC {100 * np.mean(np.abs(d) <= DLC_GOOD):.0f} % "
+        f"of the wheels, at NRMSE <= {FLOOR_RATIO:g} x the floor {100 * np.mean(ratio <= FLOOR_RATIO):.0f} %",
+        f"- DLC error over the wheels: median {_pct(np.median(d))}, {100 * np.mean(d > 0):.0f} % above the road's "
+        f"(the linear correction: median {_pct(np.median(lin))}, {100 * np.mean(lin > 0):.0f} % above)",
         _limit_text(numbers["limit"]),
         f"- median wall time of a calibration and correction: {numbers['median_wall_s']:.0f} s"])
     return head, rows, text, numbers | {"met": met}
@@ -153,7 +158,11 @@ def main(argv=None) -> int:
     ap.add_argument("--noise-N", type=float, default=scoring.NOISE_N, help="white load-cell noise, N rms (default 100)")
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     ap.add_argument("--results", type=pathlib.Path, default=RESULTS, help="folder of mismatch_suite.md")
+    ap.add_argument("--from-json", type=pathlib.Path, default=None,
+                    help="write the page from a run's printed output (its JSON line) instead of running")
     args = ap.parse_args(argv)
+    if args.from_json is not None:
+        return _page_from_json(args.from_json, args.results)
     if not 1 <= args.plants <= 24 or args.duration_s < scoring.MIN_DURATION_S or args.noise_N < 0:
         raise SystemExit(f"--plants must be 1-24, --duration-s >= {scoring.MIN_DURATION_S:g} s, --noise-N >= 0")
     lab = LABS[args.lab]
@@ -179,9 +188,35 @@ def main(argv=None) -> int:
               f"{' '.join(_pct(x) for x in s.dlc_error['delivered'])}, NRMSE/floor "
               f"{' '.join(f'{x:.2f}' for x in s.nrmse['delivered'] / s.floor)}, {s.wall_s:.0f} s"
               + (f" ({s.reason})" if s.reason else ""), file=sys.stderr, flush=True)
+    settings = {"lab": args.lab, "cab": args.cab, "seed": args.seed, "duration_s": args.duration_s,
+                "noise_N": args.noise_N, "command": script_command(__file__, argv)}
+    _write_page(scores, settings, args.results)
+    print(json.dumps(json.loads(to_json(settings | {"summary": rows_and_goals(scores)[3],
+                                                    "wall_time_s": round(time.perf_counter() - t0, 1),
+                                                    "plants": [s.to_dict() for s in scores]}))))
+    return 0
+
+
+def _page_from_json(path: pathlib.Path, results: pathlib.Path) -> int:
+    """The page of a run whose printed output (ending in its JSON line) is ``path``."""
+    lines = [line for line in path.read_text(encoding="utf-8").splitlines() if line.startswith("{")]
+    if not lines:
+        raise SystemExit(f"{path}: no JSON line of a mismatch_suite run in it; give the file its run printed")
+    run = json.loads(lines[-1])
+    scores = [PlantScore.from_dict(p) for p in run["plants"]]
+    settings = {k: run[k] for k in ("lab", "cab", "seed", "duration_s")}
+    settings["noise_N"] = run.get("noise_N", scoring.NOISE_N)
+    settings["command"] = run.get("command") or (
+        f"python benchmarks/mismatch_suite.py --plants {len(scores)} --workers 2"
+        + "".join(f" --{k} {run[k]}" for k, d in (("lab", "typical"), ("cab", AUTO), ("seed", 0)) if run[k] != d))
+    _write_page(scores, settings, results)
+    return 0
+
+
+def _write_page(scores, settings: dict, results: pathlib.Path) -> None:
     head, rows, goals, numbers = rows_and_goals(scores)
-    title = (f"The model correction on {len(scores)} random real trucks ({args.duration_s:g} s records, lab "
-             f"measurement: {args.lab}, {args.noise_N:g} N white load-cell noise, --cab {args.cab})")
+    title = (f"The model correction on {len(scores)} random real trucks ({settings['duration_s']:g} s records, lab "
+             f"measurement: {settings['lab']}, {settings['noise_N']:g} N white load-cell noise, --cab {settings['cab']})")
     note = ("Per plant the worse wheel: the model error the fallback reads (the calibrated model's dynamic "
             f"residual in the correction's band beyond the load cells' noise; limit {HYBRID_LIMIT:g}); DLC error of what "
             "`rigsim correct --model` delivered (the model, or the linear correction where it fell back) against the "
@@ -191,14 +226,8 @@ def main(argv=None) -> int:
             "- F_model(x_a) and as delivered, the hybrid F_model(x_ref) + L(F_rig - F_model(x_a)), the model's "
             "residual corrected by the linear correction L. A fallback is wrong where the forced hybrid beats the "
             "linear correction on every wheel. Goals:\n\n" + goals)
-    page = write_results_page(args.results, "mismatch_suite", title, head, rows, script_command(__file__, argv),
-                              note=note)
+    page = write_results_page(results, "mismatch_suite", title, head, rows, settings["command"], note=note)
     print(page.read_text(encoding="utf-8"))
-    print(json.dumps(json.loads(to_json({"lab": args.lab, "cab": args.cab, "seed": args.seed,
-                                         "duration_s": args.duration_s, "summary": numbers,
-                                         "wall_time_s": round(time.perf_counter() - t0, 1),
-                                         "plants": [s.to_dict() for s in scores]}))))
-    return 0
 
 
 if __name__ == "__main__":

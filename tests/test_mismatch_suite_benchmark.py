@@ -51,3 +51,24 @@ def test_the_limit_is_read_where_the_hybrid_stops_beating_the_linear_correction(
     assert ev["beats_up_to"] == 0.18 and ev["loses_from"] == 0.3 and ev["overlap"] == 0
     text = suite.rows_and_goals(scores)[2]
     assert "the largest model error where it beat: 0.180, the smallest where it did not: 0.300: a limit between" in text
+
+
+def test_the_page_is_written_again_from_a_runs_printed_json(suite, tmp_path):
+    """``--from-json``: the scores a run printed (PlantScore.to_dict) come back as they were
+    (from_dict), and the page written from them carries the run's command; an output without
+    its JSON line is refused in one sentence."""
+    import json
+
+    scores = [_score("kept", "model", 0.2, 0.05, 0.3, 0.05), _score("wrong", "linear", 0.2, 0.1, 0.3, 0.18)]
+    back = PlantScore.from_dict(json.loads(json.dumps(scores[1].to_dict())))
+    assert back.to_dict() == scores[1].to_dict()
+    out = tmp_path / "run.txt"
+    run = {"lab": "ideal", "cab": "auto", "seed": 0, "duration_s": 30.0, "plants": [s.to_dict() for s in scores]}
+    out.write_text("[ 1 s] progress\n" + json.dumps(run) + "\n", encoding="utf-8")
+    assert suite.main(["--from-json", str(out), "--results", str(tmp_path)]) == 0
+    page = (tmp_path / "mismatch_suite.md").read_text(encoding="utf-8")
+    assert "`python benchmarks/mismatch_suite.py --plants 2 --workers 2 --lab ideal`" in page
+    assert "| wrong |" in page and "lab measurement: ideal" in page
+    (tmp_path / "empty.txt").write_text("no json\n", encoding="utf-8")
+    with pytest.raises(SystemExit, match="no JSON line"):
+        suite.main(["--from-json", str(tmp_path / "empty.txt")])

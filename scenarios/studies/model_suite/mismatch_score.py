@@ -88,6 +88,20 @@ class PlantScore:
                 "model_error": None if self.model_error is None else self.model_error.tolist(),
                 "timings": dict(self.timings)}
 
+    @classmethod
+    def from_dict(cls, d: Mapping) -> "PlantScore":
+        """The score :meth:`to_dict` wrote."""
+        def arrays(m):
+            return {k: np.asarray(v, dtype=float) for k, v in m.items()}
+
+        def maybe(v):
+            return None if v is None else np.asarray(v, dtype=float)
+
+        return cls(name=d["name"], plant=dict(d["plant"]), method=d["method"], reason=d["reason"],
+                   nrmse=arrays(d["nrmse"]), dlc_error=arrays(d["dlc_error"]), floor=np.asarray(d["floor"], float),
+                   wall_s=d["wall_s"], cpu_s=d["cpu_s"], scored_s=d["scored_s"], fit_nrmse=maybe(d["fit_nrmse"]),
+                   model_error=maybe(d["model_error"]), timings=dict(d.get("timings", {})))
+
 
 def _cpu_s() -> float:
     import resource
