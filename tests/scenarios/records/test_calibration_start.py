@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.records.model.calibrate import _Problem
+from scenarios.records.model.problem import FitProblem
 
 
-def _problem() -> _Problem:
+def _problem() -> FitProblem:
     """Four fields as the calibration maps them: a plain one, an additive one, a compliance (the
     cab's mount) and a tire onset searched as a load over its fitted kt."""
-    prob = object.__new__(_Problem)
+    prob = object.__new__(FitProblem)
     prob.names = ("payload_kg", "tire_stiffness_front_N_per_m", "cab_mount_hz", "tire_progressive_onset_m")
     prob.offset = np.array([0.0, 0.0, 0.0, 20e3])  # the onset's load range starts at 20 kN
     prob.scale = np.array([3000.0, 9e5, 2.5, 10e3])  # theta 1: 3 t, 900 kN/m, 2.5 Hz, 30 kN

@@ -1,4 +1,4 @@
-"""The calibration's Jacobian reuse (calibrate.REUSE_MAX): Broyden's rank-one update where the last
+"""The calibration's Jacobian reuse (problem.REUSE_MAX): Broyden's rank-one update where the last
 Jacobian predicted the step, finite differences otherwise. Pure checks on a hand-made problem (no
 model runs: a run asked for raises); the calibrations that use it are test_model_correction.py's."""
 
@@ -7,15 +7,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scenarios.records.model.calibrate import REUSE_MAX, REUSE_RATIO, _Problem
+from scenarios.records.model.problem import REUSE_MAX, REUSE_RATIO, FitProblem
 
 
 class _Ran(Exception):
     """A model run was asked for: the Jacobian was recomputed by finite differences."""
 
 
-def _problem(last, f0) -> _Problem:
-    prob = object.__new__(_Problem)
+def _problem(last, f0) -> FitProblem:
+    prob = object.__new__(FitProblem)
     prob.last, prob.fun = last, lambda theta: f0
 
     def model(thetas):

@@ -101,7 +101,7 @@ def test_calibration_recovers_the_plant_from_rig_signals(record):
     F_rig at least halved on every wheel."""
     sc, t = record["sc"], record["t"]
     names = ("payload_kg", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m")
-    # max_nfev 5: the Jacobian after the first is a Broyden update (calibrate.REUSE_MAX), a cheaper
+    # max_nfev 5: the Jacobian after the first is a Broyden update (problem.REUSE_MAX), a cheaper
     # step than a finite-difference one, so three evaluations leave the rear stiffness 6 % off, five 1 %
     cal = calibrate(t, record["x_a"], record["F_rig"], base_scenario=sc, x_ref_m=record["x_ref"], names=names,
                     windows=1, window_s=1.5, lead_s=2.0, max_nfev=5, workers=2)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.records.model.calibrate import _Problem
+from scenarios.records.model.problem import FitProblem
 from scenarios.records.model.onset_load import ONSET_STIFFNESS, load_guess, load_range
 from scenarios.records.model.uncertainty import uncertainties
 
@@ -47,7 +47,7 @@ def test_the_first_guess_is_the_median_load_or_a_given_onset_inside_the_range(re
 
 def problem(names, guess, loads, fixed=None):
     sc = load_scenario(paper_scenarios()[0])
-    return _Problem(names, None, None, np.ones((10, 4)), [(0, 0, 10)], sc, guess, fixed or {}, None, None, loads)
+    return FitProblem(names, None, None, np.ones((10, 4)), [(0, 0, 10)], sc, guess, fixed or {}, None, None, loads)
 
 
 def test_an_onset_is_its_load_over_its_axles_stiffness():
