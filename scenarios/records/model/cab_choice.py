@@ -20,9 +20,10 @@ rigid-cab truck 0.095 held against 0.35 fitted (gen00) or 0.057 against 0.057 (g
 at the range's top, 30 Hz): the two families are far apart where the cab matters and level where
 it does not, so the choice does not hinge on the exact threshold.
 
-The price is a second calibration. It starts where the cab-held one ended, the mount at its guess
-(``calibrate(start=...)``; the search ranges stay the first guess's), so that it only has to move
-what the cab's mode moves; ``benchmarks/model_cost.py`` times both against the cab held alone.
+The price is a second calibration, from the same first guess; ``benchmarks/model_cost.py`` times
+both against the cab held alone. Started instead where the cab-held one ended
+(``calibrate(start=...)``), it cost more on that benchmark's rigid-cab truck, not less (the
+mount's crawl from its 2.5 Hz guess went on to the range's top): 70.7 s against 62.8 s.
 """
 
 from __future__ import annotations
@@ -119,18 +120,15 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     names = calibrate_kw.pop("names", None)
     check_cab(cab, names)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
-        def run(names, start=None) -> Calibration:
-            return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, start=start, executor=ex,
-                             **calibrate_kw)
+        def run(names) -> Calibration:
+            return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, executor=ex, **calibrate_kw)
 
         if names is not None:
             return run(names)
         if cab != AUTO:
             return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
         held = run(DEFAULT_NAMES)
-        # the cab's fit starts where the held cab's ended (its mount at its guess): the values both
-        # fit move only as far as the cab's mode moves them
-        fitted = run(WITH_CAB, start=dict(zip(held.names, held.fitted)))
+        fitted = run(WITH_CAB)
     chosen, why = choose(held, fitted)
     return dataclasses.replace(chosen, cab_choice=why, evaluations=held.evaluations + fitted.evaluations,
                                wall_time_s=round(held.wall_time_s + fitted.wall_time_s, 3))

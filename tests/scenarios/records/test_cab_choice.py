@@ -81,21 +81,22 @@ def test_bad_cab_modes_are_refused():
     check_cab(AUTO, names=("payload_kg",))  # explicit fields under auto: one calibration of them
 
 
-def test_the_cab_fit_starts_where_the_held_fit_ended_and_both_are_counted(monkeypatch):
-    """With ``cab`` auto the cab-fitted search starts from the cab-held fit's values (its ranges
-    are still the first guess's), and the result counts both calibrations' variants and time."""
+def test_both_calibrations_are_counted(monkeypatch):
+    """With ``cab`` auto both families are calibrated from the same first guess, and the result
+    counts both calibrations' variants and time."""
     import scenarios.records.model.cab_choice as cab_choice
 
     held = _cal(("payload_kg",), (3100.0,), (0.5, 0.5, 0.25, 0.25))
     calls = []
 
-    def fake_calibrate(t, x, f, *, names, fitted_guess, start, executor, **kw):
-        calls.append((tuple(names), start))
+    def fake_calibrate(t, x, f, *, names, fitted_guess, executor, **kw):
+        calls.append((tuple(names), fitted_guess, kw))
         return held if len(calls) == 1 else _fitted(2.0, 0.1)
 
     monkeypatch.setattr(cab_choice, "calibrate", fake_calibrate)
-    cal = calibrate_cab(None, None, None, cab=AUTO, workers=1)
-    assert calls == [(DEFAULT_NAMES, None), (DEFAULT_NAMES + ("cab_mount_hz",), {"payload_kg": 3100.0})]
+    cal = calibrate_cab(None, None, None, cab=AUTO, workers=1, fitted_guess={"payload_kg": 3000.0})
+    assert calls == [(DEFAULT_NAMES, {"payload_kg": 3000.0}, {}),
+                     (DEFAULT_NAMES + ("cab_mount_hz",), {"payload_kg": 3000.0}, {})]
     assert cal.cab_choice.startswith("cab fitted") and cal.evaluations == 20 and cal.wall_time_s == 2.0
 
 
