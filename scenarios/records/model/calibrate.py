@@ -37,7 +37,7 @@ from mjcf.variant import BOUNDS
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor
 from scenarios.records.model.band_error import band_errors
-from scenarios.records.model.cell_mass import band_acceleration, mass_sigma
+from scenarios.records.model.cell_mass import band_acceleration
 from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, FITTED, RANGES, STATION_FITTED, UNITS
 from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral
 from scenarios.records.model.model_runs import check_record
@@ -204,15 +204,16 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         lb, ub = prob.thetas(lower, upper)
         theta0 = prob.theta_of(start or {}, lb, ub)
         prob.fun(theta0)
-        m_init = prob.as_measured(prob.cache[tuple(theta0)][1])
+        block = int(round(BLOCK_S * fs))
+        m0 = prob.cache[tuple(theta0)][1]
+        m_init = prob.as_measured(m0, prob.cell_mass(m0, block)[0])
         res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, lb, ub), bounds=(lb, ub), method="trf",
                             x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
         jac = prob.final_jac(res.x, lb, ub)
         f_opt, m_run = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
-        m_opt, mass = prob.as_measured(m_run), prob.mass(m_run)
-        mass_1s = 0.0 if acc is None else mass_sigma(prob.weighted(m_run) + mass * prob.acc_w, prob.acc_w,
-                                                     use / prob.norm ** 2, int(round(BLOCK_S * fs)), prob.acc_t)
-    sigma, robust = uncertainties(jac, f_opt, int(round(BLOCK_S * fs)), prob.mapping(res.x), int(use.sum()))
+        mass, mass_1s = prob.cell_mass(m_run, block)
+        m_opt = prob.as_measured(m_run, mass)
+    sigma, robust = uncertainties(jac, f_opt, block, prob.mapping(res.x), int(use.sum()))
     fitted, linear = prob.fields(res.x), []
     for i, j, kt in prob.onsets:
         ratio = ONSET_RATIO[names[i]]  # a stiffening beyond every measured load: the tire held linear (TOP)

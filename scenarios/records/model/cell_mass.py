@@ -17,8 +17,8 @@ One mass for the four cells: one lab compensates four like pans with one estimat
 wheel lets each wheel's own model error pass for a mass (a mismatch the model lacks, a channel
 skew that looks like tire damping and, through it, like mass), and the correction then adds that
 error back: measured with ``benchmarks/mismatch_suite.py`` (its first 6 plants, 24 wheels, the
-typical lab's compensation 7.5 kg too large): worst DLC error 3.1 % per wheel, 1.9 % shared,
-2.6 % without the fit.
+typical lab's compensation 7.5 kg too large): worst DLC error 3.1 % with a mass per wheel, 1.9 %
+with one shared (both read by plain least squares, below), 2.6 % without the fit.
 
 The acceleration is band-limited by the correction's own low-pass H
 (:data:`~scenarios.records.model.band_error.BAND_LOWPASS`, zero-phase): the LVDT's noise

@@ -11,7 +11,7 @@ import numpy as np
 
 from mjcf.variant import BOUNDS, TruckVariant
 from scenarios.core.pool import run_jobs
-from scenarios.records.model.cell_mass import band_limited, mass_of
+from scenarios.records.model.cell_mass import band_limited, mass_of, mass_sigma
 from scenarios.records.model.family import ADDITIVE, COMPLIANCE, RANGES
 from scenarios.records.model.model_runs import SETTLE_S, portable, window_job
 from scenarios.records.model.onset_load import ONSET_STIFFNESS
@@ -56,8 +56,10 @@ class FitProblem:
         self.half = 0 if kernel is None else kernel.size // 2
         # the pans' acceleration (whole record), weighted as the residual, for the cells' mass
         self.acc = acc
-        self.acc_w = self.acc_t = None
-        if acc is not None:  # the regressor and its test vector, band-limited once more (cell_mass)
+        self.acc_w = self.acc_t = self.mass_weights = None
+        if acc is not None:
+            self.mass_weights = self.use / self.norm ** 2  # the residual's weight per wheel, 1/N^2
+            # the regressor and its test vector, band-limited once more (cell_mass)
             fs = 1.0 / (t[1] - t[0])
             self.acc_w, self.acc_t = (self.weighted([x[a:e] for a, _, e in windows], subtract=False)
                                       for x in (acc, band_limited(acc, fs)))
@@ -141,20 +143,24 @@ class FitProblem:
             parts.append(err[s - a:e - a - self.half])
         return np.concatenate(parts)
 
-    def mass(self, model_N) -> float:
-        """The load cells' uncompensated mass that best explains the weighted residual, kg
-        (:mod:`~scenarios.records.model.cell_mass`); 0 without the pans' acceleration."""
-        return 0.0 if self.acc is None else mass_of(self.weighted(model_N), self.acc_w, self.use / self.norm ** 2, self.acc_t)
+    def cell_mass(self, model_N, block: int) -> tuple[float, float]:
+        """The load cells' uncompensated mass that best explains the weighted residual and its
+        block-robust 1-sigma over blocks of ``block`` rows, kg (:mod:`~scenarios.records.model.cell_mass`);
+        (0, 0) without the pans' acceleration."""
+        if self.acc is None:
+            return 0.0, 0.0
+        err = self.weighted(model_N)
+        mass = mass_of(err, self.acc_w, self.mass_weights, self.acc_t)
+        return mass, mass_sigma(err + mass * self.acc_w, self.acc_w, self.mass_weights, block, self.acc_t)
 
-    def as_measured(self, model_N) -> list[np.ndarray]:
-        """The model's force on each window as the load cells read it (with the cells' mass), N."""
-        mass = self.mass(model_N)
+    def as_measured(self, model_N, mass: float) -> list[np.ndarray]:
+        """The model's force on each window as the load cells read it with ``mass`` (kg) on them, N."""
         return [m + mass * self.acc[a:e] for m, (a, _, e) in zip(model_N, self.windows)] if mass else model_N
 
     def residual(self, model_N) -> np.ndarray:
         err = self.weighted(model_N)
         if self.acc is not None:  # variable projection: the cells' mass solved for and taken out
-            err = err + mass_of(err, self.acc_w, self.use / self.norm ** 2, self.acc_t) * self.acc_w
+            err = err + mass_of(err, self.acc_w, self.mass_weights, self.acc_t) * self.acc_w
         return (err / self.norm)[:, self.use].ravel()
 
     def fun(self, theta) -> np.ndarray:
