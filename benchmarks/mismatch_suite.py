@@ -3,7 +3,7 @@
 ::
 
     python benchmarks/mismatch_suite.py [--plants 24] [--duration-s 30] [--seed 0] [--lab typical|ideal]
-                                        [--cab auto|held|fitted] [--workers N] [--noise-N 100]
+                                        [--channels aligned|raw] [--cab auto|held|fitted] [--workers N] [--noise-N 100]
                                         [--results docs/results] [--from-json RUN.txt]
 
 Plant ``i`` (:func:`scenarios.studies.model_suite.mismatch.mismatch_plants`, seeded) is a truck
@@ -14,7 +14,10 @@ case ``i`` (ISO classes A-D, 30-100 km/h, payload 0-8000 kg). Per plant, in work
 the road test (the reference), the rig test and the rig's identification before it; then, one
 plant after the other, :func:`scenarios.studies.model_suite.mismatch_score.score_plant`: the
 rig test through the lab's measurement chain (``--lab``: :data:`scenarios.core.lab.TYPICAL_LAB`
-by default, or the ideal load cell), corrected linearly by the identified T_a and by the truck
+by default, or the ideal load cell), its channels aligned as a lab that knows its anti-alias
+filters and converter skew aligns them (``--channels aligned``, default:
+:func:`scenarios.core.lab.aligned`, the identification's LVDTs too) or as recorded (``raw``),
+corrected linearly by the identified T_a and by the truck
 model calibrated on the record (its fallback honoured, and forced where it refused), against
 each plant's linear floor.
 
@@ -53,6 +56,7 @@ from scenarios.studies.suites import case_name, pick_cases  # noqa: E402
 
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 LABS = {"typical": TYPICAL_LAB, "ideal": LabChain()}
+CHANNELS = ("aligned", "raw")
 #: Goals of the suite: DLC within 1 % (95 % of wheels) and 2 % (all), NRMSE at most half the floor
 #: (95 %), at most 0.05 above the linear correction (all).
 DLC_GOOD, DLC_ALL, FLOOR_RATIO, SHARE, ABOVE_LINEAR = 0.01, 0.02, 0.5, 0.95, 0.05
@@ -154,6 +158,8 @@ def main(argv=None) -> int:
     ap.add_argument("--duration-s", type=float, default=30.0, help="analysed seconds per run (default 30)")
     ap.add_argument("--seed", type=int, default=0, help="seed of the plants' draws (default 0)")
     ap.add_argument("--lab", choices=sorted(LABS), default="typical", help="the lab's measurement (default typical)")
+    ap.add_argument("--channels", choices=CHANNELS, default="aligned",
+                    help="the lab's filters' phase and delays taken out before correcting, or not (default aligned)")
     ap.add_argument("--cab", choices=CAB_CHOICES, default=AUTO, help="the model's cab mode (default auto)")
     ap.add_argument("--noise-N", type=float, default=scoring.NOISE_N, help="white load-cell noise, N rms (default 100)")
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
@@ -165,12 +171,12 @@ def main(argv=None) -> int:
         return _page_from_json(args.from_json, args.results)
     if not 1 <= args.plants <= 24 or args.duration_s < scoring.MIN_DURATION_S or args.noise_N < 0:
         raise SystemExit(f"--plants must be 1-24, --duration-s >= {scoring.MIN_DURATION_S:g} s, --noise-N >= 0")
-    lab = LABS[args.lab]
+    lab, align = LABS[args.lab], args.channels == "aligned"
     cases = pick_cases("generalization", None, args.duration_s)[:args.plants]
     plants = mismatch_plants(cases, args.seed)  # every plant validated before any run
     t0 = time.perf_counter()
     keys = [(i, k) for i in range(len(cases)) for k in ("road", "rig", "identify")]
-    jobs = [(mismatch_job, (cases[i], plants[i], args.duration_s, k, lab)) for i, k in keys]
+    jobs = [(mismatch_job, (cases[i], plants[i], args.duration_s, k, lab, align)) for i, k in keys]
 
     def said(j, _r):
         i, k = keys[j]
@@ -182,14 +188,14 @@ def main(argv=None) -> int:
         sc = mismatch_scenario(case, plants[i], args.duration_s)
         s = score_plant(case_name(case), plants[i], sc, by.pop((i, "road")), by.pop((i, "rig")),
                         by.pop((i, "identify")), lab=lab, noise_N=args.noise_N, seed=sc.seed, workers=args.workers,
-                        cab=args.cab)
+                        cab=args.cab, align=align)
         scores.append(s)
         print(f"[{time.perf_counter() - t0:6.0f} s] {s.name}: {s.method}, DLC "
               f"{' '.join(_pct(x) for x in s.dlc_error['delivered'])}, NRMSE/floor "
               f"{' '.join(f'{x:.2f}' for x in s.nrmse['delivered'] / s.floor)}, {s.wall_s:.0f} s"
               + (f" ({s.reason})" if s.reason else ""), file=sys.stderr, flush=True)
-    settings = {"lab": args.lab, "cab": args.cab, "seed": args.seed, "duration_s": args.duration_s,
-                "noise_N": args.noise_N, "command": script_command(__file__, argv)}
+    settings = {"lab": args.lab, "channels": args.channels, "cab": args.cab, "seed": args.seed,
+                "duration_s": args.duration_s, "noise_N": args.noise_N, "command": script_command(__file__, argv)}
     _write_page(scores, settings, args.results)
     print(json.dumps(json.loads(to_json(settings | {"summary": rows_and_goals(scores)[3],
                                                     "wall_time_s": round(time.perf_counter() - t0, 1),
@@ -205,6 +211,7 @@ def _page_from_json(path: pathlib.Path, results: pathlib.Path) -> int:
     run = json.loads(lines[-1])
     scores = [PlantScore.from_dict(p) for p in run["plants"]]
     settings = {k: run[k] for k in ("lab", "cab", "seed", "duration_s")}
+    settings["channels"] = run.get("channels", "raw")
     settings["noise_N"] = run.get("noise_N", scoring.NOISE_N)
     settings["command"] = run.get("command") or (
         f"python benchmarks/mismatch_suite.py --plants {len(scores)} --workers 2"
@@ -216,7 +223,7 @@ def _page_from_json(path: pathlib.Path, results: pathlib.Path) -> int:
 def _write_page(scores, settings: dict, results: pathlib.Path) -> None:
     head, rows, goals, numbers = rows_and_goals(scores)
     title = (f"The model correction on {len(scores)} random real trucks ({settings['duration_s']:g} s records, lab "
-             f"measurement: {settings['lab']}, {settings['noise_N']:g} N white load-cell noise, --cab {settings['cab']})")
+             f"measurement: {settings['lab']}, channels {settings['channels']}, {settings['noise_N']:g} N white load-cell noise, --cab {settings['cab']})")
     note = ("Per plant the worse wheel: the model error the fallback reads (the calibrated model's dynamic "
             f"residual in the correction's band beyond the load cells' noise; limit {HYBRID_LIMIT:g}); DLC error of what "
             "`rigsim correct --model` delivered (the model, or the linear correction where it fell back) against the "

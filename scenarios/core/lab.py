@@ -22,7 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LabChain", "LabMeasurement", "TYPICAL_LAB", "LAB_BOUNDS", "measure", "measure_lvdt", "pan_acceleration"]
+from correction.io.acquisition import ChannelFilter, undo_timing
+
+__all__ = ["LabChain", "LabMeasurement", "TYPICAL_LAB", "LAB_BOUNDS", "measure", "measure_lvdt", "aligned",
+           "pan_acceleration"]
 
 #: Bounds of the :class:`LabChain` fields, ``{field: (low, high, unit, why)}``, inclusive.
 LAB_BOUNDS: dict[str, tuple[float, float, str, str]] = {
@@ -104,6 +107,16 @@ class LabChain:
         """True when the chain changes nothing but the white noise the caller adds."""
         return self == LabChain()
 
+    @property
+    def force_channel(self) -> ChannelFilter:
+        """The load cells' anti-alias filter (digital, at the record's rate) and delay."""
+        return ChannelFilter(self.force_filter_hz, int(self.filter_order), domain="digital", delay_s=self.force_delay_s)
+
+    @property
+    def lvdt_channel(self) -> ChannelFilter:
+        """The LVDTs' anti-alias filter (digital, at the record's rate) and delay."""
+        return ChannelFilter(self.lvdt_filter_hz, int(self.filter_order), domain="digital", delay_s=self.lvdt_delay_s)
+
     def check_rate(self, fs_hz: float) -> None:
         """Refuse an anti-alias corner at or above the Nyquist frequency of a record at ``fs_hz`` (Hz)."""
         for name in ("force_filter_hz", "lvdt_filter_hz"):
@@ -150,23 +163,6 @@ def pan_acceleration(pan_m: np.ndarray, fs_hz: float) -> np.ndarray:
     return a
 
 
-def _filtered(x: np.ndarray, corner_hz: float | None, order: int, fs_hz: float) -> np.ndarray:
-    if corner_hz is None:
-        return x
-    from scipy import signal
-
-    sos = signal.butter(int(order), corner_hz, fs=fs_hz, output="sos")
-    zi = signal.sosfilt_zi(sos)[:, :, None] * x[0]  # at rest on the first sample: no start-up step
-    return signal.sosfilt(sos, x, axis=0, zi=zi)[0]
-
-
-def _delayed(x: np.ndarray, delay_s: float, fs_hz: float) -> np.ndarray:
-    if delay_s == 0:
-        return x
-    t = np.arange(x.shape[0]) / fs_hz
-    return np.column_stack([np.interp(t - delay_s, t, x[:, i]) for i in range(x.shape[1])])
-
-
 def measure(run, chain: LabChain, noise_N: float, seed: int) -> LabMeasurement:
     """The rig run ``run`` as the lab's channels give it.
 
@@ -210,7 +206,7 @@ def measure(run, chain: LabChain, noise_N: float, seed: int) -> LabMeasurement:
         drift = signal.lfilter([1.0 - pole], [1.0, -pole], white, axis=0)
         drift *= chain.drift_noise_N / math.sqrt((1.0 - pole) / (1.0 + pole))  # the first-order filter's rms gain
         force = force + drift
-    force = _delayed(_filtered(force, chain.force_filter_hz, chain.filter_order, fs), chain.force_delay_s, fs)
+    force = chain.force_channel.apply(force, fs)
     return LabMeasurement(force_N=force, pan_m=None if pan is None else measure_lvdt(pan, fs, chain, seed))
 
 
@@ -224,4 +220,13 @@ def measure_lvdt(pan_m, fs_hz: float, chain: LabChain, seed: int) -> np.ndarray:
     chain.check_rate(fs_hz)
     if chain.lvdt_noise_m:
         pan = pan + chain.lvdt_noise_m * np.random.default_rng((int(seed), 11)).standard_normal(pan.shape)
-    return _delayed(_filtered(pan, chain.lvdt_filter_hz, chain.filter_order, fs_hz), chain.lvdt_delay_s, fs_hz)
+    return chain.lvdt_channel.apply(pan, fs_hz)
+
+
+def aligned(measurement: LabMeasurement, fs_hz: float, chain: LabChain) -> LabMeasurement:
+    """``measurement`` (at ``fs_hz``, Hz) with the chain's anti-alias filters' phase and delays taken
+    out of each channel (:func:`correction.io.acquisition.undo_timing`): what a lab that knows its
+    conditioners does before correcting (``rigsim correct --force-filter ... --lvdt-filter ...``)."""
+    pan = measurement.pan_m
+    return LabMeasurement(force_N=undo_timing(measurement.force_N, fs_hz, chain.force_channel),
+                          pan_m=None if pan is None else undo_timing(pan, fs_hz, chain.lvdt_channel))

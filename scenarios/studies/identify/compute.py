@@ -21,6 +21,7 @@ from correction.identification.identify import h1_estimate
 from correction.output.lowpass import BAND_HZ
 from mjcf.names import CORNERS
 from scenarios.core.drive import IDENT_SEED, Drive, identification_drive
+from correction.io.acquisition import undo_timing
 from scenarios.core.lab import LabChain, measure_lvdt
 from scenarios.core.rig import Rig
 
@@ -129,7 +130,8 @@ class RigIdentification:
 
 
 def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float | None = None,
-                 seed: int = IDENT_SEED, rig: Rig | None = None, lab: LabChain | None = None) -> RigIdentification:
+                 seed: int = IDENT_SEED, rig: Rig | None = None, lab: LabChain | None = None,
+                 align: bool = False) -> RigIdentification:
     """Run the identification on the simulated rig of ``scenario`` and fit T_a per corner.
 
     Parameters
@@ -146,6 +148,9 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     lab : scenarios.core.lab.LabChain, optional
         The lab's measurement of the LVDTs (:func:`scenarios.core.lab.measure_lvdt`, noise from
         ``seed``); default: the scenario's (``[lab]``).
+    align : bool
+        Take the LVDT channel's known filter phase and delay out before the fit
+        (:func:`scenarios.core.lab.aligned`), as ``rigsim identify --from-file --lvdt-filter`` does.
 
     Raises
     ------
@@ -161,7 +166,10 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     rate = float(scenario.output_rate_hz)
     rec = rig.run(drive, rate_hz=rate)
     k0 = int(round(IDENT_SKIP_S * rate))
-    pan = measure_lvdt(rec.pan_m, rate, scenario.lab if lab is None else lab, seed)
+    chain = scenario.lab if lab is None else lab
+    pan = measure_lvdt(rec.pan_m, rate, chain, seed)
+    if align:
+        pan = undo_timing(pan, rate, chain.lvdt_channel)
     u, y = rec.x_ref_m[k0:], pan[k0:]
     nperseg = int(min(round(SEGMENT_S * rate), u.shape[0] // 8))
     f, h, coh = h1_estimate(u, y, rate, nperseg)

@@ -151,12 +151,12 @@ def mismatch_scenario(case, plant: Mapping[str, float], duration_s: float) -> Sc
     return dataclasses.replace(case_scenario(case), duration_s=float(duration_s), vehicle=TruckVariant(**plant))
 
 
-def mismatch_job(case, plant: Mapping[str, float], duration_s: float, kind: str, lab=None):
+def mismatch_job(case, plant: Mapping[str, float], duration_s: float, kind: str, lab=None, align: bool = False):
     """Worker job: one MuJoCo run of the case's plant: "road", "rig" or "identify"
     (:func:`scenarios.studies.identify.compute.identify_rig`, its LVDTs measured through ``lab``,
-    a :class:`scenarios.core.lab.LabChain`)."""
+    a :class:`scenarios.core.lab.LabChain`, their timing undone where ``align``)."""
     sc = mismatch_scenario(case, plant, duration_s)
-    return identify_rig(sc, lab=lab) if kind == "identify" else run(sc, kind)
+    return identify_rig(sc, lab=lab, align=align) if kind == "identify" else run(sc, kind)
 
 
 def describe(plant: Mapping[str, float]) -> str:

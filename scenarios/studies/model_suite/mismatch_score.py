@@ -20,7 +20,7 @@ import numpy as np
 
 from correction.output.apply import band_limit
 from correction.output.floor import linear_floor
-from scenarios.core.lab import LabChain, measure
+from scenarios.core.lab import LabChain, aligned, measure
 from scenarios.records.model.differential import correct_with_model, model_force_pair, settled_mask
 from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
 from scenarios.studies.scoring import linear_correction
@@ -111,7 +111,8 @@ def _cpu_s() -> float:
 
 
 def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig, identification, *, lab: LabChain,
-                noise_N: float, seed: int, workers: int | None = None, cab: str = "auto") -> PlantScore:
+                noise_N: float, seed: int, workers: int | None = None, cab: str = "auto",
+                align: bool = False) -> PlantScore:
     """Correct one plant's rig test as a user would and judge it (see the module's description).
 
     Parameters
@@ -134,9 +135,14 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
         The model calibration's worker processes.
     cab : {"auto", "held", "fitted"}
         The model's cab mode.
+    align : bool
+        Take the lab's known anti-alias filters' phase and delays out of the force and LVDT
+        channels before correcting (:func:`scenarios.core.lab.aligned`; the identification given
+        should be aligned alike). The linear floor is fitted on the channels as measured.
     """
     fs = float(rig.rate_hz)
-    measured = measure(rig, lab, noise_N, seed)
+    raw = measure(rig, lab, noise_N, seed)
+    measured = aligned(raw, fs, lab) if align else raw
     road_N = np.asarray(road.signals["tire_force_N"], dtype=float)
     lin = linear_correction(identification.actuators(), fs)
     linear_N, linear_settled = lin(measured.force_N)
@@ -157,7 +163,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
         scores["hybrid"] = score_correction(hybrid, road_N, fs, rows)
     scores["delivered"] = (score_correction(mc.corrected_N, road_N, fs, rows) if mc.method == "model"
                            else scores["linear"])
-    floor = linear_floor(measured.force_N, band_limit(road_N, fs, LOWPASS, MODE), *FLOOR_TAPS, rows=rows).nrmse
+    floor = linear_floor(raw.force_N, band_limit(road_N, fs, LOWPASS, MODE), *FLOOR_TAPS, rows=rows).nrmse
     cal = mc.calibration
     fit = None if cal is None else np.asarray(cal.fit_nrmse, dtype=float)
     error = None if cal is None else np.asarray(cal.excess_nrmse, dtype=float)

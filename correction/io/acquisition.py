@@ -1,0 +1,216 @@
+"""What a lab's acquisition does to a channel's timing: its anti-alias filter and its delay, and how to undo them.
+
+A rig record's channels are not sampled alike: each passes its own anti-alias filter (the load
+cell's bridge amplifier, the LVDT's demodulator) and the converter may sample them one after the
+other. A 4th-order Butterworth at 200 Hz delays a 10 Hz wheel force by about 2 ms, one at 150 Hz
+the LVDT by about 2.8 ms: the force then leads the pan's motion by a fraction of a millisecond,
+which to a truck model fitted between the two looks like tire damping. A lab knows its filters
+(the conditioner's data sheet, the DAQ's settings); :class:`ChannelFilter` describes one channel's,
+:meth:`ChannelFilter.apply` does to a signal what the acquisition did (the simulated lab) and
+:func:`undo_timing` takes the filter's phase and the delay back out of a record, leaving the
+filter's magnitude (within 0.01 % of 1 below a tenth of the corner) so that every channel is
+aligned with the instant it was measured.
+
+``analog`` filters are the conditioner's (continuous time, the response of the analog prototype
+at each frequency); ``digital`` ones are a DAQ's decimation filter designed at the record's rate
+(``scipy.signal.butter``/``bessel`` with ``fs``, applied by ``sosfilt`` from rest at the first
+sample). Frequencies in Hz, times in s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["KINDS", "DOMAINS", "ChannelFilter", "parse_channel_filter", "undo_timing"]
+
+KINDS = ("butterworth", "bessel")
+DOMAINS = ("analog", "digital")
+#: Most delay a channel is given, s: a multiplexer's or conditioner's skew is below a millisecond;
+#: 10 ms is a misconfigured channel.
+MAX_DELAY_S = 0.01
+#: Seconds of odd reflection padded to each end of a record before its timing is undone in the
+#: frequency domain: the filters' responses (a few ms) end well inside it.
+PAD_S = 0.5
+
+
+@dataclass(frozen=True)
+class ChannelFilter:
+    """One measured channel's anti-alias filter and delay.
+
+    Parameters
+    ----------
+    corner_hz : float, Hz, optional
+        The filter's -3 dB corner (``None``: no filter, the delay only).
+    order : int
+        The filter's order, 1 to 8.
+    kind : {"butterworth", "bessel"}
+        Its family (a Bessel's corner is its -3 dB frequency, ``norm="mag"``).
+    domain : {"analog", "digital"}
+        An analog conditioner's filter, or a digital one designed at the record's rate.
+    delay_s : float, s
+        The channel's delay beyond the filter (a multiplexed converter's skew), 0 to 10 ms.
+    """
+
+    corner_hz: float | None = None
+    order: int = 4
+    kind: str = "butterworth"
+    domain: str = "analog"
+    delay_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.corner_hz is not None and (isinstance(self.corner_hz, bool)
+                                           or not isinstance(self.corner_hz, (int, float))
+                                           or not math.isfinite(self.corner_hz) or self.corner_hz <= 0):
+            raise ValueError(f"the channel filter's corner must be a positive number of Hz, got {self.corner_hz!r}")
+        if isinstance(self.order, bool) or not isinstance(self.order, (int, np.integer)) or not 1 <= self.order <= 8:
+            raise ValueError(f"the channel filter's order must be an integer from 1 to 8, got {self.order!r}")
+        if self.kind not in KINDS:
+            raise ValueError(f"the channel filter's kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
+        if self.domain not in DOMAINS:
+            raise ValueError(f"the channel filter's domain must be one of {', '.join(DOMAINS)}, got {self.domain!r}")
+        if (isinstance(self.delay_s, bool) or not isinstance(self.delay_s, (int, float))
+                or not math.isfinite(self.delay_s) or not 0 <= self.delay_s <= MAX_DELAY_S):
+            raise ValueError(f"the channel's delay must be 0 to {MAX_DELAY_S:g} s (a converter's skew is below 1 ms), "
+                             f"got {self.delay_s!r}")
+
+    @property
+    def none(self) -> bool:
+        """True when the channel is neither filtered nor delayed."""
+        return self.corner_hz is None and self.delay_s == 0
+
+    def check_rate(self, fs_hz: float) -> None:
+        """Refuse a corner at or above half the rate ``fs_hz`` (Hz) of the record it describes."""
+        if self.corner_hz is not None and self.corner_hz >= 0.5 * fs_hz:
+            raise ValueError(f"the channel filter's corner {self.corner_hz:g} Hz must lie below half the record's "
+                             f"rate ({0.5 * fs_hz:g} Hz): an anti-alias filter sits below the Nyquist frequency")
+
+    def _design(self, fs_hz: float | None, output: str):
+        from scipy import signal
+
+        kw = {"output": output}
+        if self.domain == "digital":
+            kw["fs"] = fs_hz
+            wn = self.corner_hz
+        else:
+            kw["analog"] = True
+            wn = 2.0 * math.pi * self.corner_hz
+        if self.kind == "bessel":
+            return signal.bessel(int(self.order), wn, norm="mag", **kw)
+        return signal.butter(int(self.order), wn, **kw)
+
+    def sos(self, fs_hz: float) -> np.ndarray:
+        """The digital filter's second-order sections at ``fs_hz`` (Hz) (a ``digital`` filter only)."""
+        if self.domain != "digital" or self.corner_hz is None:
+            raise ValueError("only a digital channel filter with a corner has second-order sections")
+        self.check_rate(fs_hz)
+        return self._design(fs_hz, "sos")
+
+    def response(self, f_hz, fs_hz: float) -> np.ndarray:
+        """The channel's complex response (1) at ``f_hz`` (Hz) in a record at ``fs_hz`` (Hz): filter and delay."""
+        from scipy import signal
+
+        f = np.asarray(f_hz, dtype=float)
+        h = np.exp(-2j * math.pi * f * self.delay_s)
+        if self.corner_hz is None:
+            return h
+        self.check_rate(fs_hz)
+        if self.domain == "digital":
+            return h * signal.sosfreqz(self.sos(fs_hz), worN=f, fs=fs_hz)[1]
+        b, a = self._design(None, "ba")
+        return h * signal.freqs(b, a, worN=2.0 * math.pi * f)[1]
+
+    def apply(self, x, fs_hz: float) -> np.ndarray:
+        """What the acquisition does to ``x`` (samples along axis 0) at ``fs_hz`` (Hz): the filter
+        (a digital one by ``sosfilt`` from rest at the first sample; an analog one by its response
+        on the padded record's spectrum), then the delay (linear interpolation between samples)."""
+        x = np.asarray(x, dtype=float)
+        if self.corner_hz is not None:
+            self.check_rate(fs_hz)
+            if self.domain == "digital":
+                from scipy import signal
+
+                sos = self.sos(fs_hz)
+                zi = signal.sosfilt_zi(sos).reshape(sos.shape[0], 2, *([1] * (x.ndim - 1))) * x[0]
+                x = signal.sosfilt(sos, x, axis=0, zi=zi)[0]
+            else:
+                x = _through(x, fs_hz, lambda f: ChannelFilter(self.corner_hz, self.order, self.kind).response(f, fs_hz))
+        if self.delay_s == 0:
+            return x
+        t = np.arange(x.shape[0]) / fs_hz
+        flat = x.reshape(x.shape[0], -1)
+        out = np.column_stack([np.interp(t - self.delay_s, t, flat[:, i]) for i in range(flat.shape[1])])
+        return out.reshape(x.shape)
+
+
+def _through(x: np.ndarray, fs_hz: float, gain) -> np.ndarray:
+    """``x`` (axis 0 in time) through the complex gain ``gain(f_hz)`` on the spectrum of the record
+    padded at each end by :data:`PAD_S` of odd reflection (slope and level continuous at the ends)."""
+    n = x.shape[0]
+    pad = min(n - 1, int(math.ceil(PAD_S * fs_hz)))
+    if pad > 0:
+        head = 2.0 * x[:1] - x[pad:0:-1]
+        tail = 2.0 * x[-1:] - x[-2:-pad - 2:-1]
+        padded = np.concatenate([head, x, tail], axis=0)
+    else:
+        padded = x
+    m = padded.shape[0]
+    f = np.fft.rfftfreq(m, 1.0 / fs_hz)
+    g = np.asarray(gain(f)).reshape(-1, *([1] * (x.ndim - 1)))
+    y = np.fft.irfft(np.fft.rfft(padded, axis=0) * g, n=m, axis=0)
+    return y[pad:pad + n]
+
+
+def undo_timing(x, fs_hz: float, channel: ChannelFilter) -> np.ndarray:
+    """``x`` (samples along axis 0, at ``fs_hz`` Hz) with ``channel``'s filter phase and delay taken out.
+
+    The spectrum of the record (padded by :data:`PAD_S` of odd reflection at each end) is multiplied
+    by ``conj(H) / |H|`` (H: :meth:`ChannelFilter.response`, the delay included): what remains is
+    the zero-phase magnitude ``|H|`` of the filter, aligned with the instant each sample describes.
+    Offline (non-causal); a channel with no filter and no delay is returned as given.
+
+    Parameters
+    ----------
+    x : array_like, (n,) or (n, k)
+        The channel(s) as recorded, in their unit.
+    fs_hz : float, Hz
+        The record's rate.
+    channel : ChannelFilter
+
+    Returns
+    -------
+    numpy.ndarray
+        Same shape and unit as ``x``.
+    """
+    x = np.asarray(x, dtype=float)
+    if channel.none:
+        return x
+    channel.check_rate(fs_hz)
+
+    def unphase(f):
+        h = channel.response(f, fs_hz)
+        mag = np.abs(h)
+        return np.where(mag > 0, np.conj(h) / np.where(mag > 0, mag, 1.0), 1.0)
+
+    return _through(x, fs_hz, unphase)
+
+
+def parse_channel_filter(text: str, delay_s: float = 0.0, option: str = "the channel filter") -> ChannelFilter:
+    """``"HZ[:ORDER[:KIND][:DOMAIN]]"`` (``"200"``, ``"200:4"``, ``"150:4:bessel:digital"``; ``"none"``:
+    no filter) and a delay (s) as a :class:`ChannelFilter`; a ``ValueError`` naming ``option`` otherwise."""
+    parts = [p.strip().lower() for p in str(text).split(":")]
+    try:
+        corner = None if parts[0] == "none" else float(parts[0])
+        order = int(parts[1]) if len(parts) > 1 and parts[1] else 4
+        kind = next((p for p in parts[2:] if p in KINDS), "butterworth")
+        domain = next((p for p in parts[2:] if p in DOMAINS), "analog")
+        unknown = [p for p in parts[2:] if p not in KINDS + DOMAINS]
+        if unknown or (corner is None and len(parts) > 1):
+            raise ValueError(f"{unknown[0]!r} is neither a kind ({', '.join(KINDS)}) nor a domain "
+                             f"({', '.join(DOMAINS)})" if unknown else "'none' takes no order")
+        return ChannelFilter(corner, order, kind, domain, float(delay_s))
+    except ValueError as exc:
+        raise ValueError(f"{option} {text!r}: {exc}; give HZ[:ORDER[:KIND][:DOMAIN]], e.g. 200:4 or "
+                         "150:4:bessel:digital, or none") from None
