@@ -197,13 +197,20 @@ def undo_timing(x, fs_hz: float, channel: ChannelFilter) -> np.ndarray:
     return _through(x, fs_hz, unphase)
 
 
+def _number(text: str, kind, what: str, unit: str):
+    try:
+        return kind(text)
+    except ValueError:
+        raise ValueError(f"{what} {text!r} is not a number {unit}") from None
+
+
 def parse_channel_filter(text: str, delay_s: float = 0.0, option: str = "the channel filter") -> ChannelFilter:
     """``"HZ[:ORDER[:KIND][:DOMAIN]]"`` (``"200"``, ``"200:4"``, ``"150:4:bessel:digital"``; ``"none"``:
     no filter) and a delay (s) as a :class:`ChannelFilter`; a ``ValueError`` naming ``option`` otherwise."""
     parts = [p.strip().lower() for p in str(text).split(":")]
     try:
-        corner = None if parts[0] == "none" else float(parts[0])
-        order = int(parts[1]) if len(parts) > 1 and parts[1] else 4
+        corner = None if parts[0] == "none" else _number(parts[0], float, "the corner", "of Hz")
+        order = _number(parts[1], int, "the order", "from 1 to 8") if len(parts) > 1 and parts[1] else 4
         kind = next((p for p in parts[2:] if p in KINDS), "butterworth")
         domain = next((p for p in parts[2:] if p in DOMAINS), "analog")
         unknown = [p for p in parts[2:] if p not in KINDS + DOMAINS]

@@ -46,7 +46,7 @@ import argparse
 
 from scenarios.records.naming import Naming
 from scenarios.records.output import check_out_file
-from scenarios.studies.identify.command import add_number_format
+from scenarios.studies.identify.command import add_channel_timing, add_number_format, channel_timing
 
 __all__ = ["CLI_NAMING", "add_parser", "cmd_correct"]
 
@@ -56,7 +56,7 @@ CLI_NAMING = Naming({"actuator": "--actuator", "actuators": "--actuators", "iden
                      "lowpass_hz": "--lowpass-hz", "mode": "--mode", "transient": "--transient",
                      "normalize_dc": "--normalize-dc", "model": "--model", "pairs": "--pairs", "workers": "--jobs",
                      "max_evaluations": "--max-evaluations", "calibration_windows": "--calibration-windows",
-                     "cab": "--cab", "path": "-o"})
+                     "cab": "--cab", "path": "-o", "force_filter": "--force-filter", "lvdt_filter": "--lvdt-filter"})
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -105,6 +105,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c.add_argument("--normalize-dc", action="store_true", help="scale T_a to T_a(0) = 1 instead of refusing it")
     c.add_argument("--quiet", action="store_true",
                    help="no progress lines or notes on stderr (the result is printed)")
+    add_channel_timing(c)
     add_model_arguments(c)
     c.set_defaults(func=cmd_correct)
     return c
@@ -123,7 +124,8 @@ def cmd_correct(args) -> int:
     settings = correction_settings(
         actuator=args.actuator, actuators=args.actuators, identify=args.identify, columns=args.columns,
         corner_map=args.map, lowpass=args.lowpass, lowpass_hz=args.lowpass_hz, mode=args.mode,
-        transient=args.transient, normalize_dc=args.normalize_dc, naming=CLI_NAMING)
+        transient=args.transient, normalize_dc=args.normalize_dc, force_filter=channel_timing(args, "force"),
+        lvdt_filter=channel_timing(args, "lvdt"), naming=CLI_NAMING)
     plan = settings.read(args.input, time_col=args.time_col, decimal=args.decimal, thousands=args.thousands)
     plan.check_output(args.out)
     result = plan.run()

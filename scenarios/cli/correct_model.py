@@ -108,6 +108,7 @@ def cmd_correct_model(args, naming) -> int:
     raises ScenarioError (one sentence) for bad input."""
     from scenarios.records.output import check_out_file
     from scenarios.records.settings import correction_settings
+    from scenarios.studies.identify.command import channel_timing
 
     check_out_file(args.out, [args.input, args.model, args.actuator, args.actuators], args.force)
     settings = correction_settings(
@@ -115,7 +116,8 @@ def cmd_correct_model(args, naming) -> int:
         actuators=args.actuators, columns=args.columns, corner_map=args.map, lowpass=args.lowpass,
         lowpass_hz=args.lowpass_hz, mode=args.mode, transient=args.transient, normalize_dc=args.normalize_dc,
         workers=args.jobs, max_evaluations=args.max_evaluations, calibration_windows=args.calibration_windows,
-        cab=args.cab, naming=naming)
+        cab=args.cab, force_filter=channel_timing(args, "force"), lvdt_filter=channel_timing(args, "lvdt"),
+        naming=naming)
     plan = settings.read(args.input, time_col=args.time_col, decimal=args.decimal, thousands=args.thousands)
     plan.check_output(args.out)
     result = plan.run(progress=None if args.quiet else _say)

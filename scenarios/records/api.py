@@ -37,8 +37,8 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
                    corner_map=None, lowpass: str = "regularized", lowpass_hz: float | None = None,
                    mode: str = "zerophase", transient: str = "drop", normalize_dc: bool = False,
                    workers: int | None = None, max_evaluations: int | None = None,
-                   calibration_windows: int | None = None, cab: str | None = None,
-                   progress=None) -> CorrectionResult:
+                   calibration_windows: int | None = None, cab: str | None = None, force_filter=None,
+                   lvdt_filter=None, progress=None) -> CorrectionResult:
     """Correct the wheel forces of a rig's record for the actuators' dynamics.
 
     Give exactly one source of T_a (``actuator``, ``actuators`` or ``identify``) for the linear
@@ -96,6 +96,12 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
         With ``model``: windows of 2.5 s lead-in + 4 s the model is fitted on (default 3).
     cab : {"auto", "held", "fitted"}, optional
         With ``model``: the model's cab held, its mount frequency fitted, or (default) the better fit.
+    force_filter, lvdt_filter : correction.io.acquisition.ChannelFilter or str, optional
+        The force channels' and the LVDT channels' anti-alias filter and delay as the lab's
+        acquisition applied them (``ChannelFilter(200.0, 4, delay_s=2e-4)``, or the text
+        ``"200:4"``, ``"150:4:bessel:digital"``): their phase and delay are taken out of those
+        channels before correcting (:func:`correction.io.acquisition.undo_timing`). The LVDT's
+        goes with ``identify`` or ``model``.
     progress : callable, optional
         Called with each progress line or note of a long run (the model's calibration); default: silent.
 
@@ -115,12 +121,12 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
         actuator=actuator, actuators=actuators, identify=identify, model=model, pairs=pairs, columns=columns,
         corner_map=corner_map, lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
         normalize_dc=normalize_dc, workers=workers, max_evaluations=max_evaluations,
-        calibration_windows=calibration_windows, cab=cab)
+        calibration_windows=calibration_windows, cab=cab, force_filter=force_filter, lvdt_filter=lvdt_filter)
     plan = settings.read(record) if isinstance(record, (str, os.PathLike)) else settings.plan(record)
     return plan.run(progress)
 
 
-def identify_record(record, *, pairs):
+def identify_record(record, *, pairs, lvdt_filter=None):
     """Fit T_a per corner from a record's drive and LVDT channels, as ``rigsim identify --from-file``.
 
     Parameters
@@ -130,6 +136,8 @@ def identify_record(record, *, pairs):
     pairs : Mapping[str, tuple[str, str]] or str
         Per corner the drive and LVDT channels (lengths, m), ``{"fl": ("Soll_FL", "Weg_FL"), ...}``
         or ``"fl=Soll_FL:Weg_FL,..."``.
+    lvdt_filter : correction.io.acquisition.ChannelFilter or str, optional
+        The LVDT channels' anti-alias filter and delay (``"150:4"``), taken out before the fit.
 
     Returns
     -------
@@ -144,4 +152,4 @@ def identify_record(record, *, pairs):
     """
     from scenarios.records import recorded
 
-    return recorded.identify_record(record, pairs=pairs)
+    return recorded.identify_record(record, pairs=pairs, lvdt_filter=lvdt_filter)

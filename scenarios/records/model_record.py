@@ -24,6 +24,7 @@ from scenarios.records.channels import LENGTH_UNITS, plan_channels, resolver, un
 from scenarios.records.corrected import CorrectionResult, channel_loads
 from scenarios.records.linear import linear_result, ta_text
 from scenarios.records.output import linear_correction, linear_metadata, lowpass_filter, rigsim_version
+from scenarios.records.timing import timing_metadata
 
 __all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "cal_key", "calibration_meta", "model_metadata",
            "plan_model", "run_model"]
@@ -150,6 +151,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         meta["fallback_reason"] = reason
     meta.update({"corners": ",".join(f"{k}={c}" for k, c in zip(pairs, force_cols)),
                  "pairs": ",".join(f"{k}={d}:{x}" for k, (d, x) in pairs.items())})
+    meta.update(timing_metadata(settings.force_filter, settings.lvdt_filter))
     if method in ("model", "probe"):
         meta.update({"correction": f"F_corrected = {HYBRID_FORMULA}, L = T_a^-1 T_F", "force_unit": "N",
                      "start_up_s": f"{START_S:g} (model runs' start-up: not settled)",

@@ -4,7 +4,7 @@
 to a record: which force channels are corrected and at which corner
 (:func:`scenarios.records.channels.plan_channels`; the model's in
 :func:`scenarios.records.model_record.plan_model`), the low-pass's corner held against the
-record's Nyquist frequency, and the metadata the corrected file will carry. A plan can check an
+record's Nyquist frequency (the channel filters' corners too), and the metadata the corrected file will carry. A plan can check an
 output file before the work (:meth:`CorrectionPlan.check_output`: whatever the writer would
 refuse) and runs the correction (:meth:`CorrectionPlan.run`): the linear one by
 :func:`scenarios.records.linear.run_linear`, the model one by
@@ -13,6 +13,7 @@ refuse) and runs the correction (:meth:`CorrectionPlan.run`): the linear one by
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -21,6 +22,7 @@ from scenarios.records.channels import plan_channels, resolver
 from scenarios.records.corrected import CorrectionResult
 from scenarios.records.linear import run_linear
 from scenarios.records.output import fit_metadata, linear_metadata, output_units, probe_output, rigsim_version
+from scenarios.records.timing import aligned_record, check_rates, lvdt_columns, timing_metadata
 
 __all__ = ["CorrectionPlan", "make_plan"]
 
@@ -83,12 +85,18 @@ class CorrectionPlan:
 
     def run(self, progress=None) -> CorrectionResult:
         """Correct the record. ``progress``: called with each progress line or note of a long run
-        (the model's calibration), None: silent."""
-        if self.settings.method == "model":
+        (the model's calibration), None: silent. The force and LVDT channels' timing, where the
+        settings give it, is undone first (:func:`scenarios.records.timing.aligned_record`)."""
+        s = self.settings
+        record = aligned_record(self.record, self.record.fs_hz,
+                                [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)],
+                                s.naming)
+        plan = self if record is self.record else dataclasses.replace(self, record=record)
+        if s.method == "model":
             from scenarios.records.model_record import run_model
 
-            return run_model(self, progress)
-        return run_linear(self)
+            return run_model(plan, progress)
+        return run_linear(plan)
 
 
 def _check_band(settings, record) -> None:
@@ -106,6 +114,7 @@ def make_plan(settings, record, as_read: Mapping | None = None) -> CorrectionPla
 
         channels, corners, pairs, meta = plan_model(settings, record, as_read)
         _check_band(settings, record)
+        check_rates(settings, record.fs_hz)
         return CorrectionPlan(settings, record, tuple(channels), tuple(corners), pairs=pairs, metadata=meta)
     n, name = settings.naming, resolver(record, as_read)
     asked = None if settings.columns is None else [name(c) for c in settings.columns]
@@ -123,5 +132,7 @@ def make_plan(settings, record, as_read: Mapping | None = None) -> CorrectionPla
         meta["corners"] = ",".join(f"{k}={c}" for k, c in zip(corners, cols))
     meta.update(linear_metadata(lowpass=settings.lowpass, lowpass_hz=settings.lowpass_hz, mode=settings.mode,
                                 transient=settings.transient, normalize_dc=settings.normalize_dc))
+    meta.update(timing_metadata(settings.force_filter, settings.lvdt_filter))
+    check_rates(settings, record.fs_hz)
     return CorrectionPlan(settings, record, tuple(cols), None if corners is None else tuple(corners),
                           id_cols=tuple(id_cols), metadata=meta)

@@ -38,6 +38,8 @@ class RecordedIdentification:
     fits : Mapping[str, correction.identification.actuator_fit.ActuatorFit]
     fs_hz : float, Hz
     record_s : float, s
+    lvdt_filter : correction.io.acquisition.ChannelFilter or None
+        The LVDT channels' anti-alias filter and delay, undone before the fit (None: as recorded).
     """
 
     source: str
@@ -45,13 +47,19 @@ class RecordedIdentification:
     fits: Mapping
     fs_hz: float
     record_s: float
+    lvdt_filter: object = None
 
     def actuators(self) -> tuple:
         return tuple(f.as_tf() for f in self.fits.values())
 
     def meta(self) -> dict:
-        return {"source": f"rigsim identify --from-file {self.source}", "fs_hz": self.fs_hz,
+        meta = {"source": f"rigsim identify --from-file {self.source}", "fs_hz": self.fs_hz,
                 "record_s": self.record_s, "pairs": {c: f"{d}:{x}" for c, (d, x) in self.pairs.items()}}
+        if self.lvdt_filter is not None:
+            from scenarios.records.timing import describe
+
+            meta["lvdt_timing"] = f"{describe(self.lvdt_filter)}: phase and delay undone before the fit"
+        return meta
 
     def to_dict(self) -> dict:
         return {**self.meta(), "corners": {c: f.to_dict() for c, f in self.fits.items()}}
@@ -86,7 +94,8 @@ def pairs_of(pairs, naming: Naming = KEYWORDS) -> dict[str, tuple[str, str]]:
     return out
 
 
-def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None) -> RecordedIdentification:
+def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
+                    lvdt_filter=None) -> RecordedIdentification:
     """Fit T_a for each corner's (drive, LVDT) pair of channels of a record.
 
     Parameters
@@ -101,6 +110,10 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None) -
         How messages name ``pairs`` (a command passes its flag).
     as_read : Mapping[str, str], optional
         Channel name as given -> as the reader returned it (it may match a header as written).
+    lvdt_filter : correction.io.acquisition.ChannelFilter or str, optional
+        The LVDT channels' anti-alias filter and delay as the lab's acquisition applied them
+        (``"150:4"``: :func:`correction.io.acquisition.parse_channel_filter`): taken out before
+        the fit, so that T_a is the actuator's and not the actuator's times the LVDT filter's.
 
     Returns
     -------
@@ -111,7 +124,15 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None) -
     ScenarioError
         A channel, unit or pair problem, or a record that cannot support a fit (one sentence).
     """
+    from scenarios.records.timing import check_timing
+
     opt, name = naming("pairs"), resolver(record, as_read)
+    lvdt_filter = check_timing(lvdt_filter, "lvdt_filter", naming)
+    if lvdt_filter is not None:
+        try:
+            lvdt_filter.check_rate(record.fs_hz)
+        except ValueError as exc:
+            raise ScenarioError(f"{naming('lvdt_filter')}: {exc}") from None
     pairs = {corner: (name(d), name(x)) for corner, (d, x) in pairs_of(pairs, naming).items()}
     fits = {}
     for corner, (d, x) in pairs.items():
@@ -125,16 +146,22 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None) -
         drive, lvdt = record.data[d], record.data[x]
         if np.std(drive) == 0 or np.std(lvdt) == 0:
             raise ScenarioError(f"{opt} {corner}: columns {d!r} and {x!r} must vary to identify T_a")
+        if lvdt_filter is not None and np.all(np.isfinite(lvdt)):
+            from correction.io.acquisition import undo_timing
+
+            lvdt = undo_timing(lvdt, record.fs_hz, lvdt_filter)
         try:
             fits[corner] = fit_actuator(drive, lvdt, record.fs_hz)
         except ActuatorFitError as exc:
             raise ScenarioError(f"{opt} {corner}: {exc}") from None
     return RecordedIdentification(source=str(pathlib.Path(record.path)), pairs=pairs, fits=fits,
-                                  fs_hz=float(record.fs_hz), record_s=float(record.n_samples / record.fs_hz))
+                                  fs_hz=float(record.fs_hz), record_s=float(record.n_samples / record.fs_hz),
+                                  lvdt_filter=lvdt_filter)
 
 
 def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str | None = None,
-                      thousands: str | None = None, naming: Naming = KEYWORDS) -> RecordedIdentification:
+                      thousands: str | None = None, naming: Naming = KEYWORDS,
+                      lvdt_filter=None) -> RecordedIdentification:
     """Fit T_a for each corner's pair of the recorded file ``path``, reading only the pairs' channels.
 
     Parameters
@@ -150,6 +177,8 @@ def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str 
         A text file's decimal mark and thousands separator (``read_channels``); default: detected.
     naming : Naming
         How messages name ``pairs`` (a command passes its flag).
+    lvdt_filter : correction.io.acquisition.ChannelFilter or str, optional
+        As :func:`identify_record`'s.
 
     Raises
     ------
@@ -159,4 +188,5 @@ def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str 
     pairs = pairs_of(pairs, naming)
     wanted = list(dict.fromkeys(c for cols in pairs.values() for c in cols))
     mc = read_record(path, time_col=time_col, channels=wanted, decimal=decimal, thousands=thousands)
-    return identify_record(mc, pairs=pairs, naming=naming, as_read=dict(zip(wanted, mc.names)))
+    return identify_record(mc, pairs=pairs, naming=naming, as_read=dict(zip(wanted, mc.names)),
+                           lvdt_filter=lvdt_filter)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from scenarios.records.channels import parse_columns, parse_corner_map, parse_identify, wanted_channels
 from scenarios.records.naming import KEYWORDS, Naming
 from scenarios.records.output import GIVEN
+from scenarios.records.timing import check_timing
 
 __all__ = ["LOWPASSES", "MODES", "TRANSIENTS", "CABS", "CorrectionSettings", "correction_settings"]
 
@@ -82,6 +83,9 @@ class CorrectionSettings:
         The files read besides the record (a corrected file never replaces one).
     naming : Naming
         How messages name the parameters.
+    force_filter, lvdt_filter : correction.io.acquisition.ChannelFilter or None
+        The force and LVDT channels' anti-alias filters and delays, undone before correcting
+        (:mod:`scenarios.records.timing`); None: the channels as recorded.
     """
 
     method: str
@@ -105,6 +109,8 @@ class CorrectionSettings:
     cab: str
     inputs: tuple
     naming: Naming = KEYWORDS
+    force_filter: object = None
+    lvdt_filter: object = None
 
     @property
     def channels(self) -> list[str] | None:
@@ -233,7 +239,7 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
                         mode: str = "zerophase", transient: str = "drop", normalize_dc: bool = False,
                         workers: int | None = None, max_evaluations: int | None = None,
                         calibration_windows: int | None = None, cab: str | None = None,
-                        naming: Naming = KEYWORDS) -> CorrectionSettings:
+                        force_filter=None, lvdt_filter=None, naming: Naming = KEYWORDS) -> CorrectionSettings:
     """Check the options of a correction and read their files; the parameters are
     :func:`scenarios.records.api.correct_record`'s (``naming``: how messages name them).
 
@@ -248,8 +254,13 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
     _choice(n, "transient", transient, TRANSIENTS)
     _choice(n, "cab", "auto" if cab is None else cab, CABS)
     lowpass_hz = _check_lowpass(n, lowpass, lowpass_hz)
+    force_filter, lvdt_filter = check_timing(force_filter, "force_filter", n), check_timing(lvdt_filter, "lvdt_filter", n)
+    if lvdt_filter is not None and model is None and identify is None:
+        raise _error(f"{n('lvdt_filter')} describes the LVDT channels that {n('identify')} or {n('model')} read; "
+                     f"drop it, or identify T_a with it (rigsim identify --from-file takes it too)")
     common = dict(lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
-                  normalize_dc=bool(normalize_dc), cab="auto" if cab is None else cab, naming=n)
+                  normalize_dc=bool(normalize_dc), cab="auto" if cab is None else cab, naming=n,
+                  force_filter=force_filter, lvdt_filter=lvdt_filter)
     if model is None:
         extra = {"pairs": pairs, "workers": workers, "max_evaluations": max_evaluations,
                  "calibration_windows": calibration_windows, "cab": cab}

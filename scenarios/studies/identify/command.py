@@ -13,7 +13,11 @@ from __future__ import annotations
 import math
 import pathlib
 
-__all__ = ["add_number_format", "add_parser", "cmd_identify"]
+__all__ = ["add_number_format", "add_channel_timing", "channel_timing", "add_parser", "cmd_identify"]
+
+#: A channel filter's text, in the help of the options that take one.
+FILTER_HELP = ("HZ[:ORDER[:KIND][:DOMAIN]]: the -3 dB corner in Hz, the order (default 4), butterworth "
+               "(default) or bessel, analog (a conditioner's, default) or digital (a DAQ's, at the record's rate)")
 
 
 def add_number_format(parser) -> None:
@@ -27,6 +31,30 @@ def add_number_format(parser) -> None:
                         help="text input: the one thousands separator: none, ',', '.', \"'\" or space (a space, "
                              "U+00A0 or U+202F); ',' implies --decimal . and '.' implies --decimal , (default: "
                              "detected)")
+
+
+def add_channel_timing(parser, force: bool = True) -> None:
+    """Add the record's channel timing options (``--lvdt-filter``, ``--lvdt-delay``; with ``force``
+    ``--force-filter``, ``--force-delay`` too) to ``parser``."""
+    g = parser.add_argument_group(
+        "the lab's channel timing (taken out of the channels before anything else: each filter's phase and "
+        "the delay; the drive is the controller's own command)")
+    groups = (("force", "the load cells' anti-alias filter"), ("lvdt", "the LVDTs' anti-alias filter")) if force else (
+        ("lvdt", "the LVDTs' anti-alias filter"),)
+    for what, text in groups:
+        g.add_argument(f"--{what}-filter", default=None, metavar="HZ[:ORDER...]", help=f"{text}: {FILTER_HELP}")
+        g.add_argument(f"--{what}-delay", type=float, default=None, metavar="S",
+                       help=f"the {what.upper() if what == 'lvdt' else what} channels' delay beyond their filter, s "
+                            "(a multiplexed converter's skew; 0 to 0.01)")
+
+
+def channel_timing(args, what: str):
+    """The :class:`~correction.io.acquisition.ChannelFilter` of ``--{what}-filter`` and ``--{what}-delay``
+    (None when neither is given); one ScenarioError sentence naming the option otherwise."""
+    from scenarios.records.timing import channel_filter
+
+    return channel_filter(getattr(args, f"{what}_filter", None), getattr(args, f"{what}_delay", None),
+                          option=f"--{what}-filter", delay_option=f"--{what}-delay")
 
 
 def add_parser(subparsers) -> None:
@@ -47,6 +75,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--time-col", default=None, metavar="NAME",
                    help="with --from-file: the time column (default: the one named time, t, zeit...)")
     add_number_format(p)
+    add_channel_timing(p, force=False)
     p.add_argument("--force", action="store_true", help="replace a previous result in --out")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_identify)
@@ -66,6 +95,9 @@ def _check(args):
         raise ScenarioError("--pairs goes with --from-file; a simulated identification knows its channels")
     if args.time_col is not None and args.from_file is None:
         raise ScenarioError("--time-col goes with --from-file; a simulated identification knows its time")
+    if (args.lvdt_filter is not None or args.lvdt_delay is not None) and args.from_file is None:
+        raise ScenarioError("--lvdt-filter and --lvdt-delay go with --from-file; a simulated identification "
+                            "measures its LVDTs as the scenario's [lab] says")
     if args.seed is not None and args.seed < 0:  # numpy's generators take seeds >= 0 only
         raise ScenarioError(f"--seed must be a whole number >= 0, got {args.seed}")
     d = args.duration_s
@@ -85,11 +117,13 @@ def cmd_identify(args) -> int:
     _check(args)
     seed = IDENT_SEED if args.seed is None else int(args.seed)
     scenario = load_scenario(args.scenario) if args.scenario is not None else None
-    naming = Naming({"pairs": "--pairs"})
+    naming = Naming({"pairs": "--pairs", "lvdt_filter": "--lvdt-filter"})
+    lvdt_filter = None
     if args.from_file is not None:
         from scenarios.records.recorded import parse_pairs
 
         parse_pairs(args.pairs, naming)  # the syntax of --pairs before anything is written
+        lvdt_filter = channel_timing(args, "lvdt")
     inputs = (args.from_file, *(scenario.input_files if scenario is not None else ()))
     with staged_output(args.out, force=getattr(args, "force", False), inputs=inputs) as stage:
         if args.from_file is not None:
@@ -97,7 +131,8 @@ def cmd_identify(args) -> int:
 
             ident = recorded.identify_recorded(args.from_file, args.pairs, time_col=args.time_col,
                                                decimal=getattr(args, "decimal", None),
-                                               thousands=getattr(args, "thousands", None), naming=naming)
+                                               thousands=getattr(args, "thousands", None), naming=naming,
+                                               lvdt_filter=lvdt_filter)
             title = pathlib.Path(args.from_file).name
         else:
             from correction.identification.actuator_fit import ActuatorFitError
