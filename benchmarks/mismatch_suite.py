@@ -211,11 +211,12 @@ def _page_from_json(path: pathlib.Path, results: pathlib.Path) -> int:
     run = json.loads(lines[-1])
     scores = [PlantScore.from_dict(p) for p in run["plants"]]
     settings = {k: run[k] for k in ("lab", "cab", "seed", "duration_s")}
-    settings["channels"] = run.get("channels", "raw")
+    settings["channels"] = run.get("channels", "raw")  # a run without the key did not align its channels
     settings["noise_N"] = run.get("noise_N", scoring.NOISE_N)
     settings["command"] = run.get("command") or (
         f"python benchmarks/mismatch_suite.py --plants {len(scores)} --workers 2"
-        + "".join(f" --{k} {run[k]}" for k, d in (("lab", "typical"), ("cab", AUTO), ("seed", 0)) if run[k] != d))
+        + "".join(f" --{k} {settings[k]}" for k, d in (("lab", "typical"), ("channels", "aligned"), ("cab", AUTO),
+                                                         ("seed", 0)) if settings[k] != d))
     _write_page(scores, settings, results)
     return 0
 

@@ -67,8 +67,8 @@ def test_the_page_is_written_again_from_a_runs_printed_json(suite, tmp_path):
     out.write_text("[ 1 s] progress\n" + json.dumps(run) + "\n", encoding="utf-8")
     assert suite.main(["--from-json", str(out), "--results", str(tmp_path)]) == 0
     page = (tmp_path / "mismatch_suite.md").read_text(encoding="utf-8")
-    assert "`python benchmarks/mismatch_suite.py --plants 2 --workers 2 --lab ideal`" in page
-    assert "| wrong |" in page and "lab measurement: ideal" in page
+    assert "`python benchmarks/mismatch_suite.py --plants 2 --workers 2 --lab ideal --channels raw`" in page
+    assert "| wrong |" in page and "lab measurement: ideal, channels raw" in page
     (tmp_path / "empty.txt").write_text("no json\n", encoding="utf-8")
     with pytest.raises(SystemExit, match="no JSON line"):
         suite.main(["--from-json", str(tmp_path / "empty.txt")])

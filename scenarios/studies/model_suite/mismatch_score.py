@@ -1,8 +1,10 @@
 """One plant of the mismatch suite corrected as a user would, and judged against its road test.
 
-The rig test is measured through the lab's chain (:func:`scenarios.core.lab.measure`); the
-rig's T_a is identified on the same rig before the test, its LVDTs measured the same way
-(``rigsim identify``); the measured forces are corrected linearly by it (``rigsim correct
+The rig test is measured through the lab's chain (:func:`scenarios.core.lab.measure`) and, with
+``align``, its force and LVDT channels aligned as a lab that knows its anti-alias filters and
+converter skew aligns them (:func:`scenarios.core.lab.aligned`, ``rigsim correct --force-filter
+... --lvdt-filter ...``); the rig's T_a is identified on the same rig before the test, its LVDTs
+measured (and aligned) the same way (``rigsim identify``); the measured forces are corrected linearly by it (``rigsim correct
 --actuators``) and by the truck model calibrated on the record (``rigsim correct --model``: the
 model where its fallback keeps it, else the linear correction, with its reason). Beside them: the
 model correction forced where the fallback refused it (was the refusal right?) and the plant's

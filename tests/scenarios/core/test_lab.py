@@ -130,3 +130,19 @@ def test_a_scenarios_lab_table_is_read_and_checked():
         parse_scenario(base | {"lab": {"force_filter_hz": 600}})
     with pytest.raises(ScenarioError, match="lab"):
         parse_scenario(base | {"lab": {"cell_mas_kg": 250}})
+
+
+def test_aligned_channels_are_the_chain_without_its_filters_and_skew():
+    """A lab that knows its filters and skew (``aligned``) gets back, within the filters' magnitude
+    in the band, what the same chain without filters and skew measures: an 8 Hz force and pan."""
+    from scenarios.core.lab import aligned
+
+    run = _run(force=30_000.0 + _sine(8.0, 3_000.0), pan=_sine(8.0, 0.005))
+    lab = dataclasses.replace(TYPICAL_LAB, accelerometer_noise_m_s2=0.0, lvdt_noise_m=0.0, drift_noise_N=0.0)
+    plain = dataclasses.replace(lab, force_filter_hz=None, lvdt_filter_hz=None, force_delay_s=0.0)
+    want, raw = measure(run, plain, 0.0, 0), measure(run, lab, 0.0, 0)
+    got = aligned(raw, FS, lab)
+    mid = slice(2000, -2000)
+    for w, r, g, scale in ((want.force_N, raw.force_N, got.force_N, 3_000.0), (want.pan_m, raw.pan_m, got.pan_m, 0.005)):
+        assert np.max(np.abs(r - w)[mid]) > 0.05 * scale  # 2-3 ms at 8 Hz: 10-15 % of the amplitude
+        assert np.max(np.abs(g - w)[mid]) < 0.002 * scale
