@@ -38,13 +38,21 @@ from correction.output.apply import band_limit
 from scenarios.core.lab import pan_acceleration
 from scenarios.records.model.band_error import BAND_LOWPASS
 
-__all__ = ["band_acceleration", "mass_of", "mass_sigma"]
+__all__ = ["band_acceleration", "without_cell_mass", "mass_of", "mass_sigma"]
 
 
 def band_acceleration(x_a_m, fs: float) -> np.ndarray:
     """The pans' acceleration (m/s^2, (n, k)) from their measured positions (m, (n, k)) at ``fs``
     (Hz): central second differences through the correction's band limit, zero-phase."""
     return band_limited(pan_acceleration(np.asarray(x_a_m, dtype=float), float(fs)), fs)
+
+
+def without_cell_mass(force_N, x_a_m, fs: float, mass_kg: float) -> np.ndarray:
+    """The measured forces (N, (n, k)) with ``mass_kg`` (kg, the fitted load cells' mass) times the
+    pans' band-limited acceleration (:func:`band_acceleration` of ``x_a_m``, m, at ``fs``, Hz) taken
+    out; the forces as given where the mass is 0."""
+    force = np.asarray(force_N, dtype=float)
+    return force - mass_kg * band_acceleration(x_a_m, fs) if mass_kg else force
 
 
 def band_limited(x, fs: float) -> np.ndarray:

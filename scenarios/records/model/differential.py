@@ -40,7 +40,7 @@ from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor, run_jobs
 from scenarios.core.watch import SimulationError
 from scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
-from scenarios.records.model.cell_mass import band_acceleration
+from scenarios.records.model.cell_mass import without_cell_mass
 from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
@@ -269,9 +269,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
             return _linear(reason, cal, wall0, timings)
         t1 = time.perf_counter()
         f_ref, f_a = model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex)
-        force = np.asarray(force_N, dtype=float)
-        if cal.cell_mass_kg:  # the load cells' uncompensated mass, fitted with the truck, taken out
-            force = force - cal.cell_mass_kg * band_acceleration(x_a_m, 1.0 / (t[1] - t[0]))
+        # the load cells' uncompensated mass, fitted with the truck, taken out
+        force = without_cell_mass(force_N, x_a_m, 1.0 / (t[1] - t[0]), cal.cell_mass_kg)
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:

@@ -23,6 +23,7 @@ import numpy as np
 from correction.output.apply import band_limit
 from correction.output.floor import linear_floor
 from scenarios.core.lab import LabChain, aligned, measure
+from scenarios.records.model.cell_mass import without_cell_mass
 from scenarios.records.model.differential import correct_with_model, model_force_pair, settled_mask
 from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
 from scenarios.studies.scoring import linear_correction
@@ -156,8 +157,9 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     if mc.calibration is not None:  # the model's two runs: the correction's, else run for the forced forms
         f_ref, f_a = mc.model_N or model_force_pair(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"],
                                                     measured.pan_m, base_scenario=base_scenario, workers=workers)
-        forced = measured.force_N + f_ref - f_a
-        hybrid = f_ref + lin(measured.force_N - f_a)[0]
+        force = without_cell_mass(measured.force_N, measured.pan_m, fs, mc.calibration.cell_mass_kg)
+        forced = force + f_ref - f_a
+        hybrid = f_ref + lin(force - f_a)[0]
     rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
     scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
     if forced is not None:

@@ -68,3 +68,19 @@ def test_the_calibration_recovers_a_labs_mass_compensation_error():
     assert abs(cal.cell_mass_kg + 7.5) < 3 * cal.cell_mass_sigma_kg + 0.05 * 7.5
     clean = fit(force)
     assert abs(clean.cell_mass_kg) < 3 * clean.cell_mass_sigma_kg, (clean.cell_mass_kg, clean.cell_mass_sigma_kg)
+
+
+def test_without_cell_mass_takes_the_mass_times_the_band_limited_acceleration_out():
+    """The correction's and the suite's one way to take the fitted mass out of the force."""
+    from scenarios.records.model.cell_mass import band_acceleration, without_cell_mass
+
+    fs = 1000.0
+    t = np.arange(4000) / fs
+    x = np.column_stack([0.01 * np.sin(2 * np.pi * 5.0 * t), 0.005 * np.sin(2 * np.pi * 12.0 * t)])
+    force = np.full((4000, 2), 30e3)
+    np.testing.assert_array_equal(without_cell_mass(force, x, fs, 0.0), force)
+    got = without_cell_mass(force, x, fs, -7.5)
+    np.testing.assert_allclose(got, force + 7.5 * band_acceleration(x, fs))
+    # in the band the acceleration is the analytic -(2 pi f)^2 x: 7.5 kg x 9.87 m/s^2 = 74 N at 5 Hz
+    mid = slice(1000, 3000)
+    np.testing.assert_allclose((got - force)[mid, 0], -7.5 * (2 * np.pi * 5.0) ** 2 * x[mid, 0], atol=0.5)
