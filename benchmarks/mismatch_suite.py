@@ -21,7 +21,8 @@ corrected linearly by the identified T_a and by the truck
 model calibrated on the record (its fallback honoured, and forced where it refused), against
 each plant's linear floor.
 
-Writes the table and the goals to ``docs/results/mismatch_suite.md`` (``--results``: its folder)
+Writes the table and the goals to ``docs/results/mismatch_suite.md`` (``mismatch_suite_raw.md``
+with ``--channels raw``; ``--results``: their folder)
 and prints it, then one JSON line with every number. Goals: at least 95 % of wheels within 1 % of
 the road DLC and at NRMSE <= 0.5 x the plant's linear floor; every wheel within 2 % and at most
 0.05 NRMSE above the linear correction; every fallback with its reason, none where the model
@@ -234,7 +235,8 @@ def _write_page(scores, settings: dict, results: pathlib.Path) -> None:
             "- F_model(x_a) and as delivered, the hybrid F_model(x_ref) + L(F_rig - F_model(x_a)), the model's "
             "residual corrected by the linear correction L. A fallback is wrong where the forced hybrid beats the "
             "linear correction on every wheel. Goals:\n\n" + goals)
-    page = write_results_page(results, "mismatch_suite", title, head, rows, settings["command"], note=note)
+    name = "mismatch_suite" if settings["channels"] == "aligned" else "mismatch_suite_raw"
+    page = write_results_page(results, name, title, head, rows, settings["command"], note=note)
     print(page.read_text(encoding="utf-8"))
 
 

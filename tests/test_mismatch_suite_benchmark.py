@@ -66,7 +66,7 @@ def test_the_page_is_written_again_from_a_runs_printed_json(suite, tmp_path):
     run = {"lab": "ideal", "cab": "auto", "seed": 0, "duration_s": 30.0, "plants": [s.to_dict() for s in scores]}
     out.write_text("[ 1 s] progress\n" + json.dumps(run) + "\n", encoding="utf-8")
     assert suite.main(["--from-json", str(out), "--results", str(tmp_path)]) == 0
-    page = (tmp_path / "mismatch_suite.md").read_text(encoding="utf-8")
+    page = (tmp_path / "mismatch_suite_raw.md").read_text(encoding="utf-8")  # a run without channels: raw
     assert "`python benchmarks/mismatch_suite.py --plants 2 --workers 2 --lab ideal --channels raw`" in page
     assert "| wrong |" in page and "lab measurement: ideal, channels raw" in page
     (tmp_path / "empty.txt").write_text("no json\n", encoding="utf-8")
