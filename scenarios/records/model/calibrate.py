@@ -207,9 +207,9 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         block = int(round(BLOCK_S * fs))
         m0 = prob.cache[tuple(theta0)][1]
         m_init = prob.as_measured(m0, prob.cell_mass(m0, block)[0])
-        res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, lb, ub), bounds=(lb, ub), method="trf",
+        res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, ub), bounds=(lb, ub), method="trf",
                             x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
-        jac = prob.final_jac(res.x, lb, ub)
+        jac = prob.final_jac(res.x, ub)
         f_opt, m_run = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
         mass, mass_1s = prob.cell_mass(m_run, block)
         m_opt = prob.as_measured(m_run, mass)

@@ -170,8 +170,9 @@ class FitProblem:
             self.cache = {key: (self.residual(m), m)}
         return self.cache[key][0]
 
-    def jac(self, theta, lower, upper, reuse: int | None = None) -> np.ndarray:
-        """The residual's Jacobian at ``theta``: by forward differences, or (``reuse`` > 0) the last
+    def jac(self, theta, upper, reuse: int | None = None) -> np.ndarray:
+        """The residual's Jacobian at ``theta`` (a step that would pass ``upper`` is taken backwards):
+        by forward differences, or (``reuse`` > 0) the last
         one updated by Broyden's formula where it predicted the step's reduction well (:data:`REUSE_MAX`)."""
         theta = np.asarray(theta, float)
         f0 = self.fun(theta)
@@ -190,9 +191,9 @@ class FitProblem:
         self.last = (theta, f0, jac, 0)
         return jac
 
-    def final_jac(self, theta, lower, upper) -> np.ndarray:
+    def final_jac(self, theta, upper) -> np.ndarray:
         """The finite-difference Jacobian at ``theta`` (the last one if it is that)."""
         last = self.last
         if last is not None and last[3] == 0 and np.array_equal(last[0], np.asarray(theta, float)):
             return last[2]
-        return self.jac(theta, lower, upper, reuse=0)
+        return self.jac(theta, upper, reuse=0)

@@ -47,7 +47,7 @@ def test_a_well_predicted_step_updates_the_jacobian_by_the_secant_condition():
     Numerical Methods for Unconstrained Optimization, eq. 8.1.5."""
     th1, step, j1, f1, f0 = _step_problem(0.9)
     prob = _problem((th1, f1, j1, 0), f0)
-    jac = prob.jac(th1 + step, th1 - 1.0, th1 + 1.0)
+    jac = prob.jac(th1 + step, th1 + 1.0)
     np.testing.assert_allclose(jac @ step, f0 - f1, atol=1e-12)
     ortho = np.cross(step, [1.0, 0.0, 0.0])
     np.testing.assert_allclose(jac @ ortho, j1 @ ortho, atol=1e-12)
@@ -57,12 +57,12 @@ def test_a_well_predicted_step_updates_the_jacobian_by_the_secant_condition():
 def test_a_poorly_predicted_step_or_too_many_updates_recomputes_it():
     th1, step, j1, f1, f0 = _step_problem(0.5 * REUSE_RATIO)
     with pytest.raises(_Ran):  # the step reduced the sum of squares by less than REUSE_RATIO of the prediction
-        _problem((th1, f1, j1, 0), f0).jac(th1 + step, th1 - 1.0, th1 + 1.0)
+        _problem((th1, f1, j1, 0), f0).jac(th1 + step, th1 + 1.0)
     th1, step, j1, f1, f0 = _step_problem(0.9)
     with pytest.raises(_Ran):  # REUSE_MAX updates in a row already
-        _problem((th1, f1, j1, REUSE_MAX), f0).jac(th1 + step, th1 - 1.0, th1 + 1.0)
+        _problem((th1, f1, j1, REUSE_MAX), f0).jac(th1 + step, th1 + 1.0)
     with pytest.raises(_Ran):  # no reuse asked for
-        _problem((th1, f1, j1, 0), f0).jac(th1 + step, th1 - 1.0, th1 + 1.0, reuse=0)
+        _problem((th1, f1, j1, 0), f0).jac(th1 + step, th1 + 1.0, reuse=0)
     with pytest.raises(_Ran):  # the uncertainties' Jacobian is never an update
-        _problem((th1 + step, f0, j1, 1), f0).final_jac(th1 + step, th1 - 1.0, th1 + 1.0)
-    assert _problem((th1 + step, f0, j1, 0), f0).final_jac(th1 + step, th1 - 1.0, th1 + 1.0) is j1
+        _problem((th1 + step, f0, j1, 1), f0).final_jac(th1 + step, th1 + 1.0)
+    assert _problem((th1 + step, f0, j1, 0), f0).final_jac(th1 + step, th1 + 1.0) is j1
