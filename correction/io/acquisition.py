@@ -110,17 +110,19 @@ class ChannelFilter:
 
     def response(self, f_hz, fs_hz: float) -> np.ndarray:
         """The channel's complex response (1) at ``f_hz`` (Hz) in a record at ``fs_hz`` (Hz): filter and delay."""
-        from scipy import signal
-
         f = np.asarray(f_hz, dtype=float)
         h = np.exp(-2j * math.pi * f * self.delay_s)
-        if self.corner_hz is None:
-            return h
-        self.check_rate(fs_hz)
+        return h if self.corner_hz is None else h * self._filter_response(f, fs_hz)
+
+    def _filter_response(self, f: np.ndarray, fs_hz: float) -> np.ndarray:
+        """The filter's complex response alone (no delay) at ``f`` (Hz); a filter with a corner."""
+        from scipy import signal
+
         if self.domain == "digital":
-            return h * signal.sosfreqz(self.sos(fs_hz), worN=f, fs=fs_hz)[1]
+            return signal.sosfreqz(self.sos(fs_hz), worN=f, fs=fs_hz)[1]
+        self.check_rate(fs_hz)
         b, a = self._design(None, "ba")
-        return h * signal.freqs(b, a, worN=2.0 * math.pi * f)[1]
+        return signal.freqs(b, a, worN=2.0 * math.pi * f)[1]
 
     def apply(self, x, fs_hz: float) -> np.ndarray:
         """What the acquisition does to ``x`` (samples along axis 0) at ``fs_hz`` (Hz): the filter
@@ -136,7 +138,7 @@ class ChannelFilter:
                 zi = signal.sosfilt_zi(sos).reshape(sos.shape[0], 2, *([1] * (x.ndim - 1))) * x[0]
                 x = signal.sosfilt(sos, x, axis=0, zi=zi)[0]
             else:
-                x = _through(x, fs_hz, lambda f: ChannelFilter(self.corner_hz, self.order, self.kind).response(f, fs_hz))
+                x = _through(x, fs_hz, lambda f: self._filter_response(f, fs_hz))
         if self.delay_s == 0:
             return x
         t = np.arange(x.shape[0]) / fs_hz

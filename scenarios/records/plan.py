@@ -3,9 +3,9 @@
 :func:`make_plan` matches the settings (:class:`~scenarios.records.settings.CorrectionSettings`)
 to a record: which force channels are corrected and at which corner
 (:func:`scenarios.records.channels.plan_channels`; the model's in
-:func:`scenarios.records.model_record.plan_model`), the low-pass's corner held against the
-record's Nyquist frequency (the channel filters' corners too), and the metadata the corrected file will carry. A plan can check an
-output file before the work (:meth:`CorrectionPlan.check_output`: whatever the writer would
+:func:`scenarios.records.model_record.plan_model`), the low-pass's and the channel filters'
+corners held against the record's Nyquist frequency, and the metadata the corrected file will
+carry. A plan can check an output file before the work (:meth:`CorrectionPlan.check_output`: whatever the writer would
 refuse) and runs the correction (:meth:`CorrectionPlan.run`): the linear one by
 :func:`scenarios.records.linear.run_linear`, the model one by
 :func:`scenarios.records.model_record.run_model`. Imports nothing heavy at module level.
@@ -89,8 +89,7 @@ class CorrectionPlan:
         settings give it, is undone first (:func:`scenarios.records.timing.aligned_record`)."""
         s = self.settings
         record = aligned_record(self.record, self.record.fs_hz,
-                                [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)],
-                                s.naming)
+                                [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)])
         plan = self if record is self.record else dataclasses.replace(self, record=record)
         if s.method == "model":
             from scenarios.records.model_record import run_model

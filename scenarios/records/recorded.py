@@ -124,15 +124,12 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
     ScenarioError
         A channel, unit or pair problem, or a record that cannot support a fit (one sentence).
     """
-    from scenarios.records.timing import check_timing
+    from correction.io.acquisition import undo_timing
+    from scenarios.records.timing import check_rate, check_timing
 
     opt, name = naming("pairs"), resolver(record, as_read)
     lvdt_filter = check_timing(lvdt_filter, "lvdt_filter", naming)
-    if lvdt_filter is not None:
-        try:
-            lvdt_filter.check_rate(record.fs_hz)
-        except ValueError as exc:
-            raise ScenarioError(f"{naming('lvdt_filter')}: {exc}") from None
+    check_rate(lvdt_filter, "lvdt_filter", record.fs_hz, naming)
     pairs = {corner: (name(d), name(x)) for corner, (d, x) in pairs_of(pairs, naming).items()}
     fits = {}
     for corner, (d, x) in pairs.items():
@@ -147,8 +144,6 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
         if np.std(drive) == 0 or np.std(lvdt) == 0:
             raise ScenarioError(f"{opt} {corner}: columns {d!r} and {x!r} must vary to identify T_a")
         if lvdt_filter is not None and np.all(np.isfinite(lvdt)):
-            from correction.io.acquisition import undo_timing
-
             lvdt = undo_timing(lvdt, record.fs_hz, lvdt_filter)
         try:
             fits[corner] = fit_actuator(drive, lvdt, record.fs_hz)

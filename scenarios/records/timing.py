@@ -16,7 +16,8 @@ from collections.abc import Mapping, Sequence
 
 from scenarios.records.naming import KEYWORDS, Naming
 
-__all__ = ["check_timing", "channel_filter", "check_rates", "aligned_record", "lvdt_columns", "timing_metadata"]
+__all__ = ["check_timing", "channel_filter", "check_rate", "check_rates", "aligned_record", "lvdt_columns", "describe",
+           "timing_metadata"]
 
 
 def _error(message: str):
@@ -78,20 +79,25 @@ def timing_metadata(force_filter, lvdt_filter) -> dict[str, str]:
     return {"channel_timing": "; ".join(said) + ": phase and delay undone before correcting"}
 
 
+def check_rate(channel, key: str, fs_hz: float, naming: Naming = KEYWORDS) -> None:
+    """Refuse ``channel`` (a ChannelFilter or None), given as ``key``, whose corner is not below half
+    the record's rate ``fs_hz`` (Hz): one sentence naming the option."""
+    if channel is not None:
+        try:
+            channel.check_rate(fs_hz)
+        except ValueError as exc:
+            raise _error(f"{naming(key)}: {exc}") from None
+
+
 def check_rates(settings, fs_hz: float) -> None:
-    """Refuse a channel filter of ``settings`` whose corner is not below half the record's rate ``fs_hz`` (Hz)."""
+    """:func:`check_rate` of both of ``settings``' channel filters (force and LVDT)."""
     for key in ("force_filter", "lvdt_filter"):
-        channel = getattr(settings, key)
-        if channel is not None:
-            try:
-                channel.check_rate(fs_hz)
-            except ValueError as exc:
-                raise _error(f"{settings.naming(key)}: {exc}") from None
+        check_rate(getattr(settings, key), key, fs_hz, settings.naming)
 
 
-def aligned_record(record, fs_hz: float, groups: Sequence[tuple[Sequence[str], object]], naming: Naming = KEYWORDS,
-                   keys: Sequence[str] = ("force_filter", "lvdt_filter")):
-    """``record`` with each group's channels' timing undone.
+def aligned_record(record, fs_hz: float, groups: Sequence[tuple[Sequence[str], object]]):
+    """``record`` with each group's channels' timing undone (their corners checked already:
+    :func:`check_rates`).
 
     Parameters
     ----------
@@ -100,9 +106,6 @@ def aligned_record(record, fs_hz: float, groups: Sequence[tuple[Sequence[str], o
         Its rate.
     groups : sequence of (channel names, ChannelFilter or None)
         The channels each filter describes (None: left as recorded).
-    naming : Naming
-    keys : sequence of str
-        Each group's option, named in a refusal (a corner above half the record's rate).
 
     Returns
     -------
@@ -119,13 +122,9 @@ def aligned_record(record, fs_hz: float, groups: Sequence[tuple[Sequence[str], o
 
     data = dict(record.data)
     changed = False
-    for (names, channel), key in zip(groups, keys):
+    for names, channel in groups:
         if channel is None or channel.none:
             continue
-        try:
-            channel.check_rate(fs_hz)
-        except ValueError as exc:
-            raise _error(f"{naming(key)}: {exc}") from None
         for name in dict.fromkeys(names):
             x = np.asarray(data[name], dtype=float)
             if np.all(np.isfinite(x)):
