@@ -24,6 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from correction.output.spectral import through_gain
+
 __all__ = ["KINDS", "DOMAINS", "ChannelFilter", "parse_channel_filter", "undo_timing"]
 
 KINDS = ("butterworth", "bessel")
@@ -138,31 +140,13 @@ class ChannelFilter:
                 zi = signal.sosfilt_zi(sos).reshape(sos.shape[0], 2, *([1] * (x.ndim - 1))) * x[0]
                 x = signal.sosfilt(sos, x, axis=0, zi=zi)[0]
             else:
-                x = _through(x, fs_hz, lambda f: self._filter_response(f, fs_hz))
+                x = through_gain(x, fs_hz, lambda f: self._filter_response(f, fs_hz), PAD_S)
         if self.delay_s == 0:
             return x
         t = np.arange(x.shape[0]) / fs_hz
         flat = x.reshape(x.shape[0], -1)
         out = np.column_stack([np.interp(t - self.delay_s, t, flat[:, i]) for i in range(flat.shape[1])])
         return out.reshape(x.shape)
-
-
-def _through(x: np.ndarray, fs_hz: float, gain) -> np.ndarray:
-    """``x`` (axis 0 in time) through the complex gain ``gain(f_hz)`` on the spectrum of the record
-    padded at each end by :data:`PAD_S` of odd reflection (slope and level continuous at the ends)."""
-    n = x.shape[0]
-    pad = min(n - 1, int(math.ceil(PAD_S * fs_hz)))
-    if pad > 0:
-        head = 2.0 * x[:1] - x[pad:0:-1]
-        tail = 2.0 * x[-1:] - x[-2:-pad - 2:-1]
-        padded = np.concatenate([head, x, tail], axis=0)
-    else:
-        padded = x
-    m = padded.shape[0]
-    f = np.fft.rfftfreq(m, 1.0 / fs_hz)
-    g = np.asarray(gain(f)).reshape(-1, *([1] * (x.ndim - 1)))
-    y = np.fft.irfft(np.fft.rfft(padded, axis=0) * g, n=m, axis=0)
-    return y[pad:pad + n]
 
 
 def undo_timing(x, fs_hz: float, channel: ChannelFilter) -> np.ndarray:
@@ -196,7 +180,7 @@ def undo_timing(x, fs_hz: float, channel: ChannelFilter) -> np.ndarray:
         mag = np.abs(h)
         return np.where(mag > 0, np.conj(h) / np.where(mag > 0, mag, 1.0), 1.0)
 
-    return _through(x, fs_hz, unphase)
+    return through_gain(x, fs_hz, unphase, PAD_S)
 
 
 def _number(text: str, kind, what: str, unit: str):

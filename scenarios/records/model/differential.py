@@ -8,10 +8,13 @@ to use it:
   predict the change the actuators' error x_a - x_ref causes, its own errors largely cancel;
   unfiltered (nothing is inverted);
 * with the record's linear correction L (``T_a^-1 T_F`` per wheel), F_model(x_ref) +
-  L(F_rig - F_model(x_a)): the part of the rig force the model does not explain (a left/right
+  L(W(F_rig - F_model(x_a))): the part of the rig force the model does not explain (a left/right
   asymmetry, a damper's nonlinearity, the lab's channels) is corrected for the actuators too
   instead of being kept as the rig made it. It equals L(F_rig) plus the model's estimate of L's
-  own error, so it tends to the linear correction as the model explains less.
+  own error, so it tends to the linear correction as the model explains less. W takes the load
+  cells' white noise out of that residual where it outweighs the model's error
+  (:mod:`correction.output.denoise`): with the truck's force explained by the model, the residual
+  is mostly noise, and on a smooth road that noise is a large part of what is left to correct.
 
 Both model runs start from rest while the truck on the rig was already moving at the record's
 first sample; the two start-up errors largely cancel, but not wholly (the road's and the rig's
@@ -34,6 +37,7 @@ import time
 
 import numpy as np
 
+from correction.output.denoise import design_noise_gain
 from mjcf.variant import TruckVariant
 from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
@@ -45,7 +49,7 @@ from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, 
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 
-__all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "settled_mask", "correct_with_model",
+__all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "hybrid_correction", "settled_mask", "correct_with_model",
            "fallback_reason"]
 
 #: The model runs' start-up transient, s: samples before it are not settled. Measured on the
@@ -133,6 +137,30 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
     return np.asarray(force_N, dtype=float) + f_ref - f_a
 
 
+def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel: :data:`HYBRID_FORMULA`.
+
+    Parameters
+    ----------
+    force_N : array_like, N, (n, 4)
+        The measured wheel force, the load cells' uncompensated mass taken out.
+    f_ref_N, f_a_N : array_like, N, (n, 4)
+        The model's forces on pans following the drive and the measured pans (:func:`model_force_pair`).
+    linear : callable
+        The record's linear correction L: ``linear(forces)`` -> ``(corrected (N), settled (bool, (n,)))``.
+    fs_hz : float, Hz
+        The record's rate.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The corrected force (N, (n, 4)) and L's settled samples (bool, (n,)).
+    """
+    residual = np.asarray(force_N, dtype=float) - f_a_N
+    corrected, settled = linear(design_noise_gain(residual, fs_hz).apply(residual))
+    return np.asarray(f_ref_N, dtype=float) + corrected, settled
+
+
 def fallback_reason(calibration, excess_limit: float = HYBRID_LIMIT) -> str:
     """One sentence why the linear correction is to be used with this calibration, "" if not."""
     excess = calibration.excess_nrmse
@@ -151,7 +179,7 @@ def fallback_reason(calibration, excess_limit: float = HYBRID_LIMIT) -> str:
 
 
 #: The model correction with the linear correction L of the model's residual (``linear`` given).
-HYBRID_FORMULA = "F_model(x_ref) + L(F_rig - F_model(x_a))"
+HYBRID_FORMULA = "F_model(x_ref) + L(W(F_rig - F_model(x_a)))"
 #: The differential model correction (no ``linear``).
 DIFFERENTIAL_FORMULA = "F_rig + F_model(x_ref) - F_model(x_a)"
 
@@ -187,7 +215,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     """Calibrate the truck model on the record, then correct it, or say why the linear correction is to be used.
 
     With ``linear`` (the record's linear correction L, ``T_a^-1 T_F`` per wheel) the corrected force
-    is F_model(x_ref) + L(F_rig - F_model(x_a)): the model predicts the road force and what the rig
+    is :data:`HYBRID_FORMULA` (:func:`hybrid_correction`): the model predicts the road force and what the rig
     made of it, and the part of the rig force the model does not explain is corrected for the
     actuators as the linear correction corrects the whole. Where the model is exact this is the
     model's road force plus the corrected noise; where it explains nothing it is L(F_rig); in
@@ -274,8 +302,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
-            residual, settled = linear(force - f_a)
-            corrected, formula = f_ref + residual, HYBRID_FORMULA
+            corrected, settled = hybrid_correction(force, f_ref, f_a, linear, 1.0 / (t[1] - t[0]))
+            formula = HYBRID_FORMULA
             if not holds.all():
                 corrected[:, ~holds] = linear(np.asarray(force_N, dtype=float))[0][:, ~holds]
             settled = settled_mask(t) & np.asarray(settled, dtype=bool)

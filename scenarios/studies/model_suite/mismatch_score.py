@@ -24,7 +24,8 @@ from correction.output.apply import band_limit
 from correction.output.floor import linear_floor
 from scenarios.core.lab import LabChain, aligned, measure
 from scenarios.records.model.cell_mass import without_cell_mass
-from scenarios.records.model.differential import correct_with_model, model_force_pair, settled_mask
+from scenarios.records.model.differential import (correct_with_model, hybrid_correction, model_force_pair,
+                                                   settled_mask)
 from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
 from scenarios.studies.scoring import linear_correction
 
@@ -51,7 +52,7 @@ class PlantScore:
     nrmse, dlc_error : Mapping[str, numpy.ndarray]
         Per correction (``linear``, ``delivered``, and where a calibration exists ``forced``, the
         differential model correction F_rig + F_model(x_ref) - F_model(x_a) whatever the fallback
-        said, and ``hybrid``, F_model(x_ref) + L(F_rig - F_model(x_a)) with L the linear correction:
+        said, and ``hybrid``, :data:`~scenarios.records.model.differential.HYBRID_FORMULA` with L the linear correction:
         the model's residual corrected for the actuators too), per wheel:
         NRMSE against the band-limited road force (1) and DLC error against the road's (1).
     floor : numpy.ndarray, (4,)
@@ -159,7 +160,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
                                                     measured.pan_m, base_scenario=base_scenario, workers=workers)
         force = without_cell_mass(measured.force_N, measured.pan_m, fs, mc.calibration.cell_mass_kg)
         forced = force + f_ref - f_a
-        hybrid = f_ref + lin(force - f_a)[0]
+        hybrid = hybrid_correction(force, f_ref, f_a, lin, fs)[0]
     rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
     scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
     if forced is not None:

@@ -1,0 +1,150 @@
+"""A record's white noise taken out where it outweighs what the record carries (spectral subtraction).
+
+A record ``x = s + n``, ``n`` white with one-sided power spectral density ``N0``: the zero-phase
+gain ``G(f) = max(0, 1 - N0 / S_x(f))``, ``S_x`` the record's own Welch spectrum, is the Wiener
+gain ``S_s / (S_s + N0)`` with the signal's spectrum estimated as ``S_x - N0`` (spectral
+subtraction, Boll 1979): ~1 where the signal outweighs the noise, 0 where the record is noise
+alone. ``N0`` is read from the record over a band above its signal
+(:func:`correction.identification.noise.noise_rms` on each of :data:`SUB_BANDS` parts of it, the
+least of them), ``S_x`` with Hann windows of :data:`SEGMENT_S` (50 % overlap). Where the parts'
+levels differ by more than :data:`FLAT_RATIO` the band holds more than white noise (a rough road's
+force reaching far above the truck's modes), the noise cannot be read, and the gain is 1 there: the
+column passes unchanged. The record's mean passes untouched: a static offset is not noise.
+
+Made for a residual that is mostly noise with a narrow-band remainder: the model correction's
+``F_rig - F_model(x_a)`` (:mod:`scenarios.records.model.differential`), whose truck force the
+model has taken out, leaving the model's error (where the truck's force is) and the load cells'
+noise (everywhere). On a record whose signal fills the band (a wheel force itself) the gain is ~1
+wherever the noise matters little and changes little. Only the white part is estimated: a load
+cell's low-frequency drift shares its band with the truck's slow force and cannot be told apart
+from a model's error there.
+
+:func:`design_noise_gain` returns the gain (:class:`NoiseGain`); :meth:`NoiseGain.apply` applies it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from correction.identification.noise import noise_rms
+from correction.output.spectral import through_gain
+
+__all__ = ["NOISE_BAND", "SUB_BANDS", "FLAT_RATIO", "SEGMENT_S", "NoiseGain", "design_noise_gain"]
+
+#: The band the white noise is read over, fractions of the sampling rate (60-150 Hz at 1 kHz): above
+#: the wheel forces' band (the correction keeps 30 Hz) where a residual holds noise only, and below a
+#: lab's anti-alias corner (fs / 5 and up), which attenuates the noise above it.
+NOISE_BAND = (0.06, 0.15)
+#: Parts of :data:`NOISE_BAND` whose noise levels are compared, 1.
+SUB_BANDS = 4
+#: Largest ratio of the parts' rms levels (1) at which the band is taken for white noise: the
+#: noise levels of a white record's parts agree within a few percent (their Welch estimates average
+#: hundreds of values); a residual of the medium and low roads' wheel forces (class A, 30-100 km/h,
+#: 100 N load cells) spreads 1.1-1.5 times, of a class D road's 2.6-3.5 times over 60-150 Hz.
+FLAT_RATIO = 2.0
+#: Welch segment of the record's spectrum, s (0.24 Hz resolution): fine enough for the wheel-hop
+#: peaks (~10 Hz, a few Hz wide), with ~13 averaged segments on a 30 s record.
+SEGMENT_S = 4.096
+
+
+@dataclass(frozen=True)
+class NoiseGain:
+    """The zero-phase gain per frequency and column that takes a record's white noise out.
+
+    Attributes
+    ----------
+    freq_hz : numpy.ndarray, (m,), Hz
+        Frequencies, 0 to ``fs_hz / 2``.
+    gain : numpy.ndarray, (m, k), 1
+        ``max(0, 1 - N0 / S_x(f))`` per column, in [0, 1].
+    noise_rms : numpy.ndarray, (k,), the record's unit
+        The white noise's rms over the whole band (0 to ``fs_hz / 2``) per column: the least of the
+        noise band's parts.
+    measured : numpy.ndarray, (k,), bool
+        Whether the noise band held white noise (its parts' levels within :data:`FLAT_RATIO`);
+        where not, the column's gain is 1.
+    fs_hz : float, Hz
+        The record's rate.
+    """
+
+    freq_hz: np.ndarray
+    gain: np.ndarray
+    noise_rms: np.ndarray
+    measured: np.ndarray
+    fs_hz: float
+
+    def apply(self, x) -> np.ndarray:
+        """``x`` ((n, k), the designed record's columns and rate, its unit) through the gain,
+        zero-phase, each column's mean kept."""
+        a = np.asarray(x, dtype=float)
+        if a.ndim != 2 or a.shape[1] != self.gain.shape[1]:
+            raise ValueError(f"x must be (n, {self.gain.shape[1]}) like the designed record, got {a.shape}")
+        mean = a.mean(axis=0)
+
+        def gain(f):
+            return np.column_stack([np.interp(f, self.freq_hz, g) for g in self.gain.T])
+
+        return mean + through_gain(a - mean, self.fs_hz, gain, self.pad_s)
+
+    @property
+    def pad_s(self) -> float:
+        """Reflection padded at each end when applied, s: the gain's impulse response spans about one
+        over its frequency resolution."""
+        return 1.0 / float(self.freq_hz[1] - self.freq_hz[0])
+
+    def share_kept(self) -> np.ndarray:
+        """The white noise's power kept per column (1): the mean of ``gain**2`` over the band."""
+        return np.mean(self.gain ** 2, axis=0)
+
+
+def design_noise_gain(x, fs_hz: float, *, band_hz: tuple[float, float] | None = None,
+                      segment_s: float = SEGMENT_S) -> NoiseGain:
+    """The gain that takes the white noise out of the record ``x``.
+
+    Parameters
+    ----------
+    x : array_like, (n, k)
+        The record, time along axis 0, any unit (N for forces); finite.
+    fs_hz : float, Hz
+        Its rate.
+    band_hz : (float, float), Hz, optional
+        Where the record holds noise only (default :data:`NOISE_BAND` times ``fs_hz``), read in
+        :data:`SUB_BANDS` equal parts.
+    segment_s : float, s
+        Welch segment of the record's spectrum (at most the record's length is used).
+
+    Returns
+    -------
+    NoiseGain
+
+    Raises
+    ------
+    ValueError
+        A record that is not (n, k), too short (fewer than two segments of 64 samples), not finite,
+        or a band outside (0, fs / 2).
+    """
+    from scipy.signal import welch
+
+    a = np.asarray(x, dtype=float)
+    if a.ndim != 2:
+        raise ValueError(f"x must be (n, k) samples by columns, got shape {a.shape}")
+    if not (np.isfinite(fs_hz) and fs_hz > 0):
+        raise ValueError(f"fs_hz must be a positive rate in Hz, got {fs_hz!r}")
+    if not (np.isfinite(segment_s) and segment_s > 0):
+        raise ValueError(f"segment_s must be a positive length in s, got {segment_s!r}")
+    lo, hi = (NOISE_BAND[0] * fs_hz, NOISE_BAND[1] * fs_hz) if band_hz is None else band_hz
+    edges = np.linspace(lo, hi, SUB_BANDS + 1)  # noise_rms refuses non-finite records and bands outside (0, fs / 2)
+    parts = np.array([noise_rms(a, fs_hz, (edges[j], edges[j + 1])) for j in range(SUB_BANDS)])
+    rms = parts.min(axis=0)
+    measured = parts.max(axis=0) <= FLAT_RATIO * rms
+    nperseg = min(int(math.ceil(segment_s * fs_hz)), a.shape[0] // 2)
+    if nperseg < 64:
+        raise ValueError(f"the record has {a.shape[0]} samples; the noise gain needs at least 128")
+    f, s = welch(a - a.mean(axis=0), fs=fs_hz, nperseg=nperseg, axis=0)
+    n0 = rms ** 2 / (fs_hz / 2.0)  # one-sided density of white noise of that rms
+    gain = np.where(measured, np.clip(1.0 - n0 / np.maximum(s, np.finfo(float).tiny), 0.0, 1.0), 1.0)
+    return NoiseGain(freq_hz=f, gain=gain, noise_rms=np.asarray(rms, dtype=float), measured=measured,
+                     fs_hz=float(fs_hz))
