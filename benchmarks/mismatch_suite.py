@@ -232,9 +232,9 @@ def _write_page(scores, settings: dict, results: pathlib.Path) -> None:
             "road DLC; NRMSE against the road force through the 30 Hz band limit, over the plant's linear floor "
             "(per-wheel affine FIR fitted on the road force itself); the linear correction's (identified T_a); the "
             "model correction forced where the fallback refused it, in its differential form F_rig + F_model(x_ref) "
-            "- F_model(x_a) and as delivered, the hybrid F_model(x_ref) + L(F_rig - F_model(x_a)), the model's "
-            "residual corrected by the linear correction L. A fallback is wrong where the forced hybrid beats the "
-            "linear correction on every wheel. Goals:\n\n" + goals)
+            "- F_model(x_a) and as delivered, the hybrid F_model(x_ref) + L(W(F_rig - F_model(x_a))), the model's "
+            "residual, its white noise taken out (W), corrected by the linear correction L. A fallback is wrong "
+            "where the forced hybrid beats the linear correction on every wheel. Goals:\n\n" + goals)
     name = "mismatch_suite" if settings["channels"] == "aligned" else "mismatch_suite_raw"
     page = write_results_page(results, name, title, head, rows, settings["command"], note=note)
     print(page.read_text(encoding="utf-8"))

@@ -44,7 +44,8 @@ plant after the other in this process (the calibration starts its own pool of ``
 do not nest), the model correction of the measured rig force
 (100 N rms load-cell noise on), :func:`scenarios.records.model.differential.correct_with_model`:
 calibration from x_a and F_rig only (first guess from the static loads and catalogue values, never
-the plant's), then F_model(x_ref) + L(F_rig - F_model(x_a)), L the linear correction by the identified T_a.
+the plant's), then F_model(x_ref) + L(W(F_rig - F_model(x_a))), W the residual's white noise taken out, L the
+linear correction by the identified T_a.
 Scored per wheel on the samples where
 every method has settled (the model's start-up, the linear correction's filter transients, the
 band limit's): NRMSE against the road force through the 30 Hz band limit, and DLC against the road

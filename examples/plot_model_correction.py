@@ -7,7 +7,8 @@ them, and its leaf springs' friction makes its response amplitude-dependent. Wit
 drive and LVDT in the record, the truck model of this project can be calibrated on the record
 itself (payload and its position from the static loads; tire stiffness and damping, leaf
 friction and the tires' stiffening fitted) and the record corrected by it:
-``F_model(x_ref) + L(F_rig - F_model(x_a))``, with ``L`` the linear correction.
+``F_model(x_ref) + L(W(F_rig - F_model(x_a)))``, with ``W`` the load cells' white noise taken out of
+the model's residual and ``L`` the linear correction.
 
 Here the simulator makes the record: the paper's high-roughness case at 72 km/h, 20 s, its rig
 force with 100 N of load-cell noise, written as a lab's CSV. The road test of the same case is the

@@ -87,7 +87,8 @@ class NoiseGain:
         def gain(f):
             return np.column_stack([np.interp(f, self.freq_hz, g) for g in self.gain.T])
 
-        return mean + through_gain(a - mean, self.fs_hz, gain, self.pad_s)
+        y = through_gain(a - mean, self.fs_hz, gain, self.pad_s)
+        return mean + (y - y.mean(axis=0))
 
     @property
     def pad_s(self) -> float:

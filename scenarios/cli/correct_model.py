@@ -11,7 +11,8 @@ The truck model (the project's truck, ``truck_rig.xml``) is calibrated on ``IN``
 corner the drive x_ref and the LVDT x_a (``--pairs``, the syntax of ``rigsim identify
 --from-file``; lengths, converted to m) and the wheel force F_rig (the force channel whose name
 holds the corner as a token, or ``--map``'s; converted to N); then
-F_corrected = F_model(x_ref) + L(F_rig - F_model(x_a)) per wheel, L the linear correction
+F_corrected = F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel, W the residual's white noise
+taken out (correction.output.denoise), L the linear correction
 T_a^-1 T_F with ``--actuator``/``--actuators`` if given, else T_a identified per corner from the
 ``--pairs`` channels (:func:`scenarios.records.model.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
@@ -57,8 +58,8 @@ def add_model_arguments(parser) -> None:
     g = parser.add_argument_group(
         "correction by a truck model calibrated on the record (instead of T_a^-1 T_F)")
     g.add_argument("--model", metavar="TRUCK.toml",
-                   help="correct each wheel as F_model(drive) + L(F_rig - F_model(LVDT)), L the linear correction, "
-                        "the truck model calibrated "
+                   help="correct each wheel as F_model(drive) + L(W(F_rig - F_model(LVDT))), W the residual's "
+                        "white noise taken out, L the linear correction, the truck model calibrated "
                         "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
                         "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
                         "tire per axle), each axle's left tire and leaf spring against its right one, the cab's mount frequency where it fits clearly better (--cab); minutes of "
@@ -135,6 +136,8 @@ def cmd_correct_model(args, naming) -> int:
         print(f"load cells' mass: {meta['cal_cell_mass']}")
         if cal.cab_choice:
             print(cal.cab_choice[0].upper() + cal.cab_choice[1:])
+    if "residual_noise" in meta:
+        print(meta["residual_noise"][0].upper() + meta["residual_noise"][1:])
     result.write(args.out, overwrite=args.force)
     if result.settled.any():
         print(result.table())

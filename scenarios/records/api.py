@@ -44,7 +44,8 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
     Give exactly one source of T_a (``actuator``, ``actuators`` or ``identify``) for the linear
     correction ``F_corrected = T_a^-1 T_F F_measured``, or ``model`` and ``pairs`` for the
     correction by a truck model calibrated on the record,
-    ``F_corrected = F_model(x_ref) + L(F_rig - F_model(x_a))`` with L the linear correction (minutes
+    ``F_corrected = F_model(x_ref) + L(W(F_rig - F_model(x_a)))`` with W the residual's white noise
+    taken out and L the linear correction (minutes
     of CPU; on the wheels where the model does not reproduce the forces L alone is used, and the
     result says why).
 

@@ -111,7 +111,7 @@ class CorrectionResult:
     fs_hz : float, Hz
         Sampling rate.
     method : {"linear", "model"}
-        The correction used: ``T_a^-1 T_F`` (linear) or ``F_model(x_ref) + L(F_rig - F_model(x_a))``.
+        The correction used: ``T_a^-1 T_F`` (linear) or ``F_model(x_ref) + L(W(F_rig - F_model(x_a)))``.
     reason : str
         Why the linear correction was used although the model was asked for (one sentence); "" otherwise.
     description : str

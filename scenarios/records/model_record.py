@@ -3,7 +3,8 @@
 The truck model (the project's truck, ``truck_rig.xml``) is calibrated on the record alone: per
 corner the drive x_ref and the LVDT x_a (``pairs``; lengths in m) and the wheel force F_rig (the
 force channel whose name holds the corner as a token, or ``corner_map``'s; in N); then
-F_corrected = F_model(x_ref) + L(F_rig - F_model(x_a)) per wheel, L the linear correction
+F_corrected = F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel, W the residual's white noise
+taken out (:mod:`correction.output.denoise`), L the linear correction
 ``T_a^-1 T_F`` with the given T_a, else T_a identified per corner from the ``pairs`` channels
 (:func:`scenarios.records.model.differential.correct_with_model`). The scenario's rig (actuator
 stroke) is used, and its ``[vehicle]`` tire and leaf-friction values, where given, are the
@@ -32,7 +33,7 @@ __all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "cal_key", "calibra
 #: The fields the payload's first guess comes from the record for (a [vehicle] value is not used).
 FROM_STATIC_LOADS = ("payload_kg", "payload_x_m", "payload_y_m")
 #: How the model correction corrects, in a result's description.
-MODEL_TEXT = "the truck model calibrated on the record (F_model(drive) + L(F_rig - F_model(LVDT)))"
+MODEL_TEXT = "the truck model calibrated on the record (F_model(drive) + L(W(F_rig - F_model(LVDT))))"
 
 
 def _error(message: str):
@@ -137,6 +138,16 @@ def calibration_meta(cal) -> dict[str, str]:
     return meta
 
 
+def residual_noise_text(noise_N) -> str:
+    """What W took out of the model's residual: ``noise_N``, per wheel the white noise's rms (N) or None
+    where the residual was not white above the truck's band (W passed it)."""
+    from mjcf.names import CORNERS
+
+    read = [f"{c} {v:.4g} N" if v is not None else f"{c} none (its residual is not white above the truck's band)"
+            for c, v in zip(CORNERS, noise_N)]
+    return "white noise taken out of the model's residual (rms): " + ", ".join(read)
+
+
 def model_metadata(settings, record, pairs, force_cols, model_result, fallback_source: str | None) -> dict[str, str]:
     """How the output was made; ``model_result`` the ModelCorrection (None: every key the file may
     carry, with the longest sentences, to check an output before the work)."""
@@ -157,6 +168,9 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
                      "start_up_s": f"{START_S:g} (model runs' start-up: not settled)",
                      "transient": settings.transient,
                      "model_wheels": ",".join(CORNERS if model_result is None else model_result.wheels) or "none"})
+        noise = (None,) * len(CORNERS) if model_result is None else model_result.residual_noise_N  # probe: the longest
+        if noise is not None:
+            meta["residual_noise"] = residual_noise_text(noise)
     if method in ("linear", "model", "probe"):
         meta.update({"ta_source": fallback_source or "x",
                      **linear_metadata(lowpass=settings.lowpass, lowpass_hz=settings.lowpass_hz, mode=settings.mode,

@@ -1,4 +1,4 @@
-"""Output correction by a rig-calibrated truck model: F_corr = F_model(x_ref) + L(F_rig - F_model(x_a)).
+"""Output correction by a rig-calibrated truck model: F_corr = F_model(x_ref) + L(W(F_rig - F_model(x_a))).
 
 * :mod:`.model_runs`: :func:`~.model_runs.model_forces`, the truck model's tire forces with its pans
   following a measured motion (x_ref or x_a, 1 kHz);

@@ -37,7 +37,7 @@ import time
 
 import numpy as np
 
-from correction.output.denoise import design_noise_gain
+from correction.output.denoise import NoiseGain, design_noise_gain
 from mjcf.variant import TruckVariant
 from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
@@ -137,7 +137,7 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
     return np.asarray(force_N, dtype=float) + f_ref - f_a
 
 
-def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
+def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
     """F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel: :data:`HYBRID_FORMULA`.
 
     Parameters
@@ -153,12 +153,14 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float) -> tuple[np
 
     Returns
     -------
-    (numpy.ndarray, numpy.ndarray)
-        The corrected force (N, (n, 4)) and L's settled samples (bool, (n,)).
+    (numpy.ndarray, numpy.ndarray, NoiseGain)
+        The corrected force (N, (n, 4)), L's settled samples (bool, (n,)) and W, the gain that took
+        the residual's white noise out (its ``noise_rms``, N, and ``measured`` per wheel).
     """
     residual = np.asarray(force_N, dtype=float) - f_a_N
-    corrected, settled = linear(design_noise_gain(residual, fs_hz).apply(residual))
-    return np.asarray(f_ref_N, dtype=float) + corrected, settled
+    gain = design_noise_gain(residual, fs_hz)
+    corrected, settled = linear(gain.apply(residual))
+    return np.asarray(f_ref_N, dtype=float) + corrected, settled, gain
 
 
 def fallback_reason(calibration, excess_limit: float = HYBRID_LIMIT) -> str:
@@ -299,11 +301,13 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         f_ref, f_a = model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex)
         # the load cells' uncompensated mass, fitted with the truck, taken out
         force = without_cell_mass(force_N, x_a_m, 1.0 / (t[1] - t[0]), cal.cell_mass_kg)
+        noise = None
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
-            corrected, settled = hybrid_correction(force, f_ref, f_a, linear, 1.0 / (t[1] - t[0]))
+            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, 1.0 / (t[1] - t[0]))
             formula = HYBRID_FORMULA
+            noise = tuple(float(v) if ok else None for v, ok in zip(gain.noise_rms, gain.measured))
             if not holds.all():
                 corrected[:, ~holds] = linear(np.asarray(force_N, dtype=float))[0][:, ~holds]
             settled = settled_mask(t) & np.asarray(settled, dtype=bool)
@@ -312,7 +316,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                            calibration=cal, corrected_N=corrected, settled=settled,
                            wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings,
                            wheels=tuple(c for c, ok in zip(CORNERS, holds) if ok or linear is None), formula=formula,
-                           model_N=(f_ref, f_a))
+                           model_N=(f_ref, f_a), residual_noise_N=noise)
 
 
 def _linear(reason: str, cal, wall0: float, timings: dict) -> ModelCorrection:

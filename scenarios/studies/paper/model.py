@@ -3,7 +3,8 @@
 For each case, after its road and rig runs and the project's linear correction: the truck model is
 calibrated on the rig record's own signals (drive x_ref, LVDT x_a and the measured force F_rig
 with its load-cell noise; never the road run, never the plant's parameters) and the record is
-corrected by it, F_model(x_ref) + L(F_rig - F_model(x_a)) with L the project's linear correction
+corrected by it, F_model(x_ref) + L(W(F_rig - F_model(x_a))) with W the residual's white noise taken
+out (:mod:`correction.output.denoise`) and L the project's linear correction
 by the identified T_a (:func:`scenarios.records.model.differential.correct_with_model`). Where the
 model cannot be trusted on a wheel that wheel keeps the linear correction, and one sentence says why. Scored like the other
 methods against the road force: DLC on the unfiltered force, NRMSE against the band-limited one,

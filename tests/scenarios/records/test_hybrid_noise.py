@@ -1,0 +1,47 @@
+"""The hybrid model correction F_model(x_ref) + L(W(F_rig - F_model(x_a))) takes the load cells' white
+noise out of the model's residual (scenarios.records.model.differential.hybrid_correction)."""
+
+import numpy as np
+from scipy import signal
+
+from scenarios.records.model.differential import HYBRID_FORMULA, hybrid_correction
+
+FS = 1000.0
+N = 30_000
+
+
+def _identity(forces):
+    return np.asarray(forces, dtype=float), np.ones(len(forces), dtype=bool)
+
+
+def _truck_force(seed=0):
+    sos = signal.butter(4, 12.0, fs=FS, output="sos")
+    return 4e4 + 3e3 * signal.sosfilt(sos, np.random.default_rng(seed).standard_normal((N, 4)), axis=0)
+
+
+def test_an_exact_model_leaves_little_of_the_noise():
+    # The model explains the rig force exactly: the residual is the 100 N white noise, and the hybrid
+    # with L = 1 returns the model's road force with a few percent of the noise's power left.
+    f_a = _truck_force(1)
+    f_ref = _truck_force(2)
+    noise = 100.0 * np.random.default_rng(3).standard_normal((N, 4))
+    corrected, settled, gain = hybrid_correction(f_a + noise, f_ref, f_a, _identity, FS)
+    left = corrected - f_ref - noise.mean(axis=0)
+    assert settled.all()
+    assert gain.measured.all() and np.allclose(gain.noise_rms, 100.0, rtol=0.05)
+    assert np.all(left.std(axis=0) < 0.3 * noise.std(axis=0))
+    assert "W(" in HYBRID_FORMULA
+
+
+def test_a_model_error_is_kept():
+    # The model misses a 4 Hz force of 500 N (what the residual carries beside the noise): the
+    # hybrid with L = 1 keeps it, to within the noise's share at 4 Hz.
+    t = np.arange(N) / FS
+    f_a = _truck_force(1)
+    miss = 500.0 * np.sin(2 * np.pi * 4.0 * t)[:, None] * np.ones(4)
+    noise = 100.0 * np.random.default_rng(4).standard_normal((N, 4))
+    corrected, _, _ = hybrid_correction(f_a + miss + noise, f_a, f_a, _identity, FS)
+    kept = corrected - f_a
+    inner = slice(5000, -5000)
+    err = kept[inner] - miss[inner] - (kept[inner] - miss[inner]).mean(axis=0)
+    assert np.all(np.sqrt(np.mean(err ** 2, axis=0)) < 0.1 * 500.0)
