@@ -3,7 +3,8 @@
 A record ``x = s + n``, ``n`` white with one-sided power spectral density ``N0``: the zero-phase
 gain ``G(f) = max(0, 1 - N0 / S_x(f))``, ``S_x`` the record's own Welch spectrum, is the Wiener
 gain ``S_s / (S_s + N0)`` with the signal's spectrum estimated as ``S_x - N0`` (spectral
-subtraction, Boll 1979): ~1 where the signal outweighs the noise, 0 where the record is noise
+subtraction: S. F. Boll, "Suppression of acoustic noise in speech using spectral subtraction",
+IEEE Trans. ASSP 27(2), 1979): ~1 where the signal outweighs the noise, 0 where the record is noise
 alone. ``N0`` is read from the record over a band above its signal
 (:func:`correction.identification.noise.noise_rms` on each of :data:`SUB_BANDS` parts of it, the
 least of them), ``S_x`` with Hann windows of :data:`SEGMENT_S` (50 % overlap). Where the parts'
@@ -42,8 +43,9 @@ NOISE_BAND = (0.06, 0.15)
 SUB_BANDS = 4
 #: Largest ratio of the parts' rms levels (1) at which the band is taken for white noise: the
 #: noise levels of a white record's parts agree within a few percent (their Welch estimates average
-#: hundreds of values); a residual of the medium and low roads' wheel forces (class A, 30-100 km/h,
-#: 100 N load cells) spreads 1.1-1.5 times, of a class D road's 2.6-3.5 times over 60-150 Hz.
+#: hundreds of values); the model correction's residuals on the mismatch suite's plants 0, 8 and 12
+#: (class A roads, 30-100 km/h, 100 N load cells) spread 1.1-1.5 times over 60-150 Hz, on its
+#: plants 3 and 15 (class D, 75 and 100 km/h: the rig force itself reaches past 150 Hz) 2.6-3.5 times.
 FLAT_RATIO = 2.0
 #: Welch segment of the record's spectrum, s (0.24 Hz resolution): fine enough for the wheel-hop
 #: peaks (~10 Hz, a few Hz wide), with ~13 averaged segments on a 30 s record.
