@@ -139,12 +139,11 @@ def calibration_meta(cal) -> dict[str, str]:
 
 
 def residual_noise_text(noise_N) -> str:
-    """What W took out of the model's residual: ``noise_N``, per wheel the white noise's rms (N) or None
-    where the residual was not white above the truck's band (W passed it)."""
-    from mjcf.names import CORNERS
-
+    """What W took out of the model's residual: ``noise_N``, per wheel the model corrects (corner:
+    value) the white noise's rms (N) or None where the residual was not white above the truck's band
+    (W passed it)."""
     read = [f"{c} {v:.4g} N" if v is not None else f"{c} none (its residual is not white above the truck's band)"
-            for c, v in zip(CORNERS, noise_N)]
+            for c, v in noise_N.items()]
     return "white noise taken out of the model's residual (rms): " + ", ".join(read)
 
 
@@ -168,7 +167,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
                      "start_up_s": f"{START_S:g} (model runs' start-up: not settled)",
                      "transient": settings.transient,
                      "model_wheels": ",".join(CORNERS if model_result is None else model_result.wheels) or "none"})
-        noise = (None,) * len(CORNERS) if model_result is None else model_result.residual_noise_N  # probe: the longest
+        noise = dict.fromkeys(CORNERS) if model_result is None else model_result.residual_noise_N  # probe: the longest
         if noise is not None:
             meta["residual_noise"] = residual_noise_text(noise)
     if method in ("linear", "model", "probe"):

@@ -307,7 +307,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         else:
             corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, 1.0 / (t[1] - t[0]))
             formula = HYBRID_FORMULA
-            noise = tuple(float(v) if ok else None for v, ok in zip(gain.noise_rms, gain.measured))
+            noise = {c: float(v) if white else None
+                     for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}
             if not holds.all():
                 corrected[:, ~holds] = linear(np.asarray(force_N, dtype=float))[0][:, ~holds]
             settled = settled_mask(t) & np.asarray(settled, dtype=bool)

@@ -253,10 +253,10 @@ class ModelCorrection:
     model_N : tuple of numpy.ndarray or None, N, (n, 4) each
         ``(F_model(x_ref), F_model(x_a))``, the calibrated model's two runs the correction used
         (method "model" only).
-    residual_noise_N : tuple or None, N
-        Per wheel, the white noise W took out of the model's residual (its rms over the whole band),
-        None for a wheel whose residual was not white above the truck's band (W passed it); None
-        without W (the differential form, or method "linear").
+    residual_noise_N : Mapping[str, float or None] or None, N
+        Per wheel the model corrects (by corner), the white noise W took out of the model's
+        residual (its rms over the whole band), None for a wheel whose residual was not white above
+        the truck's band (W passed it); None without W (the differential form, or method "linear").
     """
 
     method: str
@@ -269,7 +269,7 @@ class ModelCorrection:
     wheels: tuple = ()
     formula: str = ""
     model_N: tuple | None = None
-    residual_noise_N: tuple | None = None
+    residual_noise_N: Mapping | None = None
 
     @property
     def use_linear(self) -> bool:
@@ -284,4 +284,4 @@ class ModelCorrection:
         return {"method": self.method, "reason": self.reason, "calibration": self.calibration,
                 "settled_samples": settled_s, "wall_time_s": self.wall_time_s, "timings": dict(self.timings),
                 "wheels": list(self.wheels), "formula": self.formula,
-                "residual_noise_N": None if self.residual_noise_N is None else list(self.residual_noise_N)}
+                "residual_noise_N": None if self.residual_noise_N is None else dict(self.residual_noise_N)}

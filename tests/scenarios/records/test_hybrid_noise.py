@@ -45,3 +45,10 @@ def test_a_model_error_is_kept():
     inner = slice(5000, -5000)
     err = kept[inner] - miss[inner] - (kept[inner] - miss[inner]).mean(axis=0)
     assert np.all(np.sqrt(np.mean(err ** 2, axis=0)) < 0.1 * 500.0)
+
+
+def test_the_noise_taken_out_is_said_per_model_wheel():
+    from scenarios.records.model_record import residual_noise_text
+
+    text = residual_noise_text({"fl": 99.27, "fr": None})
+    assert "fl 99.27 N" in text and "fr none" in text and "rl" not in text
