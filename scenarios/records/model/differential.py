@@ -261,7 +261,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     wall0 = time.perf_counter()
     if excess_limit is None:
         excess_limit = DIFFERENTIAL_LIMIT if linear is None else HYBRID_LIMIT
-    t, _ = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
+    t, fs = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
     check_cab(cab, calibrate_kw.get("names"))
     # A record too short for the calibration's windows is the caller's to fix (raised); any other
     # refusal by the calibration means the model cannot be used on this record (the fallback).
@@ -300,12 +300,12 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         t1 = time.perf_counter()
         f_ref, f_a = model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex)
         # the load cells' uncompensated mass, fitted with the truck, taken out
-        force = without_cell_mass(force_N, x_a_m, 1.0 / (t[1] - t[0]), cal.cell_mass_kg)
+        force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
         noise = None
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
-            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, 1.0 / (t[1] - t[0]))
+            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, fs)
             formula = HYBRID_FORMULA
             noise = {c: float(v) if white else None
                      for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}
