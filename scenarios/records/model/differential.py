@@ -137,7 +137,7 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
     return np.asarray(force_N, dtype=float) + f_ref - f_a
 
 
-def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
+def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=None) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
     """F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel: :data:`HYBRID_FORMULA`.
 
     Parameters
@@ -150,6 +150,12 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float) -> tuple[np
         The record's linear correction L: ``linear(forces)`` -> ``(corrected (N), settled (bool, (n,)))``.
     fs_hz : float, Hz
         The record's rate.
+    settled : array_like of bool, (n,), optional
+        The samples past the model runs' start-up (:func:`settled_mask`, a run of samples to the
+        record's end). W is designed and applied on them alone: the start-up transient's residual
+        (kilonewtons) would raise the residual's spectrum and, where W keeps little but the mean,
+        shift the whole record by that transient's share of the mean. Before them the residual
+        entering L is held at W's first settled value. None: every sample is settled.
 
     Returns
     -------
@@ -158,9 +164,14 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float) -> tuple[np
         the residual's white noise out (its ``noise_rms``, N, and ``measured`` per wheel).
     """
     residual = np.asarray(force_N, dtype=float) - f_a_N
-    gain = design_noise_gain(residual, fs_hz)
-    corrected, settled = linear(gain.apply(residual))
-    return np.asarray(f_ref_N, dtype=float) + corrected, settled, gain
+    first = 0 if settled is None else int(np.argmax(np.asarray(settled, dtype=bool)))
+    if settled is not None and not np.all(np.asarray(settled, dtype=bool)[first:]):
+        raise ValueError("settled must be one run of samples reaching the record's end")
+    gain = design_noise_gain(residual[first:], fs_hz)
+    body = gain.apply(residual[first:])
+    denoised = np.concatenate([np.repeat(body[:1], first, axis=0), body], axis=0)
+    corrected, lin_settled = linear(denoised)
+    return np.asarray(f_ref_N, dtype=float) + corrected, lin_settled, gain
 
 
 def fallback_reason(calibration, excess_limit: float = HYBRID_LIMIT) -> str:
@@ -305,7 +316,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
-            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, fs)
+            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t))
             formula = HYBRID_FORMULA
             noise = {c: float(v) if white else None
                      for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}

@@ -160,7 +160,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
                                                     measured.pan_m, base_scenario=base_scenario, workers=workers)
         force = without_cell_mass(measured.force_N, measured.pan_m, fs, mc.calibration.cell_mass_kg)
         forced = force + f_ref - f_a
-        hybrid = hybrid_correction(force, f_ref, f_a, lin, fs)[0]
+        hybrid = hybrid_correction(force, f_ref, f_a, lin, fs, settled_mask(rig.t_s))[0]
     rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
     scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
     if forced is not None:
