@@ -40,7 +40,7 @@ from scenarios.records.model.calibrate import calibrate
 from scenarios.records.model.family import DEFAULT_NAMES
 from scenarios.records.model.result import Calibration
 
-__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "choose", "check_cab", "calibrate_cab"]
+__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "mean_square", "choose", "check_cab", "calibrate_cab"]
 
 #: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
 WITH_CAB = DEFAULT_NAMES + ("cab_mount_hz",)
@@ -56,14 +56,14 @@ MIN_GAIN = 0.2
 EDGE = 0.02
 
 
-def _mean_square(cal: Calibration) -> float:
+def mean_square(cal: Calibration) -> float:
     """Mean square fit NRMSE of the wheels the calibration fitted (:attr:`Calibration.wheels`), 1."""
     return float(np.mean([e * e for c, e in zip(CORNERS, cal.fit_nrmse) if c in cal.wheels]))
 
 
 def choose(held: Calibration, fitted: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
     """The calibration to use of the cab held and the cab fitted, and one sentence why."""
-    ms_h, ms_f = _mean_square(held), _mean_square(fitted)
+    ms_h, ms_f = mean_square(held), mean_square(fitted)
     hz = fitted.fitted_cab_hz
     gain = 1.0 - ms_f / ms_h if ms_h > 0 else 0.0
     what = (f"the cab fitted on {hz:.3g} Hz mounts reproduces the measured forces to fit NRMSE "

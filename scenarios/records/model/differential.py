@@ -47,6 +47,7 @@ from scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
 from scenarios.records.model.cell_mass import without_cell_mass
 from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
+from scenarios.records.model.restart import calibrate_again
 from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 
 __all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "hybrid_correction", "settled_mask", "correct_with_model",
@@ -280,9 +281,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                                           ("lead_s", WINDOW_LEAD_S))))
     timings = {}
     with local_executor(workers) as ex:
-        def calibrated(**wheels) -> Calibration:
+        def calibrated(**kw) -> Calibration:
             return calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
-                                 executor=ex, **wheels, **calibrate_kw)
+                                 executor=ex, **(calibrate_kw | kw))
 
         try:
             cal = calibrated()
@@ -292,6 +293,11 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         except SimulationError as exc:
             return _linear(f"a truck-model run failed during the calibration ({str(exc).rstrip('.')}), "
                            "so the linear correction is to be used.", None, wall0, timings)
+        if cal.converged:  # a fit refused for its model error: searched once more, the springs sliding
+            try:
+                cal = calibrate_again(cal, lambda start: calibrated(start=start), excess_limit)
+            except (ScenarioError, SimulationError):
+                pass  # the first fit stands, and says why it is refused
         timings["calibration_s"] = cal.wall_time_s
         reason = fallback_reason(cal, excess_limit)
         bad = outlier_wheel(cal, excess_limit) if reason and linear is not None and cal.converged else None

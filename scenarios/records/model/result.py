@@ -105,6 +105,10 @@ class Calibration:
         Where the calibration chose whether to fit the cab's mount
         (:func:`scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
         and why; "" otherwise.
+    second_start : str
+        Where the first fit was refused for its model error and searched again from the leaf
+        springs sliding (:func:`scenarios.records.model.restart.calibrate_again`): one sentence on
+        the two fits and which is kept; "" otherwise.
     """
 
     names: tuple
@@ -124,6 +128,7 @@ class Calibration:
     wall_time_s: float
     bounds: tuple = ()
     cab_choice: str = ""
+    second_start: str = ""
     noise_nrmse: tuple = ()
     band_nrmse: tuple = ()
     band_noise_nrmse: tuple = ()

@@ -89,6 +89,8 @@ def table(rows: list[dict]) -> str:
                             f"{cal.wall_time_s:.0f} s" if cal else ""))
             if cal and cal.cab_choice:
                 lines.append("\n" + cal.cab_choice[0].upper() + cal.cab_choice[1:])
+            if cal and cal.second_start:
+                lines.append("\n" + cal.second_start[0].upper() + cal.second_start[1:])
             if cal:
                 lines.append("\n" + cal.table(r["truth"]))
     return "\n".join(lines)
