@@ -31,10 +31,13 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0,
   where the onset is not identifiable and does not matter;
 * ``tire_stiffness_factor_fl``, ``tire_stiffness_factor_rl``, ``spring_rate_factor_fl``,
-  ``spring_rate_factor_rl`` (:data:`STATION_FITTED`): each axle's left tire and leaf spring over its
-  right one (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another
-  pressure, a spring with a broken leaf), and a model whose axles are symmetric puts the difference
-  into both wheels' errors, in opposite directions;
+  ``spring_rate_factor_rl``, ``spring_friction_factor_fl``, ``spring_friction_factor_rl``
+  (:data:`STATION_FITTED`): each axle's left tire, leaf spring and interleaf friction over its right
+  one (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another
+  pressure, a spring with a broken leaf, leaves that rust and rub harder), and a model whose axles
+  are symmetric puts the difference into both wheels' errors, in opposite directions. Rates are
+  searched at 0.7-1.3, the friction at 0.4-2.5: two springs of one truck whose leaves rub 0.7 and 1.4
+  times the catalogue's differ by a factor of 2;
 * ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
   cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
   bounce and pitch that loads the front wheels. A model without it absorbs a suspended cab's mode
@@ -67,7 +70,7 @@ __all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "
 
 #: Each axle's left tire stiffness and leaf-spring rate over its right one (the module's description).
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
-                  "spring_rate_factor_rl")
+                  "spring_rate_factor_rl", "spring_friction_factor_fl", "spring_friction_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
@@ -95,7 +98,8 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_
           "spring_friction_rear_N": (0.05, 8.0), "axle_mass_front_kg": (0.6, 1.8), "axle_mass_rear_kg": (0.6, 1.8),
           "tire_progressive_ratio": 0.5,
           "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0),
-          **dict.fromkeys(STATION_FITTED, (0.7, 1.3))}
+          **dict.fromkeys(STATION_FITTED, (0.7, 1.3)),
+          "spring_friction_factor_fl": (0.4, 2.5), "spring_friction_factor_rl": (0.4, 2.5)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
