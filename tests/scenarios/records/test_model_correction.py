@@ -213,37 +213,27 @@ def test_calibration_recovers_a_progressive_tire():
     assert max(cal.fit_nrmse) < 0.5 * max(cal.initial_nrmse), (cal.fit_nrmse, cal.initial_nrmse)
 
 
-def test_calibration_recovers_a_left_right_difference_of_the_tires_and_springs():
-    """The per-station family (family.STATION_FITTED, fitted by default): the road test of the medium case's
-    plant with its front-left tire 15 % softer and its rear-left spring 10 % stiffer than their right
-    neighbours, 100 N of noise; the two left factors fitted from 1 (a symmetric truck), the axles' and
-    every other value held at the plant's: both recovered within 3 %, and the fit NRMSE falls by more
-    than half (the noise's share is left)."""
-    sc, road, force = _road_record(tire_stiffness_factor_fl=0.85, spring_rate_factor_rl=1.1)
-    names = ("tire_stiffness_factor_fl", "spring_rate_factor_rl")
+@pytest.mark.parametrize("plant, rtol", [
+    ({"tire_stiffness_factor_fl": 0.85, "spring_rate_factor_rl": 1.1}, 0.03),
+    ({"spring_friction_factor_fl": 1.6, "spring_friction_factor_rl": 0.6}, 0.05),
+], ids=["tire-and-spring-rate", "leaf-friction"])
+def test_calibration_recovers_a_left_right_difference(plant, rtol):
+    """The per-station family (family.STATION_FITTED, fitted by default): the road test of the medium
+    case's plant whose left stations differ from their right neighbours (mjcf.stations: each factor
+    scales the left station's value), 100 N of noise; the two left factors fitted from 1 (a symmetric
+    truck), the axles' and every other value held at the plant's: both recovered, and the fit NRMSE
+    falls by more than half (the noise's share is left). The front-left tire 15 % softer and the
+    rear-left spring 10 % stiffer within 3 %; the front-left leaves rubbing 1.6 times and the rear-left
+    0.6 times their neighbours' within 5 % (measured 1.595, 0.609; fit NRMSE 0.11-0.26 to
+    0.056-0.067). A symmetric model cannot do this: it splits the difference and errs on both wheels
+    of the axle, in opposite directions."""
+    sc, road, force = _road_record(**plant)
+    names = tuple(plant)
     assert set(names) <= set(STATION_FITTED) <= set(DEFAULT_NAMES)
     cal = _fit_window(sc, road, force, names, max_nfev=20)
     assert cal.initial == (1.0, 1.0)
     assert cal.converged, cal.message
-    np.testing.assert_allclose(cal.fitted, (0.85, 1.1), rtol=0.03)
-    assert max(cal.fit_nrmse) < 0.5 * max(cal.initial_nrmse), (cal.fit_nrmse, cal.initial_nrmse)
-
-
-def test_calibration_recovers_a_left_right_difference_of_the_leaf_friction():
-    """The leaf springs' left/right friction factors (in family.STATION_FITTED, fitted by default): the
-    road test of the medium case's plant whose front-left leaves rub 1.6 times and rear-left 0.6 times
-    their right neighbours' (mjcf.stations: the factor scales the left spring's frictionloss), 100 N of
-    noise; the two factors fitted from 1, every other value held at the plant's: both recovered within
-    5 % (measured 1.595, 0.609), and the fit NRMSE falls by more than half (0.11-0.26 to 0.056-0.067,
-    the noise's share). A symmetric model cannot do this: it splits the
-    difference and errs on both wheels of the axle."""
-    sc, road, force = _road_record(spring_friction_factor_fl=1.6, spring_friction_factor_rl=0.6)
-    names = ("spring_friction_factor_fl", "spring_friction_factor_rl")
-    assert set(names) <= set(STATION_FITTED) <= set(DEFAULT_NAMES)
-    cal = _fit_window(sc, road, force, names, max_nfev=20)
-    assert cal.initial == (1.0, 1.0)
-    assert cal.converged, cal.message
-    np.testing.assert_allclose(cal.fitted, (1.6, 0.6), rtol=0.05)
+    np.testing.assert_allclose(cal.fitted, tuple(plant.values()), rtol=rtol)
     assert max(cal.fit_nrmse) < 0.5 * max(cal.initial_nrmse), (cal.fit_nrmse, cal.initial_nrmse)
 
 
