@@ -68,7 +68,8 @@ from __future__ import annotations
 
 __all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
 
-#: Each axle's left tire stiffness and leaf-spring rate over its right one (the module's description).
+#: Each axle's left tire stiffness, leaf-spring rate and interleaf friction over its right one (the
+#: module's description).
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
                   "spring_rate_factor_rl", "spring_friction_factor_fl", "spring_friction_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
