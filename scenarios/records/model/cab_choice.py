@@ -23,13 +23,19 @@ it does not, so the choice does not hinge on the exact threshold.
 The price is a second calibration, from the same first guess; ``benchmarks/model_cost.py`` times
 both against the cab held alone. Started instead where the cab-held one ended
 (``calibrate(start=...)``), it cost more on that benchmark's rigid-cab truck, not less (the
-mount's crawl from its 2.5 Hz guess went on to the range's top): 70.7 s wall against 52.9 s.
+mount's crawl from its 2.5 Hz guess went on to the range's top). It is skipped where a cab could
+not win (:func:`cab_scan`): at the cab-held optimum the truck is run once more with the cab on
+each of :data:`SCAN_HZ`, and the residual those runs add is projected out of the held fit's
+Jacobian; the largest share of the held fit's squared residual that such a cab would remove,
+beyond what the held parameters can, is the cab's possible gain. Under half of :data:`MIN_GAIN`
+the cab stays held, without the second calibration (a few seconds of model runs instead).
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import time
 
 import numpy as np
 
@@ -40,7 +46,7 @@ from scenarios.records.model.calibrate import calibrate
 from scenarios.records.model.family import DEFAULT_NAMES
 from scenarios.records.model.result import Calibration
 
-__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "mean_square", "choose", "check_cab", "calibrate_cab"]
+__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "mean_square", "cab_scan", "choose", "check_cab", "calibrate_cab"]
 
 #: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
 WITH_CAB = DEFAULT_NAMES + ("cab_mount_hz",)
@@ -54,11 +60,49 @@ CAB_CHOICES = (AUTO, HELD, FITTED_CAB)
 MIN_GAIN = 0.2
 #: A mount frequency within this fraction of an end of its search range is at the edge (1).
 EDGE = 0.02
+#: The cab mounts tried at the cab-held optimum (:func:`cab_scan`), Hz: 1-8 Hz a quarter octave
+#: apart, around a suspended cab's 1.5-3 Hz (``mjcf.variant.BOUNDS``) from the fitted cab's
+#: search range's bottom.
+SCAN_HZ = tuple(float(v) for v in np.round(1.0 * 2.0 ** (np.arange(13) / 4.0), 2))
 
 
 def mean_square(cal: Calibration) -> float:
     """Mean square fit NRMSE of the wheels the calibration fitted (:attr:`Calibration.wheels`), 1."""
     return float(np.mean([e * e for c, e in zip(CORNERS, cal.fit_nrmse) if c in cal.wheels]))
+
+
+def cab_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
+    """The most a cab on its own mounts could reduce a cab-held fit's squared residual, to first order.
+
+    Parameters
+    ----------
+    state : FitState
+        The cab-held fit (:func:`~scenarios.records.model.calibrate.calibrate` ``with_state``), its
+        worker pool running.
+    hz : sequence of float, Hz
+        The mount frequencies tried, each one truck run per window at the optimum with the cab on them.
+
+    Returns
+    -------
+    (float, float)
+        The largest gain (1, a share of the residual's sum of squares: the part of it along the
+        cab's added residual once the held fit's Jacobian columns are projected out of both) and the
+        mount frequency that gives it (Hz).
+    """
+    prob, r0 = state.problem, np.asarray(state.residual, float)
+    base = prob.variant(state.theta)
+    runs = prob.runs([dataclasses.replace(base, cab_mount_hz=float(f)) for f in hz])
+    q, _ = np.linalg.qr(np.asarray(state.jacobian, float))
+    r = r0 - q @ (q.T @ r0)
+    total = float(r0 @ r0)
+    gains = []
+    for m in runs:
+        d = prob.residual(m) - r0
+        d = d - q @ (q.T @ d)
+        dd = float(d @ d)
+        gains.append(float((d @ r) ** 2 / dd / total) if dd > 0.0 and total > 0.0 else 0.0)
+    best = int(np.argmax(gains))
+    return gains[best], float(hz[best])
 
 
 def choose(held: Calibration, fitted: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
@@ -110,7 +154,8 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     -------
     Calibration
         The one used; with "auto", :attr:`Calibration.cab_choice` says which and why, and its
-        :attr:`~Calibration.wall_time_s` (s) is both calibrations'.
+        :attr:`~Calibration.wall_time_s` (s) is both calibrations' (the cab-fitted one run only
+        where it could be clearly better, :func:`cab_scan`).
 
     Raises
     ------
@@ -120,15 +165,24 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     names = calibrate_kw.pop("names", None)
     check_cab(cab, names)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
-        def run(names) -> Calibration:
-            return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, executor=ex, **calibrate_kw)
+        def run(names, **kw):
+            return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, executor=ex,
+                             **(calibrate_kw | kw))
 
         if names is not None:
             return run(names)
         if cab != AUTO:
             return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
-        held = run(DEFAULT_NAMES)
+        held, state = run(DEFAULT_NAMES, with_state=True)
+        t0 = time.perf_counter()
+        gain, hz = cab_scan(state)
+        evaluations, wall = state.problem.evaluations, held.wall_time_s + time.perf_counter() - t0
+        if gain < MIN_GAIN / 2:  # no cab could make the fit clearly better: the second fit not run
+            return dataclasses.replace(held, cab_choice=(
+                f"cab held: a cab on its own mounts would remove at most {gain:.0%} of the cab-held fit's squared "
+                f"residual (on {hz:.3g} Hz mounts, to first order), less than {MIN_GAIN / 2:.0%}, so it was not "
+                "fitted."), evaluations=evaluations, wall_time_s=round(wall, 3))
         fitted = run(WITH_CAB)
     chosen, why = choose(held, fitted)
-    return dataclasses.replace(chosen, cab_choice=why, evaluations=held.evaluations + fitted.evaluations,
-                               wall_time_s=round(held.wall_time_s + fitted.wall_time_s, 3))
+    return dataclasses.replace(chosen, cab_choice=why, evaluations=evaluations + fitted.evaluations,
+                               wall_time_s=round(wall + fitted.wall_time_s, 3))

@@ -42,7 +42,7 @@ from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, FITTED, RANG
 from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral
 from scenarios.records.model.model_runs import check_record
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
-from scenarios.records.model.problem import FitProblem
+from scenarios.records.model.problem import FitProblem, FitState
 from scenarios.records.model.result import Calibration
 from scenarios.records.model.uncertainty import uncertainties
 from scenarios.records.model.weighting import differential_kernel
@@ -89,7 +89,8 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
 def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, names=DEFAULT_NAMES,
               fitted_guess: dict | None = None, start: dict | None = None, wheels=CORNERS,
               windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
-              workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None, cell_mass: bool = True) -> Calibration:
+              workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None, cell_mass: bool = True,
+              with_state: bool = False):
     """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
 
     Parameters
@@ -134,10 +135,13 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     cell_mass : bool
         Fit the load cells' uncompensated mass too (:mod:`~scenarios.records.model.cell_mass`,
         default); False holds it at 0 (a lab whose mass compensation is known to be exact).
+    with_state : bool
+        Return the fit's :class:`~scenarios.records.model.problem.FitState` too (for model runs
+        at the optimum through the same residual, with ``executor`` still running).
 
     Returns
     -------
-    Calibration
+    Calibration, or (Calibration, FitState) with ``with_state``
 
     Raises
     ------
@@ -229,7 +233,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     noise = noise_rms(force, fs)  # the load cells' white noise (whole record), N
     band, band_noise = band_errors(m_opt, force, wins, fs, noise)
 
-    return Calibration(names=names, units=tuple(UNITS[k] for k in names),
+    cal = Calibration(names=names, units=tuple(UNITS[k] for k in names),
                        initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
                        sigma=tuple(float(s) for s in sigma), sigma_robust=tuple(float(s) for s in robust), fixed=fixed, fit_nrmse=per_wheel(m_opt),
                        initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
@@ -241,4 +245,5 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                        noise_nrmse=tuple(float(v) for v in noise / prob.norm), band_nrmse=band,
                        band_noise_nrmse=band_noise, wheels=tuple(c for c in CORNERS if c in wheels),
                        cell_mass_kg=float(mass), cell_mass_sigma_kg=mass_1s)
+    return (cal, FitState(prob, np.asarray(res.x, float), jac, f_opt)) if with_state else cal
 

@@ -7,6 +7,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from mjcf.variant import BOUNDS, TruckVariant
@@ -16,7 +18,7 @@ from scenarios.records.model.family import ADDITIVE, COMPLIANCE, RANGES
 from scenarios.records.model.model_runs import SETTLE_S, portable, window_job
 from scenarios.records.model.onset_load import ONSET_STIFFNESS
 
-__all__ = ["FitProblem", "FD_STEP", "REUSE_MAX", "REUSE_RATIO"]
+__all__ = ["FitProblem", "FitState", "FD_STEP", "REUSE_MAX", "REUSE_RATIO"]
 
 #: Forward-difference step of each scaled parameter (1: 1 % of a positive field, 1 cm of payload x).
 FD_STEP = 0.01
@@ -29,6 +31,29 @@ FD_STEP = 0.01
 #: recomputed, 85-105 with at most 4 updates in a row, the same fit NRMSE and model error to three
 #: digits; without a limit 54-72, the model error up to 0.0003 worse.
 REUSE_MAX, REUSE_RATIO = 4, 0.5
+
+@dataclass(frozen=True)
+class FitState:
+    """A finished fit as its least-squares problem left it: for a question about the optimum that
+    needs model runs through the same residual (:func:`~scenarios.records.model.cab_choice.cab_scan`).
+
+    Attributes
+    ----------
+    problem : FitProblem
+        The problem (its worker pool is the caller's; used only while that pool runs).
+    theta : numpy.ndarray
+        The optimum, scaled parameters (1).
+    jacobian : numpy.ndarray
+        The residual's finite-difference Jacobian there (residuals x parameters, 1).
+    residual : numpy.ndarray
+        The weighted residual there (1).
+    """
+
+    problem: "FitProblem"
+    theta: np.ndarray
+    jacobian: np.ndarray
+    residual: np.ndarray
+
 
 class FitProblem:
     """The least-squares problem in scaled parameters theta (1 at the first guess).
@@ -118,12 +143,17 @@ class FitProblem:
 
     def model(self, thetas) -> list[list[np.ndarray]]:
         """The model's force on each window (lead-in included), per theta."""
-        jobs = [(window_job, (self.variant(th), self.t[a:e], self.x_a[a:e], self.base, SETTLE_S))
-                for th in thetas for a, _, e in self.windows]
+        return self.runs([self.variant(th) for th in thetas])
+
+    def runs(self, variants) -> list[list[np.ndarray]]:
+        """The force of each truck variant (:class:`~mjcf.variant.TruckVariant`) on each window
+        (lead-in included), N: one worker job per window and variant, all at once."""
+        jobs = [(window_job, (v, self.t[a:e], self.x_a[a:e], self.base, SETTLE_S))
+                for v in variants for a, _, e in self.windows]
         out = run_jobs(jobs, executor=self.executor)
-        self.evaluations += len(thetas)
+        self.evaluations += len(variants)
         w = len(self.windows)
-        return [out[i * w:(i + 1) * w] for i in range(len(thetas))]
+        return [out[i * w:(i + 1) * w] for i in range(len(variants))]
 
     def plain(self, model_N) -> np.ndarray:
         """Unweighted residual (scored samples x 4), N."""

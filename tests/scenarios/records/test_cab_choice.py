@@ -9,16 +9,19 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from scenarios.core.run import run
 from scenarios.studies import scoring
 from scenarios.records.model.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
-                                                           check_cab, choose)
+                                                           SCAN_HZ, cab_scan, check_cab, choose)
 from scenarios.records.model.family import DEFAULT_NAMES, FITTED
 from scenarios.records.model.first_guess import catalogue, xml_nominal
+from scenarios.records.model.problem import FitState
 from scenarios.records.model.result import Calibration
+from mjcf.variant import TruckVariant
 
 
 def _cal(names, fitted, fit_nrmse, *, converged=True, bounds=None) -> Calibration:
@@ -81,9 +84,42 @@ def test_bad_cab_modes_are_refused():
     check_cab(AUTO, names=("payload_kg",))  # explicit fields under auto: one calibration of them
 
 
-def test_both_calibrations_are_counted(monkeypatch):
-    """With ``cab`` auto both families are calibrated from the same first guess, and the result
-    counts both calibrations' variants and time."""
+class _Problem:
+    """A stand-in FitProblem whose residual of a run is the run itself (runs counted)."""
+
+    def __init__(self, runs):
+        self.out, self.evaluations, self.variants = runs, 7, []
+
+    def variant(self, theta):
+        return TruckVariant()
+
+    def runs(self, variants):
+        self.variants += variants
+        self.evaluations += len(variants)
+        return self.out[:len(variants)]
+
+    def residual(self, m):
+        return np.asarray(m, float)
+
+
+def test_the_cab_scan_projects_out_the_held_jacobian():
+    """Residual r0 = (0, 0, 3, 4), Jacobian columns e1, e2; a cab adding d = (1, 1, 3, 0) removes,
+    beyond what the Jacobian can, (d_perp . r)^2 / |d_perp|^2 = 9 of |r0|^2 = 25 (d_perp = (0, 0, 3, 0)):
+    36 %; one adding (5, -2, 0, 0) lies in the Jacobian's span and removes nothing. The variants run
+    are the held optimum's truck with the cab on each frequency."""
+    r0 = np.array([0.0, 0.0, 3.0, 4.0])
+    jac = np.eye(4)[:, :2]
+    prob = _Problem([r0 + [5.0, -2.0, 0.0, 0.0], r0 + [1.0, 1.0, 3.0, 0.0]])
+    gain, hz = cab_scan(FitState(prob, np.ones(2), jac, r0), hz=(1.5, 2.5))
+    assert gain == pytest.approx(0.36) and hz == 2.5
+    assert [v.cab_mount_hz for v in prob.variants] == [1.5, 2.5]
+    assert SCAN_HZ[0] == 1.0 and SCAN_HZ[-1] == 8.0 and len(SCAN_HZ) == 13
+
+
+@pytest.mark.parametrize("gain, runs", [(0.05, 1), (0.5, 2)])
+def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gain, runs):
+    """With ``cab`` auto: the cab-held fit, the scan at its optimum, and the cab-fitted fit (from the
+    same first guess) only where the scan's gain reaches MIN_GAIN / 2; the result counts every run."""
     import scenarios.records.model.cab_choice as cab_choice
 
     held = _cal(("payload_kg",), (3100.0,), (0.5, 0.5, 0.25, 0.25))
@@ -91,13 +127,24 @@ def test_both_calibrations_are_counted(monkeypatch):
 
     def fake_calibrate(t, x, f, *, names, fitted_guess, executor, **kw):
         calls.append((tuple(names), fitted_guess, kw))
-        return held if len(calls) == 1 else _fitted(2.0, 0.1)
+        if kw.get("with_state"):
+            return held, FitState(_Problem([]), None, None, None)
+        return _fitted(2.0, 0.1)
+
+    def fake_scan(state):
+        state.problem.evaluations += 13
+        return gain, 2.0
 
     monkeypatch.setattr(cab_choice, "calibrate", fake_calibrate)
+    monkeypatch.setattr(cab_choice, "cab_scan", fake_scan)
     cal = calibrate_cab(None, None, None, cab=AUTO, workers=1, fitted_guess={"payload_kg": 3000.0})
-    assert calls == [(DEFAULT_NAMES, {"payload_kg": 3000.0}, {}),
-                     (DEFAULT_NAMES + ("cab_mount_hz",), {"payload_kg": 3000.0}, {})]
-    assert cal.cab_choice.startswith("cab fitted") and cal.evaluations == 20 and cal.wall_time_s == 2.0
+    assert calls[0] == (DEFAULT_NAMES, {"payload_kg": 3000.0}, {"with_state": True}) and len(calls) == runs
+    if runs == 1:
+        assert cal.names == held.names and cal.evaluations == 20 and "not fitted" in cal.cab_choice
+        assert "at most 5%" in cal.cab_choice and "2 Hz" in cal.cab_choice
+    else:
+        assert calls[1] == (DEFAULT_NAMES + ("cab_mount_hz",), {"payload_kg": 3000.0}, {})
+        assert cal.cab_choice.startswith("cab fitted") and cal.evaluations == 30 and cal.wall_time_s >= 2.0
 
 
 def _record(cab_hz):
