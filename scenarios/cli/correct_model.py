@@ -21,8 +21,9 @@ and its ``[vehicle]`` tire stiffness, tire damping, tire stiffening (``tire_prog
 default to the all-wheel values) and leaf friction, where given, are the calibration's first guesses
 instead of the catalogue values; the payload and its position always
 start from the record's static loads. The cab (``--cab``): by default the model is calibrated
-twice, the cab held (rigid, or at ``[vehicle] cab_mount_hz`` if given) and the cab's mount
-frequency fitted (from that value or 2.5 Hz), and the clearly better fit is kept
+with the cab held (rigid, or at ``[vehicle] cab_mount_hz`` if given) and, where a cab on its own
+mounts could fit clearly better, once more with the cab's mount frequency fitted (from that value
+or 2.5 Hz), and the clearly better fit is kept
 (:func:`scenarios.records.model.cab_choice.calibrate_cab`); ``--cab held`` or
 ``--cab fitted`` calibrates once. Every fitted value is only a starting guess.
 
@@ -85,9 +86,9 @@ def add_model_arguments(parser) -> None:
                    help="with --model: windows of the record the model is fitted on, each 2.5 s lead-in + 4 s "
                         "(default 3); 1 is about 3 times faster, on less of the record")
     g.add_argument("--cab", choices=("auto", "held", "fitted"), default=None,
-                   help="with --model: the model's cab. auto (default): calibrate with the cab held and with its "
-                        "mount frequency fitted (1-30 Hz), keep the fit that reproduces the forces clearly better "
-                        "(3-4 times the CPU of one); held: the cab rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
+                   help="with --model: the model's cab. auto (default): calibrate with the cab held and, where "
+                        "a cab on its own mounts could fit clearly better, with its mount frequency fitted (1-30 Hz) "
+                        "too, keep the fit that reproduces the forces clearly better (about twice the CPU of one); held: the cab rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
                         "always fit the mount (a smooth record may not pin it: see the README)")
 
 

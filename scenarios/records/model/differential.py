@@ -301,9 +301,10 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         timings["calibration_s"] = cal.wall_time_s
         reason = fallback_reason(cal, excess_limit)
         bad = outlier_wheel(cal, excess_limit) if reason and linear is not None and cal.converged else None
-        if bad is not None:  # one wheel the model cannot reproduce: calibrated again on the others
-            try:
-                again = calibrated(wheels=tuple(c for c in CORNERS if c != CORNERS[bad]))
+        if bad is not None:  # one wheel the model cannot reproduce: calibrated again on the others,
+            try:  # from where the fit with it ended (its second start's sliding springs, if kept)
+                again = calibrated(wheels=tuple(c for c in CORNERS if c != CORNERS[bad]),
+                                   start=dict(zip(cal.names, cal.fitted)))
             except (ScenarioError, SimulationError):
                 again = None
             if again is not None and again.converged:

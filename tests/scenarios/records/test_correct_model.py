@@ -99,7 +99,7 @@ def test_model_correction_end_to_end(record, tmp_path, capsys):
     assert meta["scenario_file"] == str(record["scenario"]) and meta["rigsim_version"] == version("rigsim")
     assert meta["corners"] == "fl=Fz_FL,fr=Fz_FR,rl=Fz_RL,rr=Fz_RR" and meta["pairs"] == PAIRS
     assert meta["cal_runs"].endswith(", converged")
-    # the default --cab auto calibrated twice; this rigid-cab truck keeps the cab held (cab_choice.choose)
+    # the default --cab auto; this rigid-cab truck keeps the cab held (cab_choice.calibrate_cab)
     assert meta["cal_cab"].startswith("cab held: ") and "cal_cab_mount_hz" not in meta
     fit = [float(x.split()[1]) for x in meta["cal_fit_nrmse"].split(" (")[0].split(", ")]
     assert len(fit) == 4 and max(fit) < 0.1  # the model reproduces F_rig up to the load cells' noise
