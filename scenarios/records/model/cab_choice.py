@@ -1,4 +1,4 @@
-"""Whether the truck's cab sits on soft mounts: two calibrations, the clearly better fit kept.
+"""Whether the truck's cab sits on soft mounts: held, fitted where it could win, the better fit kept.
 
 A cab on its own mounts (``TruckVariant.cab_mount_hz``, a 1.5-3 Hz mode next to the body's
 bounce and pitch) loads the front wheels; a model with a rigid cab absorbs it into the front tire
@@ -143,7 +143,7 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     fitted_guess : dict, optional
         First guesses (SI), as for ``calibrate``.
     workers : int, optional
-        Worker processes (default: all cores), one pool for both calibrations.
+        Worker processes (default: all cores), one pool for every calibration.
     executor : concurrent.futures.Executor, optional
         A running pool to use instead.
     **calibrate_kw
