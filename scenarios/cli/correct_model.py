@@ -88,7 +88,8 @@ def add_model_arguments(parser) -> None:
     g.add_argument("--cab", choices=("auto", "held", "fitted"), default=None,
                    help="with --model: the model's cab. auto (default): calibrate with the cab held and, where "
                         "a cab on its own mounts could fit clearly better, with its mount frequency fitted (1-30 Hz) "
-                        "too, keep the fit that reproduces the forces clearly better (about twice the CPU of one); held: the cab rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
+                        "too, keep the fit that reproduces the forces clearly better (up to twice the CPU of one); held: the cab "
+                        "rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
                         "always fit the mount (a smooth record may not pin it: see the README)")
 
 

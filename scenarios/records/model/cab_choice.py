@@ -42,6 +42,7 @@ import numpy as np
 from mjcf.names import CORNERS
 from scenarios.core.config import ScenarioError
 from scenarios.core.pool import local_executor
+from scenarios.core.watch import SimulationError
 from scenarios.records.model.calibrate import calibrate
 from scenarios.records.model.family import DEFAULT_NAMES
 from scenarios.records.model.result import Calibration
@@ -175,7 +176,10 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
             return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
         held, state = run(DEFAULT_NAMES, with_state=True)
         t0 = time.perf_counter()
-        gain, hz = cab_scan(state)
+        try:
+            gain, hz = cab_scan(state)
+        except (ScenarioError, SimulationError):  # a cab variant that would not run: the scan cannot tell
+            gain, hz = 1.0, None
         evaluations, wall = state.problem.evaluations, held.wall_time_s + time.perf_counter() - t0
         if gain < MIN_GAIN / 2:  # no cab could make the fit clearly better: the second fit not run
             return dataclasses.replace(held, cab_choice=(

@@ -32,6 +32,7 @@ FD_STEP = 0.01
 #: digits; without a limit 54-72, the model error up to 0.0003 worse.
 REUSE_MAX, REUSE_RATIO = 4, 0.5
 
+
 @dataclass(frozen=True)
 class FitState:
     """A finished fit as its least-squares problem left it: for a question about the optimum that

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
+from scenarios.core.watch import SimulationError
 from scenarios.core.run import run
 from scenarios.studies import scoring
 from scenarios.records.model.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
@@ -116,10 +117,11 @@ def test_the_cab_scan_projects_out_the_held_jacobian():
     assert SCAN_HZ[0] == 1.0 and SCAN_HZ[-1] == 8.0 and len(SCAN_HZ) == 13
 
 
-@pytest.mark.parametrize("gain, runs", [(0.05, 1), (0.5, 2)])
+@pytest.mark.parametrize("gain, runs", [(0.05, 1), (0.5, 2), (None, 2)])
 def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gain, runs):
     """With ``cab`` auto: the cab-held fit, the scan at its optimum, and the cab-fitted fit (from the
-    same first guess) only where the scan's gain reaches MIN_GAIN / 2; the result counts every run."""
+    same first guess) only where the scan's gain reaches MIN_GAIN / 2 or the scan could not run (None:
+    a cab variant's run failed); the result counts every run."""
     import scenarios.records.model.cab_choice as cab_choice
 
     held = _cal(("payload_kg",), (3100.0,), (0.5, 0.5, 0.25, 0.25))
@@ -133,6 +135,8 @@ def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gai
 
     def fake_scan(state):
         state.problem.evaluations += 13
+        if gain is None:
+            raise SimulationError("MuJoCo warning at t = 1 s")
         return gain, 2.0
 
     monkeypatch.setattr(cab_choice, "calibrate", fake_calibrate)
