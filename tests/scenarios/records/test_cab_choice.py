@@ -17,7 +17,7 @@ from scenarios.core.watch import SimulationError
 from scenarios.core.run import run
 from scenarios.studies import scoring
 from scenarios.records.model.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
-                                                           SCAN_HZ, cab_scan, check_cab, choose)
+                                                           SCAN_HZ, SCAN_TRUSTED, cab_scan, check_cab, choose)
 from scenarios.records.model.family import DEFAULT_NAMES, FITTED
 from scenarios.records.model.first_guess import catalogue, xml_nominal
 from scenarios.records.model.problem import FitState
@@ -117,23 +117,28 @@ def test_the_cab_scan_projects_out_the_held_jacobian():
     assert SCAN_HZ[0] == 1.0 and SCAN_HZ[-1] == 8.0 and len(SCAN_HZ) == 13
 
 
-@pytest.mark.parametrize("gain, runs", [(0.05, 1), (0.5, 2), (None, 2)])
-def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gain, runs):
+@pytest.mark.parametrize("gain, runs, front", [(0.05, 1, 0.10), (0.5, 2, 0.10), (None, 2, 0.10),
+                                                 (0.05, 2, 0.13)])
+def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gain, runs, front):
     """With ``cab`` auto: the cab-held fit, the scan at its optimum, and the cab-fitted fit (from the
-    same first guess) only where the scan's gain reaches MIN_GAIN / 2 or the scan could not run (None:
-    a cab variant's run failed); the result counts every run."""
+    same first guess) only where the scan's gain reaches MIN_GAIN / 2, the scan could not run (None:
+    a cab variant's run failed) or the held fit's model error (here its fit NRMSE, no noise
+    measured) exceeds SCAN_TRUSTED (0.13 > 0.125: no scan, whatever it would say); the result counts
+    every run."""
     import scenarios.records.model.cab_choice as cab_choice
 
-    held = _cal(("payload_kg",), (3100.0,), (0.5, 0.5, 0.25, 0.25))
-    calls = []
+    held = _cal(("payload_kg",), (3100.0,), (front, front, 0.05, 0.05))
+    assert max(held.excess_nrmse) == front
+    calls, scans = [], []
 
     def fake_calibrate(t, x, f, *, names, fitted_guess, executor, **kw):
         calls.append((tuple(names), fitted_guess, kw))
         if kw.get("with_state"):
             return held, FitState(_Problem([]), None, None, None)
-        return _fitted(2.0, 0.1)
+        return _cal(("payload_kg", "cab_mount_hz"), (1.0, 2.0), (0.02,) * 4, bounds=((0.5, 2.0), (1.0, 30.0)))
 
     def fake_scan(state):
+        scans.append(state)
         state.problem.evaluations += 13
         if gain is None:
             raise SimulationError("MuJoCo warning at t = 1 s")
@@ -143,12 +148,14 @@ def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gai
     monkeypatch.setattr(cab_choice, "cab_scan", fake_scan)
     cal = calibrate_cab(None, None, None, cab=AUTO, workers=1, fitted_guess={"payload_kg": 3000.0})
     assert calls[0] == (DEFAULT_NAMES, {"payload_kg": 3000.0}, {"with_state": True}) and len(calls) == runs
+    assert len(scans) == (front <= SCAN_TRUSTED)
     if runs == 1:
         assert cal.names == held.names and cal.evaluations == 20 and "not fitted" in cal.cab_choice
-        assert "at most 5%" in cal.cab_choice and "2 Hz" in cal.cab_choice
+        assert "at most 5%" in cal.cab_choice and "2 Hz" in cal.cab_choice and "model error 0.100" in cal.cab_choice
     else:
         assert calls[1] == (DEFAULT_NAMES + ("cab_mount_hz",), {"payload_kg": 3000.0}, {})
-        assert cal.cab_choice.startswith("cab fitted") and cal.evaluations == 30 and cal.wall_time_s >= 2.0
+        assert cal.cab_choice.startswith("cab fitted") and cal.wall_time_s >= 2.0
+        assert cal.evaluations == (30 if scans else 17)
 
 
 def _record(cab_hz):
