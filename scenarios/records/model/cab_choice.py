@@ -33,12 +33,13 @@ the cab stays held, without the second calibration (a few seconds of model runs 
 The scan is a first-order answer, trusted only where the cab-held model already reproduces the
 record (its model error, :attr:`Calibration.excess_nrmse`, within :data:`SCAN_TRUSTED` on all
 fitted wheels but one: a cab loads both wheels of an axle, and one wheel alone far off, a broken
-channel say, is that wheel's own matter, ``differential.outlier_wheel``). Where it does not, a cab can open another basin that no small step shows:
-on the paper suite's stiffening tire (medium 72 km/h case, the tire +50 % over 2 cm, a mismatch
-the family lacks) the held fit leaves model errors of 0.20-0.21 on the front wheels and the scan
-finds no gain at any mount (0 %), yet the cab fitted from the first guess goes to 8.4 Hz and brings
-the front wheels from 0.63 to 0.15 of the linear floor (``benchmarks/model_correction.py --suite
-paper``). There the second calibration runs without a scan.
+channel say, is that wheel's own matter, ``differential.outlier_wheel``). Where it does not, a cab
+can open another basin that no small step shows: on the paper suite's stiffening tire (medium
+72 km/h case, the tire +50 % over 2 cm, a mismatch the family lacks) the held fit leaves model
+errors of 0.20-0.21 on the front wheels and the scan finds no gain at any mount (0 %), yet the cab
+fitted from the first guess goes to 8.4 Hz and brings the front wheels from 0.63 to 0.15 of the
+linear floor (``benchmarks/model_correction.py --suite paper``). There the second calibration
+runs without a scan.
 """
 
 from __future__ import annotations
@@ -77,10 +78,10 @@ EDGE = 0.02
 #: search range's bottom.
 SCAN_HZ = tuple(float(v) for v in np.round(1.0 * 2.0 ** (np.arange(13) / 4.0), 2))
 #: Largest model error of the cab-held fit (:attr:`Calibration.excess_nrmse` of its second-worst
-#: fitted wheel, :func:`scan_error`) at which :func:`cab_scan` decides, 1: half the hybrid correction's limit on it
-#: (``differential.HYBRID_LIMIT``, 0.25), above every fit of a truck in the model's family (at most
-#: 0.062 on the paper and generalization cases) and below the paper suite's stiffening tire, whose
-#: held fit (0.20-0.21) the scan misjudges. Above it both calibrations run.
+#: fitted wheel, :func:`scan_error`) at which :func:`cab_scan` decides, 1: half the hybrid
+#: correction's limit on it (``differential.HYBRID_LIMIT``, 0.25), above every fit of a truck in the
+#: model's family (at most 0.062 on the paper and generalization cases) and below the paper suite's
+#: stiffening tire, whose held fit (0.20-0.21) the scan misjudges. Above it both calibrations run.
 SCAN_TRUSTED = 0.125
 
 
@@ -210,8 +211,9 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         if gain < MIN_GAIN / 2:  # no cab could make the fit clearly better: the second fit not run
             return dataclasses.replace(held, cab_choice=(
                 f"cab held: a cab on its own mounts would remove at most {gain:.0%} of the cab-held fit's squared "
-                f"residual (on {hz:.3g} Hz mounts, to first order; the held fit's model error {error:.3f} on its second-worst wheel), less "
-                f"than {MIN_GAIN / 2:.0%}, so it was not fitted."), evaluations=evaluations, wall_time_s=round(wall, 3))
+                f"residual (on {hz:.3g} Hz mounts, to first order; the held fit's model error {error:.3f} on its "
+                f"second-worst wheel), less than {MIN_GAIN / 2:.0%}, so it was not fitted."),
+                evaluations=evaluations, wall_time_s=round(wall, 3))
         fitted = run(WITH_CAB)
     chosen, why = choose(held, fitted)
     return dataclasses.replace(chosen, cab_choice=why, evaluations=evaluations + fitted.evaluations,
