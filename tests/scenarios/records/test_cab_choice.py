@@ -191,6 +191,9 @@ def test_the_scan_is_judged_by_the_second_worst_fitted_wheel():
     """A cab loads both wheels of an axle: one wheel far off (the walk-through's rr channel of pure
     noise: model error 9.4 against 0.035-0.039) leaves the scan trusted, two do not; a wheel the
     calibration left out does not count."""
+    from scenarios.records.model.differential import HYBRID_LIMIT
+
+    assert SCAN_TRUSTED == HYBRID_LIMIT / 2  # the threshold's stated source
     cal = _cal(("payload_kg",), (1.0,), (0.035, 0.039, 0.038, 9.4))
     assert scan_error(cal) == 0.039 <= SCAN_TRUSTED
     assert scan_error(dataclasses.replace(cal, fit_nrmse=(0.2, 0.21, 0.05, 0.05))) == 0.2 > SCAN_TRUSTED
