@@ -111,20 +111,17 @@ def main(argv=None) -> int:
             folder.mkdir()
             rec = folder / "messung.csv"
             write_record(rec, paths[args.case], args.duration_s, cab_hz=cab_hz)
-            linear = [rigsim, "identify", "--from-file", str(rec), "--pairs", PAIRS, "--out", str(folder / "ident")]
-            commands = {"linear": None} | {cab: [rigsim, "correct", str(rec), "--model", str(paths[args.case]),
-                                                 "--pairs", PAIRS, "-o", str(folder / f"model_{cab}.csv"), "--quiet",
-                                                 "--cab", cab, "--jobs", str(args.workers)] for cab in args.cab}
-            times = {key: [] for key in commands}
-            for _ in range(args.repeat):  # in turn, so that a drift of the machine's speed reaches every command
-                for key, command in commands.items():
-                    if command is None:
-                        ident = timed(linear, env)
-                        corr = timed([rigsim, "correct", str(rec), "--actuators", str(folder / "ident" / "actuators.toml"),
-                                      "--map", FORCES, "-o", str(folder / "linear.csv"), "--quiet"], env)
-                        times[key].append((ident[0] + corr[0], ident[1] + corr[1]))
-                    else:
-                        times[key].append(timed(command, env))
+            times = {key: [] for key in ["linear", *args.cab]}
+            for r in range(args.repeat):  # in turn, so that a drift of the machine's speed reaches every command
+                ident = folder / f"ident{r}"  # each run its own outputs: the commands refuse to replace one
+                i = timed([rigsim, "identify", "--from-file", str(rec), "--pairs", PAIRS, "--out", str(ident)], env)
+                c = timed([rigsim, "correct", str(rec), "--actuators", str(ident / "actuators.toml"), "--map", FORCES,
+                           "-o", str(folder / f"linear{r}.csv"), "--quiet"], env)
+                times["linear"].append((i[0] + c[0], i[1] + c[1]))
+                for cab in args.cab:
+                    times[cab].append(timed([rigsim, "correct", str(rec), "--model", str(paths[args.case]), "--pairs",
+                                             PAIRS, "-o", str(folder / f"model_{cab}{r}.csv"), "--quiet", "--cab", cab,
+                                             "--jobs", str(args.workers)], env))
             median = {key: tuple(float(v) for v in np.median(np.asarray(t), axis=0)) for key, t in times.items()}
             base = median["linear"]
             rows.append([truck, "linear: identify --from-file + correct --actuators", base, base[0]])
