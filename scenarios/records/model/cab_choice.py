@@ -155,7 +155,7 @@ def check_cab(cab: str, names=None) -> None:
 
 
 def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | None = None,
-                  workers: int | None = None, executor=None, **calibrate_kw) -> Calibration:
+                  workers: int | None = None, executor=None, defer=None, **calibrate_kw) -> Calibration:
     """Calibrate the truck model with the cab held, fitted, or (default) whichever fits clearly better.
 
     Parameters
@@ -173,6 +173,11 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         Worker processes (default: all cores), one pool for every calibration.
     executor : concurrent.futures.Executor, optional
         A running pool to use instead.
+    defer : callable, optional
+        ``defer(held)`` -> str: with "auto", why the cab-held calibration is to be redone before the
+        cab is chosen ("" where it is not), e.g. one wheel far off every other, to be left out
+        (``differential.outlier_wheel``); where it gives a reason the held calibration is returned
+        as it is, its :attr:`~Calibration.cab_choice` saying so.
     **calibrate_kw
         Passed to ``calibrate`` (``base_scenario`` required; ``x_ref_m``, ``windows``, ``max_nfev``...);
         ``names`` (with ``cab`` "auto" only): exactly these fields, one calibration, no choice.
@@ -201,6 +206,9 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         if cab != AUTO:
             return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
         held, state = run(DEFAULT_NAMES, with_state=True)
+        later = defer(held) if defer is not None else ""
+        if later:
+            return dataclasses.replace(held, cab_choice=f"cab held, not chosen on this calibration: {later}")
         t0 = time.perf_counter()
         error = scan_error(held)
         gain, hz = 1.0, None  # a model far off, or a cab variant that would not run: the scan cannot tell

@@ -280,10 +280,15 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),
                                                           ("lead_s", WINDOW_LEAD_S))))
     timings = {}
+    def defer(held: Calibration) -> str:  # a wheel to leave out first: the cab chosen on the others' fit
+        bad = outlier_wheel(held, excess_limit) if linear is not None and held.converged else None
+        return "" if bad is None else (f"{CORNERS[bad]}'s model error ({held.excess_nrmse[bad]:.3f}) is far past every "
+                                       "other wheel's, so the truck is calibrated again without it")
+
     with local_executor(workers) as ex:
         def calibrated(**kw) -> Calibration:
             return calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
-                                 executor=ex, **(calibrate_kw | kw))
+                                 executor=ex, defer=defer, **(calibrate_kw | kw))
 
         try:
             cal = calibrated()

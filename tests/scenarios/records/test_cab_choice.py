@@ -199,3 +199,30 @@ def test_the_scan_is_judged_by_the_second_worst_fitted_wheel():
     assert scan_error(dataclasses.replace(cal, fit_nrmse=(0.2, 0.21, 0.05, 0.05))) == 0.2 > SCAN_TRUSTED
     without_rr = dataclasses.replace(cal, fit_nrmse=(0.035, 0.3, 0.038, 9.4), wheels=("fl", "fr", "rl"))
     assert scan_error(without_rr) == 0.038
+
+
+def test_a_deferred_choice_returns_the_held_fit_alone(monkeypatch):
+    """``defer`` (the model correction's: one wheel far off every other, to be left out first) with a
+    reason: the cab-held calibration is returned as it is, neither scan nor second fit run; without
+    one the choice goes on."""
+    import scenarios.records.model.cab_choice as cab_choice
+
+    held = _cal(("payload_kg",), (3100.0,), (0.2, 0.19, 0.76, 4.7))
+    calls, seen = [], []
+
+    def fake_calibrate(t, x, f, *, names, fitted_guess, executor, **kw):
+        calls.append(tuple(names))
+        return (held, FitState(_Problem([]), None, None, None)) if kw.get("with_state") else _fitted(2.0, 0.1)
+
+    def defer(cal):
+        seen.append(cal)
+        return "rr is far off"
+
+    monkeypatch.setattr(cab_choice, "calibrate", fake_calibrate)
+    monkeypatch.setattr(cab_choice, "cab_scan", lambda state: pytest.fail("no scan on a deferred choice"))
+    cal = calibrate_cab(None, None, None, cab=AUTO, workers=1, defer=defer)
+    assert calls == [DEFAULT_NAMES] and seen == [held]
+    assert cal.cab_choice == "cab held, not chosen on this calibration: rr is far off" and cal.fitted == held.fitted
+    calls.clear()
+    cal = calibrate_cab(None, None, None, cab=AUTO, workers=1, defer=lambda cal: "")
+    assert len(calls) == 2 and cal.cab_choice.startswith("cab ")  # 0.76 on rl: the scan distrusted, both fits
