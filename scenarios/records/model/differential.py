@@ -281,7 +281,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                                           ("lead_s", WINDOW_LEAD_S))))
     timings = {}
     def defer(held: Calibration) -> str:  # a wheel to leave out first: the cab chosen on the others' fit
-        bad = outlier_wheel(held, excess_limit) if linear is not None and held.converged else None
+        first = len(held.wheels) == len(CORNERS)  # the fit without that wheel chooses
+        bad = outlier_wheel(held, excess_limit) if linear is not None and held.converged and first else None
         return "" if bad is None else (f"{CORNERS[bad]}'s model error ({held.excess_nrmse[bad]:.3f}) is far past every "
                                        "other wheel's, so the truck is calibrated again without it")
 

@@ -106,3 +106,36 @@ def test_the_wheels_to_fit_are_checked_before_any_run(wheels):
 
     with pytest.raises(ScenarioError, match="wheels must be distinct corners of fl, fr, rl, rr"):
         calibrate([0.0, 0.001], [[0.0] * 4] * 2, [[1e4] * 4] * 2, base_scenario=None, wheels=wheels)
+
+
+def test_the_cab_is_chosen_on_the_calibration_without_the_outlier_wheel(monkeypatch):
+    """correct_with_model's ``defer`` (cab_choice.calibrate_cab, calibrations faked): the first fit,
+    rr far past every other wheel (the walk-through's broken channel: model errors 0.035-0.039
+    against 9.4), defers the cab's choice with a sentence naming rr; the fit without rr, whose rr
+    error is still 9.4 but no longer fitted, does not (it chooses the cab)."""
+    import numpy as np
+
+    from mjcf.names import CORNERS
+    from scenarios.core.config import load_scenario, paper_scenarios
+    import scenarios.records.model.differential as differential
+
+    said = []
+
+    def fake_calibrate_cab(t, x_a, f, *, cab, defer, wheels=CORNERS, start=None, **kw):
+        cal = dataclasses.replace(_cal((0.035, 0.039, 0.038, 9.4)), wheels=tuple(wheels))
+        said.append(defer(cal))
+        return cal
+
+    monkeypatch.setattr(differential, "calibrate_cab", fake_calibrate_cab)
+    monkeypatch.setattr(differential, "calibrate_again", lambda cal, again, limit: cal)
+    monkeypatch.setattr(differential, "model_force_pair", lambda variant, t, x_ref, x_a, **kw: (np.zeros((n, 4)),) * 2)
+    n = 4000
+    t = np.arange(n) / 1000.0
+    x = np.zeros((n, 4))
+    force = 20e3 + np.random.default_rng(0).normal(0.0, 100.0, (n, 4))
+    sc = load_scenario(paper_scenarios()[0])
+    mc = differential.correct_with_model(t, x, x, force, base_scenario=sc, workers=1, windows=1, window_s=1.0,
+                                         lead_s=0.5, linear=lambda f: (np.asarray(f, float), np.ones(len(f), bool)))
+    assert said == ["rr's model error (9.400) is far past every other wheel's, so the truck is calibrated again "
+                    "without it", ""]
+    assert mc.calibration.wheels == ("fl", "fr", "rl") and mc.wheels == ("fl", "fr", "rl")
