@@ -280,6 +280,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),
                                                           ("lead_s", WINDOW_LEAD_S))))
     timings = {}
+
     def defer(held: Calibration) -> str:  # a wheel to leave out first: the cab chosen on the others' fit
         first = len(held.wheels) == len(CORNERS)  # the fit without that wheel chooses
         bad = outlier_wheel(held, excess_limit) if linear is not None and held.converged and first else None
