@@ -73,11 +73,11 @@ __all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
                   "spring_rate_factor_rl", "spring_friction_factor_fl", "spring_friction_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
-FITTED = ("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
+FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
           "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED
-UNITS = {"payload_kg": "kg", "payload_x_m": "m", "tire_stiffness_front_N_per_m": "N/m",
+UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
          "axle_mass_front_kg": "kg", "axle_mass_rear_kg": "kg",
@@ -93,7 +93,7 @@ DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
 #: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
 #: The onsets have none: their range is the loads measured on their axle (onset_load).
-RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_per_m": (0.3, 3.0),
+RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "tire_stiffness_front_N_per_m": (0.3, 3.0),
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
           "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 8.0),
           "spring_friction_rear_N": (0.05, 8.0), "axle_mass_front_kg": (0.6, 1.8), "axle_mass_rear_kg": (0.6, 1.8),
@@ -106,7 +106,7 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "tire_stiffness_front_N_
 #: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
 #: ratio, whose linear tire is ratio 0; the onsets are searched as loads, N, their range and span
 #: the loads measured on their axle (:mod:`~scenarios.records.model.onset_load`).
-ADDITIVE = ("payload_x_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
+ADDITIVE = ("payload_x_m", "payload_z_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
             "tire_progressive_onset_rear_m")
 #: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
 #: mount's frequency, whose effect on the wheel forces fades as 1 / f^2 towards a rigid cab (a

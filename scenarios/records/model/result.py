@@ -198,7 +198,7 @@ class Calibration:
                 tv = truth.get(name)
                 if tv is None:
                     row += " - | - |"
-                elif name == "payload_x_m":
+                elif name in ("payload_x_m", "payload_z_m"):
                     row += f" {tv:.5g} | {v - tv:+.3f} m |"
                 else:
                     row += f" {tv:.5g} | {(v / tv - 1) if tv else float('nan'):+.1%} |"
