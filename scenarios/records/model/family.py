@@ -8,6 +8,13 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   loads (:func:`~scenarios.records.model.first_guess.static_guess`), the fit refines them;
   ``payload_y_m``, its centre across the truck, is held where the measured left/right moment puts it
   (:func:`~scenarios.records.model.first_guess.static_lateral`): the four static loads pin it;
+* ``payload_z_m``, the height of the payload's centre of mass, fitted from the XML's 0.56 m (a
+  0.8 m stack on the bed), searched 0.5 m either way within :data:`mjcf.variant.BOUNDS`: the
+  static loads say nothing of it, but it sets the sprung mass's pitch and roll inertia about its
+  centre of mass, and so the body's bounce and pitch modes the front wheels feel; a lab knows a
+  stack's height only roughly (a taller stack of lighter goods, or a low one of steel), and a
+  model that holds the XML's height puts the difference into the front leaf friction and tire
+  values. Where the truck is empty there is no payload to place, and it is held with the mass;
 * ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
   right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
   motion puts straight through the tire;
@@ -49,7 +56,8 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   on a rigid one; the price is a larger front-wheel error where the plant's cab mass differs from
   the model's.
 
-Not fitted: the chassis (5.2 t, its CoM and inertia), the cab's mass (the
+Not fitted: the chassis (5.2 t, its CoM and inertia; the payload's height stands in for a
+sprung mass whose pitch inertia is not the XML's), the cab's mass (the
 model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate (but for the left/right factors)
 and viscous damping are held at their catalogue (XML) values; the tire free radius only moves
 the static ride height, and the pan mass does not enter a tire force whose pans follow a given
