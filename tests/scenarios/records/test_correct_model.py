@@ -312,3 +312,15 @@ def test_an_all_wheel_stiffening_in_truck_toml_is_the_rear_guess_too(tmp_path):
     own = parse_scenario({**base, "vehicle": {"tire_progressive_ratio": 0.3, "tire_progressive_ratio_rear": 0.1}})
     guess, unused = _first_guess(own)
     assert guess["tire_progressive_ratio_rear"] == 0.1 and "tire_progressive_onset_rear_m" not in guess
+
+
+def test_a_payload_height_in_truck_toml_is_the_first_guess_and_its_mass_is_not():
+    """TRUCK.toml's [vehicle] payload_z_m (a lab that measured its stack) starts the height's fit;
+    payload_kg and payload_x_m come from the record's static loads, so the file's are reported unused."""
+    from scenarios.records.model_record import first_guess as _first_guess
+    from scenarios.core.config import parse_scenario
+
+    sc = parse_scenario({"name": "truck", "speed_kmh": 72.0, "duration_s": 10.0, "road": {"roughness": "C"},
+                         "vehicle": {"payload_kg": 3000.0, "payload_x_m": -1.0, "payload_z_m": 0.9}})
+    guess, unused = _first_guess(sc)
+    assert guess == {"payload_z_m": 0.9} and set(unused) == {"payload_kg", "payload_x_m"}
