@@ -38,7 +38,7 @@ from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.pool import local_executor
 from scenarios.records.model.band_error import band_errors
 from scenarios.records.model.cell_mass import band_acceleration
-from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, FITTED, RANGES, STATION_FITTED, UNITS
+from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
 from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral, xml_nominal
 from scenarios.records.model.model_runs import check_record
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
@@ -172,17 +172,19 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     wins = fit_windows(t, windows, window_s, lead_s)
     payload, x = static_guess(force, base_scenario)
     if payload == 0.0 and "payload_kg" not in (fitted_guess or {}):  # an empty truck: nothing to fit there
-        names = tuple(k for k in names if k not in ("payload_kg", "payload_x_m", "payload_z_m"))
+        names = tuple(dict.fromkeys(EMPTY_STAND_IN.get(k, k) for k in names if k not in ("payload_kg", "payload_x_m")))
         if not names:
             raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
                                 "name other fields to fit")
     # The payload's centre across the truck: pinned by the measured left/right moment (held, not fitted).
     y = static_lateral(force, base_scenario, payload, x)
-    guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, "payload_z_m": xml_nominal()["payload_z_m"],
-             **catalogue(),
+    nominal = xml_nominal()
+    guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, "payload_z_m": nominal["payload_z_m"],
+             "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"], **catalogue(),
              **dict.fromkeys(STATION_FITTED, 1.0), **(fitted_guess or {})}
-    held = [k for k in FITTED if k == "cab_mount_hz" or k.startswith("tire_progressive") or k in STATION_FITTED]
-    for k in held:  # held: rigid cab, linear tire, left and right stations alike
+    held = [k for k in FITTED if k in ("cab_mount_hz", *EMPTY_STAND_IN.values()) or k.startswith("tire_progressive")
+            or k in STATION_FITTED]
+    for k in held:  # held: rigid cab, linear tire, left and right stations alike, the XML's chassis
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper, loads = [], [], {}

@@ -14,7 +14,11 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   centre of mass, and so the body's bounce and pitch modes the front wheels feel; a lab knows a
   stack's height only roughly (a taller stack of lighter goods, or a low one of steel), and a
   model that holds the XML's height puts the difference into the front leaf friction and tire
-  values. Where the truck is empty there is no payload to place, and it is held with the mass;
+  values. Where the truck is empty there is no payload to raise or lower, and the chassis' pitch
+  inertia (``chassis_pitch_inertia_kg_m2``, from the XML's 25 200 kg m^2, searched 0.5-2 times it,
+  :data:`EMPTY_STAND_IN`) is fitted in its place: a chassis with its tanks, body and equipment is
+  not the catalogue's, and with no payload nothing else sets the body's pitch mode; on a loaded
+  truck it is held (the payload's height and the chassis' inertia trade against each other);
 * ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
   right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
   motion puts straight through the tire;
@@ -74,18 +78,18 @@ The fit itself: :mod:`scenarios.records.model.calibrate`.
 
 from __future__ import annotations
 
-__all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
+__all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
 
 #: Each axle's left tire stiffness, leaf-spring rate and interleaf friction over its right one (the
 #: module's description).
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
                   "spring_rate_factor_rl", "spring_friction_factor_fl", "spring_friction_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
-FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
+FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
           "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED
-UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "tire_stiffness_front_N_per_m": "N/m",
+UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pitch_inertia_kg_m2": "kg m^2", "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
          "axle_mass_front_kg": "kg", "axle_mass_rear_kg": "kg",
@@ -97,11 +101,15 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "tire_stiff
 #: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
-DEFAULT_NAMES = tuple(k for k in FITTED if k != "cab_mount_hz")
+DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2"))
+#: The payload's height's stand-in on an empty truck (fitted in its place where there is no payload):
+#: the chassis' pitch inertia (the module's description).
+EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
 #: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
 #: The onsets have none: their range is the loads measured on their axle (onset_load).
-RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "tire_stiffness_front_N_per_m": (0.3, 3.0),
+RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "chassis_pitch_inertia_kg_m2": (0.5, 2.0),
+          "tire_stiffness_front_N_per_m": (0.3, 3.0),
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
           "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 8.0),
           "spring_friction_rear_N": (0.05, 8.0), "axle_mass_front_kg": (0.6, 1.8), "axle_mass_rear_kg": (0.6, 1.8),

@@ -55,7 +55,8 @@ def _nominal() -> tuple[dict, tuple[float, float], np.ndarray]:
     model = build_model(TruckVariant())
     f, r = CORNERS.index(FRONT[0]), CORNERS.index("rl")
     nominal = nominal_values(model)
-    values = {k: nominal[k] for k in ("payload_kg", "payload_x_m", "payload_z_m", "tire_stiffness_front_N_per_m",
+    values = {k: nominal[k] for k in ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2",
+                                      "tire_stiffness_front_N_per_m",
                                       "tire_stiffness_rear_N_per_m", "tire_damping_front_Ns_per_m",
                                       "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
                                       "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg")}
