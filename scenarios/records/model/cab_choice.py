@@ -15,8 +15,8 @@ below the held cab's, and the mount frequency not at its search range's bottom
 (:meth:`Calibration.at_edge`: a fit that wandered off). At the range's top (30 Hz) the cab is
 practically rigid, and a fit that is still clearly better there found a better minimum of the
 truck's other values than the cab-held fit did (the paper suite's medium 72 km/h case with the
-stiffening tire: fit NRMSE 0.049 against the held fit's 0.155): it is kept. Convergence is not part of the choice: the chosen calibration's is
-checked where every calibration's is (a fit that did not converge falls back to the linear
+stiffening tire: fit NRMSE 0.049 against the held fit's 0.155): it is kept. Convergence is not
+part of the choice: the chosen calibration's is checked where every calibration's is (a fit that did not converge falls back to the linear
 correction, :func:`~scenarios.records.model.differential.fallback_reason`). Measured on generalization cases (30 s, docs/model_correction.md): a
 truck with its cab on 2 Hz mounts fits 0.10 against the rigid cab's 0.50 (front wheels), a
 rigid-cab truck 0.095 held against 0.35 fitted (gen00) or 0.057 against 0.057 (gen05, the mount
@@ -143,12 +143,13 @@ def choose(held: Calibration, fitted: Calibration, min_gain: float = MIN_GAIN) -
     gain = 1.0 - ms_f / ms_h if ms_h > 0 else 0.0
     what = (f"the cab fitted on {hz:.3g} Hz mounts reproduces the measured forces to fit NRMSE "
             f"{np.sqrt(ms_f):.3f} (rms of the wheels), the cab held to {np.sqrt(ms_h):.3f}")
-    lo, hi = fitted.bounds[fitted.names.index("cab_mount_hz")] if fitted.bounds else (0.0, np.inf)
-    if fitted.at_edge("cab_mount_hz", EDGE) and hz - lo < hi - hz:
-        return held, f"cab held: {what}, but the mount frequency stopped at its search range's bottom."
-    if gain >= min_gain and fitted.at_edge("cab_mount_hz", EDGE):  # mounts so stiff the cab is rigid
-        return fitted, (f"cab fitted: {what}; mounts that stiff make the cab practically rigid, and the fit with "
-                        "them found the better truck.")
+    if fitted.at_edge("cab_mount_hz", EDGE):
+        lo, hi = fitted.bounds[fitted.names.index("cab_mount_hz")]
+        if hz - lo < hi - hz:
+            return held, f"cab held: {what}, but the mount frequency stopped at its search range's bottom."
+        if gain >= min_gain:  # mounts so stiff the cab is rigid
+            return fitted, (f"cab fitted: {what}; mounts that stiff make the cab practically rigid, and the fit "
+                            "with them found the better truck.")
     if gain < min_gain:
         return held, f"cab held: {what}, less than {min_gain:.0%} better in mean square."
     return fitted, f"cab fitted: {what}."

@@ -61,7 +61,8 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   the model's.
 
 Not fitted: the chassis (5.2 t, its CoM and inertia; the payload's height stands in for a
-sprung mass whose pitch inertia is not the XML's), the cab's mass (the
+sprung mass whose pitch inertia is not the XML's, and on an empty truck the pitch inertia itself
+is fitted, :data:`EMPTY_STAND_IN`), the cab's mass (the
 model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate (but for the left/right factors)
 and viscous damping are held at their catalogue (XML) values; the tire free radius only moves
 the static ride height, and the pan mass does not enter a tire force whose pans follow a given
@@ -85,11 +86,13 @@ __all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
                   "spring_rate_factor_rl", "spring_friction_factor_fl", "spring_friction_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
-FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
+FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2",
+          "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
           "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED
-UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pitch_inertia_kg_m2": "kg m^2", "tire_stiffness_front_N_per_m": "N/m",
+UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pitch_inertia_kg_m2": "kg m^2",
+         "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
          "axle_mass_front_kg": "kg", "axle_mass_rear_kg": "kg",
