@@ -39,7 +39,7 @@ from scenarios.core.pool import local_executor
 from scenarios.records.model.band_error import band_errors
 from scenarios.records.model.cell_mass import band_acceleration
 from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
-from scenarios.records.model.first_guess import catalogue, static_guess, static_lateral, xml_nominal
+from scenarios.records.model.first_guess import catalogue, is_light, static_guess, static_lateral, xml_nominal
 from scenarios.records.model.model_runs import check_record
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
 from scenarios.records.model.problem import FitProblem, FitState
@@ -171,8 +171,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
     wins = fit_windows(t, windows, window_s, lead_s)
     payload, x = static_guess(force, base_scenario)
-    if payload == 0.0 and "payload_kg" not in (fitted_guess or {}):  # an empty truck: nothing to fit there
-        names = tuple(dict.fromkeys(EMPTY_STAND_IN.get(k, k) for k in names if k not in ("payload_kg", "payload_x_m")))
+    given = "payload_kg" in (fitted_guess or {})
+    if not given and is_light(payload, base_scenario):  # a light payload's height barely matters: the stand-in
+        names = tuple(dict.fromkeys(EMPTY_STAND_IN.get(k, k) for k in names))
+    if payload == 0.0 and not given:  # an empty truck: nothing to fit there
+        names = tuple(k for k in names if k not in ("payload_kg", "payload_x_m"))
         if not names:
             raise ScenarioError("the measured loads are those of an empty truck, which has no payload to fit; "
                                 "name other fields to fit")

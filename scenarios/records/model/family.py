@@ -14,11 +14,12 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   centre of mass, and so the body's bounce and pitch modes the front wheels feel; a lab knows a
   stack's height only roughly (a taller stack of lighter goods, or a low one of steel), and a
   model that holds the XML's height puts the difference into the front leaf friction and tire
-  values. Where the truck is empty there is no payload to raise or lower, and the chassis' pitch
-  inertia (``chassis_pitch_inertia_kg_m2``, from the XML's 25 200 kg m^2, searched 0.5-2 times it,
-  :data:`EMPTY_STAND_IN`) is fitted in its place: a chassis with its tanks, body and equipment is
-  not the catalogue's, and with no payload nothing else sets the body's pitch mode; on a loaded
-  truck it is held (the payload's height and the chassis' inertia trade against each other);
+  values. Where the truck is empty there is no payload to raise or lower (and where it is light,
+  under :data:`~scenarios.records.model.first_guess.LIGHT_FRACTION` of the empty truck, its
+  height barely matters), and the chassis' pitch inertia (``chassis_pitch_inertia_kg_m2``,
+  from the XML's 25 200 kg m^2, searched 0.5-2 times it, :data:`EMPTY_STAND_IN`) is fitted in
+  its place: a chassis with its tanks, body and equipment is not the catalogue's, and with little
+  or no payload nothing else sets the body's pitch mode; on a loaded truck it is held (the payload's height and the chassis' inertia trade against each other);
 * ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
   right tires are the same type); they set the wheel-hop modes (~10 Hz) and the force a pan's
   motion puts straight through the tire;
@@ -105,7 +106,7 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pi
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
 DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2"))
-#: The payload's height's stand-in on an empty truck (fitted in its place where there is no payload):
+#: The payload's height's stand-in on an empty or light truck (fitted in its place where the payload is light):
 #: the chassis' pitch inertia (the module's description).
 EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
