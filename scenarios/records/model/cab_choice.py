@@ -58,7 +58,7 @@ from mjcf.names import CORNERS
 from scenarios.core.config import ScenarioError
 from scenarios.core.pool import local_executor
 from scenarios.core.watch import SimulationError
-from scenarios.records.model.calibrate import calibrate
+from scenarios.records.model.calibrate import calibrate, with_sigma
 from scenarios.records.model.family import DEFAULT_NAMES
 from scenarios.records.model.result import Calibration
 
@@ -214,24 +214,28 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
             return run(names)
         if cab != AUTO:
             return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
-        held, state = run(DEFAULT_NAMES, with_state=True)
+        # Each fit's uncertainties (a Jacobian at its optimum) are computed only where it is kept.
+        w0 = time.perf_counter()
+        held, state = run(DEFAULT_NAMES, with_state=True, sigma=False)
         later = defer(held) if defer is not None else ""
         if later:
+            held = with_sigma(held, state)[0]
             return dataclasses.replace(held, cab_choice=f"cab held, not chosen on this calibration: {later}")
-        t0 = time.perf_counter()
         error = scan_error(held)
         gain, hz = 1.0, None  # a model far off, or a cab variant that would not run: the scan cannot tell
         if error <= SCAN_TRUSTED:
+            held, state = with_sigma(held, state)  # the scan projects out the held fit's Jacobian
             with contextlib.suppress(ScenarioError, SimulationError):
                 gain, hz = cab_scan(state)
-        evaluations, wall = state.problem.evaluations, held.wall_time_s + time.perf_counter() - t0
         if gain < MIN_GAIN / 2:  # no cab could make the fit clearly better: the second fit not run
             return dataclasses.replace(held, cab_choice=(
                 f"cab held: a cab on its own mounts would remove at most {gain:.0%} of the cab-held fit's squared "
                 f"residual (on {hz:.3g} Hz mounts, to first order; the held fit's model error {error:.3f} on its "
                 f"second-worst wheel), less than {MIN_GAIN / 2:.0%}, so it was not fitted."),
-                evaluations=evaluations, wall_time_s=round(wall, 3))
-        fitted = run(WITH_CAB)
-    chosen, why = choose(held, fitted)
-    return dataclasses.replace(chosen, cab_choice=why, evaluations=evaluations + fitted.evaluations,
-                               wall_time_s=round(wall + fitted.wall_time_s, 3))
+                evaluations=state.problem.evaluations, wall_time_s=round(time.perf_counter() - w0, 3))
+        fitted, fitted_state = run(WITH_CAB, with_state=True, sigma=False)
+        chosen, why = choose(held, fitted)
+        chosen = with_sigma(chosen, state if chosen is held else fitted_state)[0]
+        evaluations = state.problem.evaluations + fitted_state.problem.evaluations
+        wall = round(time.perf_counter() - w0, 3)
+    return dataclasses.replace(chosen, cab_choice=why, evaluations=evaluations, wall_time_s=wall)

@@ -27,6 +27,7 @@ the linear floor, DLC, wall time); docs/model_correction.md discusses them.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import time
 
 import numpy as np
@@ -47,7 +48,8 @@ from scenarios.records.model.result import Calibration
 from scenarios.records.model.uncertainty import uncertainties
 from scenarios.records.model.weighting import differential_kernel
 
-__all__ = ["fit_windows", "calibrate", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "MAX_NFEV", "BLOCK_S"]
+__all__ = ["fit_windows", "calibrate", "with_sigma", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "MAX_NFEV", "FTOL",
+           "BLOCK_S"]
 
 #: Windows of the record fitted: how many, scored seconds each, measured lead-in before each (s).
 #: The lead-in: a model run started at rest on a moving truck's record carries the start's state
@@ -62,6 +64,13 @@ WINDOWS, WINDOW_S, WINDOW_LEAD_S = 3, 4.0, 2.5
 #: floor, DLC within 0.24 %). A cap changes nothing for a fit that converges below it (the same
 #: trajectory).
 MAX_NFEV = 60
+#: The least squares stop where a step lowers the sum of squares by less than this fraction of it
+#: (``least_squares``' ftol, 1): the fits' last steps each take a finite-difference Jacobian for a
+#: gain the correction does not see. Measured on a 60 s record of the paper's high case (2 cores,
+#: ``benchmarks/model_cost.py``'s records): 1e-4 took 141 truck variants on the rigid-cab truck and
+#: 249 on the 2 Hz cab truck (both fits), 1e-3 109 and 174, every wheel's NRMSE against the road
+#: within 0.0006 and its DLC error within 0.02 % of the 1e-4 fits'.
+FTOL = 1e-3
 #: Block of the robust uncertainty, s: longer than the fit residual's correlation (the truck's
 #: slowest modes, ~0.6 s period), short enough for a few dozen blocks in the windows.
 BLOCK_S = 0.5
@@ -90,7 +99,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
               fitted_guess: dict | None = None, start: dict | None = None, wheels=CORNERS,
               windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
               workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None, cell_mass: bool = True,
-              with_state: bool = False):
+              with_state: bool = False, sigma: bool = True):
     """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
 
     Parameters
@@ -138,6 +147,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     with_state : bool
         Return the fit's :class:`~scenarios.records.model.problem.FitState` too (for model runs
         at the optimum through the same residual, with ``executor`` still running).
+    sigma : bool
+        Compute the fitted values' uncertainties (default): one more Jacobian at the optimum, by
+        finite differences, unless the fit's last one was. False (with ``with_state``) leaves
+        :attr:`Calibration.sigma` NaN and the state's Jacobian None, for :func:`with_sigma` to
+        complete where the calibration is kept (of two compared, say).
 
     Returns
     -------
@@ -218,12 +232,13 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         m0 = prob.cache[tuple(theta0)][1]
         m_init = prob.as_measured(m0, prob.cell_mass(m0, block)[0])
         res = least_squares(prob.fun, theta0, jac=lambda th: prob.jac(th, ub), bounds=(lb, ub), method="trf",
-                            x_scale=1.0, ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
-        jac = prob.final_jac(res.x, ub)
+                            x_scale=1.0, ftol=FTOL, xtol=1e-4, gtol=1e-6, max_nfev=max_nfev)
+        jac = prob.final_jac(res.x, ub) if sigma else None
         f_opt, m_run = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
         mass, mass_1s = prob.cell_mass(m_run, block)
         m_opt = prob.as_measured(m_run, mass)
-    sigma, robust = uncertainties(jac, f_opt, block, prob.mapping(res.x), int(use.sum()))
+    sig, robust = (uncertainties(jac, f_opt, block, prob.mapping(res.x), int(use.sum())) if sigma
+                   else (np.full(len(names), np.nan),) * 2)
     fitted, linear = prob.fields(res.x), []
     for i, j, kt in prob.onsets:
         ratio = ONSET_RATIO[names[i]]  # a stiffening beyond every measured load: the tire held linear (TOP)
@@ -241,7 +256,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
 
     cal = Calibration(names=names, units=tuple(UNITS[k] for k in names),
                        initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
-                       sigma=tuple(float(s) for s in sigma), sigma_robust=tuple(float(s) for s in robust), fixed=fixed, fit_nrmse=per_wheel(m_opt),
+                       sigma=tuple(float(s) for s in sig), sigma_robust=tuple(float(s) for s in robust), fixed=fixed, fit_nrmse=per_wheel(m_opt),
                        initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
                        windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
                        evaluations=int(prob.evaluations), converged=bool(res.status > 0),
@@ -251,5 +266,29 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                        noise_nrmse=tuple(float(v) for v in noise / prob.norm), band_nrmse=band,
                        band_noise_nrmse=band_noise, wheels=tuple(c for c in CORNERS if c in wheels),
                        cell_mass_kg=float(mass), cell_mass_sigma_kg=mass_1s)
-    return (cal, FitState(prob, np.asarray(res.x, float), jac, f_opt)) if with_state else cal
+    state = FitState(prob, np.asarray(res.x, float), jac, f_opt, ub)
+    return (cal, state) if with_state else cal
+
+
+def with_sigma(cal: Calibration, state: FitState) -> tuple[Calibration, FitState]:
+    """A calibration made with ``sigma=False`` completed: its fitted values' uncertainties from a
+    finite-difference Jacobian at the optimum (the fit's worker pool still running); one already
+    complete is returned as it is.
+
+    Returns
+    -------
+    (Calibration, FitState)
+        With :attr:`Calibration.sigma` and :attr:`~Calibration.sigma_robust` (SI), the state's Jacobian set.
+    """
+    if state.jacobian is not None:
+        return cal, state
+    prob = state.problem
+    t0 = time.perf_counter()
+    jac = prob.final_jac(state.theta, state.upper)
+    block = int(round(BLOCK_S / (prob.t[1] - prob.t[0])))
+    sig, robust = uncertainties(jac, state.residual, block, prob.mapping(state.theta), int(prob.use.sum()))
+    cal = dataclasses.replace(cal, sigma=tuple(float(s) for s in sig), sigma_robust=tuple(float(s) for s in robust),
+                              evaluations=int(prob.evaluations),
+                              wall_time_s=round(cal.wall_time_s + time.perf_counter() - t0, 3))
+    return cal, dataclasses.replace(state, jacobian=jac)
 

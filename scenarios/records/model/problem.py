@@ -44,16 +44,20 @@ class FitState:
         The problem (its worker pool is the caller's; used only while that pool runs).
     theta : numpy.ndarray
         The optimum, scaled parameters (1).
-    jacobian : numpy.ndarray
-        The residual's finite-difference Jacobian there (residuals x parameters, 1).
+    jacobian : numpy.ndarray or None
+        The residual's finite-difference Jacobian there (residuals x parameters, 1); None where the
+        calibration left its uncertainties for later (``calibrate(sigma=False)``).
     residual : numpy.ndarray
         The weighted residual there (1).
+    upper : numpy.ndarray or None
+        The upper bounds on theta (1): a finite-difference step that would pass one is taken backwards.
     """
 
     problem: "FitProblem"
     theta: np.ndarray
-    jacobian: np.ndarray
+    jacobian: np.ndarray | None
     residual: np.ndarray
+    upper: np.ndarray | None = None
 
 
 class FitProblem:

@@ -132,18 +132,24 @@ def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gai
     same first guess) only where the scan's gain reaches MIN_GAIN / 2, the scan could not run (None:
     a cab variant's run failed) or the held fit's model error (here its fit NRMSE, no noise
     measured) exceeds SCAN_TRUSTED (0.13 > 0.125: no scan, whatever it would say); the result counts
-    every run."""
+    every run. Each fit's uncertainties (a Jacobian at its optimum) are computed only for the
+    calibration kept, and for the held one where the scan projects out its Jacobian."""
     import scenarios.records.model.cab_choice as cab_choice
 
     held = _cal(("payload_kg",), (3100.0,), (front, front, 0.05, 0.05))
     assert scan_error(held) == front
-    calls, scans = [], []
+    calls, scans, completed = [], [], []
 
     def fake_calibrate(t, x, f, *, names, fitted_guess, executor, **kw):
         calls.append((tuple(names), fitted_guess, kw))
-        if kw.get("with_state"):
-            return held, FitState(_Problem([]), None, None, None)
-        return _cal(("payload_kg", "cab_mount_hz"), (1.0, 2.0), (0.02,) * 4, bounds=((0.5, 2.0), (1.0, 30.0)))
+        cal = held if len(calls) == 1 else _cal(("payload_kg", "cab_mount_hz"), (1.0, 2.0), (0.02,) * 4,
+                                                bounds=((0.5, 2.0), (1.0, 30.0)))
+        return cal, FitState(_Problem([]), None, None, None)
+
+    def fake_sigma(cal, state):  # the Jacobian at the optimum: 5 runs
+        completed.append(cal.names)
+        state.problem.evaluations += 5
+        return cal, state
 
     def fake_scan(state):
         scans.append(state)
@@ -153,17 +159,21 @@ def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gai
         return gain, 2.0
 
     monkeypatch.setattr(cab_choice, "calibrate", fake_calibrate)
+    monkeypatch.setattr(cab_choice, "with_sigma", fake_sigma)
     monkeypatch.setattr(cab_choice, "cab_scan", fake_scan)
     cal = calibrate_cab(None, None, None, cab=AUTO, workers=1, fitted_guess={"payload_kg": 3000.0})
-    assert calls[0] == (DEFAULT_NAMES, {"payload_kg": 3000.0}, {"with_state": True}) and len(calls) == runs
+    deferred = {"with_state": True, "sigma": False}
+    assert calls[0] == (DEFAULT_NAMES, {"payload_kg": 3000.0}, deferred) and len(calls) == runs
     assert len(scans) == (front <= SCAN_TRUSTED)
-    if runs == 1:
-        assert cal.names == held.names and cal.evaluations == 20 and "not fitted" in cal.cab_choice
+    if runs == 1:  # the held fit completed (its Jacobian is the scan's), 7 + 5 + 13 runs
+        assert completed == [held.names]
+        assert cal.names == held.names and cal.evaluations == 25 and "not fitted" in cal.cab_choice
         assert "at most 5%" in cal.cab_choice and "2 Hz" in cal.cab_choice and "model error 0.100 on its second" in cal.cab_choice
-    else:
-        assert calls[1] == (DEFAULT_NAMES + ("cab_mount_hz",), {"payload_kg": 3000.0}, {})
-        assert cal.cab_choice.startswith("cab fitted") and cal.wall_time_s >= 2.0
-        assert cal.evaluations == (30 if scans else 17)
+    else:  # the fitted cab chosen and completed; the held fit only where the scan needed its Jacobian
+        assert calls[1] == (DEFAULT_NAMES + ("cab_mount_hz",), {"payload_kg": 3000.0}, deferred)
+        assert cal.cab_choice.startswith("cab fitted")
+        assert completed == ([held.names] if scans else []) + [("payload_kg", "cab_mount_hz")]
+        assert cal.evaluations == (7 + 5 + 13 + 7 + 5 if scans else 7 + 7 + 5)
 
 
 def _record(cab_hz):
@@ -219,7 +229,7 @@ def test_a_deferred_choice_returns_the_held_fit_alone(monkeypatch):
 
     def fake_calibrate(t, x, f, *, names, fitted_guess, executor, **kw):
         calls.append(tuple(names))
-        return (held, FitState(_Problem([]), None, None, None)) if kw.get("with_state") else _fitted(2.0, 0.1)
+        return held if len(calls) == 1 else _fitted(2.0, 0.1), FitState(_Problem([]), None, None, None)
 
     def defer(cal):
         seen.append(cal)
@@ -227,6 +237,7 @@ def test_a_deferred_choice_returns_the_held_fit_alone(monkeypatch):
 
     monkeypatch.setattr(cab_choice, "calibrate", fake_calibrate)
     monkeypatch.setattr(cab_choice, "cab_scan", lambda state: pytest.fail("no scan on a deferred choice"))
+    monkeypatch.setattr(cab_choice, "with_sigma", lambda cal, state: (cal, state))
     cal = calibrate_cab(None, None, None, cab=AUTO, workers=1, defer=defer)
     assert calls == [DEFAULT_NAMES] and seen == [held]
     assert cal.cab_choice == "cab held, not chosen on this calibration: rr is far off" and cal.fitted == held.fitted

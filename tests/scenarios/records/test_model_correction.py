@@ -13,11 +13,11 @@ import pytest
 
 from mjcf.variant import TruckVariant
 from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
-from scenarios.core.pool import run_jobs
+from scenarios.core.pool import local_executor, run_jobs
 from scenarios.core.rig import Rig
 from scenarios.core.run import run
 from scenarios.studies import scoring
-from scenarios.records.model.calibrate import calibrate
+from scenarios.records.model.calibrate import calibrate, with_sigma
 from scenarios.records.model.family import DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, STATION_FITTED
 from scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                  empty_truck_kg, is_light, xml_nominal)
@@ -226,6 +226,26 @@ def test_calibration_recovers_the_payload_height():
     assert cal.initial[0] == xml_nominal()["payload_z_m"] == 0.56 and cal.converged, cal.message
     assert abs(cal.values()["payload_z_m"] - 0.86) < 0.03, cal.values()
     assert max(cal.fit_nrmse) < 0.5 * max(cal.initial_nrmse), (cal.fit_nrmse, cal.initial_nrmse)
+
+
+def test_uncertainties_left_for_later_are_the_fits_own():
+    """calibrate(sigma=False) and then with_sigma (the cab choice's order, the pool still running)
+    give the uncertainties calibrate computes at once: the same finite-difference Jacobian at the
+    same optimum (the fit is deterministic); until then they are NaN and the state has no Jacobian."""
+    sc, road, force = _road_record(payload_z_m=0.86)
+    names = ("payload_z_m", "tire_damping_front_Ns_per_m")
+    held = {k: getattr(sc.vehicle, k) for k in FITTED if k not in names and k != "cab_mount_hz"}
+    kw = dict(base_scenario=sc, names=names, fitted_guess=held, windows=1, window_s=3.0, lead_s=2.0, max_nfev=6)
+    with local_executor(2) as ex:
+        now = calibrate(road.t_s, road.signals["pan_m"], force, executor=ex, **kw)
+        later, state = calibrate(road.t_s, road.signals["pan_m"], force, executor=ex, with_state=True, sigma=False,
+                                 **kw)
+        assert np.isnan(later.sigma).all() and np.isnan(later.sigma_robust).all() and state.jacobian is None
+        done, state = with_sigma(later, state)
+    assert done.fitted == now.fitted and done.evaluations == now.evaluations
+    np.testing.assert_allclose(done.sigma, now.sigma, rtol=1e-9)
+    np.testing.assert_allclose(done.sigma_robust, now.sigma_robust, rtol=1e-9)
+    assert np.all(np.asarray(now.sigma) > 0) and state.jacobian.shape == (state.residual.size, 2)
 
 
 @pytest.mark.parametrize("payload_kg", [0.0, 500.0], ids=["empty", "light"])
