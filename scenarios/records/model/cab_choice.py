@@ -24,7 +24,10 @@ at the range's top, 30 Hz): the two families are far apart where the cab matters
 it does not, so the choice does not hinge on the exact threshold.
 
 The price is a second calibration, from the same first guess; ``benchmarks/model_cost.py`` times
-both against the cab held alone. Started instead where the cab-held one ended
+both against the cab held alone. Each fit's uncertainties (a finite-difference Jacobian at its
+optimum, one truck run per fitted value) are computed only for the calibration kept
+(:func:`~scenarios.records.model.calibrate.with_sigma`), and for the cab-held one where the scan
+needs its Jacobian. Started instead where the cab-held one ended
 (``calibrate(start=...)``), it cost more on that benchmark's rigid-cab truck, not less (the
 mount's crawl from its 2.5 Hz guess went on to the range's top). It is skipped where a cab could
 not win (:func:`cab_scan`): at the cab-held optimum the truck is run once more with the cab on
