@@ -160,11 +160,15 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     Raises
     ------
     ScenarioError
-        A bad record or static loads that imply no truck (before any model run).
+        A bad record, static loads that imply no truck, or ``sigma=False`` without ``with_state``
+        (before any model run).
     """
     from scipy.optimize import least_squares
 
     wall0 = time.perf_counter()
+    if not sigma and not with_state:
+        raise ScenarioError("sigma=False leaves the uncertainties for with_sigma, which needs the fit's state: "
+                            "pass with_state=True too")
     names = tuple(names)
     unknown = sorted(set(names) - set(FITTED))
     if unknown or not names:

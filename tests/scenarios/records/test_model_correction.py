@@ -246,6 +246,8 @@ def test_uncertainties_left_for_later_are_the_fits_own():
     np.testing.assert_allclose(done.sigma, now.sigma, rtol=1e-9)
     np.testing.assert_allclose(done.sigma_robust, now.sigma_robust, rtol=1e-9)
     assert np.all(np.asarray(now.sigma) > 0) and state.jacobian.shape == (state.residual.size, 2)
+    with pytest.raises(ScenarioError, match="with_state=True"):  # NaN uncertainties with no way to complete them
+        calibrate(road.t_s, road.signals["pan_m"], force, sigma=False, **kw)
 
 
 @pytest.mark.parametrize("payload_kg", [0.0, 500.0], ids=["empty", "light"])
