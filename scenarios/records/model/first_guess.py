@@ -25,7 +25,7 @@ from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -151,9 +151,14 @@ def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_
     return 0.0 if abs(y1) < LATERAL_FLOOR_M else float(y1)
 
 
+def empty_truck_loads(base_scenario: Scenario) -> np.ndarray:
+    """The catalogue truck's static wheel loads without payload (N, (4,), corners fl fr rl rr)."""
+    return static_axle_loads(TruckVariant(payload_kg=0.0, **catalogue()), base_scenario)
+
+
 def empty_truck_kg(base_scenario: Scenario) -> float:
     """The catalogue truck's mass without payload, as its static wheel loads weigh it (float, kg)."""
-    return float(static_axle_loads(TruckVariant(payload_kg=0.0, **catalogue()), base_scenario).sum() / GRAVITY_M_S2)
+    return float(empty_truck_loads(base_scenario).sum() / GRAVITY_M_S2)
 
 
 def is_light(payload_kg: float, base_scenario: Scenario) -> bool:
@@ -177,8 +182,7 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
         Measured loads that imply no payload on the truck (one sentence).
     """
     f = np.asarray(force_N, dtype=float).mean(axis=0)
-    cat = catalogue()
-    empty = static_axle_loads(TruckVariant(payload_kg=0.0, **cat), base_scenario)
+    empty = empty_truck_loads(base_scenario)
     front = np.array([c in FRONT for c in CORNERS])
     d_total = float(f.sum() - empty.sum())
     d_front = float(f[front].sum() - empty[front].sum())
