@@ -241,8 +241,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         f_opt, m_run = prob.fun(res.x), prob.cache[tuple(np.asarray(res.x, float))][1]
         mass, mass_1s = prob.cell_mass(m_run, block)
         m_opt = prob.as_measured(m_run, mass)
-    sig, robust = (uncertainties(jac, f_opt, block, prob.mapping(res.x), int(use.sum())) if sigma
-                   else (np.full(len(names), np.nan),) * 2)
+    sig, robust = _sigmas(prob, res.x, jac, f_opt) if sigma else (np.full(len(names), np.nan),) * 2
     fitted, linear = prob.fields(res.x), []
     for i, j, kt in prob.onsets:
         ratio = ONSET_RATIO[names[i]]  # a stiffening beyond every measured load: the tire held linear (TOP)
@@ -274,6 +273,14 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     return (cal, state) if with_state else cal
 
 
+def _sigmas(prob: FitProblem, theta, jac, residual) -> tuple[np.ndarray, np.ndarray]:
+    """The fitted values' formal and block-robust 1-sigma (SI) at ``theta`` from the residual's
+    ``jac`` and ``residual`` there (:func:`~scenarios.records.model.uncertainty.uncertainties`, blocks
+    of :data:`BLOCK_S`)."""
+    block = int(round(BLOCK_S / (prob.t[1] - prob.t[0])))
+    return uncertainties(jac, residual, block, prob.mapping(theta), int(prob.use.sum()))
+
+
 def with_sigma(cal: Calibration, state: FitState) -> tuple[Calibration, FitState]:
     """A calibration made with ``sigma=False`` completed: its fitted values' uncertainties from a
     finite-difference Jacobian at the optimum (the fit's worker pool still running); one already
@@ -289,8 +296,7 @@ def with_sigma(cal: Calibration, state: FitState) -> tuple[Calibration, FitState
     prob = state.problem
     t0 = time.perf_counter()
     jac = prob.final_jac(state.theta, state.upper)
-    block = int(round(BLOCK_S / (prob.t[1] - prob.t[0])))
-    sig, robust = uncertainties(jac, state.residual, block, prob.mapping(state.theta), int(prob.use.sum()))
+    sig, robust = _sigmas(prob, state.theta, jac, state.residual)
     cal = dataclasses.replace(cal, sigma=tuple(float(s) for s in sig), sigma_robust=tuple(float(s) for s in robust),
                               evaluations=int(prob.evaluations),
                               wall_time_s=round(cal.wall_time_s + time.perf_counter() - t0, 3))
