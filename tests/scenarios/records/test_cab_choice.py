@@ -63,8 +63,7 @@ def test_a_cab_fit_no_better_keeps_the_cab_held():
 def test_a_cab_at_its_range_bottom_is_not_used_at_its_top_only_if_clearly_better():
     """gen00's rigid-cab truck: the cab fit goes to the range's bottom, 1.0 Hz (measured): held, even
     with a better fit. At the top, 30 Hz, the cab is practically rigid: a fit clearly better there
-    (the paper suite's medium case with the stiffening tire: 0.049 against the held 0.155, measured)
-    found a better truck and is kept; one no better is not. Convergence is not part of the choice
+    found a better truck than the cab-held fit and is kept; one no better is not. Convergence is not part of the choice
     (the chosen fit's is checked later, by the fallback): a far better fit that did not converge is
     still the better model."""
     chosen, why = choose(HELD_CAL, _fitted(1.0, 0.1))
