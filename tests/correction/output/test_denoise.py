@@ -112,3 +112,39 @@ def test_through_gain_delays_a_sine_exactly_inside_the_record():
     inner = slice(500, -500)
     np.testing.assert_allclose(y[inner], np.sin(2 * np.pi * 3.0 * (t[inner] - 0.01)), atol=2e-3)
     np.testing.assert_allclose(through_gain(x, FS, lambda f: np.ones_like(f), pad_s=0.5), x, atol=1e-12)
+
+
+def test_the_drift_cut_is_a_forward_backward_butterworth_high_pass():
+    # Reference: scipy's second-order Butterworth high-pass at the corner, its magnitude squared
+    # (run forward and backward, a zero-phase filter has |H|^2); scipy's is the digital design, whose
+    # bilinear transform bends the analog response by ~1e-5 at 1 kHz.
+    from correction.output.denoise import DRIFT_HZ, drift_cut
+
+    f = np.linspace(0.0, 20.0, 401)
+    sos = signal.butter(2, DRIFT_HZ, btype="highpass", fs=FS, output="sos")
+    h = np.abs(signal.sosfreqz(sos, worN=f, fs=FS)[1]) ** 2
+    np.testing.assert_allclose(drift_cut(f, DRIFT_HZ), h, rtol=1e-4, atol=1e-9)
+    s, _ = _signal()
+    x = s + _white()
+    plain, cut = design_noise_gain(x, FS), design_noise_gain(x, FS, drift_hz=DRIFT_HZ)
+    np.testing.assert_allclose(cut.gain, plain.gain * drift_cut(plain.freq_hz, DRIFT_HZ)[:, None])
+
+
+def test_the_drift_cut_takes_the_slow_part_out_and_keeps_the_rest():
+    # 500 N at 0.2 Hz (drift) and 500 N at 5 Hz over 10 N of white noise and a 40 kN mean: the cut at
+    # 1 Hz passes (5 / 1)^4 / (1 + (5 / 1)^4) = 0.998 of the 5 Hz sine and ~0.3 % of the 0.2 Hz one
+    # (its gain interpolated between the spectrum's bins at 0 and 0.24 Hz), the mean untouched.
+    t = np.arange(N) / FS
+    slow, fast = (500.0 * np.sin(2 * np.pi * f * t)[:, None] * np.ones(2) for f in (0.2, 5.0))
+    x = 4e4 + slow + fast + _white(10.0)
+    out = design_noise_gain(x, FS, drift_hz=1.0).apply(x)
+    inner = slice(5000, -5000)
+    assert out.mean(axis=0) == pytest.approx(x.mean(axis=0), abs=1e-6)
+    err = out[inner] - 4e4 - fast[inner]
+    assert np.all(np.sqrt(np.mean(err ** 2, axis=0)) < 0.03 * 500.0)
+
+
+@pytest.mark.parametrize("drift_hz", [0.0, -1.0, float("nan"), FS / 2])
+def test_a_drift_corner_outside_the_band_is_refused(drift_hz):
+    with pytest.raises(ValueError, match="drift_hz"):
+        design_noise_gain(_white(), FS, drift_hz=drift_hz)
