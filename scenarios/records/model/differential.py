@@ -15,6 +15,11 @@ to use it:
   cells' white noise out of that residual where it outweighs the model's error
   (:mod:`correction.output.denoise`): with the truck's force explained by the model, the residual
   is mostly noise, and on a smooth road that noise is a large part of what is left to correct.
+  W also takes the residual's slow part out, below :data:`~correction.output.denoise.DRIFT_HZ`
+  (0.7 Hz): there the load cells drift (a lab's coloured noise, tens of newtons) and the pans
+  follow the drive, so the model's F_model(x_ref) carries the slow force alone. On the mismatch
+  suite's loaded trucks on smooth roads (class A, 30-60 km/h) the cells' 50 N of drift below
+  1 Hz is half the front wheels' correction error without the cut.
 
 Both model runs start from rest while the truck on the rig was already moving at the record's
 first sample; the two start-up errors largely cancel, but not wholly (the road's and the rig's
@@ -37,7 +42,7 @@ import time
 
 import numpy as np
 
-from correction.output.denoise import NoiseGain, design_noise_gain
+from correction.output.denoise import DRIFT_HZ, NoiseGain, design_noise_gain
 from mjcf.variant import TruckVariant
 from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
@@ -162,13 +167,14 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
     -------
     (numpy.ndarray, numpy.ndarray, NoiseGain)
         The corrected force (N, (n, 4)), L's settled samples (bool, (n,)) and W, the gain that took
-        the residual's white noise out (its ``noise_rms``, N, and ``measured`` per wheel).
+        the residual's white noise and its slow part (the load cells' drift, below
+        :data:`~correction.output.denoise.DRIFT_HZ`) out (its ``noise_rms``, N, and ``measured`` per wheel).
     """
     residual = np.asarray(force_N, dtype=float) - f_a_N
     first = 0 if settled is None else int(np.argmax(np.asarray(settled, dtype=bool)))
     if settled is not None and not np.all(np.asarray(settled, dtype=bool)[first:]):
         raise ValueError("settled must be one run of samples reaching the record's end")
-    gain = design_noise_gain(residual[first:], fs_hz)
+    gain = design_noise_gain(residual[first:], fs_hz, drift_hz=DRIFT_HZ)
     body = gain.apply(residual[first:])
     denoised = np.concatenate([np.repeat(body[:1], first, axis=0), body], axis=0)
     corrected, lin_settled = linear(denoised)
@@ -232,8 +238,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     is :data:`HYBRID_FORMULA` (:func:`hybrid_correction`): the model predicts the road force and what the rig
     made of it, and the part of the rig force the model does not explain is corrected for the
     actuators as the linear correction corrects the whole. Where the model is exact this is the
-    model's road force plus the corrected noise; where it explains nothing it is L(F_rig); in
-    between, L(F_rig) plus the model's estimate of L's own error. A wheel whose model error exceeds
+    model's road force plus the corrected noise; where it explains nothing it is L(F_rig) above
+    W's drift cut (0.7 Hz; below it the model's slow force); in between, L(F_rig) plus the model's
+    estimate of L's own error. A wheel whose model error exceeds
     ``excess_limit`` is corrected by L alone, the others by the model (the sentence in ``reason``
     names them). Without ``linear``: F_rig + F_model(x_ref) - F_model(x_a) on every wheel, or the
     linear correction for all of them.
