@@ -136,7 +136,7 @@ def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
            "fallbacks": not wrong and not numbers["fallbacks_without_reason"]}
     text = "\n".join([
         f"- wheels within {100 * DLC_GOOD:g} % of the road DLC and at NRMSE <= {FLOOR_RATIO:g} x the linear floor: "
-        f"{100 * good:.0f} % of {d.size} (goal >= {100 * SHARE:g} %): {'met' if met['share'] else 'NOT met'}",
+        f"{100 * good:.1f} % of {d.size} (goal >= {100 * SHARE:g} %): {'met' if met['share'] else 'NOT met'}",
         f"- worst DLC error: {100 * numbers['worst_dlc_error']:.2f} % (goal <= {100 * DLC_ALL:g} %): "
         f"{'met' if met['dlc'] else 'NOT met'}",
         f"- worst NRMSE above the linear correction: {numbers['worst_above_linear']:+.3f} (goal <= {ABOVE_LINEAR:g}): "
