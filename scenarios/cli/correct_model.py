@@ -60,8 +60,8 @@ def add_model_arguments(parser) -> None:
         "correction by a truck model calibrated on the record (instead of T_a^-1 T_F)")
     g.add_argument("--model", metavar="TRUCK.toml",
                    help="correct each wheel as F_model(drive) + L(W(F_rig - F_model(LVDT))), W the residual's "
-                        "white noise and its drift below 0.7 Hz taken out, L the linear correction, the truck model calibrated "
-                        "on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
+                        "white noise and its drift below 0.7 Hz taken out, L the linear correction, the truck "
+                        "model calibrated on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
                         "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
                         "tire per axle), each axle's left tire and leaf spring against its right one, the cab's mount frequency where it fits clearly better (--cab); minutes of "
                         "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "

@@ -1,7 +1,7 @@
 """Start-up stays light: building the ``rigsim`` parser (``rigsim --help``, ``rigsim correct --help``)
 imports none of python-control, matplotlib, scipy.signal, mujoco, numba or rerun (counted in a
 fresh interpreter, not timed; the times are benchmarks/startup.py's). The parser therefore
-carries two numbers of the studies as literals; they are pinned to their homes here."""
+carries numbers of the studies as literals; they are pinned to their homes here."""
 
 from __future__ import annotations
 
@@ -48,12 +48,14 @@ def _help(name: str) -> str:
 
 
 def test_the_parser_literals_match_their_homes():
+    from correction.output.denoise import DRIFT_HZ
     from scenarios.cli.main import build_parser
     from scenarios.studies.iterate.compute import TARGETS
     from scenarios.studies.scoring import NOISE_N
 
     for name in ("paper", "iterate"):
         assert f"(default {NOISE_N:g}; 0: off)" in _help(name), name
+    assert f"its drift below {DRIFT_HZ:g} Hz taken out" in _help("correct")
     args = build_parser().parse_args(["iterate", "x.toml", "--target", "force", "--out", "o"])
     assert args.noise_N is None  # None means NOISE_N in the study
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
