@@ -42,14 +42,20 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   (:mod:`~scenarios.records.model.onset_load`, which says why: an onset beyond every
   measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0,
   where the onset is not identifiable and does not matter;
-* ``tire_stiffness_factor_fl``, ``tire_stiffness_factor_rl``, ``spring_rate_factor_fl``,
-  ``spring_rate_factor_rl``, ``spring_friction_factor_fl``, ``spring_friction_factor_rl``
-  (:data:`STATION_FITTED`): each axle's left tire, leaf spring and interleaf friction over its right
-  one (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another
-  pressure, a spring with a broken leaf, leaves that rust and rub harder), and a model whose axles
-  are symmetric puts the difference into both wheels' errors, in opposite directions. Rates are
-  searched at 0.7-1.3, the friction at 0.4-2.5: two springs of one truck whose leaves rub 0.7 and 1.4
-  times the catalogue's differ by a factor of 2;
+* ``tire_stiffness_factor_fl``, ``tire_stiffness_factor_rl``, ``tire_damping_factor_fl``,
+  ``tire_damping_factor_rl``, ``spring_rate_factor_fl``, ``spring_rate_factor_rl``,
+  ``spring_friction_factor_fl``, ``spring_friction_factor_rl`` (:data:`STATION_FITTED`): each axle's
+  left tire (its stiffness and its damping), leaf spring and interleaf friction over its right one
+  (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another pressure,
+  of another make or warmer, a spring with a broken leaf, leaves that rust and rub harder), and a
+  model whose axles are symmetric puts the difference into both wheels' errors, in opposite
+  directions. Rates are searched at 0.7-1.3, the tire damping at 0.5-2 (the plant's range,
+  :data:`mjcf.stations.STATION_FACTORS`), the friction at 0.4-2.5: two springs of one truck whose
+  leaves rub 0.7 and 1.4 times the catalogue's differ by a factor of 2. The tire damping sets the
+  wheel-hop peak (~10 Hz), which on a rough road carries most of the rear wheels' dynamic force: on
+  the mismatch suite (``benchmarks/mismatch_suite.py``) an empty truck on a class D road whose rear
+  tires damp 0.8 and 1.2 times their axle's had its rear wheels at 0.54 of the linear floor with
+  one damping per axle, 0.44 with each left tire's own;
 * ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
   cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
   bounce and pitch that loads the front wheels. A model without it absorbs a suspended cab's mode
@@ -84,8 +90,9 @@ __all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS
 
 #: Each axle's left tire stiffness, leaf-spring rate and interleaf friction over its right one (the
 #: module's description).
-STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "spring_rate_factor_fl",
-                  "spring_rate_factor_rl", "spring_friction_factor_fl", "spring_friction_factor_rl")
+STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "tire_damping_factor_fl",
+                  "tire_damping_factor_rl", "spring_rate_factor_fl", "spring_rate_factor_rl",
+                  "spring_friction_factor_fl", "spring_friction_factor_rl")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2",
           "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
@@ -120,6 +127,7 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "cha
           "tire_progressive_ratio": 0.5,
           "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0),
           **dict.fromkeys(STATION_FITTED, (0.7, 1.3)),
+          "tire_damping_factor_fl": (0.5, 2.0), "tire_damping_factor_rl": (0.5, 2.0),
           "spring_friction_factor_fl": (0.4, 2.5), "spring_friction_factor_rl": (0.4, 2.5)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
