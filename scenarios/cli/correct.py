@@ -56,7 +56,8 @@ CLI_NAMING = Naming({"actuator": "--actuator", "actuators": "--actuators", "iden
                      "lowpass_hz": "--lowpass-hz", "mode": "--mode", "transient": "--transient",
                      "normalize_dc": "--normalize-dc", "model": "--model", "pairs": "--pairs", "workers": "--jobs",
                      "max_evaluations": "--max-evaluations", "calibration_windows": "--calibration-windows",
-                     "cab": "--cab", "path": "-o", "force_filter": "--force-filter", "lvdt_filter": "--lvdt-filter"})
+                     "cab": "--cab", "drift_cut_hz": "--drift-cut-hz", "path": "-o", "force_filter": "--force-filter",
+                     "lvdt_filter": "--lvdt-filter"})
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:

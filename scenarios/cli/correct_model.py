@@ -4,7 +4,8 @@
 
     rigsim correct IN --model TRUCK.toml --pairs fl=DRIVE:LVDT,fr=...,rl=...,rr=... -o OUT
                    [--map fl=CH,... | --columns A,B,C,D] [--actuator ACT.toml | --actuators ACTS.toml]
-                   [--jobs N] [--max-evaluations N] [--calibration-windows N] [--quiet]
+                   [--jobs N] [--max-evaluations N] [--calibration-windows N] [--cab auto|held|fitted]
+                   [--drift-cut-hz HZ] [--quiet]
                    [--transient drop|mark|keep] [--force] [--time-col NAME]
 
 The truck model (the project's truck, ``truck_rig.xml``) is calibrated on ``IN`` alone: per
@@ -12,7 +13,8 @@ corner the drive x_ref and the LVDT x_a (``--pairs``, the syntax of ``rigsim ide
 --from-file``; lengths, converted to m) and the wheel force F_rig (the force channel whose name
 holds the corner as a token, or ``--map``'s; converted to N); then
 F_corrected = F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel, W the residual's white noise
-taken out (correction.output.denoise), L the linear correction
+and its drift below ``--drift-cut-hz`` (0.7 Hz; 0: none) taken out (correction.output.denoise), L
+the linear correction
 T_a^-1 T_F with ``--actuator``/``--actuators`` if given, else T_a identified per corner from the
 ``--pairs`` channels (:func:`scenarios.records.model.differential.correct_with_model`). ``TRUCK.toml`` is a
 scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
@@ -51,7 +53,7 @@ __all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "
 
 #: The options only ``--model`` reads: argparse dest -> option.
 MODEL_OPTIONS = {"pairs": "--pairs", "jobs": "--jobs", "max_evaluations": "--max-evaluations",
-                 "calibration_windows": "--calibration-windows", "cab": "--cab"}
+                 "calibration_windows": "--calibration-windows", "cab": "--cab", "drift_cut_hz": "--drift-cut-hz"}
 
 
 def add_model_arguments(parser) -> None:
@@ -63,7 +65,7 @@ def add_model_arguments(parser) -> None:
                         "white noise and its drift below 0.7 Hz taken out, L the linear correction, the truck "
                         "model calibrated on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
                         "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
-                        "tire per axle), each axle's left tire and leaf spring against its right one, the cab's mount frequency where it fits clearly better (--cab); minutes of "
+                        "tire per axle), each axle's left tire (stiffness and damping) and leaf spring against its right one, the cab's mount frequency where it fits clearly better (--cab); minutes of "
                         "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "
                         "cab_mount_hz is the cab's mount (held, or the first guess of its fit), and its tire and "
                         "leaf-friction values (tire_progressive_ratio and _onset_m included) are only the "
@@ -91,6 +93,10 @@ def add_model_arguments(parser) -> None:
                         "too, keep the fit that reproduces the forces clearly better (up to twice the CPU of one); held: the cab "
                         "rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
                         "always fit the mount (a smooth record may not pin it: see the README)")
+    g.add_argument("--drift-cut-hz", type=float, default=None, metavar="HZ",
+                   help="with --model: below this frequency W takes the model's residual for the load cells' "
+                        "drift and the model's own force carries the slow part (default 0.7, at most 1.5); 0: no "
+                        "drift cut, for load cells that do not drift")
 
 
 def _error(message: str):
@@ -119,7 +125,7 @@ def cmd_correct_model(args, naming) -> int:
         actuators=args.actuators, columns=args.columns, corner_map=args.map, lowpass=args.lowpass,
         lowpass_hz=args.lowpass_hz, mode=args.mode, transient=args.transient, normalize_dc=args.normalize_dc,
         workers=args.jobs, max_evaluations=args.max_evaluations, calibration_windows=args.calibration_windows,
-        cab=args.cab, force_filter=channel_timing(args, "force"), lvdt_filter=channel_timing(args, "lvdt"),
+        cab=args.cab, drift_cut_hz=args.drift_cut_hz, force_filter=channel_timing(args, "force"), lvdt_filter=channel_timing(args, "lvdt"),
         naming=naming)
     plan = settings.read(args.input, time_col=args.time_col, decimal=args.decimal, thousands=args.thousands)
     plan.check_output(args.out)

@@ -37,8 +37,9 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
                    corner_map=None, lowpass: str = "regularized", lowpass_hz: float | None = None,
                    mode: str = "zerophase", transient: str = "drop", normalize_dc: bool = False,
                    workers: int | None = None, max_evaluations: int | None = None,
-                   calibration_windows: int | None = None, cab: str | None = None, force_filter=None,
-                   lvdt_filter=None, progress=None) -> CorrectionResult:
+                   calibration_windows: int | None = None, cab: str | None = None,
+                   drift_cut_hz: float | None = None, force_filter=None, lvdt_filter=None,
+                   progress=None) -> CorrectionResult:
     """Correct the wheel forces of a rig's record for the actuators' dynamics.
 
     Give exactly one source of T_a (``actuator``, ``actuators`` or ``identify``) for the linear
@@ -97,6 +98,11 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
         With ``model``: windows of 2.5 s lead-in + 4 s the model is fitted on (default 3).
     cab : {"auto", "held", "fitted"}, optional
         With ``model``: the model's cab held, its mount frequency fitted, or (default) the better fit.
+    drift_cut_hz : float, Hz, optional
+        With ``model``: the corner below which W takes the model's residual for the load cells'
+        drift and leaves the slow force to the model (default
+        :data:`~correction.output.denoise.DRIFT_HZ`, 0.7 Hz; at most 1.5 Hz); 0: no drift cut, for
+        a lab whose load cells do not drift.
     force_filter, lvdt_filter : correction.io.acquisition.ChannelFilter or str, optional
         The force channels' and the LVDT channels' anti-alias filter and delay as the lab's
         acquisition applied them (``ChannelFilter(200.0, 4, delay_s=2e-4)``, or the text
@@ -122,7 +128,8 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
         actuator=actuator, actuators=actuators, identify=identify, model=model, pairs=pairs, columns=columns,
         corner_map=corner_map, lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
         normalize_dc=normalize_dc, workers=workers, max_evaluations=max_evaluations,
-        calibration_windows=calibration_windows, cab=cab, force_filter=force_filter, lvdt_filter=lvdt_filter)
+        calibration_windows=calibration_windows, cab=cab, drift_cut_hz=drift_cut_hz, force_filter=force_filter,
+        lvdt_filter=lvdt_filter)
     plan = settings.read(record) if isinstance(record, (str, os.PathLike)) else settings.plan(record)
     return plan.run(progress)
 

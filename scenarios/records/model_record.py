@@ -166,7 +166,8 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         meta.update({"correction": f"F_corrected = {HYBRID_FORMULA}, L = T_a^-1 T_F", "force_unit": "N",
                      "start_up_s": f"{START_S:g} (model runs' start-up: not settled)",
                      "transient": settings.transient,
-                     "model_wheels": ",".join(CORNERS if model_result is None else model_result.wheels) or "none"})
+                     "model_wheels": ",".join(CORNERS if model_result is None else model_result.wheels) or "none",
+                 "drift_cut": "none" if settings.drift_hz is None else f"{settings.drift_hz:g} Hz"})
         noise = dict.fromkeys(CORNERS) if model_result is None else model_result.residual_noise_N  # probe: the longest
         if noise is not None:
             meta["residual_noise"] = residual_noise_text(noise)
@@ -229,7 +230,7 @@ def run_model(plan, progress=None) -> CorrectionResult:
     res = correct_with_model(record.time_s, record.array([d for d, _ in pairs.values()]),
                              record.array([x for _, x in pairs.values()]), forces, base_scenario=s.scenario,
                              workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
-                             linear=linear)
+                             linear=linear, drift_hz=s.drift_hz)
     cal = res.calibration
     if cal is not None:
         say(f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "

@@ -86,6 +86,9 @@ class CorrectionSettings:
     force_filter, lvdt_filter : correction.io.acquisition.ChannelFilter or None
         The force and LVDT channels' anti-alias filters and delays, undone before correcting
         (:mod:`scenarios.records.timing`); None: the channels as recorded.
+    drift_hz : float or None, Hz
+        The model correction's drift cut (:func:`scenarios.records.model.differential.hybrid_correction`);
+        None: no cut (asked for with 0), or the linear correction.
     """
 
     method: str
@@ -111,6 +114,7 @@ class CorrectionSettings:
     naming: Naming = KEYWORDS
     force_filter: object = None
     lvdt_filter: object = None
+    drift_hz: float | None = None
 
     @property
     def channels(self) -> list[str] | None:
@@ -218,6 +222,24 @@ def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers
     return {c: pairs[c] for c in CORNERS}, workers
 
 
+#: Largest drift-cut corner, Hz: the truck's body bounce and pitch (and a cab on soft mounts) are at
+#: 1.5-3 Hz, where the measured force must pass; the cut's gain at 1.5 Hz is 0.5 with a 1.5 Hz corner.
+DRIFT_CUT_MAX_HZ = 1.5
+
+
+def _drift_hz(naming: Naming, drift_cut_hz) -> float | None:
+    """The model correction's drift-cut corner (Hz) or None (no cut) from the option (None: the default)."""
+    from correction.output.denoise import DRIFT_HZ
+
+    if drift_cut_hz is None:
+        return DRIFT_HZ
+    if (isinstance(drift_cut_hz, bool) or not isinstance(drift_cut_hz, numbers.Real)
+            or not 0 <= float(drift_cut_hz) <= DRIFT_CUT_MAX_HZ):
+        raise _error(f"{naming('drift_cut_hz')} must be 0 (no drift cut, for load cells that do not drift) or a "
+                     f"corner in Hz up to {DRIFT_CUT_MAX_HZ:g} (below the truck's body modes), got {drift_cut_hz!r}")
+    return float(drift_cut_hz) or None
+
+
 def _fallback_tas(naming: Naming, actuator, actuators):
     """(the model's linear fallback T_a: one, or one per corner in corner order, or None; its source)."""
     from mjcf.names import CORNERS
@@ -239,7 +261,8 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
                         mode: str = "zerophase", transient: str = "drop", normalize_dc: bool = False,
                         workers: int | None = None, max_evaluations: int | None = None,
                         calibration_windows: int | None = None, cab: str | None = None,
-                        force_filter=None, lvdt_filter=None, naming: Naming = KEYWORDS) -> CorrectionSettings:
+                        drift_cut_hz: float | None = None, force_filter=None, lvdt_filter=None,
+                        naming: Naming = KEYWORDS) -> CorrectionSettings:
     """Check the options of a correction and read their files; the parameters are
     :func:`scenarios.records.api.correct_record`'s (``naming``: how messages name them).
 
@@ -263,7 +286,7 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
                   force_filter=force_filter, lvdt_filter=lvdt_filter)
     if model is None:
         extra = {"pairs": pairs, "workers": workers, "max_evaluations": max_evaluations,
-                 "calibration_windows": calibration_windows, "cab": cab}
+                 "calibration_windows": calibration_windows, "cab": cab, "drift_cut_hz": drift_cut_hz}
         given = [k for k, v in extra.items() if v is not None]
         if given:
             raise _error(f"{n(given[0])} goes with {n.setting('model', 'TRUCK.toml')} (the model correction); drop "
@@ -288,6 +311,7 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
             inputs=tuple(str(p) for p in (actuator, actuators) if _is_path(p)), **common)
     pairs, workers = _model_options(n, identify, actuator, actuators, pairs, workers, max_evaluations,
                                     calibration_windows)
+    drift_hz = _drift_hz(n, drift_cut_hz)
     if _is_path(model):
         from scenarios.core.config import load_scenario
 
@@ -300,5 +324,5 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
         method="model", columns=None if asked is None else tuple(asked),
         corner_map=None if items is None else tuple(items), identify=(), ta=ta, per_corner=False,
         ta_source=source, pairs=pairs, scenario=scenario, scenario_file=scenario_file, workers=workers,
-        max_evaluations=max_evaluations, calibration_windows=calibration_windows,
+        max_evaluations=max_evaluations, calibration_windows=calibration_windows, drift_hz=drift_hz,
         inputs=tuple(str(p) for p in (model, actuator, actuators) if _is_path(p)), **common)

@@ -143,7 +143,8 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
     return np.asarray(force_N, dtype=float) + f_ref - f_a
 
 
-def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=None) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
+def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=None, *,
+                      drift_hz: float | None = DRIFT_HZ) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
     """F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel: :data:`HYBRID_FORMULA`.
 
     Parameters
@@ -162,19 +163,23 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
         (kilonewtons) would raise the residual's spectrum and, where W keeps little but the mean,
         shift the whole record by that transient's share of the mean. Before them the residual
         entering L is held at W's first settled value. None: every sample is settled.
+    drift_hz : float or None, Hz
+        The corner of W's drift cut (default :data:`~correction.output.denoise.DRIFT_HZ`): below it
+        the residual is taken for the load cells' drift and the model's slow force stands alone.
+        None: no drift cut, for a lab whose cells do not drift (W takes the white noise only).
 
     Returns
     -------
     (numpy.ndarray, numpy.ndarray, NoiseGain)
         The corrected force (N, (n, 4)), L's settled samples (bool, (n,)) and W, the gain that took
-        the residual's white noise and its slow part (the load cells' drift, below
-        :data:`~correction.output.denoise.DRIFT_HZ`) out (its ``noise_rms``, N, and ``measured`` per wheel).
+        the residual's white noise and its slow part (the load cells' drift, below ``drift_hz``)
+        out (its ``noise_rms``, N, and ``measured`` per wheel).
     """
     residual = np.asarray(force_N, dtype=float) - f_a_N
     first = 0 if settled is None else int(np.argmax(np.asarray(settled, dtype=bool)))
     if settled is not None and not np.all(np.asarray(settled, dtype=bool)[first:]):
         raise ValueError("settled must be one run of samples reaching the record's end")
-    gain = design_noise_gain(residual[first:], fs_hz, drift_hz=DRIFT_HZ)
+    gain = design_noise_gain(residual[first:], fs_hz, drift_hz=drift_hz)
     body = gain.apply(residual[first:])
     denoised = np.concatenate([np.repeat(body[:1], first, axis=0), body], axis=0)
     corrected, lin_settled = linear(denoised)
@@ -231,7 +236,7 @@ def wheels_reason(calibration, holds, excess_limit: float = HYBRID_LIMIT) -> str
 
 def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario, workers: int | None = None,
                        excess_limit: float | None = None, cab: str = AUTO, linear=None,
-                       **calibrate_kw) -> ModelCorrection:
+                       drift_hz: float | None = DRIFT_HZ, **calibrate_kw) -> ModelCorrection:
     """Calibrate the truck model on the record, then correct it, or say why the linear correction is to be used.
 
     With ``linear`` (the record's linear correction L, ``T_a^-1 T_F`` per wheel) the corrected force
@@ -262,6 +267,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     linear : callable, optional
         ``linear(forces)`` -> ``(corrected, settled)``: the linear correction of (n, 4) forces (N) and
         its settled samples (bool, (n,)).
+    drift_hz : float or None, Hz
+        The corner of W's drift cut (:func:`hybrid_correction`; with ``linear`` only); None: no
+        cut, for a lab whose load cells do not drift.
     **calibrate_kw
         Passed to :func:`~scenarios.records.model.calibrate.calibrate` (windows, max_nfev,
         fitted_guess...).
@@ -282,6 +290,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         excess_limit = DIFFERENTIAL_LIMIT if linear is None else HYBRID_LIMIT
     t, fs = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
     check_cab(cab, calibrate_kw.get("names"))
+    if drift_hz is not None and not (np.isfinite(drift_hz) and 0 < drift_hz < fs / 2):
+        raise ScenarioError(f"drift_hz must be None (no drift cut) or a corner in Hz between 0 and fs / 2 "
+                            f"({fs / 2:g} Hz), got {drift_hz!r}")
     # A record too short for the calibration's windows is the caller's to fix (raised); any other
     # refusal by the calibration means the model cannot be used on this record (the fallback).
     fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),
@@ -337,7 +348,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
-            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t))
+            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t),
+                                                          drift_hz=drift_hz)
             formula = HYBRID_FORMULA
             noise = {c: float(v) if white else None
                      for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from correction.output.apply import band_limit
+from correction.output.denoise import DRIFT_HZ
 from correction.output.floor import linear_floor
 from scenarios.core.lab import LabChain, aligned, measure
 from scenarios.records.model.cell_mass import without_cell_mass
@@ -116,7 +117,7 @@ def _cpu_s() -> float:
 
 def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig, identification, *, lab: LabChain,
                 noise_N: float, seed: int, workers: int | None = None, cab: str = "auto",
-                align: bool = False) -> PlantScore:
+                align: bool = False, drift_hz: float | None = DRIFT_HZ) -> PlantScore:
     """Correct one plant's rig test as a user would and judge it (see the module's description).
 
     Parameters
@@ -143,6 +144,9 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
         Take the lab's known anti-alias filters' phase and delays out of the force and LVDT
         channels before correcting (:func:`scenarios.core.lab.aligned`; the identification given
         should be aligned alike). The linear floor is fitted on the channels as measured.
+    drift_hz : float or None, Hz
+        The model correction's drift cut (:func:`~scenarios.records.model.differential.hybrid_correction`);
+        None: none.
     """
     fs = float(rig.rate_hz)
     raw = measure(rig, lab, noise_N, seed)
@@ -152,7 +156,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     linear_N, linear_settled = lin(measured.force_N)
     wall0, cpu0 = time.perf_counter(), _cpu_s()
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
-                            base_scenario=base_scenario, workers=workers, cab=cab, linear=lin)
+                            base_scenario=base_scenario, workers=workers, cab=cab, linear=lin, drift_hz=drift_hz)
     wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
     forced = hybrid = None
     if mc.calibration is not None:  # the model's two runs: the correction's, else run for the forced forms
@@ -160,7 +164,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
                                                     measured.pan_m, base_scenario=base_scenario, workers=workers)
         force = without_cell_mass(measured.force_N, measured.pan_m, fs, mc.calibration.cell_mass_kg)
         forced = force + f_ref - f_a
-        hybrid = hybrid_correction(force, f_ref, f_a, lin, fs, settled_mask(rig.t_s))[0]
+        hybrid = hybrid_correction(force, f_ref, f_a, lin, fs, settled_mask(rig.t_s), drift_hz=drift_hz)[0]
     rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
     scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
     if forced is not None:

@@ -98,7 +98,7 @@ def test_model_correction_end_to_end(record, tmp_path, capsys):
     assert meta["method"] == "model" and "fallback_reason" not in meta
     assert meta["scenario_file"] == str(record["scenario"]) and meta["rigsim_version"] == version("rigsim")
     assert meta["corners"] == "fl=Fz_FL,fr=Fz_FR,rl=Fz_RL,rr=Fz_RR" and meta["pairs"] == PAIRS
-    assert meta["cal_runs"].endswith(", converged")
+    assert meta["cal_runs"].endswith(", converged") and meta["drift_cut"] == "0.7 Hz"  # the default, DRIFT_HZ
     # the default --cab auto; this rigid-cab truck keeps the cab held (cab_choice.calibrate_cab)
     assert meta["cal_cab"].startswith("cab held: ") and "cal_cab_mount_hz" not in meta
     fit = [float(x.split()[1]) for x in meta["cal_fit_nrmse"].split(" (")[0].split(", ")]
@@ -273,6 +273,39 @@ def test_the_help_literals_match_their_homes():
     assert f"(default {MAX_NFEV})" in text and f"(default {WINDOWS})" in text
     assert f"each {WINDOW_LEAD_S:g} s lead-in + {WINDOW_S:g} s" in text
     assert f"at least {WINDOW_LEAD_S + WINDOW_S:g} s of record" in text
+    from correction.output.denoise import DRIFT_HZ
+    from scenarios.records.settings import DRIFT_CUT_MAX_HZ
+
+    assert f"(default {DRIFT_HZ:g}, at most {DRIFT_CUT_MAX_HZ:g})" in text
+
+
+@pytest.mark.parametrize("value, expected", [
+    ("-0.1", "--drift-cut-hz must be 0 (no drift cut"), ("2", "a corner in Hz up to 1.5"),
+    ("nan", "got nan"),
+])
+def test_a_drift_cut_out_of_range_is_refused_before_any_work(record, tmp_path, capsys, value, expected):
+    """--drift-cut-hz: 0 or a corner up to settings.DRIFT_CUT_MAX_HZ, below the truck's body modes;
+    anything else exits 2 with one sentence naming the option, and no file is written."""
+    out = tmp_path / "out.csv"
+    assert main(["correct", str(record["csv"]), "--model", str(record["scenario"]), "--pairs", PAIRS, "-o", str(out),
+                 "--drift-cut-hz", value]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and len(err.strip().splitlines()) == 1 and not out.exists(), err
+
+
+def test_the_drift_cut_option_gives_the_corner_the_correction_uses():
+    """correction_settings: no option is the library's DRIFT_HZ, 0 is no cut (None, as
+    hybrid_correction takes it), 1.2 stays 1.2; with the linear correction it is refused."""
+    from correction.output.denoise import DRIFT_HZ
+    from scenarios.core.config import ScenarioError
+    from scenarios.records.settings import DRIFT_CUT_MAX_HZ, correction_settings
+
+    kw = dict(model=paper_scenarios()[2], pairs=PAIRS)
+    assert correction_settings(**kw).drift_hz == DRIFT_HZ < DRIFT_CUT_MAX_HZ
+    assert correction_settings(**kw, drift_cut_hz=0).drift_hz is None
+    assert correction_settings(**kw, drift_cut_hz=1.2).drift_hz == 1.2
+    with pytest.raises(ScenarioError, match=r"^drift_cut_hz goes with model='TRUCK.toml'"):
+        correction_settings(actuator=([1.0], [1.0]), drift_cut_hz=0.5)
 
 
 def test_cab_is_refused_without_model(tmp_path, capsys):

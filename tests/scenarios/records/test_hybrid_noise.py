@@ -99,5 +99,9 @@ def test_the_load_cells_drift_is_taken_out():
     slow = signal.butter(4, 2.0, fs=FS, output="sos")
     left = signal.sosfiltfilt(slow, corrected - f_ref, axis=0)[inner]
     assert np.all((left - left.mean(axis=0)).std(axis=0) < 0.4 * 50.0)
-    kept = signal.sosfiltfilt(slow, design_noise_gain(residual, FS).apply(residual), axis=0)[inner]
+    white_only = design_noise_gain(residual, FS).apply(residual)
+    kept = signal.sosfiltfilt(slow, white_only, axis=0)[inner]
     assert np.all((kept - kept.mean(axis=0)).std(axis=0) > 0.8 * 50.0)
+    # drift_hz=None (a lab whose cells do not drift): W is the white-noise gain alone
+    uncut, _, _ = hybrid_correction(f_a + residual, f_ref, f_a, _identity, FS, drift_hz=None)
+    np.testing.assert_allclose(uncut - f_ref, white_only, atol=1e-6)
