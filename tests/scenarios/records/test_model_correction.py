@@ -277,28 +277,33 @@ def test_a_payload_is_light_below_a_tenth_of_the_empty_truck():
     empty_kg = empty_truck_kg(sc)
     assert empty_kg == pytest.approx(rig.truck_mass_kg, rel=1e-3)
     assert is_light(0.09 * empty_kg, sc) and is_light(0.0, sc) and not is_light(0.11 * empty_kg, sc)
-@pytest.mark.parametrize("plant, rtol", [
-    ({"tire_stiffness_factor_fl": 0.85, "spring_rate_factor_rl": 1.1}, 0.03),
-    ({"spring_friction_factor_fl": 1.6, "spring_friction_factor_rl": 0.6}, 0.05),
-], ids=["tire-and-spring-rate", "leaf-friction"])
-def test_calibration_recovers_a_left_right_difference(plant, rtol):
+@pytest.mark.parametrize("plant, rtol, fall", [
+    ({"tire_stiffness_factor_fl": 0.85, "spring_rate_factor_rl": 1.1}, (0.03, 0.03), 0.5),
+    ({"spring_friction_factor_fl": 1.6, "spring_friction_factor_rl": 0.6}, (0.05, 0.05), 0.5),
+    ({"tire_damping_factor_fl": 1.5, "tire_damping_factor_rl": 0.7}, (0.02, 0.08), 0.6),
+], ids=["tire-and-spring-rate", "leaf-friction", "tire-damping"])
+def test_calibration_recovers_a_left_right_difference(plant, rtol, fall):
     """The per-station family (family.STATION_FITTED, fitted by default): the road test of the medium
     case's plant whose left stations differ from their right neighbours (mjcf.stations: each factor
     scales the left station's value), 100 N of noise; the two left factors fitted from 1 (a symmetric
-    truck), the axles' and every other value held at the plant's: both recovered, and the fit NRMSE
-    falls by more than half (the noise's share is left). The front-left tire 15 % softer and the
-    rear-left spring 10 % stiffer within 3 %; the front-left leaves rubbing 1.6 times and the rear-left
-    0.6 times their neighbours' within 5 % (measured 1.595, 0.609; fit NRMSE 0.11-0.26 to
-    0.056-0.067). A symmetric model cannot do this: it splits the difference and errs on both wheels
-    of the axle, in opposite directions."""
+    truck), the axles' and every other value held at the plant's: both recovered, and the worst
+    wheel's fit NRMSE falls to ``fall`` of where it started or below (the noise's share is left).
+    The front-left tire 15 % softer and the rear-left spring 10 % stiffer within 3 %; the front-left
+    leaves rubbing 1.6 times and the rear-left 0.6 times their neighbours' within 5 % (measured 1.595,
+    0.609; fit NRMSE 0.11-0.26 to 0.056-0.067); the front-left tire damping 1.5 times its
+    neighbour's within 2 % and the rear-left 0.7 times within 8 % (measured 1.496, 0.744: the rear's
+    stiff dual tires carry little damping force, robust sigma 0.018; worst fit NRMSE 0.115 ->
+    0.062). A symmetric model cannot do this: it splits the difference and errs on both wheels of the
+    axle, in opposite directions."""
     sc, road, force = _road_record(**plant)
     names = tuple(plant)
     assert set(names) <= set(STATION_FITTED) <= set(DEFAULT_NAMES)
     cal = _fit_window(sc, road, force, names, max_nfev=20)
     assert cal.initial == (1.0, 1.0)
     assert cal.converged, cal.message
-    np.testing.assert_allclose(cal.fitted, tuple(plant.values()), rtol=rtol)
-    assert max(cal.fit_nrmse) < 0.5 * max(cal.initial_nrmse), (cal.fit_nrmse, cal.initial_nrmse)
+    for got, want, tol in zip(cal.fitted, plant.values(), rtol):
+        assert got == pytest.approx(want, rel=tol), (cal.names, cal.fitted)
+    assert max(cal.fit_nrmse) < fall * max(cal.initial_nrmse), (cal.fit_nrmse, cal.initial_nrmse)
 
 
 def test_calibration_recovers_each_axles_stiffening():
