@@ -52,10 +52,10 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   directions. Rates are searched at 0.7-1.3, the tire damping at 0.5-2 (the plant's range,
   :data:`mjcf.stations.STATION_FACTORS`), the friction at 0.4-2.5: two springs of one truck whose
   leaves rub 0.7 and 1.4 times the catalogue's differ by a factor of 2. The tire damping sets the
-  wheel-hop peak (~10 Hz), which on a rough road carries most of the rear wheels' dynamic force: on
-  the mismatch suite (``benchmarks/mismatch_suite.py``) an empty truck on a class D road whose rear
-  tires damp 0.8 and 1.2 times their axle's had its rear wheels at 0.54 of the linear floor with
-  one damping per axle, 0.44 with each left tire's own;
+  wheel-hop peak (~10 Hz), which on a rough road carries most of the rear wheels' dynamic force; the
+  mismatch suite's plants (``benchmarks/mismatch_suite.py``) draw each tire's damping 0.8-1.25 times
+  its axle's, and an empty truck on a class D road among them (gen03) needs each left tire's own to
+  bring its rear wheels under half the linear floor;
 * ``cab_mount_hz``, on request only (``names=FITTED``; :data:`DEFAULT_NAMES` hold the XML's rigid
   cab): the cab on its own mounts (``TruckVariant.cab_mount_hz``), a mode next to the body's
   bounce and pitch that loads the front wheels. A model without it absorbs a suspended cab's mode
