@@ -60,12 +60,11 @@ SEGMENT_S = 4.096
 #: Corner of the drift cut, Hz (``drift_hz``): a strain-gauge load cell's zero drifts with its
 #: temperature and its amplifier's offset over seconds to minutes; 0.7 Hz is below the truck's body
 #: modes (bounce and pitch at 1.5-3 Hz, a cab on soft mounts at 1.5-2.5 Hz), where the gain is
-#: already 0.95 at 1.5 Hz and 0.98 at 2 Hz. Measured on the model correction's residuals of the
-#: mismatch suite (benchmarks/mismatch_suite.py, the lab's 50 N of drift below 1 Hz): at 1 Hz the
-#: loaded trucks on smooth roads gain a little more (gen12's worse front wheel 0.44 of the linear floor
-#: instead of 0.48), but the heavy truck on a rough road at low speed (gen14, class C, 30 km/h,
-#: 8000 kg) loses more of its slow force than the drift it sheds (a rear wheel's DLC error -0.81 %
-#: without the cut, -0.96 % at 0.7 Hz, -1.06 % at 1 Hz).
+#: already 0.95 at 1.5 Hz and 0.98 at 2 Hz. Chosen on the model correction's residuals of the
+#: mismatch suite (``benchmarks/mismatch_suite.py --drift-cut-hz F``, the lab's 50 N of drift below
+#: 1 Hz): a higher corner gives the loaded trucks on smooth roads a little more, but the heavy truck
+#: on a rough road at low speed (gen14, class C, 30 km/h, 8000 kg) loses more of its slow force than
+#: the drift it sheds (a rear wheel's DLC error grows with the corner).
 DRIFT_HZ = 0.7
 
 

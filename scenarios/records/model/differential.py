@@ -17,9 +17,11 @@ to use it:
   is mostly noise, and on a smooth road that noise is a large part of what is left to correct.
   W also takes the residual's slow part out, below :data:`~correction.output.denoise.DRIFT_HZ`
   (0.7 Hz): there the load cells drift (a lab's coloured noise, tens of newtons) and the pans
-  follow the drive, so the model's F_model(x_ref) carries the slow force alone. On the mismatch
-  suite's loaded trucks on smooth roads (class A, 30-60 km/h) the cells' 50 N of drift below
-  1 Hz is half the front wheels' correction error without the cut.
+  follow the drive, so the model's F_model(x_ref) carries the slow force alone. On a loaded truck
+  on a smooth road, whose front wheels' slow force is small, the drift is a large part of what the
+  correction leaves without the cut (``benchmarks/mismatch_suite.py --drift-cut-hz 0`` with
+  ``--lab typical`` and ``--lab typical-no-drift`` measures it). A lab whose cells do not drift
+  can switch the cut off (``drift_hz=None``).
 
 Both model runs start from rest while the truck on the rig was already moving at the record's
 first sample; the two start-up errors largely cancel, but not wholly (the road's and the rig's
