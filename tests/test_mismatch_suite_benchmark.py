@@ -66,9 +66,16 @@ def test_the_page_is_written_again_from_a_runs_printed_json(suite, tmp_path):
     run = {"lab": "ideal", "cab": "auto", "seed": 0, "duration_s": 30.0, "plants": [s.to_dict() for s in scores]}
     out.write_text("[ 1 s] progress\n" + json.dumps(run) + "\n", encoding="utf-8")
     assert suite.main(["--from-json", str(out), "--results", str(tmp_path)]) == 0
-    page = (tmp_path / "mismatch_suite_raw.md").read_text(encoding="utf-8")  # a run without channels: raw
+    # a run without channels: raw; another lab than the typical one: a page of its own
+    page = (tmp_path / "mismatch_suite_raw_ideal.md").read_text(encoding="utf-8")
     assert "`python benchmarks/mismatch_suite.py --plants 2 --workers 2 --lab ideal --channels raw`" in page
-    assert "| wrong |" in page and "lab measurement: ideal, channels raw" in page
+    assert "| wrong |" in page and "lab measurement: ideal, channels raw" in page and "drift cut 0.7 Hz" in page
+    run |= {"lab": "typical-no-drift", "channels": "aligned", "drift_cut_hz": 0.0, "command": "python x"}
+    out.write_text(json.dumps(run) + "\n", encoding="utf-8")
+    assert suite.main(["--from-json", str(out), "--results", str(tmp_path)]) == 0
+    page = (tmp_path / "mismatch_suite_typical_no_drift_cut0.md").read_text(encoding="utf-8")
+    assert "lab measurement: typical-no-drift, channels aligned" in page and "no drift cut" in page
+    assert not (tmp_path / "mismatch_suite.md").exists()
     (tmp_path / "empty.txt").write_text("no json\n", encoding="utf-8")
     with pytest.raises(SystemExit, match="no JSON line"):
         suite.main(["--from-json", str(tmp_path / "empty.txt")])
