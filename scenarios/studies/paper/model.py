@@ -4,7 +4,8 @@ For each case, after its road and rig runs and the project's linear correction: 
 calibrated on the rig record's own signals (drive x_ref, LVDT x_a and the measured force F_rig
 with its load-cell noise; never the road run, never the plant's parameters) and the record is
 corrected by it, F_model(x_ref) + L(W(F_rig - F_model(x_a))) with W the residual's white noise taken
-out (:mod:`correction.output.denoise`) and L the project's linear correction
+out (:mod:`correction.output.denoise`), and its slow part where the case's load cells drift
+(:func:`drift_corner`), and L the project's linear correction
 by the identified T_a (:func:`scenarios.records.model.differential.correct_with_model`). Where the
 model cannot be trusted on a wheel that wheel keeps the linear correction, and one sentence says why. Scored like the other
 methods against the road force: DLC on the unfiltered force, NRMSE against the band-limited one,
@@ -21,13 +22,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenarios.core.lab import measure_lvdt
+from correction.output.denoise import DRIFT_HZ
+from scenarios.core.lab import LabChain, measure_lvdt
 from scenarios.records.model.differential import HYBRID_LIMIT, HYBRID_FORMULA, correct_with_model
 from scenarios.records.model.result import ModelCorrection
 from scenarios.records.model.score import score_correction
 from scenarios.studies.scoring import linear_correction
 
-__all__ = ["ModelScore", "model_scores", "model_table"]
+__all__ = ["ModelScore", "drift_corner", "model_scores", "model_table"]
+
+
+def drift_corner(lab: LabChain) -> float | None:
+    """The model correction's drift cut for a case measured by ``lab`` (Hz, or None: no cut).
+
+    :data:`~correction.output.denoise.DRIFT_HZ` where the lab's load cells drift
+    (``lab.drift_noise_N`` > 0), None where they do not, as a lab that knows its cells passes
+    ``rigsim correct --model --drift-cut-hz 0``: on a drift-free record the cut only takes out the
+    slow part of the model's own error (the leaf springs' friction state, which the model's run
+    from rest does not share with the truck), which the residual would have corrected."""
+    return DRIFT_HZ if lab.drift_noise_N > 0 else None
 
 
 @dataclass(frozen=True)
@@ -78,7 +91,8 @@ def _score_case(case, workers: int | None) -> ModelScore:
     lvdt = measure_lvdt(rig.signals["pan_m"], rig.rate_hz, case.scenario.lab, case.scenario.seed)
     linear = linear_correction(case.identification.actuators(), rig.rate_hz)
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], lvdt, score.rig_N,
-                            base_scenario=case.scenario, workers=workers, linear=linear)
+                            base_scenario=case.scenario, workers=workers, linear=linear,
+                            drift_hz=drift_corner(case.scenario.lab))
     figures = None
     if not mc.use_linear:
         figures = score_correction(mc.corrected_N, road.signals["tire_force_N"], rig.rate_hz,

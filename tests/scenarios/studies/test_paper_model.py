@@ -67,3 +67,20 @@ def test_paper_offers_the_model_flag():
     args = p.parse_args(["paper", "--out", "x", "--model"])
     assert args.model is True
     assert p.parse_args(["paper", "--out", "x"]).model is False
+
+
+def test_the_drift_cut_follows_the_cases_lab():
+    """A case whose lab chain has no load-cell drift (the paper's scenarios: white noise only) is
+    corrected without the drift cut, as a lab that knows its cells passes --drift-cut-hz 0; a lab
+    whose cells drift (TYPICAL_LAB: 50 N below 1 Hz) gets the default corner."""
+    import dataclasses
+
+    from correction.output.denoise import DRIFT_HZ
+    from scenarios.core.config import load_scenario, paper_scenarios
+    from scenarios.core.lab import TYPICAL_LAB, LabChain
+    from scenarios.studies.paper.model import drift_corner
+
+    assert drift_corner(load_scenario(paper_scenarios()[0]).lab) is None
+    assert drift_corner(LabChain()) is None
+    assert drift_corner(TYPICAL_LAB) == DRIFT_HZ
+    assert drift_corner(dataclasses.replace(LabChain(), drift_noise_N=5.0)) == DRIFT_HZ
