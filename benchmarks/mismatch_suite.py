@@ -52,6 +52,7 @@ from scenarios.core.lab import TYPICAL_LAB, LabChain  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
 from scenarios.records.model.differential import HYBRID_LIMIT  # noqa: E402
+from scenarios.records.settings import DRIFT_CUT_MAX_HZ  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.model_suite.mismatch import (describe, mismatch_job, mismatch_plants,  # noqa: E402
                                                     mismatch_scenario)
@@ -178,9 +179,9 @@ def main(argv=None) -> int:
     if args.from_json is not None:
         return _page_from_json(args.from_json, args.results)
     if (not 1 <= args.plants <= 24 or args.duration_s < scoring.MIN_DURATION_S or args.noise_N < 0
-            or not 0 <= args.drift_cut_hz <= 5):
+            or not 0 <= args.drift_cut_hz <= DRIFT_CUT_MAX_HZ):
         raise SystemExit(f"--plants must be 1-24, --duration-s >= {scoring.MIN_DURATION_S:g} s, --noise-N >= 0, "
-                         "--drift-cut-hz 0-5 Hz")
+                         f"--drift-cut-hz 0-{DRIFT_CUT_MAX_HZ:g} Hz")
     lab, align = LABS[args.lab], args.channels == "aligned"
     cases = pick_cases("generalization", None, args.duration_s)[:args.plants]
     plants = mismatch_plants(cases, args.seed)  # every plant validated before any run

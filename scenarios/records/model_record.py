@@ -167,7 +167,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
                      "start_up_s": f"{START_S:g} (model runs' start-up: not settled)",
                      "transient": settings.transient,
                      "model_wheels": ",".join(CORNERS if model_result is None else model_result.wheels) or "none",
-                 "drift_cut": "none" if settings.drift_hz is None else f"{settings.drift_hz:g} Hz"})
+                     "drift_cut": "none" if settings.drift_hz is None else f"{settings.drift_hz:g} Hz"})
         noise = dict.fromkeys(CORNERS) if model_result is None else model_result.residual_noise_N  # probe: the longest
         if noise is not None:
             meta["residual_noise"] = residual_noise_text(noise)
