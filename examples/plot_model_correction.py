@@ -13,7 +13,7 @@ the model's residual and ``L`` the linear correction.
 Here the simulator makes the record: the paper's high-roughness case at 72 km/h, 20 s, its rig
 force with 100 N of load-cell noise, written as a lab's CSV. The road test of the same case is the
 reference the correction never sees. The calibration is kept short for this page (one window,
-the cab held, at most 20 model evaluations); ``rigsim correct --model`` defaults to three windows.
+the cab held, at most 20 model evaluations); ``rigsim correct --model`` defaults to two windows.
 """
 
 import dataclasses

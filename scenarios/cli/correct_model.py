@@ -70,7 +70,7 @@ def add_model_arguments(parser) -> None:
                         "cab_mount_hz is the cab's mount (held, or the first guess of its fit), and its tire and "
                         "leaf-friction values (tire_progressive_ratio and _onset_m included) are only the "
                         "starting guess (default: catalogue values; payload and position start from the record's "
-                        "static loads). Needs --pairs and at least 6.5 s of record (the windows are spread over "
+                        "static loads). Needs --pairs and at least 10 s of record (the windows are spread over "
                         "it). L: --actuator or --actuators if given, else T_a identified per corner from --pairs; "
                         "--lowpass, --lowpass-hz, --mode apply. On the wheels where the model does not reproduce "
                         "the forces L alone is used, and the reason is printed and written to OUT")
@@ -85,8 +85,8 @@ def add_model_arguments(parser) -> None:
                         "adds one model run per fitted value and window) (default 60); a fit stopped by it has "
                         "not converged and the linear correction is used")
     g.add_argument("--calibration-windows", type=int, default=None, metavar="N",
-                   help="with --model: windows of the record the model is fitted on, each 2.5 s lead-in + 4 s "
-                        "(default 3); 1 is about 3 times faster, on less of the record")
+                   help="with --model: windows of the record the model is fitted on, each 5 s lead-in + 5 s "
+                        "(default 2); 1 is about twice as fast, on less of the record")
     g.add_argument("--cab", choices=("auto", "held", "fitted"), default=None,
                    help="with --model: the model's cab. auto (default): calibrate with the cab held and, where "
                         "a cab on its own mounts could fit clearly better, with its mount frequency fitted (1-30 Hz) "

@@ -95,7 +95,7 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
     max_evaluations : int, optional
         With ``model``: most evaluations of the calibration's residual (default 60).
     calibration_windows : int, optional
-        With ``model``: windows of 2.5 s lead-in + 4 s the model is fitted on (default 3).
+        With ``model``: windows of 5 s lead-in + 5 s the model is fitted on (default 2).
     cab : {"auto", "held", "fitted"}, optional
         With ``model``: the model's cab held, its mount frequency fitted, or (default) the better fit.
     drift_cut_hz : float, Hz, optional
