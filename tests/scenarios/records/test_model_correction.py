@@ -148,7 +148,7 @@ def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
 def test_forces_with_no_truck_in_them_fall_back_before_any_model_run(record):
     """Forces of the wrong sign imply a negative payload: refused by the static guess, one sentence."""
     out = correct_with_model(record["t"], record["x_ref"], record["x_a"], -record["F_rig"],
-                             base_scenario=record["sc"], workers=1)
+                             base_scenario=record["sc"], workers=1, windows=1, window_s=2.0, lead_s=2.0)
     assert out.use_linear and out.calibration is None
     assert "payload" in out.reason and out.reason.endswith("so the linear correction is to be used.")
 

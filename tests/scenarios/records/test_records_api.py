@@ -225,7 +225,7 @@ def test_identify_record_gives_the_actuators_file_of_rigsim_identify(rig, tmp_pa
 
 @pytest.fixture(scope="module")
 def truck_record(tmp_path_factory):
-    """7 s of the paper's high-roughness 72 km/h case on the hydraulic rig, written as a lab's CSV
+    """10.5 s of the paper's high-roughness 72 km/h case on the hydraulic rig, written as a lab's CSV
     (tests/scenarios/records/test_correct_model.py's layout), and a TRUCK.toml whose first guesses are the truck's own."""
     import dataclasses
 
@@ -234,7 +234,7 @@ def truck_record(tmp_path_factory):
     from scenarios.core.config import load_scenario, paper_scenarios
     from scenarios.core.run import run
 
-    sc = dataclasses.replace(load_scenario(paper_scenarios()[2]), duration_s=7.0)
+    sc = dataclasses.replace(load_scenario(paper_scenarios()[2]), duration_s=10.5)
     res = run(sc, "rig")
     force = res.signals["tire_force_N"] + np.random.default_rng(7).normal(0.0, 100.0,
                                                                          res.signals["tire_force_N"].shape)
