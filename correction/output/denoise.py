@@ -40,7 +40,7 @@ from correction.identification.noise import noise_rms
 from correction.output.spectral import through_gain
 
 __all__ = ["NOISE_BAND", "SUB_BANDS", "FLAT_RATIO", "SEGMENT_S", "DRIFT_HZ", "NoiseGain", "design_noise_gain",
-           "drift_cut"]
+           "drift_cut", "check_drift_hz"]
 
 #: The band the white noise is read over, fractions of the sampling rate (60-150 Hz at 1 kHz): above
 #: the wheel forces' band (the correction keeps 30 Hz) where a residual holds noise only, and below a
@@ -66,6 +66,20 @@ SEGMENT_S = 4.096
 #: on a rough road at low speed (gen14, class C, 30 km/h, 8000 kg) loses more of its slow force than
 #: the drift it sheds (a rear wheel's DLC error grows with the corner).
 DRIFT_HZ = 0.7
+
+
+def check_drift_hz(drift_hz: float | None, fs_hz: float) -> None:
+    """Refuse a drift-cut corner that is not None (no cut) or a frequency in Hz strictly between 0
+    and half the rate ``fs_hz`` (Hz).
+
+    Raises
+    ------
+    ValueError
+        Naming ``drift_hz``, the band it must lie in and the value given (one sentence).
+    """
+    if drift_hz is not None and not (np.isfinite(drift_hz) and 0 < drift_hz < fs_hz / 2):
+        raise ValueError(f"drift_hz must be None (no drift cut) or a corner in Hz between 0 and fs / 2 "
+                         f"({fs_hz / 2:g} Hz), got {drift_hz!r}")
 
 
 def drift_cut(freq_hz, drift_hz: float) -> np.ndarray:
@@ -165,8 +179,7 @@ def design_noise_gain(x, fs_hz: float, *, band_hz: tuple[float, float] | None = 
         raise ValueError(f"fs_hz must be a positive rate in Hz, got {fs_hz!r}")
     if not (np.isfinite(segment_s) and segment_s > 0):
         raise ValueError(f"segment_s must be a positive length in s, got {segment_s!r}")
-    if drift_hz is not None and not (np.isfinite(drift_hz) and 0 < drift_hz < fs_hz / 2):
-        raise ValueError(f"drift_hz must be a corner in Hz between 0 and fs / 2, got {drift_hz!r}")
+    check_drift_hz(drift_hz, fs_hz)
     lo, hi = (NOISE_BAND[0] * fs_hz, NOISE_BAND[1] * fs_hz) if band_hz is None else band_hz
     edges = np.linspace(lo, hi, SUB_BANDS + 1)  # noise_rms refuses non-finite records and bands outside (0, fs / 2)
     parts = np.array([noise_rms(a, fs_hz, (edges[j], edges[j + 1])) for j in range(SUB_BANDS)])

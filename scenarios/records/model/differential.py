@@ -44,7 +44,7 @@ import time
 
 import numpy as np
 
-from correction.output.denoise import DRIFT_HZ, NoiseGain, design_noise_gain
+from correction.output.denoise import DRIFT_HZ, NoiseGain, check_drift_hz, design_noise_gain
 from mjcf.variant import TruckVariant
 from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
@@ -292,9 +292,10 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         excess_limit = DIFFERENTIAL_LIMIT if linear is None else HYBRID_LIMIT
     t, fs = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
     check_cab(cab, calibrate_kw.get("names"))
-    if drift_hz is not None and not (np.isfinite(drift_hz) and 0 < drift_hz < fs / 2):
-        raise ScenarioError(f"drift_hz must be None (no drift cut) or a corner in Hz between 0 and fs / 2 "
-                            f"({fs / 2:g} Hz), got {drift_hz!r}")
+    try:  # refused before any run, as the hybrid's noise gain would refuse it after the calibration
+        check_drift_hz(drift_hz, fs)
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
     # A record too short for the calibration's windows is the caller's to fix (raised); any other
     # refusal by the calibration means the model cannot be used on this record (the fallback).
     fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),

@@ -161,6 +161,23 @@ def test_a_malformed_record_is_refused_before_any_run(record):
         calibrate(record["t"][:2000], record["x_a"][:2000], record["F_rig"][:2000], base_scenario=record["sc"])
 
 
+@pytest.mark.parametrize("drift_hz", [0.0, -0.5, float("nan"), 500.0])
+def test_a_drift_corner_outside_the_band_is_refused_before_any_run(drift_hz, monkeypatch):
+    """The hybrid's drift cut (correction.output.denoise.check_drift_hz, the noise gain's own check)
+    refused at the call, not after minutes of calibration: the calibration is never reached."""
+    from scenarios.records.model import differential
+
+    def never(*_a, **_k):
+        raise AssertionError("the calibration ran")
+
+    monkeypatch.setattr(differential, "calibrate_cab", never)
+    t = np.arange(0.0, 12.0, 1e-3)
+    z = np.zeros((t.size, 4))
+    with pytest.raises(ScenarioError, match=r"drift_hz must be None \(no drift cut\) or a corner in Hz between 0 "
+                                            r"and fs / 2 \(500 Hz\)"):
+        correct_with_model(t, z, z, z + 3.0e4, base_scenario=plant_scenario(), drift_hz=drift_hz)
+
+
 def _road_record(**changes):
     """The road test of the medium case's plant with ``changes`` to its truck, and the force its load
     cells measure (100 N of noise): ``(scenario, road run, force)``."""
