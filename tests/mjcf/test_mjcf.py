@@ -65,6 +65,25 @@ def test_static_wheel_loads_sum_to_weight_and_split_by_lever_rule(payload_kg):
     assert forces[2] == pytest.approx(forces[3], rel=1e-9)
 
 
+def test_the_empty_truck_rests_on_pans_pitched_45_mm():
+    """A rough road's first sample (class D at 100 km/h: front pans +12.1 mm, rear -33.4 mm): Newton from
+    the mid-stroke pose starts with the empty truck's rear tires off their pans (no restoring force, a
+    singular step); the rest is reached from mid-stroke (physics.CONTINUATION_STEPS). Checked against the
+    statics, not the solver: the tire loads carry the truck's weight (sum of its body masses times g),
+    every tire is loaded, and the truck is at rest there (no joint acceleration)."""
+    model = build_model(TruckVariant(payload_kg=0.0), pans="slide")
+    data = mujoco.MjData(model)
+    pans = np.array([0.0121, 0.0121, -0.0334, -0.0334])
+    static_equilibrium(model, data, pan_z_m=pans)
+    idx = RigIndex.of(model)
+    np.testing.assert_allclose(data.qpos[idx.pan_qpos], pans, atol=1e-12)
+    forces = tire_forces(model, data)
+    bid = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in ("chassis", "payload", "front_axle", "rear_axle")]
+    assert forces.sum() == pytest.approx(model.body_mass[bid].sum() * G, rel=1e-3)
+    assert np.all(forces > 0.1 * forces.mean())
+    assert np.max(np.abs(data.qacc[idx.truck_dof])) < 1e-8
+
+
 def test_heavier_payload_loads_the_rear_more():
     f_light = tire_forces(*_rest(3640.0))
     f_heavy = tire_forces(*_rest(6360.0))
