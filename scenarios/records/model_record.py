@@ -183,7 +183,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})
         meta["cal_cell_mass"] = "x " * 60
         meta["cal_cab"] = "x " * 150
-        meta["cal_second_start"] = "x " * 130
+        meta["cal_second_start"] = "x " * 180
     elif cal is not None:
         meta.update(calibration_meta(cal))
         if cal.cab_choice:

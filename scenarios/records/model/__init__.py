@@ -9,7 +9,7 @@
 * :mod:`.cab_choice`: :func:`~.cab_choice.calibrate_cab`, the cab held, fitted, or (default) both
   calibrated and the clearly better fit kept;
 * :mod:`.restart`: :func:`~.restart.calibrate_again`, a fit refused for its model error searched
-  once more from the leaf springs sliding, the better kept;
+  again from the leaf springs sliding and with each axle's stations held alike, the best kept;
 * :mod:`.differential`: :func:`~.differential.correct_with_model` (calibrate, check, correct with
   the linear correction L of the model's residual, or fall back to L on the wheels the model does
   not reproduce, with one sentence why) and the differential form

@@ -61,7 +61,7 @@ from scenarios.core.config import ScenarioError
 from scenarios.core.pool import local_executor
 from scenarios.core.watch import SimulationError
 from scenarios.records.model.calibrate import calibrate, with_sigma
-from scenarios.records.model.family import DEFAULT_NAMES
+from scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
 from scenarios.records.model.result import Calibration
 
 __all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "scan_error",
@@ -166,7 +166,8 @@ def check_cab(cab: str, names=None) -> None:
 
 
 def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | None = None,
-                  workers: int | None = None, executor=None, defer=None, **calibrate_kw) -> Calibration:
+                  workers: int | None = None, executor=None, defer=None, symmetric: bool = False,
+                  **calibrate_kw) -> Calibration:
     """Calibrate the truck model with the cab held, fitted, or (default) whichever fits clearly better.
 
     Parameters
@@ -189,6 +190,10 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         cab is chosen ("" where it is not), e.g. one wheel far off every other, to be left out
         (``differential.outlier_wheel``); where it gives a reason the held calibration is returned
         as it is, its :attr:`~Calibration.cab_choice` saying so.
+    symmetric : bool
+        Hold each axle's left and right wheel stations alike: the fields of
+        :data:`~scenarios.records.model.family.STATION_FITTED` left out of every calibration
+        (``names`` included).
     **calibrate_kw
         Passed to ``calibrate`` (``base_scenario`` required; ``x_ref_m``, ``windows``, ``max_nfev``...);
         ``names`` (with ``cab`` "auto" only): exactly these fields, one calibration, no choice.
@@ -209,6 +214,7 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     check_cab(cab, names)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
         def run(names, **kw):
+            names = tuple(k for k in names if not (symmetric and k in STATION_FITTED))
             return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, executor=ex,
                              **(calibrate_kw | kw))
 

@@ -321,11 +321,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         except SimulationError as exc:
             return _linear(f"a truck-model run failed during the calibration ({str(exc).rstrip('.')}), "
                            "so the linear correction is to be used.", None, wall0, timings)
-        if cal.converged:  # a fit refused for its model error: searched once more, the springs sliding
-            try:
-                cal = calibrate_again(cal, lambda start: calibrated(start=start), excess_limit)
-            except (ScenarioError, SimulationError):
-                pass  # the first fit stands, and says why it is refused
+        if cal.converged:  # a fit refused for its model error: searched again (the springs sliding, the
+            cal = calibrate_again(cal, calibrated, excess_limit)  # stations alike); a failed search skipped
         timings["calibration_s"] = cal.wall_time_s
         reason = fallback_reason(cal, excess_limit)
         bad = outlier_wheel(cal, excess_limit) if reason and linear is not None and cal.converged else None

@@ -106,9 +106,10 @@ class Calibration:
         (:func:`scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
         and why; "" otherwise.
     second_start : str
-        Where the first fit was refused for its model error and searched again from the leaf
-        springs sliding (:func:`scenarios.records.model.restart.calibrate_again`): one sentence on
-        the two fits and which is kept; "" otherwise.
+        Where the first fit was refused for its model error and searched again, from the leaf
+        springs sliding and with each axle's stations held alike
+        (:func:`scenarios.records.model.restart.calibrate_again`): one sentence on the fits and
+        which is kept; "" otherwise.
     """
 
     names: tuple
