@@ -162,9 +162,9 @@ def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
     try:
         rec = rig.run(drive, rate_hz=fs)  # its first act is the rest state: a truck with none stops before a step
     except EquilibriumError:
-        # The first pose is twisted beyond what the truck can rest on (a diagonal pair of tires
-        # unloaded: class-D roads with independent tracks, ~3 cm): start on its planar part and
-        # twist the pans in over the lead-in, which ends before any scored sample.
+        # No rest on the first pose, even moved there from mid-stroke (static_equilibrium's
+        # continuation): start on its planar part, which a truck whose frame is stiff in torsion
+        # can stand on, and twist the pans in over the lead-in, which ends before any scored sample.
         drive = pan_motion_drive(t, pan_m, rig.dt_s, settle_s, start_m=planar_part(rig, np.asarray(pan_m)[0]))
         try:
             rec = rig.run(drive, rate_hz=fs)
