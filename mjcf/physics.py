@@ -293,7 +293,6 @@ def static_equilibrium(
     return data.qpos.copy()
 
 
-
 def _newton_rest(model, data, idx: "RigIndex", z: np.ndarray, q: np.ndarray, tol: float, max_iter: int) -> np.ndarray:
     """Newton iteration for the truck's rest (``qpos`` of its joints) with the pans at ``z`` (m, (4,)),
     started from ``q``; leaves the pans at ``z`` and the truck at the result (dry friction off)."""

@@ -81,10 +81,12 @@ def calibrate_again(cal: Calibration, run, excess_limit: float) -> Calibration:
     def refused(c: Calibration) -> bool:
         return float(np.max(c.excess_nrmse)) > excess_limit
 
+    def best() -> Calibration:  # the first fit, or a converged search's that fits better (ties: the first)
+        return min([cal, *(f for f in fits[1:] if f.converged)], key=mean_square)
+
     if not refused(cal):
         return cal
-    fits, tried = [cal], []
-    searches = []
+    fits, tried, searches = [cal], [], []
     start = sliding_start(cal)
     if start:
         searches.append((f"from the leaf springs sliding (friction {SLIDING_START:g} x its first guess)",
@@ -92,8 +94,7 @@ def calibrate_again(cal: Calibration, run, excess_limit: float) -> Calibration:
     if set(cal.names) & set(STATION_FITTED):
         searches.append(("with each axle's left and right wheel stations held alike", {"start": None, "symmetric": True}))
     for what, kw in searches:
-        best = min((f for f in fits if f.converged), key=mean_square, default=cal)
-        if not refused(best):
+        if not refused(best()):
             break
         try:
             again = run(**kw)
@@ -103,8 +104,7 @@ def calibrate_again(cal: Calibration, run, excess_limit: float) -> Calibration:
         tried.append(f"{what}: fit NRMSE {max(again.fit_nrmse):.3f}")
     if len(fits) == 1:
         return cal
-    better = [f for f in fits[1:] if f.converged and mean_square(f) < mean_square(cal)]
-    kept = min(better, key=mean_square) if better else cal
+    kept = best()
     said = (f"the first fit refused (model error {max(cal.excess_nrmse):.3f}), searched again {', then '.join(tried)}, "
             f"against {max(cal.fit_nrmse):.3f} (worst wheel): the {ORDINALS[fits.index(kept)]} fit kept")
     return dataclasses.replace(kept, evaluations=sum(f.evaluations for f in fits),
