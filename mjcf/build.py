@@ -14,6 +14,8 @@ import mujoco
 
 from mjcf import names
 from mjcf.cab import CAB_MASS_KG, add_cab_mount
+from mjcf.description import (SINGLE_TIRE_DAMPING_NS_PER_M, SINGLE_TIRE_STIFFNESS_N_PER_M, apply_geometry,
+                              apply_suspension)
 from mjcf.physics import RigIndex, tire_stiffness
 from mjcf.stations import add_rebound_damping, apply_station_factors, set_masses
 from mjcf.tires import add_progressive_tire, axle_progressive, set_tire, tire_elements
@@ -96,20 +98,26 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
         raise ValueError(f"pans must be 'slide', 'mocap' or 'fixed', got {pans!r}")
     v = variant or TruckVariant()
     spec = load_spec(SCENE_FILE if scene else MODEL_FILE)
-
+    apply_geometry(spec, v)  # the described truck's wheelbase, tracks and rear tires (None: the XML's)
     if v.payload_kg is not None:
         spec.geom("payload_box").mass = float(v.payload_kg)
     body = spec.body("payload")
     body.pos = [float(given) if given is not None else float(old)
                 for old, given in zip(body.pos, (v.payload_x_m, v.payload_y_m, v.payload_z_m))]
     set_masses(spec, v)
+    apply_suspension(spec, v)  # each axle's kind, rate and damping: after the masses (an air spring's rate reads them)
+    single = v.rear_tires == "single"
     for corner in names.CORNERS:
         front = corner in names.FRONT
+        k_rear = SINGLE_TIRE_STIFFNESS_N_PER_M if single and v.tire_stiffness_rear_N_per_m is None else \
+            v.tire_stiffness_rear_N_per_m
+        c_rear = SINGLE_TIRE_DAMPING_NS_PER_M if single and v.tire_damping_rear_Ns_per_m is None else \
+            v.tire_damping_rear_Ns_per_m
         set_tire(
             spec,
             corner,
-            v.tire_stiffness_front_N_per_m if front else v.tire_stiffness_rear_N_per_m,
-            v.tire_damping_front_Ns_per_m if front else v.tire_damping_rear_Ns_per_m,
+            v.tire_stiffness_front_N_per_m if front else k_rear,
+            v.tire_damping_front_Ns_per_m if front else c_rear,
             v.tire_free_radius_m,
         )
         friction = v.spring_friction_front_N if front else v.spring_friction_rear_N

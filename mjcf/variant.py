@@ -11,6 +11,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+from mjcf import description
 from mjcf.names import CORNERS, FRONT
 from mjcf.stations import STATION_FACTORS, station_factor_field
 from mjcf.tires import check_progressive
@@ -75,6 +76,7 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
 
 BOUNDS.update({station_factor_field(q, c): (lo, hi, "1", why)
                for q, (lo, hi, why) in STATION_FACTORS.items() for c in CORNERS})
+BOUNDS.update(description.BOUNDS)
 
 #: The payload's position fields, signed (m): the largest |value| and where the field must lie.
 _SIGNED = {"payload_x_m": (3.5, "lie on the truck (between -3.5 and 3.5 m)"),
@@ -204,6 +206,27 @@ class TruckVariant:
         One spring's interleaf friction over its axle's (``spring_friction_front_N`` or the rear
         one, or the XML's), 0.25 to 4 (lubrication, wear, corrosion). The per-station factors are
         plant features (:mod:`mjcf.stations`): the model family holds an axle's stations equal.
+    wheelbase_m : float, m, optional
+        Distance from the front axle to the rear axle (the XML: 5.0 m), 3 to 7 m. The axles, hangers,
+        pans and the chassis' centre of mass move with it (:func:`mjcf.description.apply_geometry`),
+        and the road reaches the rear wheels a wheelbase after the front ones.
+    track_front_m, track_rear_m : float, m, optional
+        Distance between an axle's wheel centres (for duals the pairs' centres; the XML: 2.05 and
+        1.83 m); the pans follow. 1.6 to 2.3 m front, 1.5 to 2.2 m rear.
+    rear_tires : {"dual", "single"}, optional
+        The rear wheel stations' tires: a dual pair (the XML) or one wide-base single, whose default
+        stiffness and damping are :data:`mjcf.description.SINGLE_TIRE_STIFFNESS_N_PER_M` and
+        :data:`mjcf.description.SINGLE_TIRE_DAMPING_NS_PER_M` unless the rear tire fields give them.
+    suspension_front, suspension_rear : {"leaf", "air"}, optional
+        Each axle's springs: multi-leaf (the XML) or air springs with levelling valves and dampers
+        of their own (:mod:`mjcf.description`: no interleaf friction, the ride height levelled at any
+        payload, a rate proportional to the load carried).
+    spring_rate_front_N_per_m, spring_rate_rear_N_per_m : float, N/m, optional
+        Each spring's rate (the XML's leaves: 3e5 and 7e5 N/m); for an air axle its rate at the empty
+        truck's load (default :data:`mjcf.description.AIR_RATE_N_PER_M`). 2e4 to 3e6 N/m.
+    spring_damping_front_Ns_per_m, spring_damping_rear_Ns_per_m : float, N s/m, optional
+        Each spring's viscous damper (the XML's leaves: 6e3 and 1e4 N s/m; an air axle's default
+        :data:`mjcf.description.AIR_DAMPING_NS_PER_M`). 0 to 1e5 N s/m.
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
@@ -258,17 +281,34 @@ class TruckVariant:
     spring_friction_factor_fr: float | None = None
     spring_friction_factor_rl: float | None = None
     spring_friction_factor_rr: float | None = None
+    wheelbase_m: float | None = None
+    track_front_m: float | None = None
+    track_rear_m: float | None = None
+    rear_tires: str | None = None
+    suspension_front: str | None = None
+    suspension_rear: str | None = None
+    spring_rate_front_N_per_m: float | None = None
+    spring_rate_rear_N_per_m: float | None = None
+    spring_damping_front_Ns_per_m: float | None = None
+    spring_damping_rear_Ns_per_m: float | None = None
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
+            if f.name in description.CHOICES:
+                words = description.CHOICES[f.name]
+                if value is not None and value not in words:
+                    raise ValueError(f"vehicle.{f.name} must be " + " or ".join(repr(w) for w in words)
+                                     + f", got {value!r}")
+                continue
             if f.name in _SIGNED:
                 limit, where = _SIGNED[f.name]
                 if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
                                           or not math.isfinite(value) or abs(value) > limit):
                     raise ValueError(f"vehicle.{f.name} must {where}, got {value!r}")
                 continue
-            zero_ok = f.name.startswith(("spring_friction", "tire_damping", "payload_kg", "tire_progressive"))
+            zero_ok = f.name.startswith(("spring_friction", "tire_damping", "payload_kg", "tire_progressive",
+                                         "spring_damping_front", "spring_damping_rear"))
             _positive(f.name, value, allow_zero=zero_ok)
             if value is not None and f.name in BOUNDS:
                 lo, hi, unit, why = BOUNDS[f.name]
@@ -295,6 +335,11 @@ class TruckVariant:
                     raise ValueError(f"vehicle.{field} x vehicle.{station_factor_field(quantity, corner)} = "
                                      f"{value * factor:g} {unit} is outside {lo:g} to {hi:g} {unit}: {why}; "
                                      "bring the factor nearer 1")
+
+    @classmethod
+    def word_fields(cls) -> dict[str, tuple[str, ...]]:
+        """The fields whose value is a word, and the words each takes (the first: the XML's)."""
+        return dict(description.CHOICES)
 
     @classmethod
     def field_names(cls) -> tuple[str, ...]:

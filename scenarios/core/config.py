@@ -206,9 +206,15 @@ def _dataclass_overrides(table: Any, cls, where: str):
         raise ScenarioError(f"[{where}] must be a table")
     names = {f.name for f in dataclasses.fields(cls)}
     _check_keys(table, names, where)
+    words = cls.word_fields() if hasattr(cls, "word_fields") else {}
     for key, value in table.items():
+        if key in words:
+            if value not in words[key]:
+                choices = " or ".join(f'"{w}"' for w in words[key])
+                raise ScenarioError(f"{where}.{key} must be {choices}, got {value!r}")
+            continue
         _number(f"{where}.{key}", value)
-    return {k: float(v) for k, v in table.items()}
+    return {k: v if k in words else float(v) for k, v in table.items()}
 
 
 def _actuator_fields():
@@ -249,6 +255,12 @@ def parse_scenario(doc: Mapping, *, source: pathlib.Path | None = None) -> Scena
     if "vehicle" in doc:
         try:
             kw["vehicle"] = TruckVariant(**_dataclass_overrides(doc["vehicle"], TruckVariant, "vehicle"))
+            from mjcf.description import described
+
+            if described(kw["vehicle"]):  # a truck of its own: refused here if it cannot stand on the rig
+                from mjcf.standing import check_stands
+
+                check_stands(kw["vehicle"])
         except ValueError as exc:
             raise ScenarioError(str(exc)) from None
     if "actuator" in doc:
