@@ -1,6 +1,7 @@
 """A record corrected by a truck model calibrated on it: the plan, the run, the linear fallback, the metadata.
 
-The truck model (the project's truck, ``truck_rig.xml``) is calibrated on the record alone: per
+The truck model (the truck the scenario's ``[vehicle]`` describes, the catalogue truck of
+``truck_rig.xml`` where it describes none) is calibrated on the record alone: per
 corner the drive x_ref and the LVDT x_a (``pairs``; lengths in m) and the wheel force F_rig (the
 force channel whose name holds the corner as a token, or ``corner_map``'s; in N); then
 F_corrected = F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel, W the residual's white noise
@@ -105,9 +106,10 @@ def first_guess(scenario) -> tuple[dict, list[str]]:
     """(fitted fields' first guesses from the scenario's [vehicle], its other given fields: not used)."""
     from mjcf.tires import REAR_FIELDS
     from scenarios.records.model.family import FITTED
+    from scenarios.records.model.first_guess import SPEC_FIELDS
 
     given = {k: getattr(scenario.vehicle, k) for k in type(scenario.vehicle).field_names()
-             if getattr(scenario.vehicle, k) is not None}
+             if getattr(scenario.vehicle, k) is not None and k not in SPEC_FIELDS}  # the description: the model's own
     guess = {k: float(v) for k, v in given.items() if k in FITTED and k not in FROM_STATIC_LOADS}
     for every, rear in REAR_FIELDS.items():
         if every in guess and rear not in guess:  # an all-wheel value is the rear tires' too
@@ -207,8 +209,8 @@ def run_model(plan, progress=None) -> CorrectionResult:
     guess, unused = first_guess(s.scenario)
     fs, forces = record.fs_hz, record.array(plan.channels)
     if unused:
-        say(f"note: {str(s.scenario_file)!r} [vehicle] {', '.join(unused)} not used: the model is the project's "
-            "truck, its payload and position start from the record's static loads")
+        say(f"note: {str(s.scenario_file)!r} [vehicle] {', '.join(unused)} not used: the model is the truck its "
+            "description gives, its payload and position start from the record's static loads")
     say(f"model correction of {str(record.path)!r} ({forces.shape[0] / fs:.4g} s at {fs:.6g} Hz): calibrating "
         f"the truck model on {windows} window(s) of {WINDOW_LEAD_S + WINDOW_S:g} s, at most {max_nfev} fit "
         f"evaluations, {s.workers} worker process(es); this takes minutes")

@@ -40,7 +40,8 @@ from scenarios.core.pool import local_executor
 from scenarios.records.model.band_error import band_errors
 from scenarios.records.model.cell_mass import band_acceleration
 from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
-from scenarios.records.model.first_guess import catalogue, is_light, static_guess, static_lateral, xml_nominal
+from scenarios.records.model.first_guess import (air_fields, catalogue, description, is_light, static_guess,
+                                                 static_lateral, xml_nominal)
 from scenarios.records.model.model_runs import check_record
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
 from scenarios.records.model.problem import FitProblem, FitState
@@ -99,6 +100,20 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
                             f"({lead_s:g} s lead-in + {scored_s:g} s); record at least {lead_s + scored_s:g} s")
     starts = np.linspace(lead, t.size - span, n).round().astype(int)
     return [(int(s - lead), int(s), int(s + span)) for s in starts]
+
+
+def _air_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
+    """``names`` on the described truck: an air axle has no interleaf friction to fit, and its spring
+    rate and damper are fitted where the leaf axle's friction would be (:func:`~.first_guess.air_fields`)."""
+    fit, drop = air_fields(desc)
+    out = []
+    for k in names:
+        if k in drop:
+            out += [f for f in fit if k.startswith("spring_friction_") and not k.startswith("spring_friction_factor")
+                    and k.split("_")[2] in f]
+        else:
+            out.append(k)
+    return tuple(dict.fromkeys(out))
 
 
 def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, names=DEFAULT_NAMES,
@@ -205,9 +220,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
                                 "name other fields to fit")
     # The payload's centre across the truck: pinned by the measured left/right moment (held, not fitted).
     y = static_lateral(force, base_scenario, payload, x)
-    nominal = xml_nominal()
+    desc = description(base_scenario)
+    nominal = xml_nominal(desc)
+    names = _air_names(names, desc)
     guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, "payload_z_m": nominal["payload_z_m"],
-             "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"], **catalogue(),
+             "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"], **catalogue(desc),
              **dict.fromkeys(STATION_FITTED, 1.0), **(fitted_guess or {})}
     held = [k for k in FITTED if k in ("cab_mount_hz", *EMPTY_STAND_IN.values()) or k.startswith("tire_progressive")
             or k in STATION_FITTED]
@@ -215,8 +232,12 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper, loads = [], [], {}
-    fixed = {k: None if v is None else float(v) for k, v in guess.items() if k not in names}
+    fixed = {k: None if v is None else (v if isinstance(v, str) else float(v)) for k, v in guess.items()
+             if k not in names}
     for k in names:
+        if k not in guess:
+            raise ScenarioError(f"{k} is fitted on an air axle only (the described truck's is a leaf spring, held at its "
+                                "given rate and damper); leave it out of names")
         if guess[k] is None:
             raise ScenarioError(f"fitted_guess gives no value for {k}, which is fitted; give a number or leave it out "
                                 "of names")

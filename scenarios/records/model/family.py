@@ -67,6 +67,14 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   on a rigid one; the price is a larger front-wheel error where the plant's cab mass differs from
   the model's.
 
+The truck is the one the scenario's ``[vehicle]`` describes (its wheelbase, tracks, rear tires,
+suspensions, spring rates and dampers, chassis mass and inertia: :data:`~scenarios.records.model.first_guess.SPEC_FIELDS`),
+held at the given values: a spec sheet states its geometry. On an **air axle**
+(:data:`AIR_FITTED`, :func:`~scenarios.records.model.first_guess.air_fields`) there is no interleaf
+friction to fit; the air springs' rate (at the empty truck's load; quoted by the spec sheet at one
+load and pressure) and their dampers are fitted in its place, searched 0.5-2 and 0.3-3 times the
+catalogue guess, and a fit given ``spring_friction_<axle>_N`` fits them instead.
+
 Not fitted: the chassis (5.2 t, its CoM and inertia; the payload's height stands in for a
 sprung mass whose pitch inertia is not the XML's, and on an empty truck the pitch inertia itself
 is fitted, :data:`EMPTY_STAND_IN`), the cab's mass (the
@@ -86,33 +94,39 @@ The fit itself: :mod:`scenarios.records.model.calibrate`.
 
 from __future__ import annotations
 
-__all__ = ["FITTED", "STATION_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
+__all__ = ["FITTED", "STATION_FITTED", "AIR_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
 
 #: Each axle's left tire stiffness, leaf-spring rate and interleaf friction over its right one (the
 #: module's description).
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "tire_damping_factor_fl",
                   "tire_damping_factor_rl", "spring_rate_factor_fl", "spring_rate_factor_rl",
                   "spring_friction_factor_fl", "spring_friction_factor_rl")
+#: An air axle's spring rate (at the empty truck's load) and damper: fitted on the described truck's
+#: air axles in place of the leaves' interleaf friction (:func:`~scenarios.records.model.first_guess.air_fields`).
+AIR_FITTED = ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spring_rate_rear_N_per_m",
+              "spring_damping_rear_Ns_per_m")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2",
           "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
-          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED
+          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED + AIR_FITTED
 UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pitch_inertia_kg_m2": "kg m^2",
          "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
          "axle_mass_front_kg": "kg", "axle_mass_rear_kg": "kg",
          "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "tire_progressive_ratio_rear": "1",
-         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz", **dict.fromkeys(STATION_FITTED, "1")}
+         "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz", **dict.fromkeys(STATION_FITTED, "1"),
+         "spring_rate_front_N_per_m": "N/m", "spring_rate_rear_N_per_m": "N/m",
+         "spring_damping_front_Ns_per_m": "N s/m", "spring_damping_rear_Ns_per_m": "N s/m"}
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
 #: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
-DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2"))
+DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2") + AIR_FITTED)
 #: The payload's height's stand-in on an empty or light truck (fitted in its place where the payload is light):
 #: the chassis' pitch inertia (the module's description).
 EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
@@ -128,7 +142,10 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "cha
           "tire_progressive_ratio_rear": 0.5, "cab_mount_hz": (0.4, 12.0),
           **dict.fromkeys(STATION_FITTED, (0.7, 1.3)),
           "tire_damping_factor_fl": (0.5, 2.0), "tire_damping_factor_rl": (0.5, 2.0),
-          "spring_friction_factor_fl": (0.4, 2.5), "spring_friction_factor_rl": (0.4, 2.5)}
+          "spring_friction_factor_fl": (0.4, 2.5), "spring_friction_factor_rl": (0.4, 2.5),
+          # an air spring's rate is quoted at one load and pressure, its damper's at one speed
+          "spring_rate_front_N_per_m": (0.5, 2.0), "spring_rate_rear_N_per_m": (0.5, 2.0),
+          "spring_damping_front_Ns_per_m": (0.3, 3.0), "spring_damping_rear_Ns_per_m": (0.3, 3.0)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's

@@ -8,6 +8,11 @@ true values.
 
 The payload's guess is the only one taken from the record; every other field starts from
 :func:`catalogue`, which never reads a plant.
+
+The truck is the one the scenario's ``[vehicle]`` describes (:func:`description`: its wheelbase,
+tracks, rear tires, suspensions, spring rates and dampers, chassis mass and inertia, from its spec
+sheet; :mod:`mjcf.description`), the catalogue truck of ``truck_rig.xml`` where it gives none: the
+nominal values are read from that truck compiled, and the catalogue guess is centred on them.
 """
 
 from __future__ import annotations
@@ -19,13 +24,14 @@ import numpy as np
 from hydraulics.params import GRAVITY_M_S2
 from mjcf import names as mjnames
 from mjcf.build import build_model, nominal_values
+from mjcf.description import AIR_DAMPING_NS_PER_M, AIR_RATE_N_PER_M, DESCRIPTION_FIELDS, suspension_of
 from mjcf.variant import BOUNDS, TruckVariant
 from mjcf.names import CORNERS, FRONT
 from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "AIR_CATALOGUE_FACTORS", "description", "air_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -45,14 +51,51 @@ CATALOGUE_CAB_MOUNT_HZ = 2.5
 CATALOGUE_TIRE_RATIO = 0.2
 
 
-@functools.lru_cache(maxsize=1)
-def _nominal() -> tuple[dict, tuple[float, float], np.ndarray]:
+#: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
+#: their given values: the geometry and suspension (:data:`mjcf.description.DESCRIPTION_FIELDS`) and
+#: the chassis' mass and inertia. The spring rates and dampers of an air axle are fitted from them
+#: (:func:`air_fields`).
+SPEC_FIELDS = DESCRIPTION_FIELDS + ("chassis_mass_kg", "chassis_roll_inertia_kg_m2", "chassis_pitch_inertia_kg_m2")
+#: The catalogue guess of an air axle's spring rate and damper (1, on the description's): the fields a
+#: spec sheet gives for air springs are 10-30 % off the truck (the rate is quoted at one load and
+#: pressure), as the catalogue's tire values are (:data:`CATALOGUE_FACTORS`).
+AIR_CATALOGUE_FACTORS = {"spring_rate_front_N_per_m": 1.15, "spring_rate_rear_N_per_m": 0.85,
+                         "spring_damping_front_Ns_per_m": 0.85, "spring_damping_rear_Ns_per_m": 1.15}
+
+
+def description(base_scenario: Scenario | None) -> TruckVariant:
+    """The truck the scenario's ``[vehicle]`` describes: its :data:`SPEC_FIELDS` alone (payload,
+    tires and plant features are the calibration's); the catalogue truck for None or no such field."""
+    vehicle = None if base_scenario is None else base_scenario.vehicle
+    if vehicle is None:
+        return TruckVariant()
+    return TruckVariant(**{k: getattr(vehicle, k) for k in SPEC_FIELDS if getattr(vehicle, k) is not None})
+
+
+def _spec(desc: TruckVariant) -> dict:
+    """The description's given fields, as keyword arguments of a :class:`TruckVariant`."""
+    return {k: getattr(desc, k) for k in SPEC_FIELDS if getattr(desc, k) is not None}
+
+
+def air_fields(desc: TruckVariant) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(fields fitted on the description's air axles: each one's spring rate and damper; fields dropped
+    there: its interleaf friction and that of its left spring over its right), empty on leaves."""
+    fit, drop = [], []
+    for axle, corner in (("front", FRONT[0]), ("rear", "rl")):
+        if suspension_of(desc, axle == "front") == "air":
+            fit += [f"spring_rate_{axle}_N_per_m", f"spring_damping_{axle}_Ns_per_m"]
+            drop += [f"spring_friction_{axle}_N", f"spring_friction_factor_{corner}"]
+    return tuple(fit), tuple(drop)
+
+
+@functools.lru_cache(maxsize=8)
+def _nominal(desc: TruckVariant = TruckVariant()) -> tuple[dict, tuple[float, float], np.ndarray]:
     """(the fitted fields' values, (front, rear) axle x in the chassis frame (m), each wheel's pan
-    y (m, left positive, :data:`CORNERS` order)) of the compiled nominal model, compiled once per
-    process."""
+    y (m, left positive, :data:`CORNERS` order)) of the compiled described truck (``desc``, default
+    the XML's), compiled once per process and description."""
     import mujoco
 
-    model = build_model(TruckVariant())
+    model = build_model(desc)
     f, r = CORNERS.index(FRONT[0]), CORNERS.index("rl")
     nominal = nominal_values(model)
     values = {k: nominal[k] for k in ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2",
@@ -64,20 +107,33 @@ def _nominal() -> tuple[dict, tuple[float, float], np.ndarray]:
     def body(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
 
+    for axle in air_fields(desc)[0]:  # an air axle's given (or default) rate at the empty load, and its damper
+        side = "front" if "front" in axle else "rear"
+        given = getattr(desc, axle)
+        if axle.startswith("spring_rate"):
+            values[axle] = float(AIR_RATE_N_PER_M[side] if given is None else given)
+        else:
+            values[axle] = float(AIR_DAMPING_NS_PER_M[side] if given is None else given)
     axles = tuple(float(model.body_pos[body(mjnames.axle_body(c)), 0]) for c in (CORNERS[f], CORNERS[r]))
     pans_y = np.array([model.body_pos[body(mjnames.pan_body(c)), 1] for c in CORNERS])  # children of the world
     return values, axles, pans_y
 
 
-def xml_nominal() -> dict[str, float]:
-    """The fitted fields' values in ``truck_rig.xml`` (SI), read from the compiled nominal model."""
-    return dict(_nominal()[0])
+def xml_nominal(desc: TruckVariant = TruckVariant()) -> dict[str, float]:
+    """The fitted fields' values of the described truck (``desc``, :func:`description`; default
+    ``truck_rig.xml``'s) (SI), read from it compiled."""
+    return dict(_nominal(desc)[0])
 
 
-def catalogue() -> dict[str, float]:
-    """The catalogue guess of the non-payload fields: :func:`xml_nominal` times :data:`CATALOGUE_FACTORS`."""
-    nominal = xml_nominal()
-    return {**{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ,
+def catalogue(desc: TruckVariant = TruckVariant()) -> dict:
+    """The catalogue guess of the non-payload fields: :func:`xml_nominal` of the described truck
+    (``desc``) times :data:`CATALOGUE_FACTORS` (and an air axle's :data:`AIR_CATALOGUE_FACTORS`), with
+    the description's own fields (:data:`SPEC_FIELDS`), so that ``TruckVariant(**catalogue(desc))``
+    is the described truck."""
+    nominal = xml_nominal(desc)
+    air = {k: nominal[k] * AIR_CATALOGUE_FACTORS[k] for k in air_fields(desc)[0]}
+    return {**_spec(desc), **{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, **air,
+            "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ,
             "tire_progressive_ratio": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_m": TIRE_PROGRESSIVE_ONSET_M,
             "tire_progressive_ratio_rear": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_rear_m": TIRE_PROGRESSIVE_ONSET_M}
 
@@ -127,9 +183,10 @@ def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_
     """
     if payload_kg <= 0.0:  # an empty truck (static_guess): no payload to place
         return 0.0
-    y_c = _nominal()[2]
+    desc = description(base_scenario)
+    y_c = _nominal(desc)[2]
     measured = float(np.asarray(force_N, dtype=float).mean(axis=0) @ y_c)
-    cat = catalogue()
+    cat = catalogue(desc)
 
     def moment(y: float) -> float:
         return float(static_axle_loads(TruckVariant(payload_kg=payload_kg, payload_x_m=payload_x_m,
@@ -152,8 +209,9 @@ def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_
 
 
 def empty_truck_loads(base_scenario: Scenario) -> np.ndarray:
-    """The catalogue truck's static wheel loads without payload (N, (4,), corners fl fr rl rr)."""
-    return static_axle_loads(TruckVariant(payload_kg=0.0, **catalogue()), base_scenario)
+    """The catalogue guess of the described truck's static wheel loads without payload (N, (4,), corners
+    fl fr rl rr)."""
+    return static_axle_loads(TruckVariant(payload_kg=0.0, **catalogue(description(base_scenario))), base_scenario)
 
 
 def empty_truck_kg(base_scenario: Scenario) -> float:
@@ -189,12 +247,12 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
     payload = d_total / GRAVITY_M_S2
     empty_kg = empty.sum() / GRAVITY_M_S2
     if -LIGHTER_FRACTION * empty_kg <= payload <= EMPTY_FRACTION * empty_kg:
-        return 0.0, float(xml_nominal()["payload_x_m"])
+        return 0.0, float(xml_nominal(description(base_scenario))["payload_x_m"])
     lo, hi = BOUNDS["payload_kg"][:2]
     if not (lo < payload <= hi) or d_total <= 0:
         raise ScenarioError(f"the measured mean wheel loads ({f.sum() / 1e3:.1f} kN in all) imply a payload of "
                             f"{payload:.0f} kg, outside {lo:g} to {hi:g} kg: check the force channels' scale and sign")
-    x_f, x_r = _nominal()[1]  # the axles' positions in the chassis frame
+    x_f, x_r = _nominal(description(base_scenario))[1]  # the axles' positions in the chassis frame
     x = x_r + (x_f - x_r) * d_front / d_total
     if abs(x) > 3.5:
         raise ScenarioError(f"the measured front/rear load split puts the payload at x = {x:.2f} m, off the truck "
