@@ -68,7 +68,7 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   the model's.
 
 The truck is the one the scenario's ``[vehicle]`` describes (its wheelbase, tracks, rear tires,
-suspensions, spring rates and dampers, chassis mass and inertia: :data:`~scenarios.records.model.first_guess.SPEC_FIELDS`),
+suspensions, spring rates and dampers: :data:`~scenarios.records.model.first_guess.SPEC_FIELDS`),
 held at the given values: a spec sheet states its geometry. On an **air axle**
 (:data:`AIR_FITTED`, :func:`~scenarios.records.model.first_guess.air_fields`) there is no interleaf
 friction to fit; the air springs' rate (at the empty truck's load; quoted by the spec sheet at one

@@ -10,8 +10,8 @@ The payload's guess is the only one taken from the record; every other field sta
 :func:`catalogue`, which never reads a plant.
 
 The truck is the one the scenario's ``[vehicle]`` describes (:func:`description`: its wheelbase,
-tracks, rear tires, suspensions, spring rates and dampers, chassis mass and inertia, from its spec
-sheet; :mod:`mjcf.description`), the catalogue truck of ``truck_rig.xml`` where it gives none: the
+tracks, rear tires, suspensions, spring rates and dampers, from its spec sheet;
+:mod:`mjcf.description`), the catalogue truck of ``truck_rig.xml`` where it gives none: the
 nominal values are read from that truck compiled, and the catalogue guess is centred on them.
 """
 
@@ -52,10 +52,11 @@ CATALOGUE_TIRE_RATIO = 0.2
 
 
 #: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
-#: their given values: the geometry and suspension (:data:`mjcf.description.DESCRIPTION_FIELDS`) and
-#: the chassis' mass and inertia. The spring rates and dampers of an air axle are fitted from them
-#: (:func:`air_fields`).
-SPEC_FIELDS = DESCRIPTION_FIELDS + ("chassis_mass_kg", "chassis_roll_inertia_kg_m2", "chassis_pitch_inertia_kg_m2")
+#: their given values: the geometry and suspension (:data:`mjcf.description.DESCRIPTION_FIELDS`); the
+#: spring rates and dampers of an air axle are fitted from them (:func:`air_fields`). The masses and
+#: inertias are not among them: the model's are the catalogue's and the fit's (a plant's are its own,
+#: and a scenario that carries a plant must not hand them to its model).
+SPEC_FIELDS = DESCRIPTION_FIELDS
 #: The catalogue guess of an air axle's spring rate and damper (1, on the description's): the fields a
 #: spec sheet gives for air springs are 10-30 % off the truck (the rate is quoted at one load and
 #: pressure), as the catalogue's tire values are (:data:`CATALOGUE_FACTORS`).
