@@ -1,0 +1,90 @@
+"""The model correction on a truck of its own: the description of TRUCK.toml's [vehicle] is the model's.
+
+The plant is the shipped 4x2 tractor (scenarios/data/trucks/tractor_air.toml: 3.7 m wheelbase, wide
+singles, rear air springs) with its air springs 15 % stiffer and its dampers 20 % softer than the
+spec sheet says; the model starts from the spec sheet. References: the plant's own values (the fit
+must find them from the rig's signals alone), and the catalogue truck's guess, which a scenario
+without a description must leave exactly as it was.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+
+import numpy as np
+import pytest
+
+from scenarios.core.config import load_scenario, paper_scenarios
+from scenarios.core.run import run
+from scenarios.records.model.calibrate import calibrate
+from scenarios.records.model.family import DEFAULT_NAMES
+from scenarios.records.model.first_guess import air_fields, catalogue, description
+from scenarios.studies import scoring
+
+TRUCKS = pathlib.Path(__file__).resolve().parents[3] / "scenarios" / "data" / "trucks"
+
+
+def test_a_scenario_without_a_description_keeps_the_catalogue_guess():
+    sc = load_scenario(next(p for p in paper_scenarios() if "medium_72" in p.stem))
+    assert description(sc) == description(None)
+    assert catalogue(description(sc)) == catalogue()
+    assert air_fields(description(sc)) == ((), ())
+
+
+def test_the_shipped_trucks_are_described():
+    tractor = description(load_scenario(TRUCKS / "tractor_air.toml"))
+    assert (tractor.wheelbase_m, tractor.rear_tires, tractor.suspension_rear) == (3.7, "single", "air")
+    fit, drop = air_fields(tractor)
+    assert fit == ("spring_rate_rear_N_per_m", "spring_damping_rear_Ns_per_m")
+    assert drop == ("spring_friction_rear_N", "spring_friction_factor_rl")
+    guess = catalogue(tractor)
+    assert guess["wheelbase_m"] == 3.7 and "spring_rate_rear_N_per_m" in guess
+    long = description(load_scenario(TRUCKS / "rigid_long_leaf.toml"))
+    assert long.wheelbase_m == 6.3 and air_fields(long) == ((), ())
+
+
+@pytest.fixture(scope="module")
+def tractor_record():
+    spec = load_scenario(TRUCKS / "tractor_air.toml")
+    plant = dataclasses.replace(spec.vehicle, spring_rate_rear_N_per_m=1.15 * spec.vehicle.spring_rate_rear_N_per_m,
+                                spring_damping_rear_Ns_per_m=0.8 * spec.vehicle.spring_damping_rear_Ns_per_m)
+    sc = dataclasses.replace(spec, duration_s=12.0, vehicle=plant)
+    rig = run(sc, "rig")
+    return spec, plant, rig, scoring.measured_force(rig, scoring.NOISE_N, sc.seed)
+
+
+def test_the_air_springs_of_a_described_tractor_are_found_from_the_rig_signals(tractor_record):
+    """From the spec sheet's catalogue guess (rate x 0.85, damper x 1.15: 26 % and 44 % off the plant's)
+    the fit finds the plant's air-spring rate within 5 % and its damper within 10 % (one 5 s window with
+    100 N of noise: measured 5.4 %; the 30 s record of the shipped tractor, 2 windows of 10 s, all
+    fields: 0.8 %); the axle's friction is not fitted (an air spring has none), the geometry is held at
+    the description's."""
+    spec, plant, rig, force = tractor_record
+    # the tires and the front leaves fitted too (their catalogue guess is 15 % off the plant's): held
+    # off, they would be explained by the rear damper; the rear friction stands for its axle's springs
+    names = ("payload_kg", "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
+             "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
+             "spring_friction_rear_N")
+    cal = calibrate(rig.t_s, rig.signals["pan_m"], force, base_scenario=spec, x_ref_m=rig.signals["profile_m"],
+                    names=names, windows=1, window_s=5.0, lead_s=5.0, max_nfev=12, workers=2)
+    fitted = dict(zip(cal.names, cal.fitted))
+    assert "spring_friction_rear_N" not in cal.names
+    assert {"spring_rate_rear_N_per_m", "spring_damping_rear_Ns_per_m", "spring_friction_front_N"} <= set(cal.names)
+    initial = dict(zip(cal.names, cal.initial))
+    assert abs(initial["spring_rate_rear_N_per_m"] / plant.spring_rate_rear_N_per_m - 1) > 0.2
+    assert fitted["spring_rate_rear_N_per_m"] == pytest.approx(plant.spring_rate_rear_N_per_m, rel=0.05)
+    assert fitted["spring_damping_rear_Ns_per_m"] == pytest.approx(plant.spring_damping_rear_Ns_per_m, rel=0.10)
+    assert cal.fixed["wheelbase_m"] == 3.7 and cal.fixed["suspension_rear"] == "air"
+    assert cal.variant().rear_tires == "single"
+    assert np.all(np.array(cal.fit_nrmse) < np.array(cal.initial_nrmse))
+
+
+def test_default_names_on_an_air_axle_fit_its_springs_not_its_friction():
+    from scenarios.records.model.calibrate import _air_names
+
+    tractor = description(load_scenario(TRUCKS / "tractor_air.toml"))
+    names = _air_names(DEFAULT_NAMES, tractor)
+    assert "spring_friction_rear_N" not in names and "spring_friction_factor_rl" not in names
+    assert "spring_friction_front_N" in names  # the steer axle's leaves keep theirs
+    assert names.index("spring_rate_rear_N_per_m") == DEFAULT_NAMES.index("spring_friction_rear_N")
