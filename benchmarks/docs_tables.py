@@ -188,19 +188,13 @@ def readme_rows(result: dict) -> list[list[str]]:
 def write_readme_table(folder: pathlib.Path, readme: pathlib.Path) -> pathlib.Path:
     """Rewrite the block of ``readme`` between :data:`README_BEGIN` and :data:`README_END` with the
     Table 2 of ``folder/paper.json`` and the command that measured it."""
-    from scenarios.studies.results_page import configuration_line, markdown_table
+    from scenarios.studies.results_page import configuration_line, markdown_table, write_block
 
     source = folder / "paper.json"
     result = json.loads(source.read_text())
-    text = readme.read_text(encoding="utf-8")
-    if text.count(README_BEGIN) != 1 or text.count(README_END) != 1:
-        raise SystemExit(f"{readme}: needs one line {README_BEGIN!r} and one line {README_END!r}")
-    head, rest = text.split(README_BEGIN)
-    _, tail = rest.split(README_END)
     block = (markdown_table(README_HEADER, readme_rows(result)).rstrip("\n") + "\n\n"
              + configuration_line(paper_command(folder, result), _date_of(source)) + "\n")
-    readme.write_text(head + README_BEGIN + "\n" + block + README_END + tail, encoding="utf-8")
-    return readme
+    return write_block(readme, README_BEGIN, README_END, block)
 
 
 def write_damage(folder: pathlib.Path, out: pathlib.Path) -> pathlib.Path:

@@ -23,7 +23,7 @@ from collections.abc import Sequence
 
 from correction.io.atomic import atomic_write_text
 
-__all__ = ["configuration_line", "markdown_table", "output_page", "results_page", "script_command",
+__all__ = ["configuration_line", "markdown_table", "output_page", "results_page", "script_command", "write_block",
            "write_output_page", "write_results_page"]
 
 
@@ -245,3 +245,22 @@ def write_output_page(folder, name: str, commands: Sequence[str], output: str, c
         The file written.
     """
     return _write(folder, name, output_page(commands, output, command, date, title, note, script))
+
+
+def write_block(path, begin: str, end: str, block: str) -> pathlib.Path:
+    """Rewrite the lines of the page ``path`` between the marker lines ``begin`` and ``end`` with
+    ``block`` (atomically); the markers stay.
+
+    Raises
+    ------
+    SystemExit
+        The page does not hold each marker exactly once (one sentence).
+    """
+    path = pathlib.Path(path)
+    text = path.read_text(encoding="utf-8")
+    if text.count(begin) != 1 or text.count(end) != 1:
+        raise SystemExit(f"{path}: needs one line {begin!r} and one line {end!r}")
+    head, rest = text.split(begin)
+    _, tail = rest.split(end)
+    atomic_write_text(path, head + begin + "\n" + block.rstrip("\n") + "\n" + end + tail)
+    return path
