@@ -235,7 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("scenario", nargs="?", default=None,
                    help="scenario TOML file whose [vehicle] describes the truck (default: the catalogue truck)")
     m.add_argument("--payload-kg", type=float, default=None,
-                   help="payload mass in kg (default: the scenario's, else 3640)")
+                   help="payload mass in kg (default: the scenario's, else 3640 kg)")
     m.add_argument("--cab-mount-hz", type=float, default=None, metavar="HZ",
                    help="the cab on its own mounts bouncing at HZ (vehicle.cab_mount_hz; default: a rigid cab)")
     m.set_defaults(func=_cmd_model)

@@ -12,7 +12,9 @@ The cases a study runs are data, not code: each suite is a TOML file under
   from the XML's nominal one and the plants (rigid cab, cab on mounts, progressive tire,
   gradually stiffening tire), ``scenarios/data/suites/model_plants.toml`` (:func:`model_plants`);
 * the mismatch suite's ranges of real trucks, ``scenarios/data/suites/mismatch_plants.toml``
-  (:func:`scenarios.studies.model_suite.mismatch.plant_ranges`).
+  (:func:`scenarios.studies.model_suite.mismatch.plant_ranges`);
+* the fleet suite's spec sheets and plants of other trucks, ``scenarios/data/suites/fleet.toml``
+  (:mod:`scenarios.studies.model_suite.fleet`).
 
 :func:`pick_cases` picks cases of a suite by parts of their names, as a command line gives them.
 """
@@ -36,7 +38,7 @@ __all__ = ["SUITES", "SUITE_FILES", "Plant", "ModelPlants", "suite_file", "gener
 #: The suites of cases :func:`pick_cases` knows.
 SUITES = ("paper", "generalization")
 #: The data files of :mod:`scenarios.studies.suites`, under ``scenarios/data/suites/``.
-SUITE_FILES = ("generalization.toml", "model_plants.toml", "mismatch_plants.toml")
+SUITE_FILES = ("generalization.toml", "model_plants.toml", "mismatch_plants.toml", "fleet.toml")
 
 
 def suite_file(name: str):

@@ -36,7 +36,7 @@ def test_every_subcommand_has_an_example_that_parses():
 def test_defaults_are_shown_in_help():
     # added by the formatter where the help text does not state the default itself
     assert "(default: road)" in " ".join(_subparsers()["run"].format_help().split())
-    assert "(default: 3640.0)" in " ".join(_subparsers()["model"].format_help().split())
+    assert "(default: the scenario's, else 3640 kg)" in " ".join(_subparsers()["model"].format_help().split())
 
 
 @pytest.mark.parametrize("flag, commands", [

@@ -19,7 +19,7 @@ from scenarios.core.rig import Rig
 from scenarios.core.run import run
 from scenarios.studies import scoring
 from scenarios.records.model.calibrate import calibrate, with_sigma
-from scenarios.records.model.family import DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, STATION_FITTED
+from scenarios.records.model.family import AIR_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, STATION_FITTED
 from scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                  empty_truck_kg, is_light, xml_nominal)
 from scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, correct_with_model,
@@ -129,7 +129,7 @@ def test_the_cab_is_fitted_only_on_request():
     """The default family holds the cab rigid (a smooth road may not pin its mount frequency: see
     family.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
     assert "cab_mount_hz" in FITTED and "cab_mount_hz" not in DEFAULT_NAMES
-    assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz", *EMPTY_STAND_IN.values()}
+    assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz", *EMPTY_STAND_IN.values(), *AIR_FITTED}
 
 
 def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
@@ -205,7 +205,7 @@ def test_calibration_recovers_a_cab_mount_frequency():
     plant = sc.vehicle
     held = {k: getattr(plant, k) for k in FITTED
             if k not in ("cab_mount_hz", "payload_z_m", *EMPTY_STAND_IN.values()) and not k.startswith("tire_progressive")
-            and k not in STATION_FITTED}
+            and k not in STATION_FITTED and k not in AIR_FITTED}
     assert all(v is not None for v in held.values())  # the stations: held symmetric, the plant's
     cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=("cab_mount_hz",),
                     fitted_guess=held, windows=1, window_s=3.0, lead_s=2.0, max_nfev=6, workers=2)
