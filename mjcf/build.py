@@ -14,6 +14,9 @@ import mujoco
 
 from mjcf import names
 from mjcf.cab import CAB_MASS_KG, add_cab_mount
+from mjcf.dampers import add_digressive_damping
+from mjcf.engine import ENGINE_MASS_KG, add_engine_mount
+from mjcf.frame import add_frame_flex
 from mjcf.description import (SINGLE_TIRE_DAMPING_NS_PER_M, SINGLE_TIRE_STIFFNESS_N_PER_M, apply_geometry,
                               apply_suspension)
 from mjcf.physics import RigIndex, tire_stiffness
@@ -129,6 +132,8 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
             add_progressive_tire(spec, corner, *stiffening, v.tire_progressive_spread_m)
         if v.damper_rebound_ratio is not None and v.damper_rebound_ratio != 1.0:
             add_rebound_damping(spec, corner, v.damper_rebound_ratio)
+        if v.damper_digressive_knee_m_per_s is not None:  # after the rebound ratio: it reads both sides' slopes
+            add_digressive_damping(spec, corner, v.damper_digressive_knee_m_per_s, v.damper_digressive_ratio)
         if v.pan_mass_kg is not None:
             spec.body(names.pan_body(corner)).mass = float(v.pan_mass_kg)
         if pans in ("fixed", "mocap"):
@@ -139,6 +144,11 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
         spec.option.timestep = float(v.timestep_s)
     if v.cab_mount_hz is not None:
         add_cab_mount(spec, v.cab_mount_hz, CAB_MASS_KG if v.cab_mass_kg is None else float(v.cab_mass_kg))
+    if v.engine_mount_hz is not None:  # before the frame is cut: the engine rides on the front half
+        add_engine_mount(spec, ENGINE_MASS_KG if v.engine_mass_kg is None else float(v.engine_mass_kg),
+                         v.engine_mount_hz)
+    if v.frame_torsion_hz is not None:  # last: it cuts the chassis as everything above left it
+        add_frame_flex(spec, v.frame_torsion_hz, v.frame_bending_hz)
     return spec
 
 

@@ -111,3 +111,41 @@ def spring_rebound_actuator(corner: str) -> str:
     """The leaf spring's rebound damping element (an actuator on the spring tendon, N, acting only
     while the spring extends); only with ``TruckVariant.damper_rebound_ratio`` set."""
     return f"spring_rebound_{_check(corner)}"
+
+
+# Plant features the calibrated model family lacks: a flexible frame, the engine on its mounts and
+# digressive dampers (mjcf/frame.py, mjcf/engine.py, mjcf/dampers.py); each element exists only
+# when its feature is applied.
+
+#: The frame's rear half (``TruckVariant.frame_torsion_hz``): a truck body whose mass adds to
+#: :data:`TRUCK_BODIES`' when it exists; it carries the rear axle, the rear hangers and the payload
+#: when the payload lies behind the frame's joints. Its body frame is the chassis' (same origin and
+#: axes), so the bodies and sites it carries keep their positions in the chassis frame.
+FRAME_REAR_BODY: str = "frame_rear"
+#: The frame's joints at mid-wheelbase, rear half on front half: its torsion hinge about x (rad,
+#: + the rear half's left side up) and its vertical bending hinge about y (rad, + the rear half's
+#: tail up, as ``chassis_pitch``'s + nose down), both at the rails' centre height; only with the
+#: flexible frame.
+FRAME_JOINTS: tuple[str, ...] = ("frame_torsion", "frame_bending")
+#: The engine and gearbox as their own body on rubber mounts (``TruckVariant.engine_mount_hz``), a
+#: truck body whose mass adds to :data:`TRUCK_BODIES`' when it exists.
+ENGINE_BODY: str = "engine"
+#: The engine's joints on the chassis: its vertical slide (m, 0 = at rest under gravity, + up) and
+#: its pitch hinge about its centre of mass (rad, + nose down); only with the engine mount.
+ENGINE_JOINTS: tuple[str, ...] = ("engine_z", "engine_pitch")
+#: The two sides of a digressive damper's elements: the spring extending (rebound) and compressing (bump).
+DAMPER_SIDES: tuple[str, ...] = ("ext", "cmp")
+
+
+def spring_digressive_actuator(corner: str, side: str) -> str:
+    """The leaf spring damper's digressive element on ``side``: the part of its low-speed damping that
+    saturates at the knee (``"ext"``: acting only while the spring extends, ``"cmp"``: only while it
+    compresses; an actuator on the spring tendon, N); only with
+    ``TruckVariant.damper_digressive_knee_m_per_s`` set."""
+    if side not in DAMPER_SIDES:
+        raise ValueError(f"side must be one of {', '.join(DAMPER_SIDES)}, got {side!r}")
+    return f"spring_digressive_{_check(corner)}_{side}"
+
+
+__all__ += ["FRAME_REAR_BODY", "FRAME_JOINTS", "ENGINE_BODY", "ENGINE_JOINTS", "DAMPER_SIDES",
+            "spring_digressive_actuator"]

@@ -12,10 +12,12 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from mjcf.names import CAB_JOINTS, CORNERS, pan_body, pan_joint, tire_actuator, tire_tendon
+from mjcf.names import (CAB_JOINTS, CORNERS, ENGINE_JOINTS, FRAME_JOINTS, pan_body, pan_joint, tire_actuator,
+                        tire_tendon)
 
 __all__ = [
     "TRUCK_JOINTS",
+    "OPTIONAL_JOINTS",
     "MODE_NAMES",
     "RigIndex",
     "EquilibriumError",
@@ -32,8 +34,8 @@ __all__ = [
     "COUPLED_SHARE",
 ]
 
-#: The truck's degrees of freedom (the pans' are :func:`mjcf.names.pan_joint`; a suspended cab
-#: adds :data:`mjcf.names.CAB_JOINTS`).
+#: The truck's degrees of freedom (the pans' are :func:`mjcf.names.pan_joint`; a suspended cab, a
+#: flexible frame and an engine on mounts add :data:`OPTIONAL_JOINTS`).
 TRUCK_JOINTS: tuple[str, ...] = (
     "chassis_z",
     "chassis_pitch",
@@ -55,7 +57,14 @@ MODE_NAMES: dict[str, str] = {
     "rear_axle_roll": "rear axle roll",
     "cab_z": "cab bounce",
     "cab_pitch": "cab pitch",
+    "frame_torsion": "frame torsion",
+    "frame_bending": "frame bending",
+    "engine_z": "engine bounce",
+    "engine_pitch": "engine pitch",
 }
+#: The plant features' joints, each group in a model only with its feature, in this order after
+#: :data:`TRUCK_JOINTS`: the suspended cab, the flexible frame, the engine on mounts.
+OPTIONAL_JOINTS: tuple[tuple[str, ...], ...] = (CAB_JOINTS, FRAME_JOINTS, ENGINE_JOINTS)
 #: A mode whose dominant joint holds less than this share of its kinetic energy (1) is named after
 #: its two largest, "cab bounce with body pitch": with the cab on 2 Hz mounts the cab's bounce
 #: couples with the body's bounce and pitch into two modes (1.5 and 3.2 Hz, cab share 0.37 and 0.54),
@@ -88,8 +97,8 @@ class RigIndex:
     Attributes
     ----------
     truck_qpos, truck_dof : numpy.ndarray of int
-        qpos and dof addresses of :data:`TRUCK_JOINTS`, in that order, then of
-        :data:`mjcf.names.CAB_JOINTS` when the model has a suspended cab.
+        qpos and dof addresses of :data:`TRUCK_JOINTS`, in that order, then of each group of
+        :data:`OPTIONAL_JOINTS` the model has (a suspended cab, a flexible frame, an engine).
     pan_qpos, pan_dof : numpy.ndarray of int
         qpos and dof addresses of :func:`mjcf.names.pan_joint` in :data:`mjcf.names.CORNERS` order
         (empty when the pans are fixed or prescribed).
@@ -125,8 +134,9 @@ class RigIndex:
                 raise KeyError(f"the model has no joint named {name!r}")
             return i
 
-        has_cab = all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) >= 0 for n in CAB_JOINTS)
-        truck = [jid(n) for n in TRUCK_JOINTS + (CAB_JOINTS if has_cab else ())]
+        present = [g for g in OPTIONAL_JOINTS if all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) >= 0
+                                                     for n in g)]
+        truck = [jid(n) for n in TRUCK_JOINTS + sum(present, ())]
         pan_names = [pan_joint(c) for c in CORNERS]
         has_pans = all(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) >= 0 for n in pan_names)
         pans = [jid(n) for n in pan_names] if has_pans else []

@@ -11,7 +11,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from mjcf import description
+from mjcf import dampers, description, engine, frame
 from mjcf.names import CORNERS, FRONT
 from mjcf.stations import STATION_FACTORS, station_factor_field
 from mjcf.tires import check_progressive
@@ -66,7 +66,9 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "chassis_mass_kg": (3000.0, 9000.0, "kg", "the sprung mass of an empty two-axle truck (frame, cab, engine, "
                         "body; truck_rig.xml: 5.2 t) is 4-7 t"),
     "chassis_roll_inertia_kg_m2": (1300.0, 5200.0, "kg m^2", "half to twice truck_rig.xml's estimate"),
-    "chassis_pitch_inertia_kg_m2": (12_600.0, 50_400.0, "kg m^2", "half to twice truck_rig.xml's estimate"),
+    "chassis_pitch_inertia_kg_m2": (6_000.0, 90_000.0, "kg m^2", "half to twice truck_rig.xml's estimate (25 200 kg "
+                                    "m^2 at 5 m) at the 3.6-6.5 m wheelbases of two-axle trucks (its radius of "
+                                    "gyration 0.44 of the wheelbase)"),
     "damper_rebound_ratio": (1.0, 5.0, "1", "dampers are valved up to 2-4 times harder in rebound than in bump; "
                              "1 is the XML's symmetric damper"),
     "timestep_s": (1e-6, 1e-3, "s", "coarser steps do not resolve the tire and hydraulic modes, finer ones "
@@ -77,6 +79,9 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
 BOUNDS.update({station_factor_field(q, c): (lo, hi, "1", why)
                for q, (lo, hi, why) in STATION_FACTORS.items() for c in CORNERS})
 BOUNDS.update(description.BOUNDS)
+BOUNDS.update(frame.BOUNDS)
+BOUNDS.update(engine.BOUNDS)
+BOUNDS.update(dampers.BOUNDS)
 
 #: The payload's position fields, signed (m): the largest |value| and where the field must lie.
 _SIGNED = {"payload_x_m": (3.5, "lie on the truck (between -3.5 and 3.5 m)"),
@@ -227,6 +232,21 @@ class TruckVariant:
     spring_damping_front_Ns_per_m, spring_damping_rear_Ns_per_m : float, N s/m, optional
         Each spring's viscous damper (the XML's leaves: 6e3 and 1e4 N s/m; an air axle's default
         :data:`mjcf.description.AIR_DAMPING_NS_PER_M`). 0 to 1e5 N s/m.
+    frame_torsion_hz, frame_bending_hz : float, Hz, optional
+        A frame that twists and bends (:func:`mjcf.frame.add_frame_flex`): the chassis cut at
+        mid-wheelbase into two halves on a torsion and a bending hinge whose springs put the frame's
+        first torsion and bending modes at these frequencies. Both or neither; 3 to 20 Hz. A plant
+        feature: the model family's frame is rigid.
+    engine_mount_hz : float, Hz, optional
+        The engine and gearbox on rubber mounts (:func:`mjcf.engine.add_engine_mount`), bouncing at
+        this frequency on a held frame; 5 to 20 Hz. A plant feature.
+    engine_mass_kg : float, kg, optional
+        Mass of the mounted engine and gearbox (default :data:`mjcf.engine.ENGINE_MASS_KG`; only with
+        ``engine_mount_hz``), taken out of the chassis; 300 to 1500 kg.
+    damper_digressive_knee_m_per_s, damper_digressive_ratio : float, m/s and 1, optional
+        Every spring damper digressive (:func:`mjcf.dampers.add_digressive_damping`): its slope falls
+        to ``ratio`` of the low-speed one beyond the knee speed. Both or neither; 0.05 to 0.5 m/s,
+        0.2 to 1. A plant feature: the model family's dampers are linear.
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
@@ -291,6 +311,12 @@ class TruckVariant:
     spring_rate_rear_N_per_m: float | None = None
     spring_damping_front_Ns_per_m: float | None = None
     spring_damping_rear_Ns_per_m: float | None = None
+    frame_torsion_hz: float | None = None
+    frame_bending_hz: float | None = None
+    engine_mount_hz: float | None = None
+    engine_mass_kg: float | None = None
+    damper_digressive_knee_m_per_s: float | None = None
+    damper_digressive_ratio: float | None = None
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -317,6 +343,15 @@ class TruckVariant:
         if self.cab_mass_kg is not None and self.cab_mount_hz is None:
             raise ValueError("vehicle.cab_mass_kg only applies to a suspended cab: set vehicle.cab_mount_hz too "
                              "(without it the cab is part of the chassis' mass)")
+        for pair in (("frame_torsion_hz", "frame_bending_hz"),
+                     ("damper_digressive_knee_m_per_s", "damper_digressive_ratio")):
+            given = [getattr(self, k) is not None for k in pair]
+            if any(given) and not all(given):
+                missing = pair[given.index(False)]
+                raise ValueError(f"vehicle.{pair[given.index(True)]} needs vehicle.{missing} too: give both")
+        if self.engine_mass_kg is not None and self.engine_mount_hz is None:
+            raise ValueError("vehicle.engine_mass_kg only applies to an engine on its mounts: set vehicle.engine_mount_hz "
+                             "too (without it the engine is part of the chassis' mass)")
         check_progressive(self)
         self._check_stations()
 

@@ -165,10 +165,11 @@ class Rig:
 
     @property
     def truck_mass_kg(self) -> float:
-        """float, kg: chassis, payload, axles and a suspended cab if any (pans excluded)."""
-        ids = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names.TRUCK_BODIES]
-        cab = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, names.CAB_BODY)
-        return float(self.model.body_mass[ids + ([cab] if cab >= 0 else [])].sum())
+        """float, kg: chassis, payload, axles and a suspended cab, a frame's rear half and an engine on
+        mounts where the truck has them (pans excluded)."""
+        ids = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, n)
+               for n in (*names.TRUCK_BODIES, names.CAB_BODY, names.FRAME_REAR_BODY, names.ENGINE_BODY)]
+        return float(self.model.body_mass[[i for i in ids if i >= 0]].sum())
 
     @property
     def unsprung_kg(self) -> np.ndarray:

@@ -61,27 +61,14 @@ def test_without_the_mount_the_model_is_the_xml_as_shipped():
 
 
 @pytest.mark.parametrize("payload_kg,cab_kg", [(3640.0, None), (6360.0, None), (3640.0, 200.0), (6360.0, 1200.0)])
-def test_mount_keeps_mass_centre_of_mass_inertia_and_wheel_loads(payload_kg, cab_kg):
+def test_mount_keeps_mass_centre_of_mass_inertia_and_wheel_loads(payload_kg, cab_kg, same_rigid_truck):
     rigid = build_model(TruckVariant(payload_kg=payload_kg))
     mounted = build_model(TruckVariant(payload_kg=payload_kg, cab_mount_hz=2.0, cab_mass_kg=cab_kg))
     cab = mujoco.mj_name2id(mounted, mujoco.mjtObj.mjOBJ_BODY, names.CAB_BODY)
     assert mounted.body_mass[cab] == pytest.approx(cab_kg or CAB_MASS_KG)
-    # Mass: the sum of the truck's body masses (with the mount the cab is a body of its own).
-    assert mounted.body_mass[_truck_body_ids(mounted)].sum() == pytest.approx(
-        rigid.body_mass[_truck_body_ids(rigid)].sum(), rel=1e-12)
-    # Centre of mass: MuJoCo's subtree_com of the chassis (truck without pans), both at qpos0.
-    d_rigid, d_mounted = mujoco.MjData(rigid), mujoco.MjData(mounted)
-    mujoco.mj_forward(rigid, d_rigid)
-    mujoco.mj_forward(mounted, d_mounted)
-    chassis = mujoco.mj_name2id(rigid, mujoco.mjtObj.mjOBJ_BODY, "chassis")
-    assert np.allclose(d_mounted.subtree_com[chassis], d_rigid.subtree_com[chassis], atol=1e-9)
-    # Roll and pitch inertia: with the cab at rest on its mounts, the mass matrix of the rigid
-    # truck's joints (heave, pitch, roll, axles) is that of the rigid-cab model.
-    m_rigid, m_mounted = np.zeros((rigid.nv, rigid.nv)), np.zeros((mounted.nv, mounted.nv))
-    mujoco.mj_fullM(rigid, d_rigid, m_rigid)
-    mujoco.mj_fullM(mounted, d_mounted, m_mounted)
-    dof_r, dof_m = RigIndex.of(rigid).truck_dof, RigIndex.of(mounted).truck_dof[: len(TRUCK_JOINTS)]
-    assert np.allclose(m_mounted[np.ix_(dof_m, dof_m)], m_rigid[np.ix_(dof_r, dof_r)], rtol=1e-9, atol=1e-6)
+    # Mass, centre of mass (MuJoCo's subtree_com of the chassis) and, with the cab at rest on its
+    # mounts, the mass matrix of the rigid truck's joints (heave, pitch, roll, axles), both at qpos0.
+    same_rigid_truck(rigid, mounted, names.TRUCK_BODIES + (names.CAB_BODY,))
     # Static wheel loads: within 0.1 % of the rigid-cab truck's.
     f_rigid = tire_forces(*_rest(TruckVariant(payload_kg=payload_kg)))
     model, data = _rest(TruckVariant(payload_kg=payload_kg, cab_mount_hz=2.0, cab_mass_kg=cab_kg))
@@ -102,15 +89,9 @@ def test_truck_with_cab_mount_starts_at_rest():
 
 
 @pytest.mark.parametrize("hz", [0.5, 2.0, 10.0])
-def test_cab_modes_on_a_held_frame_match_the_single_mass_reference(hz):
+def test_cab_modes_on_a_held_frame_match_the_single_mass_reference(hz, held_frame_modes):
     """Chassis held (its joints removed): the cab on its springs alone."""
-    spec = build_spec(TruckVariant(cab_mount_hz=hz), pans="fixed")
-    for j in TRUCK_JOINTS[:3]:  # chassis_z, chassis_pitch, chassis_roll
-        spec.delete(spec.joint(j))
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    modes = {m.name: m for m in modal_analysis(model, data)}
+    modes = held_frame_modes(build_spec(TruckVariant(cab_mount_hz=hz), pans="fixed"))
     m_cab = CAB_MASS_KG
     k = m_cab * (2 * math.pi * hz) ** 2
     f_bounce = math.sqrt(k / m_cab) / (2 * math.pi)
