@@ -44,7 +44,6 @@ import time
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import numpy as np  # noqa: E402
 
 from correction.output.denoise import DRIFT_HZ  # noqa: E402
 from scenarios.core.files import to_json  # noqa: E402
@@ -52,6 +51,7 @@ from scenarios.core.lab import TYPICAL_LAB, LabChain  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
 from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
 from scenarios.records.model.differential import HYBRID_LIMIT  # noqa: E402
+from scenarios.studies.model_suite.goals import pct, rows_and_goals  # noqa: E402
 from scenarios.records.settings import DRIFT_CUT_MAX_HZ  # noqa: E402
 from scenarios.studies import scoring  # noqa: E402
 from scenarios.studies.model_suite.mismatch import (describe, mismatch_job, mismatch_plants,  # noqa: E402
@@ -64,101 +64,6 @@ RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 LABS = {"typical": TYPICAL_LAB, "typical-no-drift": dataclasses.replace(TYPICAL_LAB, drift_noise_N=0.0),
         "ideal": LabChain()}
 CHANNELS = ("aligned", "raw")
-#: Goals of the suite: DLC within 1 % (95 % of wheels) and 2 % (all), NRMSE at most half the floor
-#: (95 %), at most 0.05 above the linear correction (all).
-DLC_GOOD, DLC_ALL, FLOOR_RATIO, SHARE, ABOVE_LINEAR = 0.01, 0.02, 0.5, 0.95, 0.05
-
-
-def _pct(x: float) -> str:
-    return f"{100 * x:+.2f} %"
-
-
-def limit_evidence(scores) -> dict:
-    """Where the fallback's limit belongs, wheel by wheel: each wheel's model error (what the fallback
-    reads) against whether the hybrid model correction, forced, beat the linear correction's NRMSE
-    there. ``beats_up_to``: the largest model error of a wheel where it beat; ``loses_from``: the
-    smallest where it did not (None where no wheel did not); a limit between them (when the first is
-    below the second) separates the wheels; otherwise the wheels between them overlap, counted in
-    ``overlap``."""
-    err, beat = [], []
-    for s in scores:
-        if s.model_error is None or "hybrid" not in s.nrmse:
-            continue
-        err.extend(np.asarray(s.model_error, float))
-        beat.extend(np.asarray(s.nrmse["hybrid"]) < np.asarray(s.nrmse["linear"]))
-    err, beat = np.asarray(err), np.asarray(beat, bool)
-    if not err.size:
-        return {"wheels": 0, "beats_up_to": None, "loses_from": None, "overlap": 0}
-    up_to = float(err[beat].max()) if beat.any() else None
-    loses = float(err[~beat].min()) if (~beat).any() else None
-    overlap = 0 if up_to is None or loses is None else int(np.sum((err >= loses) & (err <= up_to)))
-    return {"wheels": int(err.size), "beats_up_to": up_to, "loses_from": loses, "overlap": overlap,
-            "beats": int(beat.sum())}
-
-
-def _limit_text(ev: dict) -> str:
-    if not ev["wheels"]:
-        return "- the fallback's limit: no calibrated wheel to read it from"
-    where = (f"beat the linear correction on {ev['beats']} of {ev['wheels']} wheels; the largest model error where it "
-             f"beat: {ev['beats_up_to']:.3f}" if ev["beats_up_to"] is not None else
-             f"beat the linear correction on none of {ev['wheels']} wheels")
-    where += (f", the smallest where it did not: {ev['loses_from']:.3f}" if ev["loses_from"] is not None else
-              ", on every wheel")
-    if ev["loses_from"] is not None and ev["beats_up_to"] is not None:
-        where += (f" ({ev['overlap']} wheels between them)" if ev["overlap"] else ": a limit between them separates them")
-    return f"- the forced hybrid {where} (the fallback's limit: {HYBRID_LIMIT:g})"
-
-
-def rows_and_goals(scores) -> tuple[list[str], list[list], str, dict]:
-    """The table (one row per plant), the goals' text and their numbers."""
-    head = ["case", "plant", "method", "model error (worst)", "worst DLC error", "NRMSE / floor (worst)",
-            "linear NRMSE (worst)", "forced differential NRMSE (worst)", "hybrid NRMSE / floor (worst)",
-            "hybrid worst DLC error", "wall s"]
-    rows = []
-    for s in scores:
-        d, n = s.dlc_error["delivered"], s.nrmse["delivered"]
-        forced = s.nrmse.get("forced")
-        rows.append([s.name, describe(s.plant), s.method,
-                     "" if s.model_error is None else f"{np.max(s.model_error):.3f}", _pct(d[np.argmax(np.abs(d))]),
-                     f"{np.max(n / s.floor):.2f}", f"{np.max(s.nrmse['linear']):.3f}",
-                     "" if forced is None else f"{np.max(forced):.3f}",
-                     "" if forced is None else f"{np.max(s.nrmse['hybrid'] / s.floor):.2f}",
-                     "" if forced is None else _pct(s.dlc_error["hybrid"][np.argmax(np.abs(s.dlc_error["hybrid"]))]),
-                     f"{s.wall_s:.0f}"])
-    d = np.concatenate([s.dlc_error["delivered"] for s in scores])
-    ratio = np.concatenate([s.nrmse["delivered"] / s.floor for s in scores])
-    above = np.concatenate([s.nrmse["delivered"] - s.nrmse["linear"] for s in scores])
-    lin = np.concatenate([s.dlc_error["linear"] for s in scores])
-    good = np.mean((np.abs(d) <= DLC_GOOD) & (ratio <= FLOOR_RATIO))
-    fallbacks = [s for s in scores if s.method != "model"]
-    # the model correction the fallback refused is the hybrid (what --model delivers where the model holds)
-    wrong = [s.name for s in fallbacks if "hybrid" in s.nrmse and np.all(s.nrmse["hybrid"] < s.nrmse["linear"])]
-    numbers = {"wheels": int(d.size), "share_good": float(good), "worst_dlc_error": float(np.max(np.abs(d))),
-               "worst_above_linear": float(np.max(above)), "fallbacks": len(fallbacks),
-               "fallbacks_without_reason": sum(1 for s in fallbacks if not s.reason), "wrong_fallbacks": wrong,
-               "median_wall_s": float(np.median([s.wall_s for s in scores])), "limit": limit_evidence(scores)}
-    met = {"share": good >= SHARE, "dlc": numbers["worst_dlc_error"] <= DLC_ALL,
-           "linear": numbers["worst_above_linear"] <= ABOVE_LINEAR,
-           "fallbacks": not wrong and not numbers["fallbacks_without_reason"]}
-    text = "\n".join([
-        f"- wheels within {100 * DLC_GOOD:g} % of the road DLC and at NRMSE <= {FLOOR_RATIO:g} x the linear floor: "
-        f"{100 * good:.1f} % of {d.size} (goal >= {100 * SHARE:g} %): {'met' if met['share'] else 'NOT met'}",
-        f"- worst DLC error: {100 * numbers['worst_dlc_error']:.2f} % (goal <= {100 * DLC_ALL:g} %): "
-        f"{'met' if met['dlc'] else 'NOT met'}",
-        f"- worst NRMSE above the linear correction: {numbers['worst_above_linear']:+.3f} (goal <= {ABOVE_LINEAR:g}): "
-        f"{'met' if met['linear'] else 'NOT met'}",
-        f"- fallbacks: {len(fallbacks)}, without a reason: {numbers['fallbacks_without_reason']}, where the forced "
-        f"model correction (hybrid) was better on every wheel: {len(wrong)} ({', '.join(wrong) or 'none'}): "
-        f"{'met' if met['fallbacks'] else 'NOT met'}",
-        f"- the two goals apart: within {100 * DLC_GOOD:g} % of the road DLC {100 * np.mean(np.abs(d) <= DLC_GOOD):.0f} % "
-        f"of the wheels, at NRMSE <= {FLOOR_RATIO:g} x the floor {100 * np.mean(ratio <= FLOOR_RATIO):.0f} %",
-        f"- DLC error over the wheels: median {_pct(np.median(d))}, {100 * np.mean(d > 0):.0f} % above the road's "
-        f"(the linear correction: median {_pct(np.median(lin))}, {100 * np.mean(lin > 0):.0f} % above)",
-        _limit_text(numbers["limit"]),
-        f"- median wall time of a calibration and correction: {numbers['median_wall_s']:.0f} s"])
-    return head, rows, text, numbers | {"met": met}
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--plants", type=int, default=24, help="how many plants (1-24; plant i on the suite's case i)")
@@ -202,17 +107,21 @@ def main(argv=None) -> int:
                         cab=args.cab, align=align, drift_hz=args.drift_cut_hz or None)
         scores.append(s)
         print(f"[{time.perf_counter() - t0:6.0f} s] {s.name}: {s.method}, DLC "
-              f"{' '.join(_pct(x) for x in s.dlc_error['delivered'])}, NRMSE/floor "
+              f"{' '.join(pct(x) for x in s.dlc_error['delivered'])}, NRMSE/floor "
               f"{' '.join(f'{x:.2f}' for x in s.nrmse['delivered'] / s.floor)}, {s.wall_s:.0f} s"
               + (f" ({s.reason})" if s.reason else ""), file=sys.stderr, flush=True)
     settings = {"lab": args.lab, "channels": args.channels, "cab": args.cab, "seed": args.seed,
                 "duration_s": args.duration_s, "noise_N": args.noise_N, "drift_cut_hz": args.drift_cut_hz,
                 "command": script_command(__file__, argv)}
     _write_page(scores, settings, args.results)
-    print(json.dumps(json.loads(to_json(settings | {"summary": rows_and_goals(scores)[3],
+    print(json.dumps(json.loads(to_json(settings | {"summary": rows_and_goals(scores, _plant_text)[3],
                                                     "wall_time_s": round(time.perf_counter() - t0, 1),
                                                     "plants": [s.to_dict() for s in scores]}))))
     return 0
+
+
+def _plant_text(score) -> str:
+    return describe(score.plant)
 
 
 def _page_from_json(path: pathlib.Path, results: pathlib.Path) -> int:
@@ -235,7 +144,7 @@ def _page_from_json(path: pathlib.Path, results: pathlib.Path) -> int:
 
 
 def _write_page(scores, settings: dict, results: pathlib.Path) -> None:
-    head, rows, goals, numbers = rows_and_goals(scores)
+    head, rows, goals, numbers = rows_and_goals(scores, _plant_text)
     title = (f"The model correction on {len(scores)} random real trucks ({settings['duration_s']:g} s records, lab "
              f"measurement: {settings['lab']}, channels {settings['channels']}, {settings['noise_N']:g} N white load-cell noise, --cab {settings['cab']}"
              + (f", drift cut {settings['drift_cut_hz']:g} Hz" if settings["drift_cut_hz"] else ", no drift cut") + ")")

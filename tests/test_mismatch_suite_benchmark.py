@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from scenarios.studies.model_suite.goals import limit_evidence, rows_and_goals, share_interval
 from scenarios.studies.model_suite.mismatch_score import PlantScore
 
 
@@ -25,31 +26,31 @@ def _score(name, method, linear, hybrid, forced, error):
                       cpu_s=20.0, scored_s=20.0, fit_nrmse=np.full(4, error), model_error=np.array([0.1, error, 0.1, 0.1]))
 
 
-def test_a_fallback_is_wrong_where_the_refused_hybrid_was_better(suite):
+def test_a_fallback_is_wrong_where_the_refused_hybrid_was_better():
     scores = [_score("kept", "model", 0.2, 0.05, 0.3, 0.05),
               _score("right", "linear", 0.2, 0.25, 0.1, 0.3),  # the differential better, the hybrid not: right
               _score("wrong", "linear", 0.2, 0.1, 0.3, 0.18)]  # the hybrid better: wrong
-    head, rows, text, numbers = suite.rows_and_goals(scores)
+    head, rows, text, numbers = rows_and_goals(scores, lambda s: s.name)
     assert numbers["wrong_fallbacks"] == ["wrong"] and numbers["fallbacks"] == 2
     col = head.index("model error (worst)")
     assert [r[col] for r in rows] == ["0.100", "0.300", "0.180"]
     assert "where the forced model correction (hybrid) was better on every wheel: 1 (wrong)" in text
 
 
-def test_the_limit_is_read_where_the_hybrid_stops_beating_the_linear_correction(suite):
+def test_the_limit_is_read_where_the_hybrid_stops_beating_the_linear_correction():
     """Wheel by wheel (each plant's wheels at model error 0.1 but one): the hybrid better at 0.05 and
     0.18, worse at 0.3 and on the 0.1 wheels of that plant: the ten wheels from 0.1 to 0.18 overlap;
     with that plant's wheels all at 0.3, a limit in [0.18, 0.3) separates them."""
     scores = [_score("kept", "model", 0.2, 0.05, 0.3, 0.05),
               _score("right", "linear", 0.2, 0.25, 0.1, 0.3),
               _score("wrong", "linear", 0.2, 0.1, 0.3, 0.18)]
-    ev = suite.limit_evidence(scores)
+    ev = limit_evidence(scores)
     assert ev == {"wheels": 12, "beats_up_to": 0.18, "loses_from": 0.1, "overlap": 10, "beats": 8}
     # "right"'s hybrid is worse on every wheel, three of them at model error 0.1: with all four at 0.3
     scores[1] = dataclasses.replace(scores[1], model_error=np.full(4, 0.3))
-    ev = suite.limit_evidence(scores)
+    ev = limit_evidence(scores)
     assert ev["beats_up_to"] == 0.18 and ev["loses_from"] == 0.3 and ev["overlap"] == 0
-    text = suite.rows_and_goals(scores)[2]
+    text = rows_and_goals(scores, lambda s: s.name)[2]
     assert "the largest model error where it beat: 0.180, the smallest where it did not: 0.300: a limit between" in text
 
 
@@ -79,3 +80,14 @@ def test_the_page_is_written_again_from_a_runs_printed_json(suite, tmp_path):
     (tmp_path / "empty.txt").write_text("no json\n", encoding="utf-8")
     with pytest.raises(SystemExit, match="no JSON line"):
         suite.main(["--from-json", str(tmp_path / "empty.txt")])
+
+
+def test_the_share_interval_resamples_whole_trucks():
+    """All trucks good: the interval is [1, 1]; one truck of four bad on every wheel: the share is 0.75
+    and the bootstrap over trucks spans it (a truck's wheels move together: with four trucks the
+    share takes the values k / 4 only)."""
+    good = _score("good", "model", 0.2, 0.02, 0.3, 0.05)  # NRMSE 0.02 over a floor of 0.1: good
+    bad = dataclasses.replace(good, name="bad", dlc_error={k: np.full(4, 0.02) for k in good.dlc_error})
+    assert share_interval([good] * 4) == (1.0, 1.0)
+    lo, hi = share_interval([good, good, good, bad])
+    assert lo < 0.75 < hi and {lo * 4, hi * 4} <= set(range(5))

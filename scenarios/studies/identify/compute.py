@@ -131,7 +131,7 @@ class RigIdentification:
 
 def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float | None = None,
                  seed: int = IDENT_SEED, rig: Rig | None = None, lab: LabChain | None = None,
-                 align: bool = False) -> RigIdentification:
+                 align: "bool | LabChain" = False) -> RigIdentification:
     """Run the identification on the simulated rig of ``scenario`` and fit T_a per corner.
 
     Parameters
@@ -148,9 +148,10 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     lab : scenarios.core.lab.LabChain, optional
         The lab's measurement of the LVDTs (:func:`scenarios.core.lab.measure_lvdt`, noise from
         ``seed``); default: the scenario's (``[lab]``).
-    align : bool
+    align : bool or scenarios.core.lab.LabChain
         Take the LVDT channel's known filter phase and delay out before the fit
-        (:func:`scenarios.core.lab.aligned`), as ``rigsim identify --from-file --lvdt-filter`` does.
+        (:func:`scenarios.core.lab.aligned`), as ``rigsim identify --from-file --lvdt-filter`` does:
+        True, the measuring chain's own; a LabChain, its settings (a lab's nominal ones).
 
     Raises
     ------
@@ -169,7 +170,7 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     chain = scenario.lab if lab is None else lab
     pan = measure_lvdt(rec.pan_m, rate, chain, seed)
     if align:
-        pan = undo_timing(pan, rate, chain.lvdt_channel)
+        pan = undo_timing(pan, rate, (align if isinstance(align, LabChain) else chain).lvdt_channel)
     u, y = rec.x_ref_m[k0:], pan[k0:]
     nperseg = int(min(round(SEGMENT_S * rate), u.shape[0] // 8))
     f, h, coh = h1_estimate(u, y, rate, nperseg)

@@ -105,7 +105,8 @@ def plant_ranges() -> PlantRanges:
                        sometimes=types.MappingProxyType(sometimes))
 
 
-def draw_plant(case_payload_kg: float, rng: np.random.Generator) -> dict[str, float]:
+def draw_plant(case_payload_kg: float, rng: np.random.Generator,
+               nominal: Mapping[str, float] | None = None) -> dict[str, float]:
     """One plant truck's :class:`~mjcf.variant.TruckVariant` fields, drawn from :func:`plant_ranges`.
 
     Parameters
@@ -114,8 +115,11 @@ def draw_plant(case_payload_kg: float, rng: np.random.Generator) -> dict[str, fl
         The case's payload (the plant's is a factor of it).
     rng : numpy.random.Generator
         Draws, in a fixed order (the file's), so one seed gives one plant.
+    nominal : Mapping[str, float], optional
+        The values the factors and offsets apply to (SI; :func:`mjcf.build.nominal_values` of a
+        described truck); default the XML's.
     """
-    ranges, nominal = plant_ranges(), nominal_values()
+    ranges, nominal = plant_ranges(), nominal_values() if nominal is None else nominal
     out: dict[str, float] = {}
     for field, (lo, hi) in ranges.factors.items():
         base = case_payload_kg if field == "payload_kg" else nominal[field]

@@ -117,7 +117,7 @@ def _cpu_s() -> float:
 
 def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig, identification, *, lab: LabChain,
                 noise_N: float, seed: int, workers: int | None = None, cab: str = "auto",
-                align: bool = False, drift_hz: float | None = DRIFT_HZ) -> PlantScore:
+                align: "bool | LabChain" = False, drift_hz: float | None = DRIFT_HZ) -> PlantScore:
     """Correct one plant's rig test as a user would and judge it (see the module's description).
 
     Parameters
@@ -140,17 +140,18 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
         The model calibration's worker processes.
     cab : {"auto", "held", "fitted"}
         The model's cab mode.
-    align : bool
+    align : bool or LabChain
         Take the lab's known anti-alias filters' phase and delays out of the force and LVDT
         channels before correcting (:func:`scenarios.core.lab.aligned`; the identification given
-        should be aligned alike). The linear floor is fitted on the channels as measured.
+        should be aligned alike): True, with ``lab``'s own settings; a LabChain, with its settings
+        (the lab's nominal ones, where ``lab`` is the chain as it was). The linear floor is fitted on the channels as measured.
     drift_hz : float or None, Hz
         The model correction's drift cut (:func:`~scenarios.records.model.differential.hybrid_correction`);
         None: none.
     """
     fs = float(rig.rate_hz)
     raw = measure(rig, lab, noise_N, seed)
-    measured = aligned(raw, fs, lab) if align else raw
+    measured = aligned(raw, fs, align if isinstance(align, LabChain) else lab) if align else raw
     road_N = np.asarray(road.signals["tire_force_N"], dtype=float)
     lin = linear_correction(identification.actuators(), fs)
     linear_N, linear_settled = lin(measured.force_N)

@@ -1,0 +1,169 @@
+"""The model correction on trucks a lab brings: other geometry and suspension, described by their spec sheets.
+
+::
+
+    python benchmarks/fleet_suite.py --draw development|fresh [--trucks 24] [--duration-s 30]
+                                     [--seed N] [--cab auto|held|fitted] [--workers N] [--noise-N 100]
+    python benchmarks/fleet_suite.py --page DEVELOPMENT.txt FRESH.txt [--results docs/results]
+
+Truck ``i`` of a draw (:func:`scenarios.studies.model_suite.fleet.draw_truck`) is a spec sheet
+(wheelbase 3.6-6.5 m, tracks, dual or single rear tires, leaf or air on each axle with their rates
+and dampers) and a plant truck on the rig that differs from it as the mismatch suite's plants differ
+from the catalogue (payload, stations, masses, rebound, cab, progressive tire) and carries structure
+the model family lacks (a frame that twists and bends, an engine on rubber mounts, dampers
+digressive or worn, air springs' bushings), on its own road (ISO B-D, 30-90 km/h). Per truck, in
+worker processes: the road test (the reference), the rig test and the rig's identification; then
+:func:`scenarios.studies.model_suite.mismatch_score.score_plant`: the rig test through the lab's
+chain as it was (each filter corner off by up to 5 %, the force delay by up to 10 %), its channels
+aligned with the lab's **nominal** settings, corrected linearly by the identified T_a and by the
+truck model calibrated on the record, the model starting from the spec sheet (``rigsim correct
+--model TRUCK.toml`` with the spec sheet as ``[vehicle]``).
+
+The development draw is seed 0: what the method is developed on. ``--draw fresh`` draws the seed
+when it runs (unless ``--seed`` gives one) and prints it: the set the method is scored on, never
+tuned on. Each run prints its table, the goals and one JSON line; ``--page`` writes
+``docs/results/fleet_suite.md`` from the two runs' printed output, the draws side by side with a
+95 % confidence interval over trucks (:func:`scenarios.studies.model_suite.goals.share_interval`).
+Goals (:mod:`scenarios.studies.model_suite.goals`): at least 95 % of wheels within 1 % of the road
+DLC at NRMSE at most half the linear floor; no wheel more than 0.05 NRMSE above the linear
+correction.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import pathlib
+import secrets
+import sys
+import time
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from scenarios.core.files import to_json  # noqa: E402
+from scenarios.core.lab import TYPICAL_LAB  # noqa: E402
+from scenarios.core.pool import run_jobs  # noqa: E402
+from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
+from scenarios.studies import scoring  # noqa: E402
+from scenarios.studies.model_suite.fleet import fleet_job, fleet_trucks, lacks, spec_text  # noqa: E402
+from scenarios.studies.model_suite.goals import pct, rows_and_goals, share_interval  # noqa: E402
+from scenarios.studies.model_suite.mismatch_score import PlantScore, score_plant  # noqa: E402
+from scenarios.studies.results_page import markdown_table, script_command, write_results_page  # noqa: E402
+
+RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
+DRAWS = ("development", "fresh")
+#: The development draw's seed.
+DEVELOPMENT_SEED = 0
+
+
+def _truck_text(score) -> str:
+    p = score.plant
+    return f"{p['_spec']}; lacks: {p['_lacks']}"
+
+
+def run_draw(args) -> dict:
+    """Run and score one draw; its settings, summary and scores (as printed in its JSON line)."""
+    seed = args.seed if args.seed is not None else (DEVELOPMENT_SEED if args.draw == "development"
+                                                    else secrets.randbits(31))
+    print(f"fleet suite, {args.draw} draw: seed {seed}", file=sys.stderr, flush=True)
+    trucks = fleet_trucks(args.trucks, seed)  # every truck drawn and checked before any run
+    t0 = time.perf_counter()
+    keys = [(i, k) for i in range(len(trucks)) for k in ("road", "rig", "identify")]
+    jobs = [(fleet_job, (trucks[i], args.duration_s, k)) for i, k in keys]
+
+    def said(j, _r):
+        i, k = keys[j]
+        print(f"[{time.perf_counter() - t0:6.0f} s] {trucks[i].name}: {k}", file=sys.stderr, flush=True)
+
+    by = dict(zip(keys, run_jobs(jobs, workers=args.workers, on_done=said)))
+    scores = []
+    for i, truck in enumerate(trucks):
+        spec = truck.scenario(args.duration_s, truck="spec")
+        s = score_plant(truck.name, truck.plant, spec, by.pop((i, "road")), by.pop((i, "rig")), by.pop((i, "identify")),
+                        lab=truck.lab, noise_N=args.noise_N, seed=spec.seed, workers=args.workers, cab=args.cab,
+                        align=TYPICAL_LAB)
+        s = dataclasses.replace(s, plant={**s.plant, "_spec": spec_text(truck), "_lacks": lacks(truck)})
+        scores.append(s)
+        print(f"[{time.perf_counter() - t0:6.0f} s] {s.name} ({spec_text(truck)}): {s.method}, DLC "
+              f"{' '.join(pct(x) for x in s.dlc_error['delivered'])}, NRMSE/floor "
+              f"{' '.join(f'{x:.2f}' for x in s.nrmse['delivered'] / s.floor)}, {s.wall_s:.0f} s"
+              + (f" ({s.reason})" if s.reason else ""), file=sys.stderr, flush=True)
+    head, rows, goals, numbers = rows_and_goals(scores, _truck_text)
+    interval = share_interval(scores)
+    print(markdown_table(head, rows))
+    print(goals)
+    print(f"- 95 % confidence interval of the share over trucks: {100 * interval[0]:.1f}-{100 * interval[1]:.1f} %")
+    settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "duration_s": args.duration_s,
+                "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__, sys.argv[1:])}
+    out = json.loads(to_json(settings | {"summary": numbers, "interval": interval,
+                                         "wall_time_s": round(time.perf_counter() - t0, 1),
+                                         "plants": [s.to_dict() for s in scores]}))
+    print(json.dumps(out))
+    return out
+
+
+def _read_run(path: pathlib.Path) -> dict:
+    lines = [line for line in path.read_text(encoding="utf-8").splitlines() if line.startswith("{")]
+    if not lines:
+        raise SystemExit(f"{path}: no JSON line of a fleet_suite run in it; give the file its run printed")
+    return json.loads(lines[-1])
+
+
+def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path:
+    """``fleet_suite.md``: each draw's summary side by side, then each draw's table."""
+    runs = [_read_run(p) for p in paths]
+    summary_head = ["draw", "seed", "trucks", "wheels good (95 % CI over trucks)", "worst DLC error",
+                    "worst NRMSE above linear", "fallbacks", "median wall s"]
+    summary, parts = [], []
+    for run in runs:
+        scores = [PlantScore.from_dict(p) for p in run["plants"]]
+        head, rows, goals, numbers = rows_and_goals(scores, _truck_text)
+        lo, hi = run["interval"]
+        summary.append([run["draw"], run["seed"], len(scores), f"{100 * numbers['share_good']:.1f} % "
+                        f"({100 * lo:.1f}-{100 * hi:.1f} %)", f"{100 * numbers['worst_dlc_error']:.2f} %",
+                        f"{numbers['worst_above_linear']:+.3f}", numbers["fallbacks"], f"{numbers['median_wall_s']:.0f}"])
+        parts.append(f"**The {run['draw']} draw** (seed {run['seed']}, `{run['command']}`)\n\n"
+                     + markdown_table(head, rows).rstrip("\n") + "\n\n" + goals)
+    note = ("Per truck the worse wheel, as in the mismatch suite (docs/results/mismatch_suite.md); the plant column "
+            "gives the spec sheet (wheelbase, rear tires, front/rear suspension, payload) and what the plant has that "
+            "its model lacks. The records pass through the lab's chain as it was (corners off by up to 5 %) and are "
+            "aligned with its nominal settings.\n\n" + "\n\n".join(parts))
+    command = " && ".join(r["command"] for r in runs)
+    page = write_results_page(results, "fleet_suite", "The model correction on trucks a lab brings: development "
+                              "and fresh draws", summary_head, summary, command, note=note,
+                              script=script_command(__file__, ["--page", *map(str, paths)]))
+    print(page.read_text(encoding="utf-8"))
+    return page
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--draw", choices=DRAWS, default=None, help="run the development draw (seed 0) or a fresh one")
+    ap.add_argument("--trucks", type=int, default=24, help="how many trucks (default 24)")
+    ap.add_argument("--duration-s", type=float, default=30.0, help="analysed seconds per run (default 30)")
+    ap.add_argument("--seed", type=int, default=None, help="the draw's seed (default: 0, or drawn now for fresh)")
+    ap.add_argument("--cab", choices=CAB_CHOICES, default=AUTO, help="the model's cab mode (default auto)")
+    ap.add_argument("--noise-N", type=float, default=scoring.NOISE_N, help="white load-cell noise, N rms (default 100)")
+    ap.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    ap.add_argument("--page", type=pathlib.Path, nargs="+", default=None, metavar="RUN.txt",
+                    help="write fleet_suite.md from runs' printed output instead of running")
+    ap.add_argument("--results", type=pathlib.Path, default=RESULTS, help="folder of fleet_suite.md")
+    args = ap.parse_args(argv)
+    if args.page is not None:
+        write_page(args.page, args.results)
+        return 0
+    if args.draw is None:
+        raise SystemExit("give --draw development or --draw fresh (or --page RUN.txt ...)")
+    if not 1 <= args.trucks <= 200 or args.duration_s < scoring.MIN_DURATION_S or args.noise_N < 0:
+        raise SystemExit(f"--trucks must be 1-200, --duration-s >= {scoring.MIN_DURATION_S:g} s, --noise-N >= 0")
+    run_draw(args)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
