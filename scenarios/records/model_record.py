@@ -28,7 +28,7 @@ from scenarios.records.linear import linear_result, ta_text
 from scenarios.records.output import linear_correction, linear_metadata, lowpass_filter, rigsim_version
 from scenarios.records.timing import timing_metadata
 
-__all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "cal_key", "calibration_meta", "model_metadata",
+__all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "description_note", "cal_key", "calibration_meta", "model_metadata",
            "plan_model", "run_model"]
 
 #: The fields the payload's first guess comes from the record for (a [vehicle] value is not used).
@@ -196,6 +196,27 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
     return meta
 
 
+def description_note(cal, scenario_file) -> str:
+    """One sentence pointing at the truck's description where the calibrated model does not reproduce a
+    wheel beyond the fallback's limit (a wheelbase 10 % off or leaves declared where the truck rides on
+    air give model errors of 0.2-0.8, the described truck 0.02-0.05: tests/scenarios/records/
+    test_described_truck.py), else ""."""
+    if cal is None:
+        return ""
+    import numpy as np
+
+    from mjcf.names import CORNERS
+    from scenarios.records.model.differential import HYBRID_LIMIT
+
+    excess = np.asarray(cal.excess_nrmse, dtype=float)
+    worst = int(np.argmax(excess))
+    if excess[worst] <= HYBRID_LIMIT:
+        return ""
+    return (f"note: a model error of {excess[worst]:.2f} on {CORNERS[worst]} (limit {HYBRID_LIMIT:g}) is what a truck "
+            f"described wrongly gives: check {str(scenario_file)!r} [vehicle] wheelbase_m, track_front_m, "
+            "track_rear_m, rear_tires, suspension_front and suspension_rear against the truck on the rig")
+
+
 def run_model(plan, progress=None) -> CorrectionResult:
     """Calibrate the truck model on the planned record and correct it, or correct it linearly and say why.
 
@@ -235,6 +256,9 @@ def run_model(plan, progress=None) -> CorrectionResult:
                              workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
                              linear=linear, drift_hz=s.drift_hz)
     cal = res.calibration
+    hint = description_note(cal, s.scenario_file)
+    if hint:
+        say(hint)
     if cal is not None:
         say(f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
             f"{'converged' if cal.converged else 'not converged'}, worst fit NRMSE {cal.worst_fit_nrmse:.3f})"

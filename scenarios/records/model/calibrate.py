@@ -40,7 +40,7 @@ from scenarios.core.pool import local_executor
 from scenarios.records.model.band_error import band_errors
 from scenarios.records.model.cell_mass import band_acceleration
 from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
-from scenarios.records.model.first_guess import (air_fields, catalogue, description, is_light, static_guess,
+from scenarios.records.model.first_guess import (catalogue, description, is_light, spring_fields, static_guess,
                                                  static_lateral, xml_nominal)
 from scenarios.records.model.model_runs import check_record
 from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
@@ -102,17 +102,17 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
     return [(int(s - lead), int(s), int(s + span)) for s in starts]
 
 
-def _air_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
-    """``names`` on the described truck: an air axle has no interleaf friction to fit, and its spring
-    rate and damper are fitted where the leaf axle's friction would be (:func:`~.first_guess.air_fields`)."""
-    fit, drop = air_fields(desc)
+def _spring_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
+    """``names`` on the described truck (:func:`~.first_guess.spring_fields`): where ``names`` fit an
+    axle's interleaf friction, its spring rate and damper are fitted too (an air axle: in the
+    friction's place, for it has none); the catalogue truck's names as given."""
+    fit, drop = spring_fields(desc)
     out = []
     for k in names:
-        if k in drop:
-            out += [f for f in fit if k.startswith("spring_friction_") and not k.startswith("spring_friction_factor")
-                    and k.split("_")[2] in f]
-        else:
+        if k not in drop:
             out.append(k)
+        if k.startswith("spring_friction_") and not k.startswith("spring_friction_factor"):
+            out += [f for f in fit if k.split("_")[2] in f]
     return tuple(dict.fromkeys(out))
 
 
@@ -222,7 +222,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     y = static_lateral(force, base_scenario, payload, x)
     desc = description(base_scenario)
     nominal = xml_nominal(desc)
-    names = _air_names(names, desc)
+    names = _spring_names(names, desc)
     guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, "payload_z_m": nominal["payload_z_m"],
              "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"], **catalogue(desc),
              **dict.fromkeys(STATION_FITTED, 1.0), **(fitted_guess or {})}
@@ -236,8 +236,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
              if k not in names}
     for k in names:
         if k not in guess:
-            raise ScenarioError(f"{k} is fitted on an air axle only (the described truck's is a leaf spring, held at its "
-                                "given rate and damper); leave it out of names")
+            raise ScenarioError(f"{k} is fitted on a described truck only (the catalogue truck's springs are held at "
+                                "truck_rig.xml's); describe the truck in [vehicle] or leave it out of names")
         if guess[k] is None:
             raise ScenarioError(f"fitted_guess gives no value for {k}, which is fitted; give a number or leave it out "
                                 "of names")

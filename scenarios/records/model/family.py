@@ -69,11 +69,12 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
 
 The truck is the one the scenario's ``[vehicle]`` describes (its wheelbase, tracks, rear tires,
 suspensions, spring rates and dampers: :data:`~scenarios.records.model.first_guess.SPEC_FIELDS`),
-held at the given values: a spec sheet states its geometry. On an **air axle**
-(:data:`AIR_FITTED`, :func:`~scenarios.records.model.first_guess.air_fields`) there is no interleaf
-friction to fit; the air springs' rate (at the empty truck's load; quoted by the spec sheet at one
-load and pressure) and their dampers are fitted in its place, searched 0.5-2 and 0.3-3 times the
-catalogue guess, and a fit given ``spring_friction_<axle>_N`` fits them instead.
+held at the given values: a spec sheet states its geometry. Its springs' rates and dampers per axle
+(:data:`AIR_FITTED`, :func:`~scenarios.records.model.first_guess.spring_fields`) are fitted beside
+the axle's interleaf friction, searched 0.5-2 and 0.3-3 times the catalogue guess: a spec sheet
+quotes an air spring's rate at one load and pressure and a leaf spring's to 5-10 %, and dampers wear
+to a third of their force. An **air axle** has no interleaf friction: its rate and damper are
+fitted in the friction's place.
 
 Not fitted: the chassis (5.2 t, its CoM and inertia; the payload's height stands in for a
 sprung mass whose pitch inertia is not the XML's, and on an empty truck the pitch inertia itself
@@ -101,8 +102,8 @@ __all__ = ["FITTED", "STATION_FITTED", "AIR_FITTED", "DEFAULT_NAMES", "EMPTY_STA
 STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "tire_damping_factor_fl",
                   "tire_damping_factor_rl", "spring_rate_factor_fl", "spring_rate_factor_rl",
                   "spring_friction_factor_fl", "spring_friction_factor_rl")
-#: An air axle's spring rate (at the empty truck's load) and damper: fitted on the described truck's
-#: air axles in place of the leaves' interleaf friction (:func:`~scenarios.records.model.first_guess.air_fields`).
+#: Each axle's spring rate (an air spring's at the empty truck's load) and damper: fitted on a described
+#: truck (:func:`~scenarios.records.model.first_guess.spring_fields`), where the names fit the axle's friction.
 AIR_FITTED = ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spring_rate_rear_N_per_m",
               "spring_damping_rear_Ns_per_m")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).

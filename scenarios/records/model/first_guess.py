@@ -24,14 +24,14 @@ import numpy as np
 from hydraulics.params import GRAVITY_M_S2
 from mjcf import names as mjnames
 from mjcf.build import build_model, nominal_values
-from mjcf.description import AIR_DAMPING_NS_PER_M, AIR_RATE_N_PER_M, DESCRIPTION_FIELDS, suspension_of
+from mjcf.description import AIR_DAMPING_NS_PER_M, AIR_RATE_N_PER_M, DESCRIPTION_FIELDS, described, suspension_of
 from mjcf.variant import BOUNDS, TruckVariant
 from mjcf.names import CORNERS, FRONT
 from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["SPEC_FIELDS", "AIR_CATALOGUE_FACTORS", "description", "air_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -53,14 +53,15 @@ CATALOGUE_TIRE_RATIO = 0.2
 
 #: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
 #: their given values: the geometry and suspension (:data:`mjcf.description.DESCRIPTION_FIELDS`); the
-#: spring rates and dampers of an air axle are fitted from them (:func:`air_fields`). The masses and
+#: spring rates and dampers are fitted from them (:func:`spring_fields`). The masses and
 #: inertias are not among them: the model's are the catalogue's and the fit's (a plant's are its own,
 #: and a scenario that carries a plant must not hand them to its model).
 SPEC_FIELDS = DESCRIPTION_FIELDS
-#: The catalogue guess of an air axle's spring rate and damper (1, on the description's): the fields a
-#: spec sheet gives for air springs are 10-30 % off the truck (the rate is quoted at one load and
-#: pressure), as the catalogue's tire values are (:data:`CATALOGUE_FACTORS`).
-AIR_CATALOGUE_FACTORS = {"spring_rate_front_N_per_m": 1.15, "spring_rate_rear_N_per_m": 0.85,
+#: The catalogue guess of a described axle's spring rate and damper (1, on the description's): the
+#: values a spec sheet gives are 10-30 % off the truck on the rig (an air spring's rate is quoted at
+#: one load and pressure, a leaf spring's is made to 5-10 %, a damper wears to a third of its force),
+#: as the catalogue's tire values are (:data:`CATALOGUE_FACTORS`).
+SPRING_CATALOGUE_FACTORS = {"spring_rate_front_N_per_m": 1.15, "spring_rate_rear_N_per_m": 0.85,
                          "spring_damping_front_Ns_per_m": 0.85, "spring_damping_rear_Ns_per_m": 1.15}
 
 
@@ -78,13 +79,20 @@ def _spec(desc: TruckVariant) -> dict:
     return {k: getattr(desc, k) for k in SPEC_FIELDS if getattr(desc, k) is not None}
 
 
-def air_fields(desc: TruckVariant) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """(fields fitted on the description's air axles: each one's spring rate and damper; fields dropped
-    there: its interleaf friction and that of its left spring over its right), empty on leaves."""
+def spring_fields(desc: TruckVariant) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(the springs' fields fitted on the described truck, per axle its spring rate and damper; the
+    fields dropped: an air axle's interleaf friction and that of its left spring over its right).
+
+    A spec sheet's rates and dampers are uncertain (:data:`SPRING_CATALOGUE_FACTORS`), so a described
+    truck's are fitted on both kinds of axle; an air spring has no interleaf friction to fit. The
+    catalogue truck (no description) holds its leaves' rate and damper at the XML's, as the model
+    family did before trucks were described (its suites' figures)."""
     fit, drop = [], []
+    if not described(desc):
+        return (), ()
     for axle, corner in (("front", FRONT[0]), ("rear", "rl")):
+        fit += [f"spring_rate_{axle}_N_per_m", f"spring_damping_{axle}_Ns_per_m"]
         if suspension_of(desc, axle == "front") == "air":
-            fit += [f"spring_rate_{axle}_N_per_m", f"spring_damping_{axle}_Ns_per_m"]
             drop += [f"spring_friction_{axle}_N", f"spring_friction_factor_{corner}"]
     return tuple(fit), tuple(drop)
 
@@ -108,13 +116,16 @@ def _nominal(desc: TruckVariant = TruckVariant()) -> tuple[dict, tuple[float, fl
     def body(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
 
-    for axle in air_fields(desc)[0]:  # an air axle's given (or default) rate at the empty load, and its damper
-        side = "front" if "front" in axle else "rear"
-        given = getattr(desc, axle)
-        if axle.startswith("spring_rate"):
-            values[axle] = float(AIR_RATE_N_PER_M[side] if given is None else given)
+    for field in spring_fields(desc)[0]:  # each axle's given rate (an air spring's at the empty load) and damper
+        side = "front" if "front" in field else "rear"
+        corner = CORNERS[f] if side == "front" else CORNERS[r]
+        tendon = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, mjnames.spring_tendon(corner))
+        given, air = getattr(desc, field), suspension_of(desc, side == "front") == "air"
+        if field.startswith("spring_rate"):
+            default = AIR_RATE_N_PER_M[side] if air else float(model.tendon_stiffness[tendon])
         else:
-            values[axle] = float(AIR_DAMPING_NS_PER_M[side] if given is None else given)
+            default = AIR_DAMPING_NS_PER_M[side] if air else float(model.tendon_damping[tendon])
+        values[field] = float(default if given is None else given)
     axles = tuple(float(model.body_pos[body(mjnames.axle_body(c)), 0]) for c in (CORNERS[f], CORNERS[r]))
     pans_y = np.array([model.body_pos[body(mjnames.pan_body(c)), 1] for c in CORNERS])  # children of the world
     return values, axles, pans_y
@@ -128,11 +139,11 @@ def xml_nominal(desc: TruckVariant = TruckVariant()) -> dict[str, float]:
 
 def catalogue(desc: TruckVariant = TruckVariant()) -> dict:
     """The catalogue guess of the non-payload fields: :func:`xml_nominal` of the described truck
-    (``desc``) times :data:`CATALOGUE_FACTORS` (and an air axle's :data:`AIR_CATALOGUE_FACTORS`), with
+    (``desc``) times :data:`CATALOGUE_FACTORS` (and a described axle's :data:`SPRING_CATALOGUE_FACTORS`), with
     the description's own fields (:data:`SPEC_FIELDS`), so that ``TruckVariant(**catalogue(desc))``
     is the described truck."""
     nominal = xml_nominal(desc)
-    air = {k: nominal[k] * AIR_CATALOGUE_FACTORS[k] for k in air_fields(desc)[0]}
+    air = {k: nominal[k] * SPRING_CATALOGUE_FACTORS[k] for k in spring_fields(desc)[0]}
     return {**_spec(desc), **{k: nominal[k] * v for k, v in CATALOGUE_FACTORS.items()}, **air,
             "cab_mount_hz": CATALOGUE_CAB_MOUNT_HZ,
             "tire_progressive_ratio": CATALOGUE_TIRE_RATIO, "tire_progressive_onset_m": TIRE_PROGRESSIVE_ONSET_M,

@@ -19,7 +19,7 @@ from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.core.run import run
 from scenarios.records.model.calibrate import calibrate
 from scenarios.records.model.family import DEFAULT_NAMES
-from scenarios.records.model.first_guess import air_fields, catalogue, description
+from scenarios.records.model.first_guess import catalogue, description, spring_fields
 from scenarios.studies import scoring
 
 TRUCKS = pathlib.Path(__file__).resolve().parents[3] / "scenarios" / "data" / "trucks"
@@ -29,19 +29,20 @@ def test_a_scenario_without_a_description_keeps_the_catalogue_guess():
     sc = load_scenario(next(p for p in paper_scenarios() if "medium_72" in p.stem))
     assert description(sc) == description(None)
     assert catalogue(description(sc)) == catalogue()
-    assert air_fields(description(sc)) == ((), ())
+    assert spring_fields(description(sc)) == ((), ())
 
 
 def test_the_shipped_trucks_are_described():
     tractor = description(load_scenario(TRUCKS / "tractor_air.toml"))
     assert (tractor.wheelbase_m, tractor.rear_tires, tractor.suspension_rear) == (3.7, "single", "air")
-    fit, drop = air_fields(tractor)
-    assert fit == ("spring_rate_rear_N_per_m", "spring_damping_rear_Ns_per_m")
-    assert drop == ("spring_friction_rear_N", "spring_friction_factor_rl")
+    fit, drop = spring_fields(tractor)
+    assert fit == ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spring_rate_rear_N_per_m",
+                   "spring_damping_rear_Ns_per_m")
+    assert drop == ("spring_friction_rear_N", "spring_friction_factor_rl")  # the air axle's
     guess = catalogue(tractor)
     assert guess["wheelbase_m"] == 3.7 and "spring_rate_rear_N_per_m" in guess
     long = description(load_scenario(TRUCKS / "rigid_long_leaf.toml"))
-    assert long.wheelbase_m == 6.3 and air_fields(long) == ((), ())
+    assert long.wheelbase_m == 6.3 and spring_fields(long)[1] == ()  # leaves: their friction kept
 
 
 @pytest.fixture(scope="module")
@@ -80,11 +81,47 @@ def test_the_air_springs_of_a_described_tractor_are_found_from_the_rig_signals(t
     assert np.all(np.array(cal.fit_nrmse) < np.array(cal.initial_nrmse))
 
 
-def test_default_names_on_an_air_axle_fit_its_springs_not_its_friction():
-    from scenarios.records.model.calibrate import _air_names
+def test_default_names_on_a_described_truck_fit_its_springs_and_an_air_axle_no_friction():
+    from scenarios.records.model.calibrate import _spring_names
 
     tractor = description(load_scenario(TRUCKS / "tractor_air.toml"))
-    names = _air_names(DEFAULT_NAMES, tractor)
+    names = _spring_names(DEFAULT_NAMES, tractor)
     assert "spring_friction_rear_N" not in names and "spring_friction_factor_rl" not in names
-    assert "spring_friction_front_N" in names  # the steer axle's leaves keep theirs
-    assert names.index("spring_rate_rear_N_per_m") == DEFAULT_NAMES.index("spring_friction_rear_N")
+    assert "spring_friction_front_N" in names  # the steer axle's leaves keep theirs, and fit their rate and damper
+    i = names.index("spring_friction_front_N")
+    assert names[i + 1:i + 3] == ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m")
+    assert {"spring_rate_rear_N_per_m", "spring_damping_rear_Ns_per_m"} <= set(names)
+    assert _spring_names(DEFAULT_NAMES, description(None)) == DEFAULT_NAMES  # the catalogue truck's as before
+
+
+def test_a_wrong_description_shows_in_the_model_error_and_is_said(tractor_record):
+    """The same record calibrated from a spec sheet that declares leaves where the tractor rides on air
+    (at the catalogue's leaf rate and friction), and one whose wheelbase is 10 % long: the rear wheels'
+    model error is at least 1.5 times the right description's (measured: 0.080 right, 0.196 leaves, 0.145 the
+    long wheelbase, on one 5 s window; the leaves' rate, damper and friction are
+    fitted, so a leaf model can take an air spring's part but for its rate's rise with load); a model
+    error past the fallback's limit gets the note naming the description's fields, one within it none."""
+    from scenarios.records.model.differential import HYBRID_LIMIT
+    from scenarios.records.model_record import description_note
+
+    spec, plant, rig, force = tractor_record
+    names = ("payload_kg", "tire_stiffness_rear_N_per_m", "spring_friction_rear_N")
+
+    def model_error(vehicle):
+        sc = dataclasses.replace(spec, vehicle=vehicle)
+        return calibrate(rig.t_s, rig.signals["pan_m"], force, base_scenario=sc, x_ref_m=rig.signals["profile_m"],
+                         names=names, windows=1, window_s=5.0, lead_s=5.0, max_nfev=8, workers=2)
+
+    right = model_error(spec.vehicle)
+    leaves = model_error(dataclasses.replace(spec.vehicle, suspension_rear="leaf", spring_rate_rear_N_per_m=7e5,
+                                             spring_damping_rear_Ns_per_m=1e4))
+    long = model_error(dataclasses.replace(spec.vehicle, wheelbase_m=1.1 * spec.vehicle.wheelbase_m))
+    assert max(right.excess_nrmse[2:]) < HYBRID_LIMIT  # the rear wheels (only the rear axle's fields fitted)
+    for wrong in (leaves, long):
+        print(f"rear model error: right {max(right.excess_nrmse[2:]):.3f}, wrong {max(wrong.excess_nrmse[2:]):.3f}")
+        assert max(wrong.excess_nrmse[2:]) > 1.5 * max(right.excess_nrmse[2:])
+    from types import SimpleNamespace  # a calibration as the note reads it: its model error per wheel
+
+    note = description_note(SimpleNamespace(excess_nrmse=(0.1, 0.1, 0.3, 0.1)), "TRUCK.toml")
+    assert note.startswith("note: a model error of 0.30 on rl") and "'TRUCK.toml' [vehicle] wheelbase_m" in note
+    assert description_note(SimpleNamespace(excess_nrmse=(0.1, 0.1, 0.1, 0.1)), "TRUCK.toml") == ""
