@@ -31,6 +31,9 @@ def add_parser(subparsers) -> None:
     pp.add_argument("--model", action="store_true",
                     help="add a third method: each rig record corrected by a truck model calibrated on its own "
                          "signals, the cab held and fitted, the better kept (about 1-2.5 CPU-minutes per case)")
+    pp.add_argument("--truck", default=None, metavar="TRUCK.toml",
+                    help="run the paper's cases with the truck this scenario file's [vehicle] describes (its "
+                         "geometry, suspension, tires, masses; each case keeps its own payload)")
     pp.add_argument("--quiet", action="store_true", help="no progress output")
     pp.set_defaults(func=cmd_paper)
 
@@ -61,6 +64,20 @@ def _check(args) -> None:
         check_output_file(args.rrd, "--rrd", force=getattr(args, "force", False), folder=args.out)
 
 
+def _truck(path) -> dict | None:
+    """The [vehicle] fields of the scenario file ``path`` but its payload (the cases keep theirs), None
+    without a file; every check of the file before any work (ScenarioError, one sentence)."""
+    if path is None:
+        return None
+    import dataclasses
+
+    from scenarios.core.config import load_scenario
+
+    vehicle = load_scenario(path).vehicle
+    fields = {f.name: getattr(vehicle, f.name) for f in dataclasses.fields(vehicle)}
+    return {k: v for k, v in fields.items() if v is not None and k != "payload_kg"}
+
+
 def cmd_paper(args) -> int:
     import gc
 
@@ -80,7 +97,7 @@ def cmd_paper(args) -> int:
         from scenarios.core.config import load_scenario, paper_scenarios
         from scenarios.core.files import to_json
         from scenarios.core.outputs import staged_output
-        from scenarios.studies.paper.compute import run_paper
+        from scenarios.studies.paper.compute import case_scenario, run_paper
         from scenarios.studies.paper.report import case_figure_jobs, render_report, write_case_run, write_files
         from scenarios.studies.scoring import NOISE_N
     finally:
@@ -88,8 +105,9 @@ def cmd_paper(args) -> int:
         gc.enable()
 
     paths = paper_scenarios(getattr(args, "rig", "design"))
+    truck = _truck(getattr(args, "truck", None))
     for p in paths:  # validate everything before anything runs
-        load_scenario(p)
+        case_scenario(p, None, truck)
     _check(args)
     pose_rate = None
     if args.rrd:
@@ -105,7 +123,8 @@ def cmd_paper(args) -> int:
                   f"({r.info['wall_time_s']:.1f} s)", file=sys.stderr)
 
     noise_N = NOISE_N if args.noise_N is None else args.noise_N
-    with staged_output(args.out, force=getattr(args, "force", False), inputs=paths) as stage:
+    inputs = [*paths, *([args.truck] if truck else [])]
+    with staged_output(args.out, force=getattr(args, "force", False), inputs=inputs) as stage:
         rendered = {}
 
         def report(result) -> None:
@@ -121,7 +140,7 @@ def cmd_paper(args) -> int:
                            case_jobs=functools.partial(case_figure_jobs, out=stage.path),
                            finish_run=functools.partial(write_case_run, out=stage.path),
                            on_scored=None if model else report,
-                           configuration=getattr(args, "rig", "design"))
+                           configuration=getattr(args, "rig", "design"), truck=truck)
         if model:
             import dataclasses
 

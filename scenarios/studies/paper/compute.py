@@ -12,7 +12,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import copy
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -206,32 +206,36 @@ class PaperResult:
         return "\n".join(lines)
 
 
-def case_scenario(path, duration_s: float | None):
-    """The scenario at ``path``, with ``duration_s`` (s) in place of its own if given."""
+def case_scenario(path, duration_s: float | None, truck: Mapping | None = None):
+    """The scenario at ``path``, with ``duration_s`` (s) in place of its own if given, and ``truck``'s
+    :class:`~mjcf.variant.TruckVariant` fields over its ``[vehicle]`` (a lab's own truck on the case's
+    road and payload; None: the case's truck)."""
     scenario = load_scenario(path)
+    if truck:
+        scenario = dataclasses.replace(scenario, vehicle=dataclasses.replace(scenario.vehicle, **truck))
     return scenario if duration_s is None else dataclasses.replace(scenario, duration_s=duration_s)
 
 
 def run_job(path: str, mode: str, duration_s: float | None = None, pose_rate_hz: float | None = None,
-            finish_run: Callable | None = None) -> RunResult:
+            finish_run: Callable | None = None, truck: Mapping | None = None) -> RunResult:
     """Worker: load and run one scenario in one mode (in its own process), then ``finish_run(result)``."""
-    scenario = case_scenario(path, duration_s)
+    scenario = case_scenario(path, duration_s, truck)
     result = run(scenario, mode, pose_rate_hz=pose_rate_hz)
     if finish_run is not None:
         finish_run(result)
     return result
 
 
-def identify_job(path: str, duration_s: float | None = None) -> RigIdentification:
+def identify_job(path: str, duration_s: float | None = None, truck: Mapping | None = None) -> RigIdentification:
     """Worker: identify the rig of one scenario (its test drive sets the rms), in its own process."""
-    scenario = case_scenario(path, duration_s)
+    scenario = case_scenario(path, duration_s, truck)
     return identify_rig(scenario)
 
 
 def case_job(path: str, duration_s: float | None, noise_N: float, road: RunResult, rig: RunResult,
-             ident: RigIdentification, finish: Callable | None) -> PairScore:
+             ident: RigIdentification, finish: Callable | None, truck: Mapping | None = None) -> PairScore:
     """Worker: score one case (and ``finish(case)``, e.g. its files), as soon as its runs are in."""
-    scenario = case_scenario(path, duration_s)
+    scenario = case_scenario(path, duration_s, truck)
     score = score_pair(road, rig, Rig(scenario), methods=METHODS, identified=ident.actuators(),
                        noise_N=noise_N, seed=scenario.seed)
     if finish is not None:
@@ -246,7 +250,8 @@ def _tire_forces(result: RunResult) -> RunResult:
 
 
 def _scoring_job(path: str, duration_s: float | None, noise_N: float, road: RunResult, rig: RunResult,
-                 ident: RigIdentification, finish: Callable | None, case_jobs: Callable | None) -> tuple:
+                 ident: RigIdentification, finish: Callable | None, case_jobs: Callable | None,
+                 truck: Mapping | None = None) -> tuple:
     """Worker: :func:`case_job`; returns the score and the calls ``case_jobs(case)`` asks for."""
     follow_ups = []
 
@@ -256,14 +261,15 @@ def _scoring_job(path: str, duration_s: float | None, noise_N: float, road: RunR
         if case_jobs is not None:
             follow_ups.extend(case_jobs(case))
 
-    return case_job(path, duration_s, noise_N, road, rig, ident, done), follow_ups
+    return case_job(path, duration_s, noise_N, road, rig, ident, done, truck), follow_ups
 
 
 def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float | None = None,
               noise_N: float = NOISE_N, pose_rate_hz: float | None = None,
               on_done: Callable[[RunResult], None] | None = None, finish: Callable | None = None,
               finish_run: Callable | None = None, case_jobs: Callable | None = None,
-              on_scored: Callable | None = None, configuration: str = "design") -> PaperResult:
+              on_scored: Callable | None = None, configuration: str = "design",
+              truck: Mapping | None = None) -> PaperResult:
     """Run the cases of ``paths`` on the road and on the rig, and score each pair.
 
     The three runs of every case (identification, road, rig) are jobs of one process pool; a
@@ -302,12 +308,15 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
     configuration : str
         The configuration ``paths`` belong to, recorded in the result
         (:attr:`PaperResult.configuration`).
+    truck : Mapping, optional
+        :class:`~mjcf.variant.TruckVariant` fields over every case's ``[vehicle]`` (a lab's own truck
+        on the paper's roads and payloads; ``rigsim paper --truck``).
     """
-    scenarios = [case_scenario(p, duration_s) for p in paths]
+    scenarios = [case_scenario(p, duration_s, truck) for p in paths]
     calls = []
     for p in paths:
-        calls += [(identify_job, (str(p), duration_s))]
-        calls += [(run_job, (str(p), mode, duration_s, pose_rate_hz, finish_run)) for mode in ("road", "rig")]
+        calls += [(identify_job, (str(p), duration_s, truck))]
+        calls += [(run_job, (str(p), mode, duration_s, pose_rate_hz, finish_run, truck)) for mode in ("road", "rig")]
     runs: list = [None] * len(calls)
     scores: list = [None] * len(paths)
     result = None
@@ -345,7 +354,7 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
                 if all(r is not None for r in runs[3 * c:3 * c + 3]):
                     ident, road, rig = runs[3 * c:3 * c + 3]
                     case = ex.submit(_scoring_job, str(paths[c]), duration_s, noise_N, _tire_forces(road),
-                                     _tire_forces(rig), ident, finish, case_jobs)
+                                     _tire_forces(rig), ident, finish, case_jobs, truck)
                     jobs[case] = ("case", c)
                     pending.add(case)
     return result if result is not None else assembled()
