@@ -79,3 +79,22 @@ def test_the_lab_chain_is_off_its_nominal_settings_within_tolerance(fleet):
                                    lvdt_filter_hz=TYPICAL_LAB.lvdt_filter_hz,
                                    force_delay_s=TYPICAL_LAB.force_delay_s) == TYPICAL_LAB
     assert len({t.lab.force_filter_hz for t in fleet}) == N  # each truck's chain its own
+
+
+def test_a_sweep_runs_over_the_spec_sheets_words_and_refuses_a_wrong_one():
+    """Sweep axes over the description's word fields: each case's truck has its word; a word the field
+    does not take is refused naming the case and the field, before anything runs."""
+    from scenarios.core.config import ScenarioError
+    from scenarios.studies.sweep.grid import parse_grid
+
+    doc = {"sweep": {"name": "kinds"},
+           "base": {"name": "kinds", "speed_kmh": 60.0, "duration_s": 10.0, "road": {"roughness": "C"},
+                    "vehicle": {"payload_kg": 5000.0, "wheelbase_m": 4.2}},
+           "axes": {"vehicle": {"suspension_rear": ["leaf", "air"], "rear_tires": ["dual", "single"]}}}
+    grid = parse_grid(doc)
+    kinds = {(c.scenario.vehicle.suspension_rear, c.scenario.vehicle.rear_tires) for c in grid.cases}
+    assert kinds == {("leaf", "dual"), ("leaf", "single"), ("air", "dual"), ("air", "single")}
+    assert all(c.scenario.vehicle.wheelbase_m == 4.2 for c in grid.cases)
+    doc["axes"]["vehicle"]["suspension_rear"] = ["leaf", "coil"]
+    with pytest.raises(ScenarioError, match=r"vehicle.suspension_rear must be \"leaf\" or \"air\", got 'coil'"):
+        parse_grid(doc)
