@@ -45,6 +45,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
+from correction.output.pipeline import CorrectionError  # noqa: E402
 from scenarios.core.files import to_json  # noqa: E402
 from scenarios.core.lab import TYPICAL_LAB  # noqa: E402
 from scenarios.core.pool import run_jobs  # noqa: E402
@@ -59,6 +60,17 @@ RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 DRAWS = ("development", "fresh")
 #: The development draw's seed.
 DEVELOPMENT_SEED = 0
+#: Hz: where the linear correction refuses a truck's records at 1 kHz (its identified T_a^-1 needs a
+#: finer step than 1 ms to hold to 1 % below 30 Hz, and says so), they are recorded again at this rate,
+#: as a lab follows that sentence's fix.
+RETRY_RATE_HZ = 2000.0
+
+
+def _score(truck, runs, args, rate_hz):
+    """One truck's runs (road, rig, identification) scored as ``rigsim correct --model`` with its spec sheet."""
+    spec = truck.scenario(args.duration_s, truck="spec", rate_hz=rate_hz)
+    return score_plant(truck.name, truck.plant, spec, *runs, lab=truck.lab, noise_N=args.noise_N, seed=spec.seed,
+                       workers=args.workers, cab=args.cab, align=TYPICAL_LAB)
 
 
 def _truck_text(score) -> str:
@@ -81,12 +93,20 @@ def run_draw(args) -> dict:
         print(f"[{time.perf_counter() - t0:6.0f} s] {trucks[i].name}: {k}", file=sys.stderr, flush=True)
 
     by = dict(zip(keys, run_jobs(jobs, workers=args.workers, on_done=said)))
-    scores = []
+    scores, refused = [], []
     for i, truck in enumerate(trucks):
-        spec = truck.scenario(args.duration_s, truck="spec")
-        s = score_plant(truck.name, truck.plant, spec, by.pop((i, "road")), by.pop((i, "rig")), by.pop((i, "identify")),
-                        lab=truck.lab, noise_N=args.noise_N, seed=spec.seed, workers=args.workers, cab=args.cab,
-                        align=TYPICAL_LAB)
+        runs = [by.pop((i, k)) for k in ("road", "rig", "identify")]
+        try:
+            s = _score(truck, runs, args, None)
+        except CorrectionError as exc:  # the lab's own fix: record at a rate the correction filter holds at
+            if "sampling rate" not in str(exc):
+                raise
+            print(f"[{time.perf_counter() - t0:6.0f} s] {truck.name}: {exc}; its records again at "
+                  f"{RETRY_RATE_HZ:g} Hz", file=sys.stderr, flush=True)
+            runs = run_jobs([(fleet_job, (truck, args.duration_s, k, RETRY_RATE_HZ)) for k in ("road", "rig", "identify")],
+                            workers=args.workers)
+            s = _score(truck, runs, args, RETRY_RATE_HZ)
+            refused.append(truck.name)
         s = dataclasses.replace(s, plant={**s.plant, "_spec": spec_text(truck), "_lacks": lacks(truck)})
         scores.append(s)
         print(f"[{time.perf_counter() - t0:6.0f} s] {s.name} ({spec_text(truck)}): {s.method}, DLC "
@@ -98,7 +118,10 @@ def run_draw(args) -> dict:
     print(markdown_table(head, rows))
     print(goals)
     print(f"- 95 % confidence interval of the share over trucks: {100 * interval[0]:.1f}-{100 * interval[1]:.1f} %")
+    if refused:
+        print(f"- recorded at {RETRY_RATE_HZ:g} Hz where the linear correction refused 1 kHz: {', '.join(refused)}")
     settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "duration_s": args.duration_s,
+                "at_retry_rate": refused,
                 "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__, sys.argv[1:])}
     out = json.loads(to_json(settings | {"summary": numbers, "interval": interval,
                                          "wall_time_s": round(time.perf_counter() - t0, 1),
@@ -127,8 +150,11 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
         summary.append([run["draw"], run["seed"], len(scores), f"{100 * numbers['share_good']:.1f} % "
                         f"({100 * lo:.1f}-{100 * hi:.1f} %)", f"{100 * numbers['worst_dlc_error']:.2f} %",
                         f"{numbers['worst_above_linear']:+.3f}", numbers["fallbacks"], f"{numbers['median_wall_s']:.0f}"])
+        retried = run.get("at_retry_rate") or []
         parts.append(f"**The {run['draw']} draw** (seed {run['seed']}, `{run['command']}`)\n\n"
-                     + markdown_table(head, rows).rstrip("\n") + "\n\n" + goals)
+                     + markdown_table(head, rows).rstrip("\n") + "\n\n" + goals
+                     + (f"\n- recorded at {RETRY_RATE_HZ:g} Hz, where the linear correction refused the 1 kHz records "
+                        f"(its T_a^-1 off by more than 1 % below 30 Hz at that step): {', '.join(retried)}" if retried else ""))
     note = ("Per truck the worse wheel, as in the mismatch suite (docs/results/mismatch_suite.md); the plant column "
             "gives the spec sheet (wheelbase, rear tires, front/rear suspension, payload) and what the plant has that "
             "its model lacks. The records pass through the lab's chain as it was (corners off by up to 5 %) and are "

@@ -86,12 +86,14 @@ class FleetTruck:
     document: Mapping
     lab: LabChain
 
-    def scenario(self, duration_s: float, *, truck: str = "plant"):
+    def scenario(self, duration_s: float, *, truck: str = "plant", rate_hz: float | None = None):
         """The truck's road as a Scenario, ``duration_s`` s long, carrying its plant (``truck="plant"``)
-        or its spec sheet (``"spec"``: the file a lab gives ``rigsim correct --model``)."""
+        or its spec sheet (``"spec"``: the file a lab gives ``rigsim correct --model``), its records at
+        ``rate_hz`` (Hz; default the scenario's 1 kHz)."""
         sc = case_scenario(dict(self.document))
         vehicle = TruckVariant(**(self.plant if truck == "plant" else self.spec))
-        return dataclasses.replace(sc, duration_s=float(duration_s), vehicle=vehicle)
+        rate = {} if rate_hz is None else {"output_rate_hz": float(rate_hz)}
+        return dataclasses.replace(sc, duration_s=float(duration_s), vehicle=vehicle, **rate)
 
 
 def _uniform(rng, pair) -> float:
@@ -196,10 +198,11 @@ def fleet_trucks(n: int, seed: int) -> list[FleetTruck]:
     return [draw_truck(i, seed) for i in range(int(n))]
 
 
-def fleet_job(truck: FleetTruck, duration_s: float, kind: str):
+def fleet_job(truck: FleetTruck, duration_s: float, kind: str, rate_hz: float | None = None):
     """Worker job: one MuJoCo run of the truck's plant: "road", "rig" or "identify" (its LVDTs measured
-    through the truck's lab chain and aligned with the nominal one, :data:`TYPICAL_LAB`)."""
-    sc = truck.scenario(duration_s)
+    through the truck's lab chain and aligned with the nominal one, :data:`TYPICAL_LAB`), recorded at
+    ``rate_hz`` (Hz; default 1 kHz)."""
+    sc = truck.scenario(duration_s, rate_hz=rate_hz)
     return identify_rig(sc, lab=truck.lab, align=TYPICAL_LAB) if kind == "identify" else run(sc, kind)
 
 
