@@ -89,6 +89,15 @@ SCENARIOS = {
     "timestep_coarse": GOOD + "[vehicle]\ntimestep_s = 0.1\n",
     "pan_mass_huge": GOOD + "[vehicle]\npan_mass_kg = 1e5\n",
     "vehicle_unknown_key": GOOD + "[vehicle]\npayload = 3640.0\n",
+    # a truck of its own (mjcf/description.py, mjcf/standing.py): bad words, ranges, pairs, trucks that cannot stand
+    "wheelbase_short": GOOD + "[vehicle]\nwheelbase_m = 2.0\n",
+    "suspension_word": GOOD + '[vehicle]\nsuspension_rear = "coil"\n',
+    "rear_tires_number": GOOD + "[vehicle]\nrear_tires = 2\n",
+    "track_wide": GOOD + "[vehicle]\ntrack_front_m = 3.0\n",
+    "truck_lifts": GOOD + "[vehicle]\npayload_kg = 9000.0\npayload_x_m = -3.4\nwheelbase_m = 3.6\n",
+    "springs_bottom": GOOD + "[vehicle]\npayload_kg = 14000.0\nspring_rate_rear_N_per_m = 1.5e5\nwheelbase_m = 5.0\n",
+    "frame_half": GOOD + "[vehicle]\nframe_torsion_hz = 8.0\n",
+    "engine_mass_alone": GOOD + "[vehicle]\nengine_mass_kg = 1000.0\n",
     "no_rest": GOOD + "[vehicle]\npayload_kg = 40000.0\npayload_x_m = -3.5\n",
     "memory": _edit("duration_s = 12.0", "duration_s = 3600.0") + "[vehicle]\ntimestep_s = 1e-6\n",
     "actuator_unknown_key": GOOD + "[actuator]\nsupply_pressure = 21e6\n",
@@ -226,8 +235,14 @@ _add("run", "options", "unknown_option", "run", f"{S}/good.toml", "--out", O, "-
 for _v in ("-5", "1e12", "nan", "inf", "-inf", "1e9", "abc"):
     _add("model", "bad number", f"payload_{_v}", "model", "--payload-kg", _v)
 _add("model", "options", "unknown_option", "model", "--mass", "5")
+for _name in ("truck_lifts", "springs_bottom", "suspension_word"):
+    _add("model", "scenario file", _name, "model", f"{S}/s_{_name}.toml")
+_add("model", "missing file", "scenario", "model", f"{S}/nothing.toml")
 
 # rigsim paper
+for _name in ("truck_lifts", "frame_half"):
+    _add("paper", "scenario file", f"truck_{_name}", "paper", "--out", O, "--truck", f"{S}/s_{_name}.toml")
+_add("paper", "missing file", "truck", "paper", "--out", O, "--truck", f"{S}/nothing.toml")
 for _v in ("0", "-1", "nan", "inf", "9.9", "1e6", "abc"):
     _add("paper", "bad number", f"duration_{_v}", "paper", "--out", O, "--duration-s", _v)
 for _v in ("0", "-5", "1.5", "x"):
