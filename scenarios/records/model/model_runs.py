@@ -26,7 +26,8 @@ from scenarios.core.config import Scenario, ScenarioError
 from scenarios.core.drive import Drive
 from scenarios.core.rig import Rig
 
-__all__ = ["SETTLE_S", "model_forces", "pan_motion_drive", "static_axle_loads", "window_job", "check_record", "portable"]
+__all__ = ["SETTLE_S", "NoRestError", "model_forces", "pan_motion_drive", "static_axle_loads", "window_job",
+           "fit_window_job", "check_record", "portable"]
 
 #: Settling lead-in before a model run follows its pan motion, s: the truck is put at static
 #: rest on the pans' first positions (the frictionless equilibrium, :meth:`Rig.rest_state`), then
@@ -122,6 +123,10 @@ def model_scenario(variant: TruckVariant, base_scenario: Scenario, duration_s: f
                                lead_in_s=float(settle_s))
 
 
+class NoRestError(ScenarioError):
+    """A model truck that finds no rest on the pans' first pose (one sentence)."""
+
+
 def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
                  settle_s: float = SETTLE_S) -> np.ndarray:
     """Tire forces of the truck ``variant`` with its pans following ``pan_m``.
@@ -169,7 +174,7 @@ def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
         try:
             rec = rig.run(drive, rate_hz=fs)
         except EquilibriumError as exc:
-            raise ScenarioError(f"model truck: {exc}") from None
+            raise NoRestError(f"model truck: {exc}") from None
     if rec.tire_force_N.shape != (t.size, 4):
         raise RuntimeError(f"the model run gave {rec.tire_force_N.shape[0]} samples for {t.size}")
     return np.asarray(rec.tire_force_N)
@@ -192,3 +197,13 @@ def portable(scenario: Scenario) -> Scenario:
 def window_job(variant: TruckVariant, t_s, pan_m, base_scenario: Scenario, settle_s: float) -> np.ndarray:
     """:func:`model_forces` as a worker job (positional arguments only)."""
     return model_forces(variant, t_s, pan_m, base_scenario=base_scenario, settle_s=settle_s)
+
+
+def fit_window_job(variant: TruckVariant, t_s, pan_m, base_scenario: Scenario, settle_s: float) -> np.ndarray | None:
+    """:func:`window_job` for a fit's trial truck: None where that truck finds no rest on the window's first
+    pose (:class:`NoRestError`: a trial far from the first guess, soft air springs under a high load that
+    roll it over, say), which the fit scores as the worst of fits rather than ending on it."""
+    try:
+        return window_job(variant, t_s, pan_m, base_scenario, settle_s)
+    except NoRestError:
+        return None

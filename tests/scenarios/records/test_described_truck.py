@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import dataclasses
 import pathlib
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from mjcf.variant import TruckVariant
 from scenarios.core.config import load_scenario, paper_scenarios
 from scenarios.core.run import run
 from scenarios.records.model.calibrate import calibrate
@@ -120,8 +122,29 @@ def test_a_wrong_description_shows_in_the_model_error_and_is_said(tractor_record
     for wrong in (leaves, long):
         print(f"rear model error: right {max(right.excess_nrmse[2:]):.3f}, wrong {max(wrong.excess_nrmse[2:]):.3f}")
         assert max(wrong.excess_nrmse[2:]) > 1.5 * max(right.excess_nrmse[2:])
-    from types import SimpleNamespace  # a calibration as the note reads it: its model error per wheel
-
     note = description_note(SimpleNamespace(excess_nrmse=(0.1, 0.1, 0.3, 0.1)), "TRUCK.toml")
     assert note.startswith("note: a model error of 0.30 on rl") and "'TRUCK.toml' [vehicle] wheelbase_m" in note
     assert description_note(SimpleNamespace(excess_nrmse=(0.1, 0.1, 0.1, 0.1)), "TRUCK.toml") == ""
+
+
+def test_a_trial_truck_with_no_rest_is_the_worst_fit_not_the_end_of_the_calibration(tractor_record, monkeypatch):
+    """A fit's trial far from its first guess may find no rest (soft air springs rolling a high load
+    over): fit_window_job returns None where window_job raises NoRestError, and the fit's runs read
+    it as a truck that predicts no force (zeros), so the residual is the whole measured force."""
+    import numpy as np
+
+    import scenarios.records.model.problem as problem
+    from scenarios.records.model.model_runs import NoRestError, fit_window_job, window_job
+
+    spec, plant, rig, force = tractor_record
+    t, x = rig.t_s[:500], rig.signals["pan_m"][:500]
+    tipping = TruckVariant(**{**{k: v for k, v in vars(spec.vehicle).items() if v is not None},
+                              "payload_kg": 20000.0, "payload_z_m": 1.6, "spring_rate_rear_N_per_m": 2e4,
+                              "spring_rate_front_N_per_m": 2e4})
+    with pytest.raises(NoRestError, match="model truck"):
+        window_job(tipping, t, x, spec, 0.5)
+    assert fit_window_job(tipping, t, x, spec, 0.5) is None
+    fake = SimpleNamespace(windows=[(0, 100, 300)], t=t, x_a=x, base=spec, executor=None, evaluations=0)
+    monkeypatch.setattr(problem, "run_jobs", lambda jobs, executor=None: [None])
+    out = problem.FitProblem.runs(fake, [tipping])
+    assert out[0][0].shape == (300, 4) and not out[0][0].any() and fake.evaluations == 1
