@@ -122,11 +122,24 @@ def run_draw(args) -> dict:
         print(f"- recorded at {RETRY_RATE_HZ:g} Hz where the linear correction refused 1 kHz: {', '.join(refused)}")
     settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "duration_s": args.duration_s,
                 "at_retry_rate": refused,
-                "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__, sys.argv[1:])}
+                "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__, _argv_kept())}
     out = json.loads(to_json(settings | {"summary": numbers, "interval": interval,
                                          "wall_time_s": round(time.perf_counter() - t0, 1),
                                          "plants": [s.to_dict() for s in scores]}))
     print(json.dumps(out))
+    return out
+
+
+def _argv_kept() -> list[str]:
+    """The command line without ``--results DIR`` (where the page goes, not what was measured)."""
+    argv, out, skip = sys.argv[1:], [], False
+    for a in argv:
+        if skip:
+            skip = False
+        elif a == "--results":
+            skip = True
+        elif not a.startswith("--results="):
+            out.append(a)
     return out
 
 
@@ -162,7 +175,7 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
     command = " && ".join(r["command"] for r in runs)
     page = write_results_page(results, "fleet_suite", "The model correction on trucks a lab brings: development "
                               "and fresh draws", summary_head, summary, command, note=note,
-                              script=script_command(__file__, ["--page", *map(str, paths)]))
+                              script=script_command(__file__, ["--page", *(f"{r['draw'].upper()}.txt" for r in runs)]))
     print(page.read_text(encoding="utf-8"))
     return page
 
