@@ -252,11 +252,11 @@ class _Identified:
         return _actuators()
 
 
-def _fake_identify_job(path, duration_s=None):
+def _fake_identify_job(path, duration_s=None, truck=None):
     return _Identified()
 
 
-def _fake_run_job(path, mode, duration_s=None, pose_rate_hz=None, finish_run=None):
+def _fake_run_job(path, mode, duration_s=None, pose_rate_hz=None, finish_run=None, truck=None):
     road, rig = _runs(extra_signals=True)
     return dataclasses.replace(road if mode == "road" else rig, scenario_name=pathlib.Path(path).stem)
 
