@@ -7,9 +7,11 @@ once, for any layer: it lives in :mod:`correction`, the lowest layer that reads 
 imports nothing of the project but :mod:`correction.io.atomic` (how a file is opened, read and
 written), so the correction toolkit works on its own and the scenarios can build on it.
 
+* :func:`path_text`: a path given as ``str``, ``bytes`` or ``os.PathLike`` as text, or one
+  sentence naming what it should have been;
 * :func:`read_toml`: path -> dict, or one sentence: missing file, a directory, a named pipe or
-  a device, a file over 16 MiB, unreadable or not UTF-8, invalid TOML (with tomllib's line and
-  column);
+  a device, a file over 16 MiB, unreadable or not UTF-8 (a UTF-8 byte-order mark is read, a
+  UTF-16 or UTF-32 one named), invalid TOML (with tomllib's line and column);
 * :func:`check_keys`: refuse an unknown key, naming the closest valid one
   (``difflib.get_close_matches``, cutoff 0.5) or else listing the valid keys;
 * :func:`number`: a TOML value as a finite float within optional bounds;
@@ -35,12 +37,47 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_TOML_BYTES", "read_toml", "check_keys", "number", "toml_text", "write_toml"]
+__all__ = ["MAX_TOML_BYTES", "path_text", "read_toml", "check_keys", "number", "toml_text", "write_toml"]
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 #: The largest TOML file read, bytes: the project's files (scenarios, grids, actuator files) are
 #: a few KiB; a file this large is the wrong file.
 MAX_TOML_BYTES = 16 * 2**20
+#: Byte-order marks of the encodings a text editor may save a file in instead of UTF-8, longest first
+#: (UTF-32's little-endian mark begins with UTF-16's).
+_FOREIGN_BOMS = ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"), (b"\xff\xfe", "UTF-16"),
+                 (b"\xfe\xff", "UTF-16"))
+
+
+def path_text(path, what: str, error: type[Exception] = ValueError) -> str:
+    """A path given as ``str``, ``bytes`` (the file system's encoding) or ``os.PathLike``, as text.
+
+    Parameters
+    ----------
+    path : str, bytes or os.PathLike
+        The path as the caller gave it.
+    what : str
+        What the path names, for the message: a keyword (``"record"``) or ``"actuator file"``.
+    error : type of Exception
+        The class raised.
+
+    Returns
+    -------
+    str
+        ``os.fsdecode(path)``.
+
+    Raises
+    ------
+    error
+        ``"{what} must name a file (a str, bytes or os.PathLike path), got NoneType"``, or an empty path.
+    """
+    try:
+        text = os.fsdecode(path)
+    except TypeError:
+        raise error(f"{what} must name a file (a str, bytes or os.PathLike path), got {type(path).__name__}") from None
+    if not text:
+        raise error(f"{what} '' names no file; give the file's path")
+    return text
 
 
 def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = ValueError, *,
@@ -53,7 +90,7 @@ def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = Value
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str, bytes or os.PathLike
         The file.
     what : str
         What the file is, for the messages, e.g. ``"scenario file"``, ``"grid file"``,
@@ -66,7 +103,8 @@ def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = Value
     Returns
     -------
     dict
-        The parsed document (``tomllib.loads``; line ends ``\\r\\n`` and ``\\r`` read as ``\\n``).
+        The parsed document (``tomllib.loads``; line ends ``\\r\\n`` and ``\\r`` read as ``\\n``, a
+        leading UTF-8 byte-order mark skipped).
 
     Raises
     ------
@@ -75,16 +113,20 @@ def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = Value
         ``"{what} 'PATH' is a named pipe (FIFO), not a TOML file; ..."`` (a device, a socket alike);
         ``"{what} 'PATH' is 20 MiB, more than the 16 MiB a TOML file may have; ..."``;
         ``"cannot read {what} 'PATH': <reason>"`` (permissions, not UTF-8, ...);
+        ``"{what} 'PATH' is UTF-16 (its byte-order mark says so), not UTF-8; ..."``;
         ``"{what} 'PATH' is not valid TOML: <tomllib's message with line and column>"``.
     """
     from correction.io.atomic import read_regular, size_text
 
-    p = pathlib.Path(path)
+    p = pathlib.Path(path_text(path, what, error))
     name = repr(str(p))
     raw = read_regular(p, what, max_bytes=max_bytes, error=error, expected="a TOML file",
                        too_large=f", more than the {size_text(max_bytes)} a TOML file may have; check the path")
+    for bom, encoding in _FOREIGN_BOMS:
+        if raw.startswith(bom):
+            raise error(f"{what} {name} is {encoding} (its byte-order mark says so), not UTF-8; save it as UTF-8")
     try:
-        text = raw.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")
+        text = raw.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
     except UnicodeDecodeError as exc:
         raise error(f"cannot read {what} {name}: {_one_line(exc)}") from None
     try:

@@ -166,7 +166,7 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str, bytes or os.PathLike
         .csv/.txt/.dat in any dialect, .rsp/.drv/.tim/.rpc (RPC III), .mf4/.mdf (MDF4), .tdms.
     time_col : str, optional
         The time column (default: the one with a time name: ``time``, ``t``, ``zeit``...).
@@ -191,7 +191,10 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
         (:func:`correction.io.measured.read_channels`).
     """
     from correction.io.measured import MeasuredDataError, read_channels
+    from correction.io.tomlfile import path_text
+    from scenarios.core.config import ScenarioError
 
+    path = path_text(path, "path", ScenarioError)
     try:
         return read_channels(path, time_col=time_col, channels=channels, decimal=decimal, thousands=thousands)
     except MeasuredDataError as exc:
