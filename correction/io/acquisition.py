@@ -26,10 +26,17 @@ import numpy as np
 
 from correction.output.spectral import through_gain
 
-__all__ = ["KINDS", "DOMAINS", "ChannelFilter", "parse_channel_filter", "undo_timing"]
+__all__ = ["KINDS", "DOMAINS", "MIN_CORNER_HZ", "ChannelFilter", "parse_channel_filter", "undo_timing"]
 
 KINDS = ("butterworth", "bessel")
 DOMAINS = ("analog", "digital")
+#: Lowest corner of a channel filter, Hz: an anti-alias filter sits between the band a rig test
+#: measures (its wheel forces and pan motions reach tens of Hz) and half the sampling rate. A
+#: corner far below it leaves nothing of the record, and its phase is lost to round-off (at
+#: 1e-300 Hz the response underflows to 0 and no phase is undone at all).
+MIN_CORNER_HZ = 1.0
+#: The corners a channel filter may have, in words.
+CORNER_RANGE = f"from {MIN_CORNER_HZ:g} Hz to below half the record's rate"
 #: Most delay a channel is given, s: a multiplexer's or conditioner's skew is below a millisecond;
 #: 10 ms is a misconfigured channel.
 MAX_DELAY_S = 0.01
@@ -45,7 +52,8 @@ class ChannelFilter:
     Parameters
     ----------
     corner_hz : float, Hz, optional
-        The filter's -3 dB corner (``None``: no filter, the delay only).
+        The filter's -3 dB corner (``None``: no filter, the delay only), :data:`MIN_CORNER_HZ` or
+        more (and below half the rate of the record it describes: :meth:`check_rate`).
     order : int
         The filter's order, 1 to 8.
     kind : {"butterworth", "bessel"}
@@ -65,8 +73,9 @@ class ChannelFilter:
     def __post_init__(self) -> None:
         if self.corner_hz is not None and (isinstance(self.corner_hz, bool)
                                            or not isinstance(self.corner_hz, (int, float))
-                                           or not math.isfinite(self.corner_hz) or self.corner_hz <= 0):
-            raise ValueError(f"the channel filter's corner must be a positive number of Hz, got {self.corner_hz!r}")
+                                           or not math.isfinite(self.corner_hz) or self.corner_hz < MIN_CORNER_HZ):
+            raise ValueError(f"the channel filter's corner must be a number of Hz {CORNER_RANGE}, got "
+                             f"{self.corner_hz!r}")
         if isinstance(self.order, bool) or not isinstance(self.order, (int, np.integer)) or not 1 <= self.order <= 8:
             raise ValueError(f"the channel filter's order must be an integer from 1 to 8, got {self.order!r}")
         if self.kind not in KINDS:
@@ -86,8 +95,8 @@ class ChannelFilter:
     def check_rate(self, fs_hz: float) -> None:
         """Refuse a corner at or above half the rate ``fs_hz`` (Hz) of the record it describes."""
         if self.corner_hz is not None and self.corner_hz >= 0.5 * fs_hz:
-            raise ValueError(f"the channel filter's corner {self.corner_hz:g} Hz must lie below half the record's "
-                             f"rate ({0.5 * fs_hz:g} Hz): an anti-alias filter sits below the Nyquist frequency")
+            raise ValueError(f"the channel filter's corner {self.corner_hz:g} Hz must lie {CORNER_RANGE} "
+                             f"({0.5 * fs_hz:g} Hz): an anti-alias filter sits below the Nyquist frequency")
 
     def _design(self, fs_hz: float | None, output: str):
         from scipy import signal
@@ -191,17 +200,24 @@ def _number(text: str, kind, what: str, unit: str):
 
 def parse_channel_filter(text: str, delay_s: float = 0.0, option: str = "the channel filter") -> ChannelFilter:
     """``"HZ[:ORDER[:KIND][:DOMAIN]]"`` (``"200"``, ``"200:4"``, ``"150:4:bessel:digital"``; ``"none"``:
-    no filter) and a delay (s) as a :class:`ChannelFilter`; a ``ValueError`` naming ``option`` otherwise."""
+    no filter) and a delay (s) as a :class:`ChannelFilter`; a ``ValueError`` naming ``option`` otherwise:
+    a word that is no kind nor domain, a kind or a domain given twice (``"200:4:bessel:butterworth"``),
+    a corner out of :data:`CORNER_RANGE`."""
     parts = [p.strip().lower() for p in str(text).split(":")]
     try:
         corner = None if parts[0] == "none" else _number(parts[0], float, "the corner", "of Hz")
         order = _number(parts[1], int, "the order", "from 1 to 8") if len(parts) > 1 and parts[1] else 4
-        kind = next((p for p in parts[2:] if p in KINDS), "butterworth")
-        domain = next((p for p in parts[2:] if p in DOMAINS), "analog")
-        unknown = [p for p in parts[2:] if p not in KINDS + DOMAINS]
+        words = parts[2:]
+        unknown = [p for p in words if p not in KINDS + DOMAINS]
         if unknown or (corner is None and len(parts) > 1):
             raise ValueError(f"{unknown[0]!r} is neither a kind ({', '.join(KINDS)}) nor a domain "
                              f"({', '.join(DOMAINS)})" if unknown else "'none' takes no order")
+        for what, names in (("kind", KINDS), ("domain", DOMAINS)):
+            given = [p for p in words if p in names]
+            if len(given) > 1:
+                raise ValueError(f"{len(given)} {what}s given ({', '.join(given)}) where one goes")
+        kind = next((p for p in words if p in KINDS), "butterworth")
+        domain = next((p for p in words if p in DOMAINS), "analog")
         return ChannelFilter(corner, order, kind, domain, float(delay_s))
     except ValueError as exc:
         raise ValueError(f"{option} {text!r}: {exc}; give HZ[:ORDER[:KIND][:DOMAIN]], e.g. 200:4 or "

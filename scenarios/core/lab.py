@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.io.acquisition import ChannelFilter, undo_timing
+from correction.io.acquisition import MIN_CORNER_HZ, ChannelFilter, undo_timing
 
 __all__ = ["LabChain", "LabMeasurement", "TYPICAL_LAB", "LAB_BOUNDS", "measure", "measure_lvdt", "aligned",
            "pan_acceleration"]
@@ -33,9 +33,9 @@ LAB_BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "compensation_kg": (0.0, 2000.0, "kg", "the lab's estimate of the mass above the load cell"),
     "accelerometer_noise_m_s2": (0.0, 10.0, "m/s^2", "a pan accelerometer's rms noise is below 0.1 m/s^2"),
     "lvdt_noise_m": (0.0, 1e-3, "m", "an LVDT's rms noise is tens of micrometres; 1 mm is a broken channel"),
-    "force_filter_hz": (1.0, 1e4, "Hz", "an anti-alias filter sits between the band of interest and half the "
-                        "sampling rate"),
-    "lvdt_filter_hz": (1.0, 1e4, "Hz", "as force_filter_hz"),
+    "force_filter_hz": (MIN_CORNER_HZ, 1e4, "Hz", "an anti-alias filter sits between the band of interest and "
+                        "half the sampling rate"),
+    "lvdt_filter_hz": (MIN_CORNER_HZ, 1e4, "Hz", "as force_filter_hz"),
     "filter_order": (1, 8, "1", "anti-alias filters are Butterworth or Bessel of order 2 to 8"),
     "force_delay_s": (0.0, 0.01, "s", "a channel's skew (multiplexing, conditioning) is below 1 ms; 10 ms is a "
                       "misconfigured channel"),
