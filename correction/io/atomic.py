@@ -9,7 +9,8 @@ the file and what it is. :func:`available_memory_bytes` gives the limit that fit
 Writing: :func:`atomic_write_bytes` writes a temporary file in the target's folder, flushes it to
 disk and renames it onto the target (``os.replace``, atomic on POSIX and Windows). Temporary
 files carry the writer's host and pid, so the next write to the same target removes those of
-writers that no longer run.
+writers that no longer run. Inside :func:`no_replace` a target is published only where nothing
+is (:mod:`correction.io.claim`, a command's output file claimed by one command at a time).
 
 The one home of these patterns for :mod:`correction` (measured data, actuator and TOML files) and
 :mod:`scenarios` (every result file), which builds on it.
@@ -25,9 +26,11 @@ import re
 import secrets
 import socket
 import stat
+import threading
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "available_memory_bytes", "dead_writers_leftovers",
-           "host_tag", "open_regular", "pid_running", "read_regular", "remove_stale_temp_files", "size_text"]
+           "host_tag", "no_replace", "open_regular", "pid_running", "read_regular", "remove_stale_temp_files",
+           "size_text"]
 
 #: What a path that is not a regular file is, by the test of its mode.
 _KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
@@ -35,6 +38,10 @@ _KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a named pipe (FIFO)"),
 #: The name of a temporary file after ``.{name}.{host}.{pid}.``: a random token, ``.tmp``, and
 #: the extension of the target when the writer needs it (a library that picks the format by it).
 _TEMP_REST = re.compile(r"[A-Za-z0-9_]+\.tmp(\.[A-Za-z0-9]+)?")
+#: The targets :func:`atomic_path` may not replace (:func:`no_replace`), by absolute path: the
+#: exception it raises when one has appeared meanwhile.
+_NO_REPLACE: dict[str, Exception] = {}
+_NO_REPLACE_LOCK = threading.Lock()
 
 
 def host_tag() -> str:
@@ -266,6 +273,40 @@ def _new_temp_file(path: pathlib.Path, keep_suffix: bool) -> pathlib.Path:
 
 
 @contextlib.contextmanager
+def no_replace(path, refusal: Exception):
+    """While inside, :func:`atomic_path` (in any thread of this process) publishes ``path`` only
+    where nothing is: a file that appeared there is left as it is and ``refusal`` raised."""
+    key = os.path.abspath(path)
+    with _NO_REPLACE_LOCK:
+        _NO_REPLACE[key] = refusal
+    try:
+        yield
+    finally:
+        with _NO_REPLACE_LOCK:
+            _NO_REPLACE.pop(key, None)
+
+
+def _publish(tmp: pathlib.Path, path: pathlib.Path) -> None:
+    """Rename the finished ``tmp`` onto ``path``; inside :func:`no_replace` only if nothing is
+    there (a hard link, then the temporary name removed)."""
+    with _NO_REPLACE_LOCK:
+        refusal = _NO_REPLACE.get(os.path.abspath(path))
+    if refusal is None:
+        os.replace(tmp, path)
+        return
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        raise refusal from None
+    except OSError:  # a file system without hard links: the check and the rename are apart
+        if os.path.lexists(path):
+            raise refusal from None
+        os.replace(tmp, path)
+        return
+    os.unlink(tmp)
+
+
+@contextlib.contextmanager
 def atomic_path(path, *, keep_suffix: bool = False):
     """A temporary file beside ``path`` for a writer that opens the file itself (a library's file
     sink): leaving the block without error flushes it to disk and renames it onto ``path``; an
@@ -275,7 +316,9 @@ def atomic_path(path, *, keep_suffix: bool = False):
     file gets (0666 less the umask); with ``keep_suffix`` it ends with ``path``'s extension too
     (``.out.mf4.host.123.89abcdef.tmp.mf4``), for a writer that picks the format by it. One left
     by a writer that was killed (its pid no longer runs on this host) is removed first
-    (:func:`remove_stale_temp_files`).
+    (:func:`remove_stale_temp_files`). Inside :func:`no_replace` of ``path`` the file is published
+    by ``os.link``, which leaves a file that appeared there meanwhile as it is (the refusal
+    :func:`no_replace` was given is raised and the temporary file removed).
 
     Yields
     ------
@@ -293,7 +336,7 @@ def atomic_path(path, *, keep_suffix: bool = False):
             os.fsync(fd)
         finally:
             os.close(fd)
-        os.replace(tmp, path)
+        _publish(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)

@@ -29,7 +29,9 @@ metadata on how it was made (input, T_a source, low-pass, mode, settling toleran
 version). The per-channel DLC, stress factor and damage-equivalent load before and after
 correction are printed. Bad input raises :class:`scenarios.core.config.ScenarioError` (one
 sentence naming the channel or line and the fix) and nothing is written; ``-o`` naming an input,
-or an existing file without ``--force``, is refused before any work.
+or an existing file without ``--force``, is refused before any work, and so is an ``-o`` another
+command is writing (the file is claimed for the command's run:
+:func:`scenarios.records.output.claimed_out_file`).
 
 ``--model TRUCK.toml --pairs fl=DRIVE:LVDT,...`` corrects instead by a truck model calibrated on
 the file's own drive, LVDT and force channels (:mod:`scenarios.cli.correct_model`).
@@ -45,7 +47,7 @@ from __future__ import annotations
 import argparse
 
 from scenarios.records.naming import Naming
-from scenarios.records.output import check_out_file
+from scenarios.records.output import claimed_out_file
 from scenarios.studies.identify.command import add_channel_timing, add_number_format, channel_timing
 
 __all__ = ["CLI_NAMING", "add_parser", "cmd_correct"]
@@ -116,12 +118,18 @@ def cmd_correct(args) -> int:
     """Run ``rigsim correct``; returns 0, raises ScenarioError (one sentence) for bad input."""
     from scenarios.cli import correct_model
 
-    if args.model is not None:
-        return correct_model.cmd_correct_model(args, CLI_NAMING)
-    correct_model.refuse_model_options(args)
+    if args.model is None:
+        correct_model.refuse_model_options(args)
+    with claimed_out_file(args.out, [args.input, args.model, args.actuator, args.actuators], args.force):
+        if args.model is not None:
+            return correct_model.cmd_correct_model(args, CLI_NAMING)
+        return _correct_linear(args)
+
+
+def _correct_linear(args) -> int:
+    """``rigsim correct`` without ``--model``, ``-o`` checked and claimed."""
     from scenarios.records.settings import correction_settings
 
-    check_out_file(args.out, [args.input, args.actuator, args.actuators], args.force)
     settings = correction_settings(
         actuator=args.actuator, actuators=args.actuators, identify=args.identify, columns=args.columns,
         corner_map=args.map, lowpass=args.lowpass, lowpass_hz=args.lowpass_hz, mode=args.mode,

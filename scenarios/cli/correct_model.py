@@ -113,13 +113,12 @@ def refuse_model_options(args) -> None:
 
 
 def cmd_correct_model(args, naming) -> int:
-    """Run ``rigsim correct --model``, messages naming the flags as ``naming`` says; returns 0,
-    raises ScenarioError (one sentence) for bad input."""
-    from scenarios.records.output import check_out_file
+    """Run ``rigsim correct --model`` (its ``-o`` checked and claimed by the caller:
+    :func:`scenarios.records.output.claimed_out_file`), messages naming the flags as ``naming``
+    says; returns 0, raises ScenarioError (one sentence) for bad input."""
     from scenarios.records.settings import correction_settings
     from scenarios.studies.identify.command import channel_timing
 
-    check_out_file(args.out, [args.input, args.model, args.actuator, args.actuators], args.force)
     settings = correction_settings(
         model=args.model, pairs=args.pairs or None, identify=args.identify, actuator=args.actuator,
         actuators=args.actuators, columns=args.columns, corner_map=args.map, lowpass=args.lowpass,

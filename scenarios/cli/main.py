@@ -86,9 +86,8 @@ def _cmd_run(args) -> int:
 
     from scenarios.core.config import ScenarioError, load_scenario
     from scenarios.core.memory import return_freed_arrays
-    from scenarios.core.outputs import check_output_file, staged_output
-    from scenarios.core.results import check_timeseries_format, write_run
-    from scenarios.review.recording_process import RecordingError, RecordingProcess
+    from scenarios.core.outputs import check_output_file, claimed_output_file
+    from scenarios.core.results import check_timeseries_format
 
     return_freed_arrays()  # freed arrays leave the process: a long run peaks at its record plus one temporary
     check_timeseries_format(args.format)
@@ -112,10 +111,25 @@ def _cmd_run(args) -> int:
     cost = run_cost(args.mode, scenario.lead_in_s + scenario.duration_s,
                     int(scenario.duration_s * rate) + 1, args.format)
     check_disk(cost, args.out)
-    if args.rrd is not None:  # checked with --out before the run: both are written, or neither
-        check_output_file(args.rrd, "--rrd", force=args.force, folder=args.out)
-        if os.path.exists(args.rrd) and os.path.samefile(args.rrd, args.scenario):
-            raise ScenarioError(f"--rrd {args.rrd} is the scenario file; name another file for the recording")
+    with contextlib.ExitStack() as claims:
+        if args.rrd is not None:  # checked with --out before the run: both are written, or neither
+            check_output_file(args.rrd, "--rrd", force=args.force, folder=args.out)
+            if os.path.exists(args.rrd) and os.path.samefile(args.rrd, args.scenario):
+                raise ScenarioError(f"--rrd {args.rrd} is the scenario file; name another file for the recording")
+            if os.path.relpath(os.path.abspath(args.rrd), os.path.abspath(args.out)).startswith(os.pardir):
+                # outside --out (inside, it is written into the staging folder): one command writes it
+                claims.enter_context(claimed_output_file(
+                    args.rrd, "--rrd", force=args.force,
+                    check=lambda: check_output_file(args.rrd, "--rrd", force=args.force, folder=args.out)))
+        return _run_and_write(args, scenario, cost)
+
+
+def _run_and_write(args, scenario, cost) -> int:
+    """``rigsim run`` once its arguments are checked (and ``--rrd`` claimed): the run, its folder and recording."""
+    from scenarios.core.outputs import staged_output
+    from scenarios.core.results import write_run
+    from scenarios.review.recording_process import RecordingError, RecordingProcess
+
     # --rrd: a child process imports rerun and writes the recording (scenarios.review.recording_process);
     # it starts before the simulation's imports, so that its own overlap them and the run
     recording = RecordingProcess() if args.rrd is not None else contextlib.nullcontext()

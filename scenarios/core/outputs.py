@@ -13,8 +13,9 @@ there. ``--force`` replaces a folder only when it carries the marker and holds n
 does not list: a folder rigsim did not write, or one where something was added since, is refused
 with one sentence, ``--force`` or not. An output folder may never be, or contain, an input file
 of the command, the working folder or the home folder. :func:`check_output_file` checks a single output file (``--rrd``, ``rigsim correct
--o``) before any work. Files inside the staging folder are still written by
-:func:`correction.io.atomic.atomic_write_bytes`.
+-o``) before any work and :func:`claimed_output_file` claims it for the command's run, so that a
+second command writing it is refused (:mod:`correction.io.claim`). Files inside the staging folder
+are still written by :func:`correction.io.atomic.atomic_write_bytes`.
 """
 
 from __future__ import annotations
@@ -27,14 +28,15 @@ import shutil
 import sys
 
 from correction.io.atomic import dead_writers_leftovers, host_tag
+from correction.io.claim import claimed_output, make_parents, remove_empty
 from scenarios.core.config import ScenarioError
 from scenarios.core.ownership import (MARKER, check_not_over, check_owned, count_files, entries, plural,
                                        read_marker, write_marker)
 
 _KINDS = ("partial", "old")  # staging folders, and previous results moved aside by --force
 
-__all__ = ["MARKER", "Staging", "check_output_file", "check_output_folder", "claim_output_folder", "remove_stale_staging",
-           "staged_output"]
+__all__ = ["MARKER", "Staging", "check_output_file", "check_output_folder", "claim_output_folder",
+           "claimed_output_file", "remove_stale_staging", "staged_output"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -185,23 +187,6 @@ def claim_output_folder(target, *, written_by: str, option: str = "--out", input
     return path
 
 
-def _make_parents(folder: pathlib.Path) -> list[pathlib.Path]:
-    """Create ``folder`` and its missing parents; returns those created (deepest last)."""
-    missing = []
-    p = folder
-    while not os.path.lexists(p) and p.parent != p:
-        missing.append(p)
-        p = p.parent
-    folder.mkdir(parents=True, exist_ok=True)
-    return missing[::-1]
-
-
-def _remove_empty(folders: list[pathlib.Path]) -> None:
-    for p in reversed(folders):
-        with contextlib.suppress(OSError):
-            p.rmdir()
-
-
 def _holds_anything(path: pathlib.Path) -> bool:
     return path.is_dir() and any(path.iterdir())
 
@@ -271,12 +256,12 @@ def staged_output(target, *, force: bool = False, option: str = "--out", inputs=
     staging = path.parent / f".{path.name}.{host_tag()}.{os.getpid()}.partial"
     created: list[pathlib.Path] = []
     try:
-        created = _make_parents(path.parent)
+        created = make_parents(path.parent)
         if os.path.lexists(staging):  # only this process can have left it (its pid is ours)
             _remove(staging)
         os.mkdir(staging)
     except OSError as exc:
-        _remove_empty(created)
+        remove_empty(created)
         where = pathlib.Path(exc.filename).parent if exc.filename else path.parent
         raise ScenarioError(f"{option} {shown} cannot be written: cannot create a folder in {where} "
                             f"({exc.strerror or exc}); choose a folder you can write to") from None
@@ -287,7 +272,7 @@ def staged_output(target, *, force: bool = False, option: str = "--out", inputs=
         with contextlib.suppress(OSError):
             if os.path.lexists(staging):
                 _remove(staging)
-        _remove_empty(created)
+        remove_empty(created)
         raise
 
 
@@ -332,3 +317,24 @@ def check_output_file(path, option: str, *, force: bool = False, folder=None) ->
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ScenarioError(f"{option} {text} cannot be written: no permission to write in {parent}")
     return pathlib.Path(text)
+
+
+@contextlib.contextmanager
+def claimed_output_file(path, option: str, *, force: bool = False, check=None):
+    """Check the output file ``path`` (:func:`check_output_file`, or ``check()`` when given) and
+    claim it for the block (:func:`correction.io.claim.claimed_output`): a second command writing
+    it is refused, and a file that appears there meanwhile is not replaced without ``force``.
+
+    Raises
+    ------
+    ScenarioError
+        One sentence naming ``option``: what the check refuses (checked again once claimed: the
+        writer before may have finished meanwhile), or a file another command is writing.
+    """
+    def checked():
+        return check_output_file(path, option, force=force) if check is None else check()
+
+    checked()
+    with claimed_output(path, replace=force, error=ScenarioError, option=option):
+        checked()
+        yield pathlib.Path(path)

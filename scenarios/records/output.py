@@ -2,10 +2,10 @@
 
 Shared by the linear correction and the model correction (which falls back to the linear one) of
 :mod:`scenarios.records.api`: an output file refused before any work (:func:`check_out_file`,
-:func:`probe_output`), the one linear correction with its options (:func:`linear_correction`,
-:func:`lowpass_filter`), and the metadata that says how a corrected file was made
-(:func:`linear_metadata`), fitted to what the output's format can hold (:func:`fit_metadata`).
-Imports nothing heavy at module level.
+:func:`probe_output`) and claimed for the command's run (:func:`claimed_out_file`), the one linear
+correction with its options (:func:`linear_correction`, :func:`lowpass_filter`), and the metadata
+that says how a corrected file was made (:func:`linear_metadata`), fitted to what the output's
+format can hold (:func:`fit_metadata`). Imports nothing heavy at module level.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import textwrap
 
 from scenarios.records.naming import KEYWORDS, Naming
 
-__all__ = ["SENTENCE_KEYS", "GIVEN", "check_out_file", "header_value", "fit_metadata", "rigsim_version", "lowpass_filter",
-           "linear_metadata", "output_units", "probe_output", "linear_correction"]
+__all__ = ["SENTENCE_KEYS", "GIVEN", "check_out_file", "claimed_out_file", "header_value", "fit_metadata",
+           "rigsim_version", "lowpass_filter", "linear_metadata", "output_units", "probe_output", "linear_correction"]
 
 #: Metadata keys whose value is a sentence: an RPC III header (96-byte values) holds it split over
 #: ``key``, ``key_2``, ``key_3``...
@@ -44,6 +44,15 @@ def check_out_file(out, inputs, force: bool) -> None:
         format_of(out, WRITE_FORMATS)
     except MeasuredDataError as exc:
         raise _error(str(exc).replace(" (overwrite=True)", "")) from None
+
+
+def claimed_out_file(out, inputs, force: bool):
+    """A context manager: :func:`check_out_file` of ``-o`` ``out``, then ``out`` claimed for the
+    block (:func:`scenarios.core.outputs.claimed_output_file`): a second command writing it is
+    refused in one sentence, and a file that appears there meanwhile is not replaced without ``force``."""
+    from scenarios.core.outputs import claimed_output_file
+
+    return claimed_output_file(out, "-o", force=force, check=lambda: check_out_file(out, inputs, force))
 
 
 def header_value(text: str) -> str:
