@@ -19,13 +19,16 @@ and returns a :class:`~scenarios.records.corrected.CorrectionResult` whose
 :meth:`~scenarios.records.plan.CorrectionPlan.check_output` and
 :meth:`~scenarios.records.plan.CorrectionPlan.run`). Every refusal is one
 :class:`~scenarios.core.config.ScenarioError` sentence (a ``ValueError``) naming the keyword at
-fault. Imports nothing heavy at module level.
+fault, never a Python or numpy error: the arguments are checked before any work
+(:mod:`scenarios.records.arguments`), and a path may be a ``str``, ``bytes`` or ``os.PathLike``.
+Imports nothing heavy at module level.
 """
 
 from __future__ import annotations
 
 import os
 
+from scenarios.records.arguments import checked_pairs, checked_record, file_path, shown
 from scenarios.records.channels import read_record
 from scenarios.records.corrected import ChannelLoads, CorrectionResult
 from scenarios.records.settings import correction_settings
@@ -52,14 +55,16 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
 
     Parameters
     ----------
-    record : correction.io.measured.MeasuredChannels or str or os.PathLike
-        The record (:func:`read_record`), or a file to read with only the channels needed.
-    actuator : str, os.PathLike or T_a, optional
+    record : correction.io.measured.MeasuredChannels, str, bytes or os.PathLike
+        The record (:func:`read_record`, or built with
+        :func:`correction.io.measured_core.make_channels`), or a file to read with only the
+        channels needed.
+    actuator : str, bytes, os.PathLike or T_a, optional
         One T_a for every force channel: an actuator file (``[transfer_function] num, den`` or
         eq. 4's ``[parameters]``, :mod:`correction.io.actuator_file`), or ``(num, den)`` in
         descending powers of s (s in rad/s), an ``ActuatorFit`` or a ``control.TransferFunction``.
         With ``model``: L's T_a.
-    actuators : str, os.PathLike or Mapping[str, T_a], optional
+    actuators : str, bytes, os.PathLike or Mapping[str, T_a], optional
         One T_a per corner: a per-corner actuator file (``rigsim identify``'s ``actuators.toml``)
         or corner -> T_a; each corner corrects the force channel whose name holds the corner as
         a token (``tire_force_fl_N``, ``Fz_FL``) or the one ``corner_map`` gives. With ``model``:
@@ -67,7 +72,7 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
     identify : (str, str) or str, optional
         The drive and pan displacement channels (lengths) T_a is fitted from
         (:func:`correction.identification.actuator_fit.fit_actuator`), ``("drive", "lvdt")`` or ``"drive,lvdt"``.
-    model : str, os.PathLike or Scenario, optional
+    model : str, bytes, os.PathLike or Scenario, optional
         A scenario file whose rig is used and whose ``[vehicle]`` values start the calibration.
     pairs : Mapping[str, tuple[str, str]] or str, optional
         With ``model``: per corner fl, fr, rl, rr the drive and LVDT channels,
@@ -82,7 +87,9 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
         ``lowpass_hz`` (default), or the paper's eq. 5 (16/24 Hz).
     lowpass_hz : float, Hz, optional
         The regularized low-pass's corner, its -3 dB frequency (default
-        :data:`~correction.output.lowpass.BAND_HZ`, 30 Hz); finite, > 0, below fs / 2.
+        :data:`~correction.output.lowpass.BAND_HZ`, 30 Hz); finite, > 0, below fs / 2, and high
+        enough that the low-pass's transients fit in the record (about 6.3 s Hz / corner
+        zero-phase: 0.32 Hz at the least for a 20 s record).
     mode : {"zerophase", "causal"}
         ``zerophase``: ``|T_a^-1 T_F|`` with T_a^-1's phase, offline; ``causal``: as a real-time filter.
     transient : {"drop", "mark", "keep"}
@@ -93,9 +100,10 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
     workers : int, optional
         With ``model``: worker processes (default: all cores).
     max_evaluations : int, optional
-        With ``model``: most evaluations of the calibration's residual (default 60).
+        With ``model``: most evaluations of the calibration's residual (default 60); a whole number >= 1.
     calibration_windows : int, optional
-        With ``model``: windows of 5 s lead-in + 5 s the model is fitted on (default 2).
+        With ``model``: windows of 5 s lead-in + 5 s the model is fitted on (default 2); at most
+        as many as the record holds side by side (3 in 20 s).
     cab : {"auto", "held", "fitted"}, optional
         With ``model``: the model's cab held, its mount frequency fitted, or (default) the better fit.
     drift_cut_hz : float, Hz, optional
@@ -110,7 +118,8 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
         channels before correcting (:func:`correction.io.acquisition.undo_timing`). The LVDT's
         goes with ``identify`` or ``model``.
     progress : callable, optional
-        Called with each progress line or note of a long run (the model's calibration); default: silent.
+        Called with each progress line or note of a long run (the model's calibration), a str; default:
+        silent.
 
     Returns
     -------
@@ -124,13 +133,18 @@ def correct_record(record, *, actuator=None, actuators=None, identify=None, mode
     ScenarioError
         One sentence naming the keyword, channel or file at fault and the fix; nothing is computed.
     """
+    if progress is not None and not callable(progress):
+        from scenarios.core.config import ScenarioError
+
+        raise ScenarioError(f"progress must be a callable taking each progress line (print, list.append), got "
+                            f"{shown(progress)}")
     settings = correction_settings(
         actuator=actuator, actuators=actuators, identify=identify, model=model, pairs=pairs, columns=columns,
         corner_map=corner_map, lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
         normalize_dc=normalize_dc, workers=workers, max_evaluations=max_evaluations,
         calibration_windows=calibration_windows, cab=cab, drift_cut_hz=drift_cut_hz, force_filter=force_filter,
         lvdt_filter=lvdt_filter)
-    plan = settings.read(record) if isinstance(record, (str, os.PathLike)) else settings.plan(record)
+    plan = settings.read(record) if isinstance(record, (str, bytes, os.PathLike)) else settings.plan(record)
     return plan.run(progress)
 
 
@@ -139,8 +153,9 @@ def identify_record(record, *, pairs, lvdt_filter=None):
 
     Parameters
     ----------
-    record : correction.io.measured.MeasuredChannels
-        The record (:func:`read_record`): independent random drives on the posts give the cleanest fit.
+    record : correction.io.measured.MeasuredChannels, str, bytes or os.PathLike
+        The record (:func:`read_record`, or built in Python), or a file to read with only the
+        pairs' channels: independent random drives on the posts give the cleanest fit.
     pairs : Mapping[str, tuple[str, str]] or str
         Per corner the drive and LVDT channels (lengths, m), ``{"fl": ("Soll_FL", "Weg_FL"), ...}``
         or ``"fl=Soll_FL:Weg_FL,..."``.
@@ -160,4 +175,7 @@ def identify_record(record, *, pairs, lvdt_filter=None):
     """
     from scenarios.records import recorded
 
-    return recorded.identify_record(record, pairs=pairs, lvdt_filter=lvdt_filter)
+    pairs = recorded.pairs_of(checked_pairs(pairs))
+    if isinstance(record, (str, bytes, os.PathLike)):
+        return recorded.identify_recorded(file_path(record, "record"), pairs, lvdt_filter=lvdt_filter)
+    return recorded.identify_record(checked_record(record), pairs=pairs, lvdt_filter=lvdt_filter)

@@ -171,7 +171,7 @@ class CorrectionResult:
 
         Parameters
         ----------
-        path : str or os.PathLike
+        path : str, bytes or os.PathLike
             .csv/.txt/.dat, .rsp/.drv/.tim/.rpc (RPC III), .mf4/.mdf, .tdms
             (:func:`correction.io.measured.write_channels`).
         overwrite : bool
@@ -186,12 +186,17 @@ class CorrectionResult:
         Raises
         ------
         ScenarioError
-            One sentence: an existing file without ``overwrite``, an input file, an extension no
-            writer knows, a name or metadata value the format cannot hold.
+            One sentence: a path or ``overwrite`` of the wrong type, an existing file without
+            ``overwrite``, an input file, an extension no writer knows, a name or metadata value the
+            format cannot hold.
         """
         from types import SimpleNamespace
 
         from correction.io.measured import MeasuredDataError, write_channels
+        from scenarios.records.arguments import file_path, flag
+        from scenarios.records.naming import KEYWORDS
+
+        path, overwrite = file_path(path, "path"), flag(KEYWORDS, "overwrite", overwrite)
 
         rows = np.flatnonzero(self.settled) if self.transient == "drop" else np.arange(self.settled.size)
         data = {f"{c}_corrected": self.corrected_N[rows, j] for j, c in enumerate(self.channels)}

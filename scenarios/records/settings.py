@@ -1,24 +1,26 @@
 """What to correct and how: the options of a record's correction checked, and their files read.
 
 :func:`correction_settings` checks every option of :func:`scenarios.records.api.correct_record`
-before any record is read (choices, the low-pass corner, which T_a source, the model's options)
-and reads the files they name (the actuator files, the truck's scenario file); the
-:class:`CorrectionSettings` it returns knows which channels a record needs
-(:attr:`CorrectionSettings.channels`) and plans the correction of a record
-(:meth:`CorrectionSettings.plan`, :meth:`CorrectionSettings.read`:
-:mod:`scenarios.records.plan`). Every refusal is one
+before any record is read (types, choices, the low-pass corner, which T_a source and its form,
+the model's options) and reads the files they name (the actuator files, the truck's scenario
+file; paths as ``str``, ``bytes`` or ``os.PathLike``); the :class:`CorrectionSettings` it returns
+knows which channels a record needs (:attr:`CorrectionSettings.channels`) and plans the
+correction of a record (:meth:`CorrectionSettings.plan`, :meth:`CorrectionSettings.read`:
+:mod:`scenarios.records.plan`), holding the settings against the record before any work: the
+low-pass's transients against its length and the calibration windows it holds
+(:mod:`scenarios.records.arguments`). Every refusal is one
 :class:`~scenarios.core.config.ScenarioError` sentence naming the parameter as ``naming`` says.
 Imports nothing heavy at module level.
 """
 
 from __future__ import annotations
 
-import math
-import numbers
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from scenarios.records.arguments import (check_corner, check_windows, checked_corner_map, checked_names, checked_pairs,
+                                         checked_record, count, file_path, finite, flag, shown, ta_form)
 from scenarios.records.channels import parse_columns, parse_corner_map, parse_identify, wanted_channels
 from scenarios.records.naming import KEYWORDS, Naming
 from scenarios.records.output import GIVEN
@@ -39,7 +41,7 @@ def _error(message: str):
 
 
 def _is_path(value) -> bool:
-    return isinstance(value, (str, os.PathLike))
+    return isinstance(value, (str, bytes, os.PathLike))
 
 
 @dataclass(frozen=True)
@@ -127,10 +129,15 @@ class CorrectionSettings:
     def plan(self, record, as_read: Mapping | None = None):
         """The correction of ``record`` (a :class:`~correction.io.measured.MeasuredChannels`) planned and
         checked (:class:`scenarios.records.plan.CorrectionPlan`); ``as_read``: channel name as given ->
-        as the reader returned it (default: matched exactly, else by case)."""
+        as the reader returned it (default: matched exactly, else by case). The calibration windows
+        the record holds and the low-pass's transients against its length are checked too."""
         from scenarios.records.plan import make_plan
 
-        return make_plan(self, record, as_read)
+        record = checked_record(record)
+        check_windows(self, record)
+        plan = make_plan(self, record, as_read)
+        check_corner(self, record)
+        return plan
 
     def read(self, path, *, time_col: str | None = None, decimal: str | None = None, thousands: str | None = None):
         """Read ``path`` with only the channels these settings need (:attr:`channels`;
@@ -143,52 +150,55 @@ class CorrectionSettings:
 
 
 def _choice(naming: Naming, key: str, value, allowed) -> None:
-    if value not in allowed:
-        raise _error(f"{naming(key)} must be one of {', '.join(allowed)}, got {value!r}")
+    if not isinstance(value, str) or value not in allowed:
+        raise _error(f"{naming(key)} must be one of {', '.join(allowed)}, got {shown(value)}")
 
 
 def _check_lowpass(naming: Naming, lowpass: str, lowpass_hz) -> float | None:
     if lowpass_hz is None:
         return None
     opt = naming("lowpass_hz")
-    if isinstance(lowpass_hz, bool) or not isinstance(lowpass_hz, numbers.Real) or not (
-            math.isfinite(lowpass_hz) and lowpass_hz > 0):
-        raise _error(f"{opt} must be a finite number of Hz > 0, got {lowpass_hz!r}")
+    hz = finite(lowpass_hz)
+    if hz is None or hz <= 0:
+        raise _error(f"{opt} must be a finite number of Hz > 0, got {shown(lowpass_hz)}")
     if lowpass != "regularized":
         raise _error(f"{opt} sets the corner of the regularized low-pass; the paper's low-pass keeps its 16/24 Hz: "
                      f"drop {opt} or pass {naming.setting('lowpass', 'regularized')}")
-    return float(lowpass_hz)
+    return hz
 
 
-def _one_ta(value):
+def _one_ta(value, naming: Naming):
     """(T_a, source) from ``value``: an actuator file (path) or a T_a object."""
+    opt = naming("actuator")
     if not _is_path(value):
-        return value, GIVEN
+        return ta_form(value, opt), GIVEN
     from correction.io.actuator_file import read_actuator_file
 
+    path = file_path(value, opt)
     try:
-        return read_actuator_file(value), str(value)
+        return read_actuator_file(path), path
     except ValueError as exc:
-        raise _error(str(exc)) from None
+        raise _error(f"{opt}: {exc}") from None
 
 
 def _corner_tas(value, naming: Naming) -> tuple[dict, str]:
     """(corner -> T_a, source) from ``value``: a per-corner actuator file (path) or a mapping."""
+    opt = naming("actuators")
     if not _is_path(value):
-        if not isinstance(value, Mapping):
-            raise _error(f"{naming('actuators')} must be a per-corner actuator file or a mapping of corner -> T_a, "
-                         f"got {type(value).__name__}")
-        return dict(value), GIVEN
+        if not isinstance(value, Mapping) or not value:
+            raise _error(f"{opt} must be a per-corner actuator file or a mapping of corner -> T_a, got "
+                         f"{shown(value)}")
+        return {str(c): ta_form(ta, f"{opt} {c!r}") for c, ta in value.items()}, GIVEN
     from correction.io.actuator_file import read_actuators_file
 
+    path = file_path(value, opt)
     try:
-        return read_actuators_file(value), str(value)
+        return read_actuators_file(path), path
     except ValueError as exc:
-        raise _error(str(exc)) from None
+        raise _error(f"{opt}: {exc}") from None
 
 
-def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers, max_evaluations,
-                   calibration_windows):
+def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers):
     """(pairs in corner order, workers); the model's options only."""
     from mjcf.names import CORNERS
     from scenarios.core.pool import worker_count
@@ -201,6 +211,8 @@ def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers
     if actuator is not None and actuators is not None:
         raise _error(f"give at most one of {n('actuator')} and {n('actuators')} (the T_a of {n('model')}'s linear "
                      "fallback)")
+    if pairs is not None:
+        checked_pairs(pairs, n)
     if not pairs:
         raise _error(f"{n('model')} needs {n.setting('pairs', 'fl=DRIVE:LVDT,fr=...,rl=...,rr=...')} naming each "
                      "corner's drive and LVDT channels")
@@ -212,15 +224,16 @@ def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers
     if missing:
         raise _error(f"{n('pairs')} has no corner {missing[0]!r}; give CORNER=DRIVE:LVDT for each of "
                      f"{', '.join(CORNERS)}")
-    try:
-        workers = worker_count(workers)
-    except (TypeError, ValueError):
-        raise _error(f"{n('workers')} must be a whole number >= 1, got {workers}") from None
-    for key, value in (("max_evaluations", max_evaluations), ("calibration_windows", calibration_windows)):
-        if value is not None and (isinstance(value, bool) or int(value) != value or value < 1):
-            raise _error(f"{n(key)} must be a whole number >= 1, got {value}")
+    cores = os.cpu_count() or 1
+    workers = worker_count(count(n, "workers", workers, (WORKERS_PER_CORE * cores,
+                                                        f"{WORKERS_PER_CORE} per core; this machine has {cores}")))
     return {c: pairs[c] for c in CORNERS}, workers
 
+
+#: Most worker processes of the model correction per core, 1: the truck model's runs are CPU-bound,
+#: so more processes than cores add only memory (each holds a MuJoCo model); a few per core leave
+#: room for a machine whose cores are counted low (a container's quota).
+WORKERS_PER_CORE = 4
 
 #: Largest drift-cut corner, Hz: the truck's body bounce and pitch (and a cab on soft mounts) are at
 #: 1.5-3 Hz, where the measured force must pass; the cut's gain at 1.5 Hz is 0.5 with a 1.5 Hz corner.
@@ -233,11 +246,27 @@ def _drift_hz(naming: Naming, drift_cut_hz) -> float | None:
 
     if drift_cut_hz is None:
         return DRIFT_HZ
-    if (isinstance(drift_cut_hz, bool) or not isinstance(drift_cut_hz, numbers.Real)
-            or not 0 <= float(drift_cut_hz) <= DRIFT_CUT_MAX_HZ):
+    hz = finite(drift_cut_hz)
+    if hz is None or not 0 <= hz <= DRIFT_CUT_MAX_HZ:
         raise _error(f"{naming('drift_cut_hz')} must be 0 (no drift cut, for load cells that do not drift) or a "
-                     f"corner in Hz up to {DRIFT_CUT_MAX_HZ:g} (below the truck's body modes), got {drift_cut_hz!r}")
-    return float(drift_cut_hz) or None
+                     f"corner in Hz up to {DRIFT_CUT_MAX_HZ:g} (below the truck's body modes), got "
+                     f"{shown(drift_cut_hz)}")
+    return hz or None
+
+
+def _scenario(naming: Naming, model) -> tuple:
+    """(the truck's scenario, its file or :data:`~scenarios.records.output.GIVEN`) from ``model``."""
+    from scenarios.core.config import Scenario, ScenarioError, load_scenario
+
+    if isinstance(model, Scenario):
+        return model, GIVEN
+    if not _is_path(model):
+        raise _error(f"{naming('model')} must be a scenario file (TRUCK.toml) or a Scenario, got {shown(model)}")
+    path = file_path(model, naming("model"))
+    try:
+        return load_scenario(path), path
+    except ScenarioError as exc:
+        raise _error(f"{naming('model')}: {exc}") from None
 
 
 def _fallback_tas(naming: Naming, actuator, actuators):
@@ -245,7 +274,7 @@ def _fallback_tas(naming: Naming, actuator, actuators):
     from mjcf.names import CORNERS
 
     if actuator is not None:
-        return _one_ta(actuator)
+        return _one_ta(actuator, naming)
     if actuators is None:
         return None, None
     table, source = _corner_tas(actuators, naming)
@@ -272,17 +301,21 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
         One sentence naming the parameter (an option, a file, a T_a source) and the fix.
     """
     n = naming
+    identify = checked_names(n, "identify", identify, "'DRIVE,DISP' or the two channel names")
+    columns = checked_names(n, "columns", columns, "'A,B' or a sequence of channel names")
+    corner_map = checked_corner_map(n, corner_map)
     _choice(n, "lowpass", lowpass, LOWPASSES)
     _choice(n, "mode", mode, MODES)
     _choice(n, "transient", transient, TRANSIENTS)
     _choice(n, "cab", "auto" if cab is None else cab, CABS)
     lowpass_hz = _check_lowpass(n, lowpass, lowpass_hz)
+    normalize_dc = flag(n, "normalize_dc", normalize_dc)
     force_filter, lvdt_filter = check_timing(force_filter, "force_filter", n), check_timing(lvdt_filter, "lvdt_filter", n)
     if lvdt_filter is not None and model is None and identify is None:
         raise _error(f"{n('lvdt_filter')} describes the LVDT channels that {n('identify')} or {n('model')} read; "
                      f"drop it, or identify T_a with it (rigsim identify --from-file takes it too)")
     common = dict(lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
-                  normalize_dc=bool(normalize_dc), cab="auto" if cab is None else cab, naming=n,
+                  normalize_dc=normalize_dc, cab="auto" if cab is None else cab, naming=n,
                   force_filter=force_filter, lvdt_filter=lvdt_filter)
     if model is None:
         extra = {"pairs": pairs, "workers": workers, "max_evaluations": max_evaluations,
@@ -302,22 +335,18 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
             raise _error(f"{n('corner_map')} maps corners of a per-corner file: use it with "
                          f"{n.setting('actuators', 'ACTS.toml')}")
         ta, source = (None, None) if identify is not None else (
-            _one_ta(actuator) if actuator is not None else _corner_tas(actuators, n))
+            _one_ta(actuator, n) if actuator is not None else _corner_tas(actuators, n))
         return CorrectionSettings(
             method="linear", columns=None if asked is None else tuple(asked),
             corner_map=None if items is None else tuple(items), identify=tuple(id_cols), ta=ta,
             per_corner=actuators is not None, ta_source=source, pairs=None, scenario=None, scenario_file=None,
             workers=None, max_evaluations=None, calibration_windows=None,
-            inputs=tuple(str(p) for p in (actuator, actuators) if _is_path(p)), **common)
-    pairs, workers = _model_options(n, identify, actuator, actuators, pairs, workers, max_evaluations,
-                                    calibration_windows)
+            inputs=(source,) if _is_path(actuator) or _is_path(actuators) else (), **common)
+    pairs, workers = _model_options(n, identify, actuator, actuators, pairs, workers)
+    max_evaluations = count(n, "max_evaluations", max_evaluations)
+    calibration_windows = count(n, "calibration_windows", calibration_windows)
     drift_hz = _drift_hz(n, drift_cut_hz)
-    if _is_path(model):
-        from scenarios.core.config import load_scenario
-
-        scenario, scenario_file = load_scenario(model), str(model)
-    else:
-        scenario, scenario_file = model, GIVEN
+    scenario, scenario_file = _scenario(n, model)
     asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
     ta, source = _fallback_tas(n, actuator, actuators)
     return CorrectionSettings(
@@ -325,4 +354,4 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
         corner_map=None if items is None else tuple(items), identify=(), ta=ta, per_corner=False,
         ta_source=source, pairs=pairs, scenario=scenario, scenario_file=scenario_file, workers=workers,
         max_evaluations=max_evaluations, calibration_windows=calibration_windows, drift_hz=drift_hz,
-        inputs=tuple(str(p) for p in (model, actuator, actuators) if _is_path(p)), **common)
+        inputs=tuple(f for f in (scenario_file, source) if f not in (None, GIVEN)), **common)
