@@ -18,8 +18,12 @@ Every channel comes back in SI (:mod:`correction.io.measured_units`: kN -> N, mm
 ms -> s, % -> fraction...), with the unit as written kept in ``source_units``; a channel without
 unit is taken as SI (a name suffix ``_N``, ``_m``, ``_Pa``, ``_s``, ``_ms`` gives its unit; with
 none, its SI unit and ``source_units`` entry are ``""``). The time axis must be uniform (1 % of a
-step); ``fs_hz`` is its rate. Every refusal is one :class:`MeasuredDataError` sentence naming the
-file, the column or channel, the line or unit, and the fix.
+step, no gap) at a rate of at most :data:`~correction.io.measured_core.MAX_RATE_HZ`; ``fs_hz`` is
+its rate, read within the axis's resolution
+(:func:`~correction.io.measured_core.uniform_rate`), and ``time_s`` starts at 0: the first
+sample's time as the file gives it (a time-of-day clock, epoch seconds, RPC III's START_TIME) is
+``metadata["time_start_s"]`` when not 0. Every refusal is one :class:`MeasuredDataError`
+sentence naming the file, the column or channel, the line or unit, and the fix.
 
 Metadata: the CSV ``# key: value`` preamble; the RPC III header keys other than those that lay
 out the data (:data:`correction.io.rpc3.STRUCTURAL_KEYS`, ``*.CHAN_n``); the MDF4 header comment and
@@ -33,8 +37,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from correction.io.measured_core import (TIME_KEYS, MeasuredChannels, MeasuredDataError, atomic_output, check_output,
-                                      make_channels, to_si, uniform_rate)
+from correction.io.measured_core import (TIME_KEYS, TIME_START_KEY, MeasuredChannels, MeasuredDataError, atomic_output,
+                                      check_channel, check_output, make_channels, to_si)
+from correction.io.measured_time import round_rate, uniform_rate
 
 __all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "READ_FORMATS", "WRITE_FORMATS",
            "read_channels", "write_channels", "format_of"]
@@ -107,7 +112,7 @@ def read_channels(path, *, time_col: str | None = None, channels=None, decimal: 
 
 
 def _read_rpc(path, time_col, channels) -> MeasuredChannels:
-    from correction.io.rpc3 import is_structural, read_rpc3
+    from correction.io.rpc3 import BYTE_ORDERS, STEP_ROUNDING, is_structural, read_rpc3
 
     if time_col is not None:
         raise MeasuredDataError(f"RPC III file {str(path)!r} has no time column (DELTA_T gives the time); leave "
@@ -135,8 +140,14 @@ def _read_rpc(path, time_col, channels) -> MeasuredChannels:
         k = index[c]
         data[c], units[c], src[c] = to_si(c, r.data[k], r.units[k], path, what="channel")
     meta = {k: v for k, v in r.header.items() if not is_structural(k)}
-    return make_channels(time_s=r.start_s + np.arange(n) * r.dt_s, data=data, units=units, source_units=src,
-                         fs_hz=1.0 / r.dt_s, metadata=meta, path=path, fmt="rpc3")
+    order = BYTE_ORDERS[r.header["FORMAT"].upper()]
+    dialect = {"byte_order": "little-endian" if order == "<" else "big-endian",
+               "data_type": r.header.get("DATA_TYPE", "SHORT_INTEGER").upper()}
+    if r.start_s != 0.0:
+        meta[TIME_START_KEY] = repr(r.start_s)
+    fs = round_rate(1.0 / r.dt_s, STEP_ROUNDING)
+    return make_channels(time_s=np.arange(n) / fs, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta,
+                         path=path, fmt="rpc3", dialect=dialect)
 
 
 def _validated(channels):
@@ -152,13 +163,7 @@ def _validated(channels):
     if not data:
         raise MeasuredDataError("there is no channel to write; give at least one")
     for name, v in data.items():
-        if v.shape != t.shape:
-            raise MeasuredDataError(f"channel {name!r} has shape {v.shape} but time_s has {t.shape}; give one value "
-                                    "per time")
-        bad = np.flatnonzero(~np.isfinite(v))
-        if bad.size:
-            raise MeasuredDataError(f"channel {name!r} is {v[bad[0]]} at sample {int(bad[0])}; the file would not "
-                                    "read back: remove or interpolate it")
+        check_channel(v, t.size, f"channel {name!r}")
     return t, data, {n: str(units.get(n, "") or "") for n in data}
 
 

@@ -1,6 +1,7 @@
-"""What every reader and writer of measured channels shares: the result, the error, SI
-conversion of one channel, the uniform time axis, the safe opening of an input file (a regular
-file that fits in memory) and the safe writing of an output file.
+"""What every reader and writer of measured channels shares: the result (checked as it is built,
+from a file or in Python, on the uniform time axis of :mod:`correction.io.measured_time`), the
+error (:mod:`correction.io.measured_error`), SI conversion of one channel, the safe opening of an
+input file (a regular file that fits in memory) and the safe writing of an output file.
 
 Used by :mod:`correction.io.measured` (the public API) and the format modules
 (:mod:`correction.io.measured_csv`, :mod:`correction.io.rpc3`, :mod:`correction.io.measured_lab`); it
@@ -9,27 +10,29 @@ imports none of them.
 
 from __future__ import annotations
 
+import math
 import os
 import pathlib
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import numpy as np
 
 from correction.io.atomic import atomic_path, available_memory_bytes, open_regular, read_regular, size_text
+from correction.io.measured_error import MeasuredDataError
+from correction.io.measured_time import checked_rate
 from correction.io.measured_units import lookup_unit, suffix_unit
 
-__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "READ_MEMORY_PER_BYTE", "read_bytes", "open_input",
-           "is_time_name", "to_si", "uniform_rate", "make_channels", "check_output", "atomic_output"]
+__all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "TIME_START_KEY", "READ_MEMORY_PER_BYTE", "read_bytes",
+           "open_input", "is_time_name", "to_si", "make_channels", "check_channel", "check_output", "atomic_output"]
 
 #: Names (case-insensitive, unit decoration removed) that make a column the time column.
 TIME_KEYS = frozenset({"time", "t", "zeit", "time_s", "time_ms", "time_us", "t_s", "t_ms", "zeit_s", "zeit_ms",
                        "times", "sec", "seconds", "time_sec", "timestamp_s", "x_value"})
-
-
-class MeasuredDataError(ValueError):
-    """A measured-data file that cannot be used as written; the message is one sentence."""
+#: Metadata key of the first sample's time (s) as the file or the caller gave it, when not 0
+#: (a time-of-day clock, epoch seconds): :attr:`MeasuredChannels.time_s` starts at 0.
+TIME_START_KEY = "time_start_s"
 
 
 def is_time_name(name: str) -> bool:
@@ -44,10 +47,16 @@ def is_time_name(name: str) -> bool:
 class MeasuredChannels:
     """Channels of one measured file on one uniform time axis, in SI units.
 
+    Built from a file by the readers, or in Python (directly or by :func:`make_channels`): either
+    way ``time_s`` must be a uniform axis (:func:`~correction.io.measured_time.uniform_rate`)
+    whose rate ``fs_hz`` is, and each channel one finite value per time; a contradiction is one
+    :class:`MeasuredDataError` sentence naming the argument. ``time_s`` is then made relative to
+    its first sample, the first sample's time kept as ``metadata[TIME_START_KEY]``.
+
     Attributes
     ----------
     time_s : numpy.ndarray, shape (n,), s
-        The time of each sample as the file gives it (not shifted to 0); read-only.
+        The time of each sample from the first: ``np.arange(n) / fs_hz``; read-only.
     data : Mapping[str, numpy.ndarray]
         Channel name (without unit decoration) -> values, shape (n,), in ``units[name]``; read-only.
     units : Mapping[str, str]
@@ -56,16 +65,23 @@ class MeasuredChannels:
     source_units : Mapping[str, str]
         Channel name -> the unit as the file wrote it (``"kN"``, ``"mm"``; ``""`` when none).
     fs_hz : float, Hz
-        Sampling rate of the uniform time axis.
+        Sampling rate of the uniform time axis (at most
+        :data:`~correction.io.measured_time.MAX_RATE_HZ`).
     metadata : Mapping[str, str]
         What the file carries besides the data: the CSV ``# key: value`` preamble, the RPC III header,
-        the MDF4 comment and properties, the TDMS properties.
+        the MDF4 comment and properties, the TDMS properties; and :data:`TIME_START_KEY`, the time
+        (s) of the first sample as given, when not 0.
     path : str
         The file read.
     format : str
         ``"csv"``, ``"rpc3"``, ``"mdf4"`` or ``"tdms"``.
     time_name : str
         The time column as named in the file (``"time"`` when the format has none).
+    dialect : Mapping[str, object]
+        How the reader read the file (empty when built in Python): CSV ``delimiter`` (``"blanks"``:
+        runs of blanks), ``decimal`` (None: no field decided it), ``thousands`` (as given, else None),
+        ``header_line`` (1-based), ``units_row``, ``encoding``; RPC III ``byte_order``, ``data_type``;
+        MDF4 ``version``; TDMS ``time`` (``"channel"`` or ``"waveform"`` properties).
     """
 
     time_s: np.ndarray
@@ -77,6 +93,32 @@ class MeasuredChannels:
     path: str
     format: str
     time_name: str = "time"
+    dialect: Mapping = field(default_factory=lambda: MappingProxyType({}))
+
+    def __post_init__(self):
+        t = _frozen(self.time_s, "time_s")
+        if t.ndim != 1:
+            raise MeasuredDataError(f"argument 'time_s' has shape {t.shape}; fix: give one time (s) per sample")
+        rate, tol = checked_rate(t, "time_s", lambda i: f"time_s[{i}]", "argument")
+        fs = self.fs_hz if isinstance(self.fs_hz, (int, float, np.number)) else math.nan
+        if not (math.isfinite(fs) and fs > 0):
+            raise MeasuredDataError(f"fs_hz = {self.fs_hz!r} Hz is not a sampling rate; fix: give the rate of time_s, "
+                                    f"{rate:.9g} Hz")
+        if abs(fs - rate) > max(tol, 1e-12) * rate:
+            raise MeasuredDataError(f"fs_hz = {fs:g} Hz contradicts time_s, whose steps give {rate:.9g} Hz; fix: give "
+                                    "fs_hz = (len(time_s) - 1) / (time_s[-1] - time_s[0]) or the time_s it was "
+                                    "sampled on")
+        data = {k: _frozen(v, f"data[{k!r}]") for k, v in self.data.items()}
+        for k, v in data.items():
+            check_channel(v, t.size, f"data[{k!r}]")
+        meta = {str(k): str(v) for k, v in self.metadata.items()}
+        if t[0] != 0.0:
+            meta[TIME_START_KEY] = repr(float(t[0]))
+        for name, value in (("time_s", _frozen(np.arange(t.size) / float(fs))), ("fs_hz", float(fs)),
+                            ("data", MappingProxyType(data)), ("units", MappingProxyType(dict(self.units))),
+                            ("source_units", MappingProxyType(dict(self.source_units))),
+                            ("metadata", MappingProxyType(meta)), ("path", str(self.path))):
+            object.__setattr__(self, name, value)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -94,25 +136,46 @@ class MeasuredChannels:
 
     def to_dict(self) -> dict:
         """A summary for JSON (no sample values): path, format, rate, channels and units, metadata."""
+        try:
+            start = float(self.metadata.get(TIME_START_KEY, 0.0))
+        except ValueError:
+            start = None
         return {"path": self.path, "format": self.format, "fs_hz": self.fs_hz, "n_samples": self.n_samples,
-                "time_name": self.time_name, "start_s": float(self.time_s[0]) if self.n_samples else None,
+                "time_name": self.time_name, "start_s": start,
                 "units": dict(self.units), "source_units": dict(self.source_units), "metadata": dict(self.metadata)}
 
 
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=float)
+def check_channel(values: np.ndarray, n: int, what: str) -> None:
+    """Refuse channel ``what`` (``"channel 'Fz'"``, ``"data['Fz']"``) unless ``values`` is one
+    finite value for each of ``n`` times."""
+    if values.shape != (n,):
+        raise MeasuredDataError(f"{what} has shape {values.shape} but time_s has ({n},); fix: give one value per time")
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise MeasuredDataError(f"{what} is {float(values[bad[0]])} at sample {int(bad[0])}; fix: remove or "
+                                "interpolate the missing samples")
+
+
+def _frozen(a, name: str = "values") -> np.ndarray:
+    """``a`` as a read-only float array: itself when it is one, else a copy (the caller's stays
+    writable); one sentence naming argument ``name`` when it is not numbers."""
+    if isinstance(a, np.ndarray) and a.dtype == np.float64 and not a.flags.writeable:
+        return a
+    try:
+        a = np.array(a, dtype=float)
+    except (TypeError, ValueError):
+        raise MeasuredDataError(f"argument {name} is not numbers; fix: give an array of floats") from None
     a.setflags(write=False)
     return a
 
 
 def make_channels(*, time_s, data: Mapping, units: Mapping, source_units: Mapping, fs_hz: float,
-                  metadata: Mapping, path, fmt: str, time_name: str = "time") -> MeasuredChannels:
-    """Build a :class:`MeasuredChannels` with read-only arrays and mappings."""
-    return MeasuredChannels(
-        time_s=_frozen(time_s), data=MappingProxyType({k: _frozen(v) for k, v in data.items()}),
-        units=MappingProxyType(dict(units)), source_units=MappingProxyType(dict(source_units)),
-        fs_hz=float(fs_hz), metadata=MappingProxyType({str(k): str(v) for k, v in metadata.items()}),
-        path=str(path), format=fmt, time_name=time_name)
+                  metadata: Mapping, path, fmt: str, time_name: str = "time",
+                  dialect: Mapping | None = None) -> MeasuredChannels:
+    """Build a :class:`MeasuredChannels` (checked, read-only, ``time_s`` from 0) of format ``fmt``."""
+    return MeasuredChannels(time_s=time_s, data=data, units=units, source_units=source_units, fs_hz=fs_hz,
+                            metadata=metadata, path=path, format=fmt, time_name=time_name,
+                            dialect=MappingProxyType(dict(dialect or {})))
 
 
 def to_si(name: str, values: np.ndarray, unit: str | None, path, what: str = "column"):
@@ -140,31 +203,6 @@ def to_si(name: str, values: np.ndarray, unit: str | None, path, what: str = "co
     if offset != 0.0:
         v = v + offset
     return v, si_unit, written
-
-
-def uniform_rate(t: np.ndarray, name: str, where: Callable[[int], str]) -> float:
-    """Sampling rate (Hz) of a uniform time axis ``t`` (s); errors name the first bad place.
-
-    ``where(i)`` names sample ``i`` (``"line 12"``, ``"sample 12"``). A step may differ from the
-    median by 1 % (rounding of the written times), not more (a gap or a jitter).
-    """
-    n = t.size
-    if n < 2:
-        raise MeasuredDataError(f"time {name!r} has {n} samples; at least two are needed")
-    steps = np.diff(t)
-    bad = np.flatnonzero(steps <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise MeasuredDataError(f"column {name!r} does not increase at {where(i)} (t = {t[i]:.9g} s after "
-                                f"{t[i - 1]:.9g} s); fix: sort the rows and remove duplicates")
-    dt = float(np.median(steps))
-    off = np.flatnonzero(np.abs(steps - dt) > 0.01 * dt)
-    if off.size:
-        i = int(off[0]) + 1
-        raise MeasuredDataError(f"column {name!r} is not uniform at {where(i)} (step {steps[i - 1]:.6g} s from "
-                                f"t = {t[i - 1]:.9g} s, the file's step is {dt:.6g} s); fix: resample the file to "
-                                "a uniform grid")
-    return float((n - 1) / (t[-1] - t[0]))
 
 
 def check_output(path, *, overwrite: bool, inputs=()) -> pathlib.Path:

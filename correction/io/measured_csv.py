@@ -45,9 +45,10 @@ from types import MappingProxyType
 
 import numpy as np
 
-from correction.io.measured_core import MeasuredChannels, MeasuredDataError, is_time_name, open_input, to_si, uniform_rate
+from correction.io.measured_core import MeasuredChannels, MeasuredDataError, is_time_name, open_input, to_si
 from correction.io.measured_numbers import NumberFormat, classify
 from correction.io.measured_stream import SKIP_PREFIXES, Stream, split_fields
+from correction.io.measured_time import uniform_rate
 from correction.io.measured_units import split_name_unit, strip_unit_field
 
 __all__ = ["COMMENT_PREFIXES", "SAMPLE_LINES", "SAMPLE_CHARS", "read_csv_channels", "check_names", "write_csv"]
@@ -291,7 +292,7 @@ def _read(path, legacy, time_col, channels, decimal, thousands) -> MeasuredChann
     t_name = names[jt]
     t, _, _ = to_si(t_name, values[0], units[jt], path)
     values[0] = None
-    fs = uniform_rate(t, t_name, lambda i: f"line {where(i)}")
+    fs = uniform_rate(t, t_name, lambda i: f"line {where(i)} of {str(path)!r}")
     data, si, src = {}, {}, {}
     for k, j in enumerate(cols, start=1):
         v, si[names[j]], src[names[j]] = to_si(names[j], values[k], units[j], path)

@@ -37,7 +37,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from correction.io.lab_boundary import library_call, said
-from correction.io.measured_core import MeasuredDataError, is_time_name, make_channels, open_input, to_si, uniform_rate
+from correction.io.measured_core import MeasuredDataError, is_time_name, make_channels, open_input, to_si
+from correction.io.measured_time import uniform_rate
 
 __all__ = ["read_mdf", "write_mdf", "read_tdms", "write_tdms", "need"]
 
@@ -74,7 +75,7 @@ def _rate(t: np.ndarray, name: str, path) -> float:
     """The sampling rate (Hz) of time ``t`` (s) named ``name``; a refusal names the file."""
     if t.size < 2:
         raise MeasuredDataError(f"time {name!r} of {str(path)!r} has {t.size} samples; at least two are needed")
-    return uniform_rate(t, name, lambda i: f"sample {i} of {str(path)!r}")
+    return uniform_rate(t, name, lambda i: f"sample {i} of {str(path)!r}", "time channel")
 
 
 def _time_si(name: str, t, unit: str, path) -> np.ndarray:
@@ -156,6 +157,7 @@ def read_mdf(path, *, time_col=None, channels=None):
         mdf = asammdf.MDF(str(path))
         try:
             found = _mdf_channels(mdf, path, time_col, channels)
+            found["dialect"] = {"version": str(mdf.version)}
         finally:
             with contextlib.suppress(Exception):
                 mdf.close()
@@ -320,7 +322,8 @@ def _tdms_channels(f, path, time_col, channels) -> dict:
     meta = {str(k): str(v) for k, v in f.properties.items()}
     for g in f.groups():
         meta.update({f"{g.name}.{k}": str(v) for k, v in g.properties.items()})
-    return dict(time_s=t, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta, time_name=tname)
+    return dict(time_s=t, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta, time_name=tname,
+                dialect={"time": "channel" if tnames else "waveform"})
 
 
 def _tdms_time(ch, path) -> np.ndarray:

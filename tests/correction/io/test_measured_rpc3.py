@@ -94,9 +94,10 @@ def test_own_writer_round_trip_within_half_a_step(tmp_path):
         assert back.metadata["TIME_TYPE"] == kind and back.metadata["TEST"] == "step 4"
         assert dict(back.units) == {"Fz_FL": "N", "x_FL": "m", "zero": "1"}
         assert p.stat().st_size == 512 * math.ceil(len(read_rpc3(p).header) / 4) + 3 * 2048 * 2 * 2  # whole groups
-    # a start time other than 0 comes back
-    shifted = SimpleNamespace(time_s=t + 5.0, data=data, units={})
-    np.testing.assert_allclose(read_channels(write_channels(tmp_path / "s.rsp", shifted)).time_s, t + 5.0, atol=1e-9)
+    # a start time other than 0 comes back as metadata, the times from 0
+    shifted = read_channels(write_channels(tmp_path / "s.rsp", SimpleNamespace(time_s=t + 5.0, data=data, units={})))
+    np.testing.assert_allclose(shifted.time_s, t, atol=1e-12)
+    assert shifted.metadata["time_start_s"] == "5.0"
 
 
 def test_csv_to_rpc3_to_csv_within_the_quantization(tmp_path):
