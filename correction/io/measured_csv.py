@@ -40,24 +40,30 @@ import io
 import os
 import re
 from collections import Counter
+from itertools import chain
 from collections.abc import Mapping
 from types import MappingProxyType
 
 import numpy as np
 
 from correction.io.measured_core import MeasuredChannels, MeasuredDataError, is_time_name, open_input, to_si
-from correction.io.measured_numbers import NumberFormat, classify
-from correction.io.measured_stream import SKIP_PREFIXES, Stream, split_fields
 from correction.io.measured_time import uniform_rate
+from correction.io.measured_numbers import NumberFormat, classify
+from correction.io.measured_stream import SKIP_PREFIXES, Stream, check_widths, split_fields
 from correction.io.measured_units import split_name_unit, strip_unit_field
 
-__all__ = ["COMMENT_PREFIXES", "SAMPLE_LINES", "SAMPLE_CHARS", "read_csv_channels", "check_names", "write_csv"]
+__all__ = ["COMMENT_PREFIXES", "SAMPLE_LINES", "SAMPLE_CHARS", "MAX_COLUMNS", "read_csv_channels", "check_names",
+           "write_csv"]
 
 COMMENT_PREFIXES = ("#", ";", "%", "//")
 #: The first lines read for the layout: at most this many data lines...
 SAMPLE_LINES = 500
 #: ... and about this many characters.
 SAMPLE_CHARS = 1 << 20
+#: Most columns a header may have: an Excel worksheet holds 16 384 (Microsoft, "Excel
+#: specifications and limits"), far more channels than a rig records; a wider header is refused
+#: before it is split.
+MAX_COLUMNS = 16384
 _NUMBER = re.compile(r"[+-]?(\d[\d.,_' \u00a0\u202f]*|[.,]\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.I)
 _KEY_VALUE = re.compile(r"^\s*(?P<key>[^:=]*?[^:=\s])\s*(?::|=)\s?(?P<value>.*)$")
 
@@ -144,6 +150,13 @@ def _head(fh, path):
     else:
         raise MeasuredDataError(f"input file {str(path)!r} is empty; it needs a header line and data rows")
     header, at, sample, chars = line.rstrip("\n"), number, [], 0
+    d = max(("\t", ";", ","), key=header.count)
+    fields = header.count(d) + (not header.rstrip().endswith(d)) if d in header else sum(
+        1 for _ in re.finditer(r"\S+", header))
+    if fields > MAX_COLUMNS:
+        raise MeasuredDataError(f"the header (line {at}) of {str(path)!r} has {fields} fields, more than the "
+                                f"{MAX_COLUMNS} columns of an Excel worksheet and any rig's channels; fix: export "
+                                "only the channels needed")
     while len(sample) < SAMPLE_LINES and chars < SAMPLE_CHARS:
         line = fh.readline()
         if not line:
@@ -184,8 +197,8 @@ def _time_column(names, headers, path, time_col: str | None) -> int:
 
 
 def _layout(fh, path):
-    """Metadata, delimiter, header, names, units, the first data rows (after a units row) and
-    the number of the last line read."""
+    """Metadata, delimiter, header, names, units, the first data rows (after a units row), the
+    number of the last line read and the dialect (delimiter, header line, units row)."""
     meta, at, header, sample, number = _head(fh, path)
     d = _sniff(header, [ln for _, ln in sample[:50]])
     head = _split_header(header, d)
@@ -193,7 +206,8 @@ def _layout(fh, path):
         head = head[:-1]
     names, units = map(list, zip(*(split_name_unit(x) for x in head))) if head else ([], [])
     first = _trim(_fields(sample[0][1], d), len(head))
-    if len(first) == len(head) and _is_units_row(first):
+    units_row = len(first) == len(head) and _is_units_row(first)
+    if units_row:
         for j, f in enumerate(first):
             u = strip_unit_field(f)
             if u:
@@ -202,16 +216,16 @@ def _layout(fh, path):
                                             f"but {u!r} in the units row (line {sample[0][0]}); fix one of them")
                 units[j] = u
         sample = sample[1:]
-    return meta, d, head, names, units, sample, number
+    dialect = {"delimiter": "blanks" if d is None else d, "header_line": at, "units_row": units_row}
+    return meta, d, head, names, units, sample, number, dialect
 
 
 def _numeric_columns(rows: list[list[str]], width: int) -> list[bool]:
-    """Per column: some field of ``rows`` is a number (a text column otherwise)."""
+    """Per column: some field of ``rows`` (each ``width`` fields) is a number (a text column otherwise)."""
     if not rows:
         return [False] * width
-    status, _ = classify(np.array([r[:width] + [""] * (width - len(r)) for r in rows], dtype=str).ravel())
-    status = status.reshape(len(rows), width)
-    return list((status >= 0).any(axis=0))
+    status, _ = classify(list(chain.from_iterable(rows)))
+    return list((status.reshape(len(rows), width) >= 0).any(axis=0))
 
 
 def _select(path, names, headers, units, numeric, time_col, channels) -> tuple[int, list[int]]:
@@ -276,17 +290,23 @@ def read_csv_channels(path, *, time_col: str | None = None, channels=None, decim
 
 def _read(path, legacy, time_col, channels, decimal, thousands) -> MeasuredChannels:
     with _open(path, legacy) as fh:
-        meta, d, head, names, units, sample, number = _layout(fh, path)
+        meta, d, head, names, units, sample, number, dialect = _layout(fh, path)
+        dialect["encoding"] = {"utf-8-sig": "utf-8"}.get(fh.encoding, fh.encoding)
         width = len(head)
         rows = [_trim(_fields(ln, d), width) for _, ln in sample]
+        check_widths(rows, width, lambda i: sample[i][0], path)
         jt, cols = _select(path, names, head, units, _numeric_columns(rows, width), time_col, channels)
         size = os.fstat(fh.fileno()).st_size
         per_line = max(1.0, sum(len(ln) + 1 for _, ln in sample) / max(1, len(sample)))
         stream = Stream(path, d, width, [jt, *cols], [names[j] or f"#{j + 1}" for j in [jt, *cols]],
                         NumberFormat(path, decimal, thousands), capacity=int(size / per_line * 1.1) + 16)
         stream.first(sample)
+        if stream.ambiguous[0] is None and stream.rows > 1:  # the time axis and its rate, before the rest is read
+            t, _, _ = to_si(names[jt], stream.values[0][:stream.rows], units[jt], path)
+            uniform_rate(t, names[jt], lambda i: f"line {stream.lines(i)} of {str(path)!r}")
         stream.rest(fh, number)
     values, where = stream.finish()
+    dialect.update(decimal=stream.fmt.mark, thousands=stream.fmt.given[1])
     if values[0].size < 2:
         raise MeasuredDataError(f"input file {str(path)!r} has {values[0].size} data rows; at least two are needed")
     t_name = names[jt]
@@ -301,7 +321,7 @@ def _read(path, legacy, time_col, channels, decimal, thousands) -> MeasuredChann
     return MeasuredChannels(time_s=_frozen(t), data=MappingProxyType(data), units=MappingProxyType(si),
                             source_units=MappingProxyType(src), fs_hz=float(fs),
                             metadata=MappingProxyType({str(k): str(v) for k, v in meta.items()}), path=str(path),
-                            format="csv", time_name=t_name)
+                            format="csv", time_name=t_name, dialect=MappingProxyType(dialect))
 
 
 def check_names(names, time_name: str, fmt: str) -> None:

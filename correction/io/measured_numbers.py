@@ -37,13 +37,14 @@ Either settles every ambiguous field; ``thousands=","`` implies ``decimal="."`` 
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 
 import numpy as np
 
 from correction.io.measured_core import MeasuredDataError
 
-__all__ = ["SPACES", "DECIMALS", "THOUSANDS", "NumberFormat", "classify"]
+__all__ = ["SPACES", "DECIMALS", "THOUSANDS", "WIDE", "LONGEST", "CHUNK", "CHUNK_CHARS", "NumberFormat", "classify"]
 
 #: The blanks that group digits: space, no-break space U+00A0, narrow no-break space U+202F.
 SPACES = " \u00a0\u202f"
@@ -61,6 +62,17 @@ _AMBIGUOUS = {AMB_POINT: ".", AMB_COMMA: ","}
 _OTHER = {".": ",", ",": "."}
 _NAME = {".": "point", ",": "comma"}
 _BLANKS = "'" + SPACES
+#: Longest field (characters) classified with others in one fixed-width array: a float64 printed
+#: exactly takes at most 24 characters, 1,234,567,890.123456789 grouped 23.
+WIDE = 40
+#: Longest field (characters) read as a number: a float64 printed in full without exponent takes
+#: up to 309 digits before the point (1.8e308) or some 770 after it (the smallest subnormal);
+#: numpy's parser takes a time that grows faster than the length beyond.
+LONGEST = 1 << 10
+#: Fields classified at once, and characters (the longest field's, times the fields) of one
+#: fixed-width array: 4 MB of UCS-4.
+CHUNK, CHUNK_CHARS = 1 << 16, 1 << 20
+_NUMBER_CHARS = re.compile("[0-9+.,eE'_" + SPACES + "-]*")
 
 
 def _floats(a: np.ndarray):
@@ -133,14 +145,39 @@ def _grouped(f: np.ndarray, count: dict, thousands: str | None, status, value, a
     value[at] = np.where(ok & (code != GROUPING), v, np.nan)
 
 
-def classify(a: np.ndarray, thousands: str | None = None):
+def classify(fields, thousands: str | None = None):
     """Status (``PLAIN``, ``POINT``, ``COMMA``, ``AMB_POINT``, ``AMB_COMMA``; ``EMPTY``, ``BAD``,
     ``GROUPING``: grouped by a separator other than ``thousands``) and value of each stripped
-    field of ``a``; an ambiguous field's value reads its separator as the decimal mark."""
-    a = np.asarray(a, dtype=str)
+    field of ``fields`` (a sequence or array of str); an ambiguous field's value reads its
+    separator as the decimal mark.
+
+    Memory and time follow the fields' own length: a field longer than :data:`LONGEST`
+    characters, or longer than :data:`WIDE` and holding other than the characters of a number (a
+    note), is not a number at once; the others are classified in fixed-width arrays of fields of about one
+    length, at most :data:`CHUNK` fields and :data:`CHUNK_CHARS` characters of width times fields
+    each."""
+    fields = fields.ravel().tolist() if isinstance(fields, np.ndarray) else list(fields)
+    status, value = np.zeros(len(fields), dtype=np.int8), np.full(len(fields), np.nan)
+    lengths = np.fromiter(map(len, fields), np.int64, len(fields))
+    for i in np.flatnonzero(lengths > WIDE).tolist():
+        if lengths[i] > LONGEST or not _NUMBER_CHARS.fullmatch(fields[i]):
+            status[i], lengths[i] = BAD, -1
+    order = np.argsort(lengths, kind="stable")
+    order = order[lengths[order] >= 0]
+    start = 0
+    while start < order.size:
+        stop = min(start + CHUNK, order.size)
+        while stop - start > 1 and (stop - start) * lengths[order[stop - 1]] > CHUNK_CHARS:
+            stop = start + (stop - start) // 2
+        at = order[start:stop]
+        status[at], value[at] = _classified(np.array([fields[i] for i in at.tolist()], dtype=str), thousands)
+        start = stop
+    return status, value
+
+
+def _classified(a: np.ndarray, thousands: str | None):
+    """:func:`classify` of the fixed-width array ``a``."""
     status, value = np.zeros(a.size, dtype=np.int8), np.full(a.size, np.nan)
-    if not a.size:
-        return status, value
     count = {c: np.char.count(a, c) for c in ".,'_" + SPACES}
     others = count["'"] + sum(count[c] for c in SPACES)
     seps = count["."] + count[","] + others
@@ -162,6 +199,11 @@ def classify(a: np.ndarray, thousands: str | None = None):
     if rest.size:
         _grouped(a[rest], {c: n[rest] for c, n in count.items()}, thousands, status, value, rest)
     return status, value
+
+
+def _shown(text: str) -> str:
+    """``text`` for a message: a field longer than :data:`WIDE` cut, with its length."""
+    return text if len(text) <= WIDE else f"{text[:WIDE]}... ({len(text)} characters)"
 
 
 def _first(mask: np.ndarray):
@@ -219,10 +261,10 @@ class NumberFormat:
         if other is not None:
             where = "it" if other[0] == name else f"column {other[0]!r}"
             raise MeasuredDataError(
-                f"column {name!r} of {self.path!r} writes {text!r} at line {line} (decimal {_NAME[mark]}) but {where} "
-                f"writes {other[2]!r} at line {other[1]} (decimal {_NAME[_OTHER[mark]]}); fix: export the file with "
-                "one decimal mark")
-        self.seen.setdefault(mark, (name, line, text))
+                f"column {name!r} of {self.path!r} writes {_shown(text)!r} at line {line} (decimal {_NAME[mark]}) but "
+                f"{where} writes {other[2]!r} at line {other[1]} (decimal {_NAME[_OTHER[mark]]}); fix: export the file "
+                "with one decimal mark")
+        self.seen.setdefault(mark, (name, line, _shown(text)))
 
     def _settle(self, status: np.ndarray, value: np.ndarray) -> None:
         """Read the ambiguous fields as the given separators or the known decimal mark say."""
@@ -239,8 +281,8 @@ class NumberFormat:
             status[hit] = _DECIDE[_OTHER[sep] if grouping else sep]
 
     def read(self, fields: np.ndarray, names: list[str], line_of: Callable[[int], int]):
-        """A block of rows of the columns read (``fields`` shape (rows, columns), stripped, in
-        file order) as floats.
+        """A block of rows of the columns read (``fields`` shape (rows, columns), str or object
+        holding str, stripped, in file order) as floats.
 
         Returns
         -------
@@ -262,7 +304,7 @@ class NumberFormat:
             status[status == _DECIDE[_OTHER[self.decimal]]] = GROUPING
         i, j = _first(status < 0)
         if i is not None:
-            text, line, name = str(fields[i, j]), line_of(i), names[j]
+            text, line, name = _shown(str(fields[i, j])), line_of(i), names[j]
             if status[i, j] == EMPTY:
                 raise MeasuredDataError(f"column {name!r} is empty at line {line} of {self.path!r}; fix: fill the gap "
                                         "or leave the column out")
@@ -285,8 +327,8 @@ class NumberFormat:
 
     def missing(self, name: str, text: str, line: int) -> MeasuredDataError:
         """The refusal of a NaN or infinite sample."""
-        return MeasuredDataError(f"column {name!r} has {text!r} at line {line} of {self.path!r}; fix: remove or "
-                                 "interpolate the missing samples")
+        return MeasuredDataError(f"column {name!r} has {_shown(text)!r} at line {line} of {self.path!r}; fix: remove "
+                                 "or interpolate the missing samples")
 
     def settle(self, values: np.ndarray, ambiguous: np.ndarray, name: str, first: tuple[int, str]) -> None:
         """Read a column's ambiguous fields (``ambiguous`` from :meth:`read`) with the file's

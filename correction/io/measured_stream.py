@@ -17,14 +17,13 @@ import re
 from array import array
 from bisect import bisect_right
 from itertools import repeat
-from operator import itemgetter
 
 import numpy as np
 
 from correction.io.measured_core import MeasuredDataError
 from correction.io.measured_numbers import SPACES, NumberFormat
 
-__all__ = ["SKIP_PREFIXES", "BLOCK_CHARS", "Stream", "split_fields"]
+__all__ = ["SKIP_PREFIXES", "BLOCK_CHARS", "Stream", "split_fields", "check_widths"]
 
 #: Lines below the header that are skipped (``;`` may start a row of a semicolon file).
 SKIP_PREFIXES = ("#", "//", "%")
@@ -49,6 +48,16 @@ def split_fields(line: str, delimiter: str | None) -> list[str]:
         pattern = _QUOTED[delimiter] = re.compile(
             rf'(?:^|{e})(?:{blank}"([^"]*(?:""[^"]*)*)"{blank}(?={e}|$)|([^{e}]*))')
     return [q.replace('""', '"') if q else p for q, p in pattern.findall(line)]
+
+
+def check_widths(rows: list[list[str]], width: int, line_of, path) -> None:
+    """Refuse the first of ``rows`` (fields) without ``width`` fields (or one more, empty: a
+    trailing delimiter), naming its file line ``line_of(i)``."""
+    lens = np.fromiter(map(len, rows), np.int64, len(rows))
+    for i in np.flatnonzero(lens != width).tolist():
+        if lens[i] != width + 1 or rows[i][-1].strip():
+            raise MeasuredDataError(f"line {line_of(i)} of {str(path)!r} has {lens[i]} fields but the header has "
+                                    f"{width}; fix: give the row one field per column")
 
 
 class _Lines:
@@ -266,14 +275,10 @@ class Stream:
         """The block field by field: counts, numbers, decimal marks checked; values and the
         fields still ambiguous."""
         rows = [split_fields(ln, self.d) for ln in lines]
-        w = self.width
-        lens = np.fromiter(map(len, rows), np.int64, len(rows))
-        for i in np.flatnonzero(lens != w).tolist():
-            if lens[i] != w + 1 or rows[i][-1].strip():
-                raise MeasuredDataError(f"line {line_of(i)} of {self.path!r} has {lens[i]} fields but the header has "
-                                        f"{w}; fix the row")
-        table = np.array(list(map(itemgetter(*self.cols), rows)), dtype=str).reshape(len(rows), len(self.cols))
-        table = np.char.strip(table)
+        check_widths(rows, self.width, line_of, self.path)
+        table = np.empty((len(rows), len(self.cols)), dtype=object)  # the fields' own strings: no fixed width
+        for k, j in enumerate(self.cols):
+            table[:, k] = [r[j].strip() for r in rows]
         values, amb = self.fmt.read(table, self.names, line_of)
         if amb is not None:
             for k in np.flatnonzero(amb.any(axis=0)).tolist():
