@@ -473,7 +473,8 @@ def test_actuators_map_the_corners_of_a_daq_file_and_the_output_records_how_it_w
     auto = read_csv(tmp / "auto.csv")
     back = read_channels(tmp / "c.rsp")
     assert back.names == ("Fz_FL_corrected", "Fz_FR_corrected") and set(back.units.values()) == {"N"}
-    np.testing.assert_allclose(back.time_s, auto["time"], atol=1e-9)
+    np.testing.assert_allclose(back.time_s, auto["time"] - auto["time"][0], atol=1e-9)  # read from the first sample
+    assert float(back.metadata["time_start_s"]) == pytest.approx(auto["time"][0], abs=1e-9)
     for name in back.names:  # int16 RPC III: within half a step of the exact values
         step = np.abs(auto[name]).max() / 32752
         assert np.abs(back.data[name] - auto[name]).max() <= 0.5 * step * (1 + 1e-9)
