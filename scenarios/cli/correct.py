@@ -3,7 +3,7 @@
 ::
 
     rigsim correct IN (--actuator ACT.toml | --actuators ACTS.toml [--map fl=CH,...]
-                   | --identify DRIVE_CH,DISP_CH) -o OUT [--force] [--time-col NAME]
+                   | --identify DRIVE,LVDT) -o OUT [--force] [--time-col NAME]
                    [--lowpass paper|regularized] [--lowpass-hz HZ] [--mode causal|zerophase]
                    [--columns A,B] [--transient drop|mark|keep] [--quiet]
                    [--decimal .|,] [--thousands none|,|.|'|space]
@@ -18,8 +18,9 @@ named channels are read. A chosen channel that is not a force is refused. ``T_a`
 ``--actuator`` (one actuator file, :mod:`correction.io.actuator_file`, for every channel),
 ``--actuators`` (one ``T_a`` per corner; a corner corrects the channel whose name holds the
 corner as a token, ``tire_force_fl_N`` or ``Fz_FL``, case-insensitive, or the one ``--map``
-gives) or ``--identify`` (the drive and pan displacement channels of the same file, fitted by
-:func:`correction.identification.actuator_fit.fit_actuator`). The one correction is
+gives) or ``--identify`` (one drive and pan displacement (LVDT) channel of the same file, fitted by
+:func:`correction.identification.actuator_fit.fit_actuator`; ``--model``'s ``--pairs`` names one
+such pair per corner). The one correction is
 :func:`correction.output.pipeline.correct_forces`.
 
 ``OUT`` is written by :func:`correction.io.measured.write_channels` in its extension's format: the
@@ -36,6 +37,9 @@ command is writing (the file is claimed for the command's run:
 ``--model TRUCK.toml --pairs fl=DRIVE:LVDT,...`` corrects instead by a truck model calibrated on
 the file's own drive, LVDT and force channels (:mod:`scenarios.cli.correct_model`).
 
+``--help`` shows one line per option, in groups (input, channels, linear correction, model
+correction, output); each option in full is on the guide's page, ``docs/guide/correct.md``.
+
 This module parses and prints: the work is the records API's (:mod:`scenarios.records.api`; the
 settings checked by :func:`scenarios.records.settings.correction_settings`, the file read and
 the correction planned by their ``read``, then ``check_output``, ``run`` and the result's
@@ -46,11 +50,13 @@ from __future__ import annotations
 
 import argparse
 
+from scenarios.core.flags import (add_channel_timing, add_command, add_force, add_number_format, add_out, add_quiet,
+                                  add_time_col)
 from scenarios.records.naming import Naming
 from scenarios.records.output import claimed_out_file
-from scenarios.studies.identify.command import add_channel_timing, add_number_format, channel_timing
+from scenarios.studies.identify.command import channel_timing
 
-__all__ = ["CLI_NAMING", "add_parser", "cmd_correct"]
+__all__ = ["CLI_NAMING", "USAGE", "add_parser", "cmd_correct"]
 
 #: The records API's keywords as ``rigsim correct`` names them.
 CLI_NAMING = Naming({"actuator": "--actuator", "actuators": "--actuators", "identify": "--identify",
@@ -62,54 +68,47 @@ CLI_NAMING = Naming({"actuator": "--actuator", "actuators": "--actuators", "iden
                      "lvdt_filter": "--lvdt-filter"})
 
 
+#: ``rigsim correct``'s usage line: the four ways to get T_a (or the model), then the rest.
+USAGE = ("%(prog)s IN -o OUT (--actuators ACTS.toml | --actuator ACT.toml\n"
+         "       | --identify DRIVE,LVDT | --model TRUCK.toml --pairs fl=DRIVE:LVDT,...)\n"
+         "       [options]")
+
+
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    """Register ``correct`` on an ``argparse`` sub-parsers object; sets ``func=cmd_correct``."""
-    from correction.output.lowpass import BAND_HZ, BAND_ORDER
+    """Register ``correct`` on an ``argparse`` sub-parsers object; sets ``func=cmd_correct``. One line
+    per option; the details are on the guide's page (``docs/guide/correct.md``)."""
+    from correction.output.lowpass import BAND_HZ
     from scenarios.cli.correct_model import add_model_arguments
 
-    c = subparsers.add_parser(
-        "correct", help="correct wheel forces measured on a rig (CSV, RPC III, MDF4, TDMS) for the actuator dynamics",
-        description="Filter measured wheel forces by the inverse actuator transfer function times a "
-                    "low-pass (the paper's output correction) and write them, in N, to a new file; with --model, "
-                    "correct them by a truck model calibrated on the same file instead.")
-    c.add_argument("input", metavar="IN", help="measured file (.csv/.txt/.dat in any dialect, RPC III .rsp/.drv/.tim, "
-                   ".mf4, .tdms) on a uniform time axis; units converted to SI (kN -> N, mm -> m)")
-    c.add_argument("--time-col", metavar="NAME", help="the time column (default: the one named time, t, zeit...)")
-    add_number_format(c)
-    c.add_argument("--actuator", metavar="ACT.toml",
-                   help="actuator file for every channel: [transfer_function] num, den (descending powers of s) "
-                        "or [parameters] (eq. 4)")
-    c.add_argument("--actuators", metavar="ACTS.toml",
-                   help="per-corner actuator file: one table per corner ([fl], [fr], ...) with num, den; each "
-                        "corner corrects the force channel whose name holds the corner as a token (or see --map)")
-    c.add_argument("--map", metavar="CORNER=CH[,...]",
-                   help="with --actuators or --model: the channel (name without [unit]) of each corner, e.g. "
-                        "fl=Fz_FL,fr=Fz_FR")
-    c.add_argument("-o", "--out", required=True, metavar="OUT",
-                   help="output file (.csv, .rsp RPC III, .mf4, .tdms) with <channel>_corrected in N")
-    c.add_argument("--force", action="store_true", help="replace OUT if it exists (never an input file)")
-    c.add_argument("--lowpass", choices=("paper", "regularized"), default="regularized",
-                   help="paper: eq. 5 (2 x 2nd order, 16/24 Hz, zeta 1; already -3 dB near 8 Hz); "
-                        f"regularized: Butterworth of order {BAND_ORDER} at --lowpass-hz, inverse ~exact to "
-                        "two thirds of it (default)")
-    c.add_argument("--lowpass-hz", type=float, default=None, metavar="HZ",
-                   help=f"with --lowpass regularized: the Butterworth's corner (-3 dB), Hz, below half the "
-                        f"sampling rate (default {BAND_HZ:g})")
-    c.add_argument("--mode", choices=("causal", "zerophase"), default="zerophase",
-                   help="zerophase: |T_a^-1 T_F| with T_a^-1's phase, offline (default); causal: as a "
-                        "real-time filter (adds T_F's phase lag)")
-    c.add_argument("--identify", metavar="DRIVE_CH,DISP_CH",
-                   help="identify T_a from these two channels (drive and pan displacement) instead of --actuator")
-    c.add_argument("--columns", metavar="CH[,CH...]",
-                   help="force channels to correct (default: every force channel but the --identify ones; with "
-                        "--actuators, those of the file's corners)")
-    c.add_argument("--transient", choices=("drop", "mark", "keep"), default="drop",
-                   help="samples inside the filters' transients: drop (default), mark ('settled' channel) or keep")
-    c.add_argument("--normalize-dc", action="store_true", help="scale T_a to T_a(0) = 1 instead of refusing it")
-    c.add_argument("--quiet", action="store_true",
-                   help="no progress lines or notes on stderr (the result is printed)")
-    add_channel_timing(c)
-    add_model_arguments(c)
+    c = add_command(subparsers, "correct",
+                    "correct wheel forces measured on a rig (CSV, RPC III, MDF4, TDMS) for the actuator dynamics",
+                    "Writes them, in N, to OUT. Each option in full is on docs/guide/correct.md.", usage=USAGE)
+    g = c.add_argument_group("input")
+    g.add_argument("input", metavar="IN", help="the record: CSV, RPC III, MDF4 or TDMS")
+    add_time_col(g)
+    add_number_format(g)
+    g = c.add_argument_group("channels")
+    g.add_argument("--columns", metavar="CH,...", help="force channels to correct (default: all)")
+    g.add_argument("--map", metavar="CORNER=CH,...", help="each corner's force channel, e.g. fl=Fz_FL")
+    add_channel_timing(g)
+    g = c.add_argument_group("linear correction: T_a^-1 T_F, T_a from one of")
+    g.add_argument("--actuators", metavar="ACTS.toml", help="one T_a per corner (rigsim identify's file)")
+    g.add_argument("--actuator", metavar="ACT.toml", help="one T_a for every force channel")
+    g.add_argument("--identify", metavar="DRIVE,LVDT", help="one T_a fitted on IN's DRIVE,LVDT pair")
+    g.add_argument("--lowpass", choices=("paper", "regularized"), default="regularized", metavar="KIND",
+                   help="T_F: regularized (default) or paper (eq. 5)")
+    g.add_argument("--lowpass-hz", type=float, default=None, metavar="HZ",
+                   help=f"regularized T_F's -3 dB corner (default {BAND_HZ:g})")
+    g.add_argument("--mode", choices=("causal", "zerophase"), default="zerophase", metavar="MODE",
+                   help="zerophase (default, offline) or causal")
+    g.add_argument("--normalize-dc", action="store_true", help="scale T_a to T_a(0) = 1 instead of refusing it")
+    add_model_arguments(c.add_argument_group("model correction: a truck model calibrated on IN"))
+    g = c.add_argument_group("output")
+    add_out(g, "file", "its extension's format")
+    g.add_argument("--transient", choices=("drop", "mark", "keep"), default="drop", metavar="WHAT",
+                   help="filter transients: drop (default), mark or keep")
+    add_force(g)
+    add_quiet(g)
     c.set_defaults(func=cmd_correct)
     return c
 

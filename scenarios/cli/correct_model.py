@@ -56,47 +56,22 @@ MODEL_OPTIONS = {"pairs": "--pairs", "jobs": "--jobs", "max_evaluations": "--max
                  "calibration_windows": "--calibration-windows", "cab": "--cab", "drift_cut_hz": "--drift-cut-hz"}
 
 
-def add_model_arguments(parser) -> None:
-    """Add ``--model`` and its options to ``rigsim correct``'s parser (help literals pinned by the tests)."""
-    g = parser.add_argument_group(
-        "correction by a truck model calibrated on the record (instead of T_a^-1 T_F)")
-    g.add_argument("--model", metavar="TRUCK.toml",
-                   help="correct each wheel as F_model(drive) + L(W(F_rig - F_model(LVDT))), W the residual's "
-                        "white noise and its drift below 0.7 Hz taken out, L the linear correction, the truck "
-                        "model calibrated on IN's own drive, LVDT and force channels (payload and its position, tire stiffness and "
-                        "damping and leaf friction per axle, the tires' stiffening (ratio and onset of a bilinear "
-                        "tire per axle), each axle's left tire (stiffness and damping) and leaf spring against its right one, the cab's mount frequency where it fits clearly better (--cab); minutes of "
-                        "CPU). TRUCK.toml is a scenario file: its rig (actuator stroke) is used, its [vehicle] "
-                        "cab_mount_hz is the cab's mount (held, or the first guess of its fit), and its tire and "
-                        "leaf-friction values (tire_progressive_ratio and _onset_m included) are only the "
-                        "starting guess (default: catalogue values; payload and position start from the record's "
-                        "static loads). Needs --pairs and at least 10 s of record (the windows are spread over "
-                        "it). L: --actuator or --actuators if given, else T_a identified per corner from --pairs; "
-                        "--lowpass, --lowpass-hz, --mode apply. On the wheels where the model does not reproduce "
-                        "the forces L alone is used, and the reason is printed and written to OUT")
-    g.add_argument("--pairs", metavar="fl=DRIVE:LVDT,...",
-                   help="with --model: per corner (fl, fr, rl, rr) the drive and the pan displacement (LVDT) "
-                        "channels, named without their [unit] as for rigsim identify --from-file; lengths from "
-                        "mid-stroke (m, mm... converted to m)")
-    g.add_argument("--jobs", type=int, default=None, metavar="N",
-                   help="with --model: worker processes (default: all cores)")
-    g.add_argument("--max-evaluations", type=int, default=None, metavar="N",
-                   help="with --model: most evaluations of the fit's residual (scipy's max_nfev; each Jacobian "
-                        "adds one model run per fitted value and window) (default 60); a fit stopped by it has "
-                        "not converged and the linear correction is used")
-    g.add_argument("--calibration-windows", type=int, default=None, metavar="N",
-                   help="with --model: windows of the record the model is fitted on, each 5 s lead-in + 5 s "
-                        "(default 2); 1 is about twice as fast, on less of the record")
-    g.add_argument("--cab", choices=("auto", "held", "fitted"), default=None,
-                   help="with --model: the model's cab. auto (default): calibrate with the cab held and, where "
-                        "a cab on its own mounts could fit clearly better, with its mount frequency fitted (1-30 Hz) "
-                        "too, keep the fit that reproduces the forces clearly better (up to twice the CPU of one); held: the cab "
-                        "rigid, or at TRUCK.toml's vehicle.cab_mount_hz; fitted: "
-                        "always fit the mount (a smooth record may not pin it: see the README)")
-    g.add_argument("--drift-cut-hz", type=float, default=None, metavar="HZ",
-                   help="with --model: below this frequency W takes the model's residual for the load cells' "
-                        "drift and the model's own force carries the slow part (default 0.7, at most 1.5); 0: no "
-                        "drift cut, for load cells that do not drift")
+def add_model_arguments(group) -> None:
+    """Add ``--model`` and its options to ``group`` of ``rigsim correct``'s parser, one line each (the
+    numbers are literals, pinned to their homes by the tests; the details: ``docs/guide/correct.md``)."""
+    from scenarios.core.flags import add_jobs, add_pairs
+
+    group.add_argument("--model", metavar="TRUCK.toml", help="this truck, on at least 10 s of record")
+    add_pairs(group)
+    add_jobs(group)
+    group.add_argument("--max-evaluations", type=int, default=None, metavar="N",
+                       help="most evaluations of the fit (default 60)")
+    group.add_argument("--calibration-windows", type=int, default=None, metavar="N",
+                       help="windows, each 5 s lead-in + 5 s (default 2)")
+    group.add_argument("--cab", choices=("auto", "held", "fitted"), default=None, metavar="auto|held|fitted",
+                       help="the cab (default auto): docs/model_correction.md")
+    group.add_argument("--drift-cut-hz", type=float, default=None, metavar="HZ",
+                       help="drift cut, Hz; 0: none (default 0.7, at most 1.5)")
 
 
 def _error(message: str):

@@ -12,40 +12,12 @@ from __future__ import annotations
 
 import math
 import pathlib
+import sys
 
-__all__ = ["add_number_format", "add_channel_timing", "channel_timing", "add_parser", "cmd_identify"]
+from scenarios.core.flags import (add_channel_timing, add_command, add_duration, add_force, add_number_format,
+                                  add_out, add_pairs, add_quiet, add_time_col)
 
-#: A channel filter's text, in the help of the options that take one.
-FILTER_HELP = ("HZ[:ORDER[:KIND][:DOMAIN]]: the -3 dB corner in Hz, the order (default 4), butterworth "
-               "(default) or bessel, analog (a conditioner's, default) or digital (a DAQ's, at the record's rate)")
-
-
-def add_number_format(parser) -> None:
-    """Add ``--decimal`` and ``--thousands`` (how a text input writes its numbers) to ``parser``."""
-    from correction.io.measured_numbers import DECIMALS, THOUSANDS
-
-    parser.add_argument("--decimal", choices=DECIMALS, default=None,
-                        help="text input: the decimal mark, . or , (default: decided by the numbers of the columns "
-                             "read; a file they leave ambiguous, such as one with only 21,988, is refused)")
-    parser.add_argument("--thousands", choices=tuple(THOUSANDS), default=None,
-                        help="text input: the one thousands separator: none, ',', '.', \"'\" or space (a space, "
-                             "U+00A0 or U+202F); ',' implies --decimal . and '.' implies --decimal , (default: "
-                             "detected)")
-
-
-def add_channel_timing(parser, force: bool = True) -> None:
-    """Add the record's channel timing options (``--lvdt-filter``, ``--lvdt-delay``; with ``force``
-    ``--force-filter``, ``--force-delay`` too) to ``parser``."""
-    g = parser.add_argument_group(
-        "the lab's channel timing (taken out of the channels before anything else: each filter's phase and "
-        "the delay; the drive is the controller's own command)")
-    groups = (("force", "the load cells' anti-alias filter"), ("lvdt", "the LVDTs' anti-alias filter")) if force else (
-        ("lvdt", "the LVDTs' anti-alias filter"),)
-    for what, text in groups:
-        g.add_argument(f"--{what}-filter", default=None, metavar="HZ[:ORDER...]", help=f"{text}: {FILTER_HELP}")
-        g.add_argument(f"--{what}-delay", type=float, default=None, metavar="S",
-                       help=f"the {what.upper() if what == 'lvdt' else what} channels' delay beyond their filter, s "
-                            "(a multiplexed converter's skew; 0 to 0.01)")
+__all__ = ["channel_timing", "add_parser", "cmd_identify"]
 
 
 def channel_timing(args, what: str):
@@ -59,25 +31,22 @@ def channel_timing(args, what: str):
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim identify``."""
-    p = subparsers.add_parser(
-        "identify", help="identify T_a per corner: random drives on the simulated rig, or a recorded file")
+    p = add_command(
+        subparsers, "identify", "identify T_a per corner: random drives on the simulated rig, or a recorded file",
+        "Writes actuators.toml (the file rigsim correct --actuators reads), identification.json and bode.png.")
     p.add_argument("scenario", nargs="?", help="scenario TOML file (the truck on the simulated rig)")
-    p.add_argument("--out", "-o", required=True, help="output folder (actuators.toml, identification.json, bode.png)")
-    p.add_argument("--duration-s", type=float, default=None,
-                   help="identification record in s (default: the scenario's duration, at least 60 s)")
+    add_out(p, holds="actuators.toml, identification.json, bode.png")
+    add_duration(p, "the identification record", "the scenario's duration_s, at least 60 s")
     p.add_argument("--seed", type=int, default=None, help="seed of the random drives (default: the project's)")
-    p.add_argument("--from-file", default=None, metavar="REC",
-                   help="identify from a recorded file of a real rig instead (.csv in any dialect, .rsp, .mf4, "
-                        ".tdms; needs --pairs)")
-    p.add_argument("--pairs", default=None, metavar="fl=DRIVE:LVDT,...",
-                   help="with --from-file: per corner the drive and the pan displacement (LVDT) channels, named "
-                        "without their [unit]; lengths in m, mm... (converted to m)")
-    p.add_argument("--time-col", default=None, metavar="NAME",
-                   help="with --from-file: the time column (default: the one named time, t, zeit...)")
-    add_number_format(p)
-    add_channel_timing(p, force=False)
-    p.add_argument("--force", action="store_true", help="replace a previous result in --out")
-    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_force(p)
+    add_quiet(p)
+    g = p.add_argument_group("a recorded file of a real rig")
+    g.add_argument("--from-file", default=None, metavar="REC",
+                   help="identify from this file instead (CSV, RPC III, MDF4 or TDMS; needs --pairs)")
+    add_pairs(g)
+    add_time_col(g)
+    add_number_format(g)
+    add_channel_timing(g, force=False)
     p.set_defaults(func=cmd_identify)
 
 
@@ -139,7 +108,8 @@ def cmd_identify(args) -> int:
             from scenarios.studies.identify.compute import identify_rig
 
             if not args.quiet:
-                print(f"identifying {scenario.name}: independent random drives on the four posts", flush=True)
+                print(f"identifying {scenario.name}: independent random drives on the four posts", file=sys.stderr,
+                      flush=True)
             try:
                 ident = identify_rig(scenario, duration_s=args.duration_s, seed=seed)
             except ActuatorFitError as exc:

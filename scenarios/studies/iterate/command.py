@@ -19,6 +19,8 @@ import argparse
 import dataclasses
 import sys
 
+from scenarios.core.flags import add_command, add_duration, add_force, add_noise, add_out, add_quiet
+
 __all__ = ["add_parser", "cmd_iterate"]
 
 
@@ -29,16 +31,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     # ``rigsim --help`` (tests/scenarios/cli/test_startup.py pins both). The band limit's module is light.
     from correction.output.lowpass import BAND_HZ
 
-    c = subparsers.add_parser(
-        "iterate", help="iterate the rig's drive file until the pans (or tire forces) match the road test",
-        description="Input correction on the simulated rig: identify the rig's FRF matrix, then iterate "
+    c = add_command(subparsers, "iterate",
+                    "iterate the rig's drive file until the pans (or tire forces) match the road test",
+                    "Input correction on the simulated rig: identify the rig's FRF matrix, then iterate "
                     "d_{k+1} = d_k + g H^-1 (target - response_k); compare with the output correction.")
     c.add_argument("scenario", help="scenario TOML file")
     c.add_argument("--target", choices=("displacement", "force"), required=True,
                    help="displacement: pan displacement = road profile (Moran); force: tire force = the road "
                         "run's tire force (RPC-style remote target)")
-    c.add_argument("--out", "-o", required=True,
-                   help="output folder (drive.csv, drive.drv: RPC III drive file, iteration.json, iteration.png)")
+    add_out(c, holds="drive.csv, drive.drv (RPC III drive file), iteration.json, iteration.png")
     c.add_argument("--gain", type=float, default=0.8, help="relaxation gain g (default 0.8; stable below ~2)")
     c.add_argument("--max-iterations", type=int, default=6, help="most drive updates (default 6)")
     c.add_argument("--tolerance", type=float, default=0.01, help="stop at this mean NRMSE (default 0.01)")
@@ -46,13 +47,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help=f"frequency band of the update, Hz (default 0.3 {BAND_HZ:g})")
     c.add_argument("--coherence-min", type=float, default=0.8,
                    help="no update where the identification's coherence is below this (default 0.8)")
-    c.add_argument("--duration-s", type=float, default=None, help="override the scenario's duration, s")
-    c.add_argument("--noise-N", type=float, default=None,
-                   help="rms load-cell noise added to rig forces, N (default 100; 0: off)")
+    add_duration(c, "the analysed record", "the scenario's duration_s")
+    add_noise(c)
     c.add_argument("--run-anyway", action="store_true",
                    help="run even if the gain's predicted spectral radius is >= 1 (divergence still stops it)")
-    c.add_argument("--force", action="store_true", help="replace a previous result in --out")
-    c.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_force(c)
+    add_quiet(c)
     c.set_defaults(func=cmd_iterate)
     return c
 

@@ -7,34 +7,31 @@ import math
 import pathlib
 import sys
 
+from scenarios.core.flags import (add_command, add_duration, add_force, add_jobs, add_noise, add_out, add_quiet,
+                                  add_recording, add_rig)
+
 __all__ = ["add_parser", "cmd_paper"]
 
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim paper``."""
-    pp = subparsers.add_parser("paper", help="the paper's three cases: road and rig runs, output correction, Table 2")
-    pp.add_argument("--out", "-o", required=True, help="output folder")
-    pp.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
-    pp.add_argument("--duration-s", type=float, default=None,
-                    help="override every case's duration in s (a quick look; the paper's cases run 60 s)")
-    pp.add_argument("--rig", choices=("design", "dyntrac"), default="design",
-                    help="the cases' configuration: 'design' (default), the project's actuator gains, ISO class roads "
-                         "and leaf friction; 'dyntrac', the rig's loop gains, the roads and the leaf friction fitted "
-                         "to the paper's Table 2 (benchmarks/dyntrac_fit.py)")
-    # The default is scenarios.studies.scoring.NOISE_N, applied in cmd_paper: importing scoring here
-    # would load the whole simulator for ``rigsim --help`` (tests/scenarios/cli/test_startup.py pins the number).
-    pp.add_argument("--noise-N", type=float, default=None,
-                    help="rms of the white noise added to the measured rig force, N (default 100; 0: off)")
-    pp.add_argument("--rrd", default=None, help="also write a rerun recording (.rrd), one recording per case")
-    pp.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
-    pp.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
+    pp = add_command(subparsers, "paper", "the paper's three cases: road and rig runs, output correction, Table 2",
+                     "Runs each case on the road and on the rig, corrects the rig's forces, prints Table 2 and the "
+                     "damage table and writes them with the figures.")
+    add_out(pp, holds="paper.json, report.md, figures")
+    add_jobs(pp)
+    add_duration(pp, "every case's analysed record", "the paper's 60 s; shorter for a quick look")
+    add_rig(pp)
+    add_noise(pp)  # None: scenarios.studies.scoring.NOISE_N, applied in cmd_paper
+    add_recording(pp, "each case")
     pp.add_argument("--model", action="store_true",
                     help="add a third method: each rig record corrected by a truck model calibrated on its own "
                          "signals, the cab held and fitted, the better kept (about 1-2.5 CPU-minutes per case)")
     pp.add_argument("--truck", default=None, metavar="TRUCK.toml",
                     help="run the paper's cases with the truck this scenario file's [vehicle] describes (its "
                          "geometry, suspension, tires, masses; each case keeps its own payload)")
-    pp.add_argument("--quiet", action="store_true", help="no progress output")
+    add_force(pp)
+    add_quiet(pp)
     pp.set_defaults(func=cmd_paper)
 
 

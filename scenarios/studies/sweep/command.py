@@ -3,7 +3,7 @@ cores or on a Dask cluster, with nothing lost.
 
 ::
 
-    rigsim sweep GRID.toml --out DIR [--scheduler tcp://HOST:PORT] [--workers N] [--no-resume]
+    rigsim sweep GRID.toml --out DIR [--scheduler tcp://HOST:PORT] [--jobs N] [--no-resume]
 
 The package: :mod:`~scenarios.studies.sweep.grid` (the grid file), :mod:`~scenarios.studies.sweep.axes`
 (its axes and the cap on cases) and :mod:`~scenarios.studies.sweep.settings` (its evaluation keys),
@@ -23,8 +23,11 @@ Resume is the default; Ctrl-C keeps every finished case, and the same command re
 
 from __future__ import annotations
 
+import argparse
 import pathlib
 import sys
+
+from scenarios.core.flags import add_command, add_jobs, add_out, add_quiet
 
 __all__ = ["add_parser", "cmd_sweep"]
 
@@ -40,8 +43,8 @@ def cmd_sweep(args) -> int:
     from scenarios.studies.sweep.store import CASES_DIR
 
     if args.scheduler is not None and args.workers is not None:
-        raise ScenarioError("--workers sets the local process pool; a Dask cluster's size is set where its "
-                            "workers are started, so give one of --workers and --scheduler")
+        raise ScenarioError("--jobs sets the local process pool; a Dask cluster's size is set where its "
+                            "workers are started, so give one of --jobs and --scheduler")
     try:
         worker_count(args.workers)
     except ValueError:
@@ -82,16 +85,15 @@ def cmd_sweep(args) -> int:
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim sweep`` on an argparse sub-parsers object (``func=cmd_sweep``)."""
-    sp = subparsers.add_parser(
-        "sweep", help="run a grid of scenarios (road, rig, corrected) on all cores or a Dask cluster",
-        description="Run every case of a grid file in road and rig mode, correct the rig forces, and "
-                    "collect one row per case in OUT/results.csv (resumable; one file per case in OUT/cases).")
+    sp = add_command(subparsers, "sweep", "run a grid of scenarios (road, rig, corrected) on all cores or a Dask cluster",
+                     "Runs every case of a grid file in road and rig mode, corrects the rig forces, and collects "
+                     "one row per case in OUT/results.csv (resumable; one file per case in OUT/cases).")
     sp.add_argument("grid", metavar="GRID.toml", help="grid file: a base scenario plus axes and/or [[cases]]")
-    sp.add_argument("--out", "-o", required=True, help="output folder")
+    add_out(sp, holds="results.csv, summary.png, sweep.json, cases/")
     sp.add_argument("--scheduler", metavar="tcp://HOST:PORT", default=None,
                     help="run on an existing Dask distributed cluster (workers started with --nthreads 1)")
-    sp.add_argument("--jobs", "--workers", dest="workers", type=int, default=None, metavar="N",
-                    help="local worker processes (default: all cores; --workers is the old name)")
+    add_jobs(sp, dest="workers")
+    sp.add_argument("--workers", dest="workers", type=int, default=None, help=argparse.SUPPRESS)
     sp.add_argument("--no-resume", action="store_true", help="run every case again, even those already finished")
-    sp.add_argument("--quiet", action="store_true", help="no progress output")
+    add_quiet(sp)
     sp.set_defaults(func=cmd_sweep)

@@ -13,6 +13,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+from scenarios.core.flags import (add_command, add_duration, add_force, add_jobs, add_out, add_quiet, add_recording,
+                                  add_rig)
+
 __all__ = ["add_parser", "cmd_validate", "MIN_DURATION_S", "MIN_IDENT_DURATION_S"]
 
 #: Shortest Table 1 record, s: two output samples at the scenario's 1 kHz (a DLC needs two;
@@ -36,20 +39,18 @@ def __getattr__(name: str):
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``validate`` on an ``argparse`` sub-parser collection; sets ``func=cmd_validate``."""
-    p = subparsers.add_parser(
-        "validate", help="validate the linearized actuator model (eq. 4) against the multibody plant")
-    p.add_argument("--out", "-o", required=True, help="output folder (validate.json, report.md, PNGs)")
-    p.add_argument("--duration-s", type=float, default=None,
-                   help="analysed duration of the Table 1 runs in s (default: the scenario's 60 s)")
-    p.add_argument("--ident-duration-s", type=float, default=None,
+    p = add_command(subparsers, "validate", "validate the linearized actuator model (eq. 4) against the multibody plant",
+                    "Eq. 4, the linearized plant and the FRF identified on the nonlinear rig side by side: Bode "
+                    "overlays, step responses (Figure 7) and Table 1.")
+    add_out(p, holds="validate.json, report.md, PNGs")
+    add_duration(p, "the Table 1 runs' analysed record", "the scenario's 60 s")
+    p.add_argument("--ident-duration-s", type=float, default=None, metavar="S",
                    help="identification record in s (default: twice --duration-s, at least 10 s)")
-    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores, at most 8)")
-    p.add_argument("--rrd", default=None, help="also write a rerun recording of the Table 1 road and rig runs")
-    p.add_argument("--view", action="store_true", help="with --rrd: open the recording in the rerun viewer")
-    p.add_argument("--force", action="store_true", help="replace a previous result in --out (and the --rrd file)")
-    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    p.add_argument("--rig", choices=("design", "dyntrac"), default="design",
-                   help="the Table 1 case's configuration, as rigsim paper --rig (default: design)")
+    add_jobs(p, most=8)
+    add_rig(p)
+    add_recording(p, "the Table 1 road and rig runs")
+    add_force(p)
+    add_quiet(p)
     p.set_defaults(func=cmd_validate)
     return p
 

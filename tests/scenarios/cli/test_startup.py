@@ -55,7 +55,7 @@ def test_the_parser_literals_match_their_homes():
 
     for name in ("paper", "iterate"):
         assert f"(default {NOISE_N:g}; 0: off)" in _help(name), name
-    assert f"its drift below {DRIFT_HZ:g} Hz taken out" in _help("correct")
+    assert f"(default {DRIFT_HZ:g}, at most" in _help("correct")
     args = build_parser().parse_args(["iterate", "x.toml", "--target", "force", "--out", "o"])
     assert args.noise_N is None  # None means NOISE_N in the study
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
