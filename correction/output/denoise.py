@@ -12,10 +12,15 @@ levels differ by more than :data:`FLAT_RATIO` the band holds more than white noi
 force reaching far above the truck's modes), the noise cannot be read, and the gain is 1 there: the
 column passes unchanged. The record's mean passes untouched: a static offset is not noise.
 
-With ``drift_hz``, the record's slow part is taken out too: the gain is multiplied by
-``(f / f_d)^4 / (1 + (f / f_d)^4)``, the magnitude of a second-order Butterworth high-pass at
-``f_d`` run forward and backward (zero-phase), the mean still kept. That is for a record whose slow
-part is the load cells' drift rather than anything the caller wants (:data:`DRIFT_HZ`).
+With ``drift_hz``, the record's slow part is taken out too, as far as it is drift: the gain is
+multiplied by ``h(f) + (1 - h(f)) k``, ``h(f) = (f / f_d)^4 / (1 + (f / f_d)^4)`` the magnitude of a
+second-order Butterworth high-pass at ``f_d`` run forward and backward (zero-phase), the mean still
+kept, and ``k`` the share of the slow part kept (:func:`drift_keep`). That is for a record whose slow
+part may be the load cells' drift rather than anything the caller wants (:data:`DRIFT_HZ`). The
+drift's level, ``drift_rms``, is subtracted from the slow part's as the white noise's is from each
+frequency's: ``k = max(0, 1 - drift_rms^2 / P_slow)``, ``P_slow`` the record's power the high-pass
+would take out. A slow part at the drift's level is cut (k = 0); one far above it is more than any
+drift and is kept (k -> 1). Without ``drift_rms`` the slow part is cut whatever its level.
 
 Made for a residual that is mostly noise with a narrow-band remainder: the model correction's
 ``F_rig - F_model(x_a)`` (:mod:`scenarios.records.model.differential`), whose truck force the
@@ -39,8 +44,8 @@ import numpy as np
 from correction.identification.noise import noise_rms
 from correction.output.spectral import through_gain
 
-__all__ = ["NOISE_BAND", "SUB_BANDS", "FLAT_RATIO", "SEGMENT_S", "DRIFT_HZ", "NoiseGain", "design_noise_gain",
-           "drift_cut", "check_drift_hz"]
+__all__ = ["NOISE_BAND", "SUB_BANDS", "FLAT_RATIO", "SEGMENT_S", "DRIFT_HZ", "DRIFT_RMS_N", "NoiseGain", "design_noise_gain",
+           "drift_cut", "drift_keep", "check_drift_hz"]
 
 #: The band the white noise is read over, fractions of the sampling rate (60-150 Hz at 1 kHz): above
 #: the wheel forces' band (the correction keeps 30 Hz) where a residual holds noise only, and below a
@@ -66,6 +71,15 @@ SEGMENT_S = 4.096
 #: on a rough road at low speed (gen14, class C, 30 km/h, 8000 kg) loses more of its slow force than
 #: the drift it sheds (a rear wheel's DLC error grows with the corner).
 DRIFT_HZ = 0.7
+#: N: the load cells' drift level the drift cut subtracts (``drift_rms``): the slow part of a
+#: residual at this level is cut as drift, one far above it is kept as the model's error (a body
+#: roll mode at 0.3-0.7 Hz on soft air springs or worn dampers that the model misses, hundreds of
+#: newtons: the road's cross-slope excites it, the pans follow the drive there, and the measured
+#: force holds what the model lacks). **Estimate**: a strain-gauge cell's zero drifts by some 0.05 %
+#: of its span per 10 K (the temperature effect on the zero signal that load-cell data sheets
+#: quote), 50 N on a 100 kN wheel-force cell for 10 K over a test, and its amplifier's 1/f noise
+#: adds tens of newtons: 100 N is the top of what a working cell drifts.
+DRIFT_RMS_N = 100.0
 
 
 def check_drift_hz(drift_hz: float | None, fs_hz: float) -> None:
@@ -89,6 +103,28 @@ def drift_cut(freq_hz, drift_hz: float) -> np.ndarray:
     return r / (1.0 + r)
 
 
+def drift_keep(slow_power, drift_rms: float | None) -> np.ndarray:
+    """The share of each column's slow part kept by the drift cut (1, (k,), in [0, 1]).
+
+    Parameters
+    ----------
+    slow_power : array_like, (k,), the record's unit squared
+        Each column's power that the cut would take out (its mean square through ``1 - h(f)``,
+        :func:`drift_cut`'s complement).
+    drift_rms : float or None, the record's unit
+        The drift's rms; None: no level known, every slow part cut (0).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``max(0, 1 - drift_rms^2 / slow_power)``: the slow part's power beyond the drift's, as a share.
+    """
+    p = np.asarray(slow_power, dtype=float)
+    if drift_rms is None:
+        return np.zeros(p.shape)
+    return np.clip(1.0 - float(drift_rms) ** 2 / np.maximum(p, np.finfo(float).tiny), 0.0, 1.0)
+
+
 @dataclass(frozen=True)
 class NoiseGain:
     """The zero-phase gain per frequency and column that takes a record's white noise out.
@@ -108,6 +144,9 @@ class NoiseGain:
         where not, the column's gain is 1.
     fs_hz : float, Hz
         The record's rate.
+    drift_kept : numpy.ndarray or None, (k,), 1
+        Designed with ``drift_hz``: the share of each column's slow part kept (:func:`drift_keep`;
+        0: cut as drift); None without a drift cut.
     """
 
     freq_hz: np.ndarray
@@ -115,6 +154,7 @@ class NoiseGain:
     noise_rms: np.ndarray
     measured: np.ndarray
     fs_hz: float
+    drift_kept: np.ndarray | None = None
 
     def apply(self, x) -> np.ndarray:
         """``x`` ((n, k), the designed record's columns and rate, its unit) through the gain,
@@ -142,7 +182,8 @@ class NoiseGain:
 
 
 def design_noise_gain(x, fs_hz: float, *, band_hz: tuple[float, float] | None = None,
-                      segment_s: float = SEGMENT_S, drift_hz: float | None = None) -> NoiseGain:
+                      segment_s: float = SEGMENT_S, drift_hz: float | None = None,
+                      drift_rms: float | None = None) -> NoiseGain:
     """The gain that takes the white noise out of the record ``x``.
 
     Parameters
@@ -158,7 +199,11 @@ def design_noise_gain(x, fs_hz: float, *, band_hz: tuple[float, float] | None = 
         Welch segment of the record's spectrum (at most the record's length is used).
     drift_hz : float, Hz, optional
         Take the record's slow part out too (:func:`drift_cut` at this corner, every column,
-        whether or not its white noise was read); None: only the white noise.
+        whether or not its white noise was read), as far as it is drift (``drift_rms``); None: only
+        the white noise.
+    drift_rms : float, the record's unit, optional
+        The drift's rms (with ``drift_hz``): a column's slow part is cut where it is at that level and
+        kept where it is far above it (:func:`drift_keep`); None: cut whatever its level.
 
     Returns
     -------
@@ -168,7 +213,8 @@ def design_noise_gain(x, fs_hz: float, *, band_hz: tuple[float, float] | None = 
     ------
     ValueError
         A record that is not (n, k), too short (fewer than two segments of 64 samples), not finite,
-        or a band outside (0, fs / 2), or a ``drift_hz`` that is not positive and below fs / 2.
+        or a band outside (0, fs / 2), or a ``drift_hz`` that is not positive and below fs / 2, or a
+        ``drift_rms`` that is not a finite level of at least 0.
     """
     from scipy.signal import welch
 
@@ -180,6 +226,8 @@ def design_noise_gain(x, fs_hz: float, *, band_hz: tuple[float, float] | None = 
     if not (np.isfinite(segment_s) and segment_s > 0):
         raise ValueError(f"segment_s must be a positive length in s, got {segment_s!r}")
     check_drift_hz(drift_hz, fs_hz)
+    if drift_rms is not None and not (np.isfinite(drift_rms) and drift_rms >= 0):
+        raise ValueError(f"drift_rms must be None (cut every slow part) or the drift's rms, at least 0, got {drift_rms!r}")
     lo, hi = (NOISE_BAND[0] * fs_hz, NOISE_BAND[1] * fs_hz) if band_hz is None else band_hz
     edges = np.linspace(lo, hi, SUB_BANDS + 1)  # noise_rms refuses non-finite records and bands outside (0, fs / 2)
     parts = np.array([noise_rms(a, fs_hz, (edges[j], edges[j + 1])) for j in range(SUB_BANDS)])
@@ -191,7 +239,11 @@ def design_noise_gain(x, fs_hz: float, *, band_hz: tuple[float, float] | None = 
     f, s = welch(a - a.mean(axis=0), fs=fs_hz, nperseg=nperseg, axis=0)
     n0 = rms ** 2 / (fs_hz / 2.0)  # one-sided density of white noise of that rms
     gain = np.where(measured, np.clip(1.0 - n0 / np.maximum(s, np.finfo(float).tiny), 0.0, 1.0), 1.0)
+    kept = None
     if drift_hz is not None:
-        gain = gain * drift_cut(f, drift_hz)[:, None]
+        high = drift_cut(f, drift_hz)[:, None]
+        slow = through_gain(a - a.mean(axis=0), fs_hz, lambda fr: 1.0 - drift_cut(fr, drift_hz), 1.0 / f[1])
+        kept = drift_keep(np.mean(slow ** 2, axis=0), drift_rms)
+        gain = gain * (high + (1.0 - high) * kept[None, :])
     return NoiseGain(freq_hz=f, gain=gain, noise_rms=np.asarray(rms, dtype=float), measured=measured,
-                     fs_hz=float(fs_hz))
+                     fs_hz=float(fs_hz), drift_kept=kept)

@@ -102,10 +102,21 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
     return [(int(s - lead), int(s), int(s + span)) for s in starts]
 
 
+#: Fitted on a described truck beside the body's pitch: the chassis' roll inertia. A spec sheet gives
+#: none (tanks, body, cab and engine on their mounts), and on soft air springs or worn dampers the
+#: body's roll mode sits low (0.3-0.7 Hz: the springs' roll stiffness less the load's height times
+#: its weight), lightly damped, where the road's cross-slope excites it: a roll inertia held at the
+#: catalogue's puts that mode off the truck's, and the front wheels' slow force with it. Searched
+#: 0.5-2 times the catalogue's (:data:`~scenarios.records.model.family.RANGES`). The catalogue truck
+#: holds the XML's.
+DESCRIBED_ROLL = "chassis_roll_inertia_kg_m2"
+
+
 def _spring_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
     """``names`` on the described truck (:func:`~.first_guess.spring_fields`): where ``names`` fit an
-    axle's interleaf friction, its spring rate and damper are fitted too (an air axle: in the
-    friction's place, for it has none); the catalogue truck's names as given."""
+    axle's friction, its spring rate and damper are fitted too (an air axle's friction is its
+    bushings' and dampers' seals'); where they fit the body's pitch (the payload's height or its
+    stand-in), its roll inertia too (:data:`DESCRIBED_ROLL`); the catalogue truck's names as given."""
     fit, drop = spring_fields(desc)
     out = []
     for k in names:
@@ -113,6 +124,8 @@ def _spring_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
             out.append(k)
         if k.startswith("spring_friction_") and not k.startswith("spring_friction_factor"):
             out += [f for f in fit if k.split("_")[2] in f]
+        if fit and k in ("payload_z_m", *EMPTY_STAND_IN.values()):
+            out.append(DESCRIBED_ROLL)
     return tuple(dict.fromkeys(out))
 
 
@@ -224,9 +237,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     nominal = xml_nominal(desc)
     names = _spring_names(names, desc)
     guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, "payload_z_m": nominal["payload_z_m"],
-             "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"], **catalogue(desc),
+             "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"],
+             "chassis_roll_inertia_kg_m2": nominal["chassis_roll_inertia_kg_m2"], **catalogue(desc),
              **dict.fromkeys(STATION_FITTED, 1.0), **(fitted_guess or {})}
-    held = [k for k in FITTED if k in ("cab_mount_hz", *EMPTY_STAND_IN.values()) or k.startswith("tire_progressive")
+    held = [k for k in FITTED if k in ("cab_mount_hz", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values())
+            or k.startswith("tire_progressive")
             or k in STATION_FITTED]
     for k in held:  # held: rigid cab, linear tire, left and right stations alike, the XML's chassis
         if k not in names and k not in (fitted_guess or {}):

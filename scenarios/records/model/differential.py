@@ -16,8 +16,11 @@ to use it:
   (:mod:`correction.output.denoise`): with the truck's force explained by the model, the residual
   is mostly noise, and on a smooth road that noise is a large part of what is left to correct.
   W also takes the residual's slow part out, below :data:`~correction.output.denoise.DRIFT_HZ`
-  (0.7 Hz): there the load cells drift (a lab's coloured noise, tens of newtons) and the pans
-  follow the drive, so the model's F_model(x_ref) carries the slow force alone. On a loaded truck
+  (0.7 Hz), as far as it is at the load cells' drift level
+  (:data:`~correction.output.denoise.DRIFT_RMS_N`): there the load cells drift (a lab's coloured
+  noise, tens of newtons) and the pans follow the drive, so the model's F_model(x_ref) carries the
+  slow force alone; a slow residual far above any drift is the model's own error (a body roll mode
+  at 0.3-0.7 Hz that it misses) and is kept, corrected like the rest. On a loaded truck
   on a smooth road, whose front wheels' slow force is small, the drift is a large part of what the
   correction leaves without the cut (``benchmarks/mismatch_suite.py --drift-cut-hz 0`` with
   ``--lab typical`` and ``--lab typical-no-drift`` measures it). A lab whose cells do not drift
@@ -44,7 +47,7 @@ import time
 
 import numpy as np
 
-from correction.output.denoise import DRIFT_HZ, NoiseGain, check_drift_hz, design_noise_gain
+from correction.output.denoise import DRIFT_HZ, DRIFT_RMS_N, NoiseGain, check_drift_hz, design_noise_gain
 from mjcf.variant import TruckVariant
 from mjcf.names import CORNERS
 from scenarios.core.config import Scenario, ScenarioError
@@ -146,7 +149,8 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
 
 
 def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=None, *,
-                      drift_hz: float | None = DRIFT_HZ) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
+                      drift_hz: float | None = DRIFT_HZ,
+                      drift_rms_N: float | None = DRIFT_RMS_N) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
     """F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel: :data:`HYBRID_FORMULA`.
 
     Parameters
@@ -169,6 +173,10 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
         The corner of W's drift cut (default :data:`~correction.output.denoise.DRIFT_HZ`): below it
         the residual is taken for the load cells' drift and the model's slow force stands alone.
         None: no drift cut, for a lab whose cells do not drift (W takes the white noise only).
+    drift_rms_N : float or None, N
+        The load cells' drift level (default :data:`~correction.output.denoise.DRIFT_RMS_N`): a
+        wheel's slow residual at that level is cut as drift, one far above it is the model's error
+        and kept (:func:`~correction.output.denoise.drift_keep`); None: cut whatever its level.
 
     Returns
     -------
@@ -181,7 +189,7 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
     first = 0 if settled is None else int(np.argmax(np.asarray(settled, dtype=bool)))
     if settled is not None and not np.all(np.asarray(settled, dtype=bool)[first:]):
         raise ValueError("settled must be one run of samples reaching the record's end")
-    gain = design_noise_gain(residual[first:], fs_hz, drift_hz=drift_hz)
+    gain = design_noise_gain(residual[first:], fs_hz, drift_hz=drift_hz, drift_rms=drift_rms_N)
     body = gain.apply(residual[first:])
     denoised = np.concatenate([np.repeat(body[:1], first, axis=0), body], axis=0)
     corrected, lin_settled = linear(denoised)
@@ -238,7 +246,8 @@ def wheels_reason(calibration, holds, excess_limit: float = HYBRID_LIMIT) -> str
 
 def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario, workers: int | None = None,
                        excess_limit: float | None = None, cab: str = AUTO, linear=None,
-                       drift_hz: float | None = DRIFT_HZ, **calibrate_kw) -> ModelCorrection:
+                       drift_hz: float | None = DRIFT_HZ, drift_rms_N: float | None = DRIFT_RMS_N,
+                       **calibrate_kw) -> ModelCorrection:
     """Calibrate the truck model on the record, then correct it, or say why the linear correction is to be used.
 
     With ``linear`` (the record's linear correction L, ``T_a^-1 T_F`` per wheel) the corrected force
@@ -272,6 +281,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     drift_hz : float or None, Hz
         The corner of W's drift cut (:func:`hybrid_correction`; with ``linear`` only); None: no
         cut, for a lab whose load cells do not drift.
+    drift_rms_N : float or None, N
+        The load cells' drift level the cut subtracts (:func:`hybrid_correction`); None: every
+        wheel's slow residual cut.
     **calibrate_kw
         Passed to :func:`~scenarios.records.model.calibrate.calibrate` (windows, max_nfev,
         fitted_guess...).
@@ -349,7 +361,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
             corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t),
-                                                          drift_hz=drift_hz)
+                                                          drift_hz=drift_hz, drift_rms_N=drift_rms_N)
             formula = HYBRID_FORMULA
             noise = {c: float(v) if white else None
                      for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}

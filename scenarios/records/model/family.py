@@ -73,8 +73,9 @@ held at the given values: a spec sheet states its geometry. Its springs' rates a
 (:data:`AIR_FITTED`, :func:`~scenarios.records.model.first_guess.spring_fields`) are fitted beside
 the axle's interleaf friction, searched 0.5-2 and 0.3-3 times the catalogue guess: a spec sheet
 quotes an air spring's rate at one load and pressure and a leaf spring's to 5-10 %, and dampers wear
-to a third of their force. An **air axle** has no interleaf friction: its rate and damper are
-fitted in the friction's place.
+to a third of their force. An **air axle** has no interleaf friction, but its bushings and its
+dampers' seals rub: its friction is fitted from a small guess
+(:data:`~scenarios.records.model.first_guess.AIR_FRICTION_GUESS_N`), one value for the axle.
 
 Not fitted: the chassis (5.2 t, its CoM and inertia; the payload's height stands in for a
 sprung mass whose pitch inertia is not the XML's, and on an empty truck the pitch inertia itself
@@ -107,12 +108,13 @@ STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "tire_
 AIR_FITTED = ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spring_rate_rear_N_per_m",
               "spring_damping_rear_Ns_per_m")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
-FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2",
+FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2", "chassis_roll_inertia_kg_m2",
           "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
           "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED + AIR_FITTED
 UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pitch_inertia_kg_m2": "kg m^2",
+         "chassis_roll_inertia_kg_m2": "kg m^2",
          "tire_stiffness_front_N_per_m": "N/m",
          "tire_stiffness_rear_N_per_m": "N/m", "tire_damping_front_Ns_per_m": "N s/m",
          "tire_damping_rear_Ns_per_m": "N s/m", "spring_friction_front_N": "N", "spring_friction_rear_N": "N",
@@ -127,7 +129,8 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pi
 #: bottom (generalization case gen00, class A at 30 km/h, rigid-cab plant, 20 s, the cab fitted:
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
-DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2") + AIR_FITTED)
+DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2",
+                                                     "chassis_roll_inertia_kg_m2") + AIR_FITTED)
 #: The payload's height's stand-in on an empty or light truck (fitted in its place where the payload is light):
 #: the chassis' pitch inertia (the module's description).
 EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
@@ -135,6 +138,7 @@ EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
 #: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
 #: The onsets have none: their range is the loads measured on their axle (onset_load).
 RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "chassis_pitch_inertia_kg_m2": (0.5, 2.0),
+          "chassis_roll_inertia_kg_m2": (0.5, 2.0),
           "tire_stiffness_front_N_per_m": (0.3, 3.0),
           "tire_stiffness_rear_N_per_m": (0.3, 3.0), "tire_damping_front_Ns_per_m": (0.05, 5.0),
           "tire_damping_rear_Ns_per_m": (0.05, 5.0), "spring_friction_front_N": (0.05, 8.0),

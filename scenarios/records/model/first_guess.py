@@ -31,7 +31,7 @@ from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from scenarios.core.config import Scenario, ScenarioError
 from scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -63,6 +63,11 @@ SPEC_FIELDS = DESCRIPTION_FIELDS
 #: as the catalogue's tire values are (:data:`CATALOGUE_FACTORS`).
 SPRING_CATALOGUE_FACTORS = {"spring_rate_front_N_per_m": 1.15, "spring_rate_rear_N_per_m": 0.85,
                          "spring_damping_front_Ns_per_m": 0.85, "spring_damping_rear_Ns_per_m": 1.15}
+#: N: the guess of an air axle's friction per spring (its bushings and its dampers' seals; an air
+#: spring has no leaves to rub). **Estimate**: an air suspension's Coulomb friction is small beside
+#: a multi-leaf spring's 1-5 kN (Cebon 1999, ch. 2), a hundred newtons or so; searched 0.05-8 times
+#: the catalogue guess (:data:`~scenarios.records.model.family.RANGES`), 6-900 N.
+AIR_FRICTION_GUESS_N = 100.0
 
 
 def description(base_scenario: Scenario | None) -> TruckVariant:
@@ -81,19 +86,20 @@ def _spec(desc: TruckVariant) -> dict:
 
 def spring_fields(desc: TruckVariant) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """(the springs' fields fitted on the described truck, per axle its spring rate and damper; the
-    fields dropped: an air axle's interleaf friction and that of its left spring over its right).
+    fields dropped: an air axle's left spring's friction over its right one's).
 
     A spec sheet's rates and dampers are uncertain (:data:`SPRING_CATALOGUE_FACTORS`), so a described
-    truck's are fitted on both kinds of axle; an air spring has no interleaf friction to fit. The
-    catalogue truck (no description) holds its leaves' rate and damper at the XML's, as the model
-    family did before trucks were described (its suites' figures)."""
+    truck's are fitted on both kinds of axle. An air axle has no interleaf friction, but its
+    bushings and its dampers' seals rub: its friction is fitted from :data:`AIR_FRICTION_GUESS_N`,
+    one value for the axle (a few hundred newtons cannot be told apart left from right). The
+    catalogue truck (no description) holds its leaves' rate and damper at the XML's."""
     fit, drop = [], []
     if not described(desc):
         return (), ()
     for axle, corner in (("front", FRONT[0]), ("rear", "rl")):
         fit += [f"spring_rate_{axle}_N_per_m", f"spring_damping_{axle}_Ns_per_m"]
         if suspension_of(desc, axle == "front") == "air":
-            drop += [f"spring_friction_{axle}_N", f"spring_friction_factor_{corner}"]
+            drop += [f"spring_friction_factor_{corner}"]
     return tuple(fit), tuple(drop)
 
 
@@ -108,6 +114,7 @@ def _nominal(desc: TruckVariant = TruckVariant()) -> tuple[dict, tuple[float, fl
     f, r = CORNERS.index(FRONT[0]), CORNERS.index("rl")
     nominal = nominal_values(model)
     values = {k: nominal[k] for k in ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2",
+                                      "chassis_roll_inertia_kg_m2",
                                       "tire_stiffness_front_N_per_m",
                                       "tire_stiffness_rear_N_per_m", "tire_damping_front_Ns_per_m",
                                       "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
@@ -126,6 +133,9 @@ def _nominal(desc: TruckVariant = TruckVariant()) -> tuple[dict, tuple[float, fl
         else:
             default = AIR_DAMPING_NS_PER_M[side] if air else float(model.tendon_damping[tendon])
         values[field] = float(default if given is None else given)
+        friction = f"spring_friction_{side}_N"
+        if air and getattr(desc, friction) is None:  # the air axle's friction: the guess, not the XML's 0
+            values[friction] = AIR_FRICTION_GUESS_N
     axles = tuple(float(model.body_pos[body(mjnames.axle_body(c)), 0]) for c in (CORNERS[f], CORNERS[r]))
     pans_y = np.array([model.body_pos[body(mjnames.pan_body(c)), 1] for c in CORNERS])  # children of the world
     return values, axles, pans_y

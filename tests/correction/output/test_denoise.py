@@ -148,3 +148,37 @@ def test_the_drift_cut_takes_the_slow_part_out_and_keeps_the_rest():
 def test_a_drift_corner_outside_the_band_is_refused(drift_hz):
     with pytest.raises(ValueError, match="drift_hz"):
         design_noise_gain(_white(), FS, drift_hz=drift_hz)
+
+
+def test_a_slow_part_far_above_the_drift_level_is_kept_and_one_at_it_cut():
+    # Spectral subtraction of the drift's power from the slow part's (Boll 1979, applied to the band
+    # the cut takes out): a 0.37 Hz sine of 300 N amplitude (212 N rms, far above a 50 N drift) keeps
+    # 1 - 50^2 / 212^2 = 0.944 of its power; one of 60 N (42 N rms, under the drift's level) is cut
+    # whole; the 9 Hz part passes either way. The analytic share is that of the sine alone: the white
+    # noise below 0.7 Hz adds (100 N)^2 x 0.7 / 500 = 14 N^2 to the 45 000 N^2, nothing at 1e-3.
+    from correction.output.denoise import drift_keep
+
+    t = np.arange(N) / FS
+    slow = np.column_stack([300.0 * np.sin(2 * np.pi * 0.37 * t), 60.0 * np.sin(2 * np.pi * 0.37 * t)])
+    fast = 1000.0 * np.sin(2 * np.pi * 9.0 * t)[:, None] * np.ones(2)
+    x = slow + fast + _white(100.0)
+    g = design_noise_gain(x, FS, drift_hz=0.7, drift_rms=50.0)
+    assert g.drift_kept[0] == pytest.approx(1 - 50.0 ** 2 / (300.0 ** 2 / 2), abs=0.01)
+    assert g.drift_kept[1] == 0.0
+    out = g.apply(x)
+    inner = slice(5000, -5000)
+    basis = np.column_stack([np.sin(2 * np.pi * 0.37 * t), np.cos(2 * np.pi * 0.37 * t)])[inner]
+    amp = np.hypot(*np.linalg.lstsq(basis, out[inner] - out[inner].mean(axis=0), rcond=None)[0])
+    # the gain on the slow sine, h + (1 - h) k with h(0.37 Hz) < 0.2 (the spectrum's bins interpolated)
+    assert 0.9 * 300.0 < amp[0] < 300.0
+    assert amp[1] < 0.2 * 60.0  # the 60 N sine cut as drift
+    # without a level every slow part is cut, as the drift cut alone (the previous test's gain)
+    np.testing.assert_array_equal(design_noise_gain(x, FS, drift_hz=0.7).drift_kept, [0.0, 0.0])
+    np.testing.assert_array_equal(drift_keep([1e4, 1e2], None), [0.0, 0.0])
+    assert design_noise_gain(x, FS).drift_kept is None
+
+
+@pytest.mark.parametrize("drift_rms", [-1.0, float("nan"), float("inf")])
+def test_a_drift_level_that_is_not_a_level_is_refused(drift_rms):
+    with pytest.raises(ValueError, match="drift_rms"):
+        design_noise_gain(_white(), FS, drift_hz=0.7, drift_rms=drift_rms)
