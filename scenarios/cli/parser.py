@@ -15,6 +15,7 @@ EXAMPLES = {
     "paper": "rigsim paper --out out/paper",
     "validate": "rigsim validate --out out/validate --duration-s 20",
     "identify": "rigsim identify scenarios/data/paper/high_72kmh_3640kg.toml --out out/ident",
+    "info": "rigsim info out/lab/messung.csv",
     "correct": "rigsim correct measured.csv --actuators out/ident/actuators.toml -o corrected.csv",
     "sweep": "rigsim sweep scenarios/data/sweeps/example.toml --out out/sweep --jobs 2",
     "iterate": "rigsim iterate scenarios/data/paper/high_72kmh_3640kg.toml --target displacement --out out/iterate",
@@ -58,7 +59,7 @@ def _version() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``rigsim`` parser; each command's ``func`` runs it."""
-    from scenarios.cli import correct, model, run
+    from scenarios.cli import correct, info, model, run
     from scenarios.studies.identify import command as identify
     from scenarios.studies.iterate import command as iterate
     from scenarios.studies.paper import command as paper
@@ -69,7 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
                 epilog="example: " + EXAMPLES["paper"])
     p.add_argument("--version", action="version", version=f"rigsim {_version()}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
-    for command in (run, paper, validate, identify, correct, sweep, iterate, model):
+    for command in (run, paper, validate, identify, info, correct, sweep, iterate, model):
         command.add_parser(sub)
     for name, parser in sub.choices.items():
         parser.epilog = f"example: {EXAMPLES[name]}"
