@@ -39,7 +39,7 @@ import numpy as np
 
 from correction.io.measured_core import (TIME_KEYS, TIME_START_KEY, MeasuredChannels, MeasuredDataError, atomic_output,
                                       check_channel, check_output, make_channels, to_si)
-from correction.io.measured_time import round_rate, uniform_rate
+from correction.io.measured_time import round_rate, time_grid, uniform_rate
 
 __all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "READ_FORMATS", "WRITE_FORMATS",
            "read_channels", "write_channels", "format_of"]
@@ -146,7 +146,9 @@ def _read_rpc(path, time_col, channels) -> MeasuredChannels:
     if r.start_s != 0.0:
         meta[TIME_START_KEY] = repr(r.start_s)
     fs = round_rate(1.0 / r.dt_s, STEP_ROUNDING)
-    return make_channels(time_s=np.arange(n) / fs, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta,
+    t = time_grid(n, fs)
+    t.setflags(write=False)  # the record's own: kept, not copied
+    return make_channels(time_s=t, data=data, units=units, source_units=src, fs_hz=fs, metadata=meta,
                          path=path, fmt="rpc3", dialect=dialect)
 
 

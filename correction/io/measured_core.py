@@ -21,7 +21,7 @@ import numpy as np
 
 from correction.io.atomic import atomic_path, available_memory_bytes, open_regular, read_regular, size_text
 from correction.io.measured_error import MeasuredDataError
-from correction.io.measured_time import checked_rate
+from correction.io.measured_time import checked_rate, time_grid
 from correction.io.measured_units import lookup_unit, suffix_unit
 
 __all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "TIME_START_KEY", "READ_MEMORY_PER_BYTE", "read_bytes",
@@ -114,7 +114,7 @@ class MeasuredChannels:
         meta = {str(k): str(v) for k, v in self.metadata.items()}
         if t[0] != 0.0:
             meta[TIME_START_KEY] = repr(float(t[0]))
-        for name, value in (("time_s", _frozen(np.arange(t.size) / float(fs))), ("fs_hz", float(fs)),
+        for name, value in (("time_s", _frozen(time_grid(t.size, float(fs), t))), ("fs_hz", float(fs)),
                             ("data", MappingProxyType(data)), ("units", MappingProxyType(dict(self.units))),
                             ("source_units", MappingProxyType(dict(self.source_units))),
                             ("metadata", MappingProxyType(meta)), ("path", str(self.path))):

@@ -16,7 +16,7 @@ import numpy as np
 
 from correction.io.measured_error import MeasuredDataError
 
-__all__ = ["MAX_RATE_HZ", "STEP_TOLERANCE", "RATE_ROUNDING", "uniform_rate", "checked_rate", "round_rate"]
+__all__ = ["MAX_RATE_HZ", "STEP_TOLERANCE", "RATE_ROUNDING", "uniform_rate", "checked_rate", "time_grid", "round_rate"]
 
 #: Highest sampling rate of a measured record, float, Hz. A road simulator's controller plays and
 #: records time histories at 102.4 to 2048 Hz on system rates up to 4096 Hz (MTS TestSuite
@@ -113,6 +113,18 @@ def _refuse_step(t: np.ndarray, i: int, dt: float, name: str, where: Callable[[i
                                 "or cut the record there")
     raise MeasuredDataError(f"{what} {name!r} is not uniform at {where(i)} ({step}); fix: resample the record to a "
                             "uniform grid")
+
+
+def time_grid(n: int, fs_hz: float, like: np.ndarray | None = None) -> np.ndarray:
+    """``np.arange(n) / fs_hz`` (s, shape (n,)) for a rate ``fs_hz`` (Hz): ``like`` itself when it
+    holds exactly that (compared in blocks), else one new array."""
+    if like is not None and like.shape == (n,) and all(
+            np.array_equal(like[a:a + _BLOCK], np.arange(a, min(a + _BLOCK, n), dtype=float) / fs_hz)
+            for a in range(0, n, _BLOCK)):
+        return like
+    grid = np.arange(n, dtype=float)
+    grid /= fs_hz
+    return grid
 
 
 def round_rate(fs_hz: float, tolerance: float) -> float:
