@@ -33,8 +33,14 @@ studies' ``identified`` method) uses this one policy:
   moved up to it with their ratio kept (a shorter transient of the inverse);
 * **refusal** only for data that cannot support a fit: fewer than :data:`MIN_COHERENT_FRACTION`
   (70 %) of the points in :data:`COHERENCE_BAND_HZ` (1-30 Hz, clipped to the fitted band) with
-  coherence at or above ``coherence_min`` raises :class:`ActuatorFitError`. A fit whose error is
-  poor in some band is not refused; it is reported (:attr:`ActuatorFit.band_errors`).
+  coherence at or above ``coherence_min`` raises :class:`ActuatorFitError` (a
+  :class:`~correction.identification.plausibility.WiringError` naming the wrong corner when their
+  median is below :data:`~correction.identification.plausibility.UNRELATED_COHERENCE`: channels
+  that do not follow each other at all). A fit whose error is poor in some band is not refused; it
+  is reported (:attr:`ActuatorFit.band_errors`). :func:`fit_actuator`, which fits a drive and an
+  LVDT channel, also refuses a pair whose data are not an actuator's
+  (:func:`correction.identification.plausibility.check_actuator`: swapped, inverted, another
+  post's, another unit).
 
 Frequencies at the interface are in Hz; ``s`` (and poles and zeros) in rad/s.
 """
@@ -47,14 +53,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from correction.identification.actuator_fit_rules import (CANDIDATE_ORDERS, ActuatorFitError, choose_orders, held_out_error,
-                                 rational_response, usable_actuator)
+from correction.identification.actuator_fit_rules import (CANDIDATE_ORDERS, TRUSTED_COHERENCE, ActuatorFitError,
+                                                          choose_orders, held_out_error, rational_response,
+                                                          usable_actuator)
 from correction.identification.identify import fit_rational_coefficients, h1_estimate
+from correction.identification.plausibility import UNRELATED_COHERENCE, WiringError, check_actuator, check_signals
 from correction.output.lowpass import BAND_HZ
 from correction.output.transfer import describe_roots, transfer_bandwidth_hz
 
 __all__ = ["ActuatorFitError", "ActuatorFit", "fit_frequency_response", "fit_actuator", "default_nperseg",
-           "MIN_COHERENT_FRACTION", "COHERENCE_BAND_HZ", "REPORT_BANDS_HZ"]
+           "coherence_median", "MIN_COHERENT_FRACTION", "COHERENCE_BAND_HZ", "REPORT_BANDS_HZ"]
 
 #: Least fraction of the points in :data:`COHERENCE_BAND_HZ` with coherence >= coherence_min, 1.
 MIN_COHERENT_FRACTION = 0.7
@@ -171,18 +179,29 @@ def _band_errors(num, den, f, h, coh, band, coherence_min) -> dict:
     return out
 
 
-def _check_coherence(f, coh, band, coherence_min, resolution) -> None:
+def _coherence_band(f, band) -> tuple[np.ndarray, float, float]:
+    """The points of :data:`COHERENCE_BAND_HZ` clipped to ``band`` (all of ``band`` if they do not
+    overlap): (selection, low, high)."""
     lo, hi = max(COHERENCE_BAND_HZ[0], band[0]), min(COHERENCE_BAND_HZ[1], band[1])
     if hi <= lo:
         lo, hi = band
-    sel = (f >= lo) & (f <= hi)
+    return (f >= lo) & (f <= hi), lo, hi
+
+
+def _check_coherence(f, coh, band, coherence_min, resolution) -> None:
+    sel, lo, hi = _coherence_band(f, band)
     frac = float(np.mean(coh[sel] >= coherence_min)) if sel.any() else 0.0
     if frac < MIN_COHERENT_FRACTION:
+        told = (f"the drive-to-displacement coherence is >= {coherence_min:g} at only {frac:.0%} of the points in "
+                f"{_band_label(lo, hi)} ({MIN_COHERENT_FRACTION:.0%} needed")
+        median = float(np.median(coh[sel])) if sel.any() else 0.0
+        if sel.any() and median < UNRELATED_COHERENCE:
+            raise WiringError("wrong corner", f"{told}, median {median:.2f}, what unrelated channels give): the LVDT "
+                              "does not follow this drive (the wrong corner, or not an LVDT)",
+                              "pair the drive with the LVDT of its own post")
         need_s = 10.0 * math.ceil((_SEGMENTS + 1) / 2.0 / resolution / 10.0)
-        raise ActuatorFitError(
-            f"the drive-to-displacement coherence is >= {coherence_min:g} at only {frac:.0%} of the points in "
-            f"{_band_label(lo, hi)} ({MIN_COHERENT_FRACTION:.0%} needed); record at least {need_s:.0f} s of "
-            "independent random drive on every post with an rms near the test drive's")
+        raise ActuatorFitError(f"{told}); record at least {need_s:.0f} s of independent random drive on every post "
+                               "with an rms near the test drive's")
 
 
 def _fit(f, h, w, orders, resolution, anchor_weight):
@@ -220,7 +239,7 @@ def _check_orders(orders) -> tuple[int, int]:
 
 
 def fit_frequency_response(f_hz, h, coherence, *, band_hz=(0.1, 60.0), orders=None,
-                           coherence_min: float = 0.9) -> ActuatorFit:
+                           coherence_min: float = TRUSTED_COHERENCE) -> ActuatorFit:
     """Fit a usable ``T_a`` to a measured frequency response (see the module notes for the policy).
 
     Parameters
@@ -295,7 +314,7 @@ def default_nperseg(n: int, fs: float) -> int:
 
 
 def fit_actuator(drive_m, displacement_m, fs: float, *, band_hz=(0.1, 60.0), orders=None,
-                 coherence_min: float = 0.9, nperseg: int | None = None) -> ActuatorFit:
+                 coherence_min: float = TRUSTED_COHERENCE, nperseg: int | None = None) -> ActuatorFit:
     """Identify ``T_a = X_a / X_p`` from a drive record and the measured pan displacement.
 
     Parameters
@@ -323,20 +342,49 @@ def fit_actuator(drive_m, displacement_m, fs: float, *, band_hz=(0.1, 60.0), ord
     ------
     ActuatorFitError
         Too little coherence (one sentence naming the band and what to record).
+    correction.identification.plausibility.WiringError
+        An ActuatorFitError naming the likely cause: data that are not an actuator's drive and
+        pan displacement (the same samples twice, swapped, another post's, inverted, another
+        unit; :func:`correction.identification.plausibility.check_actuator`).
     ValueError
         Records of different lengths, non-finite samples, a record too short.
     """
+    u, y, fs = _pair(drive_m, displacement_m, fs)
+    check_signals(u, y)
+    if nperseg is None:
+        nperseg = default_nperseg(u.size, fs)
+    f, h, coh = h1_estimate(u, y, fs, nperseg)
+    try:
+        band = (float(band_hz[0]), min(float(band_hz[1]), 0.45 * fs))
+    except (TypeError, ValueError, IndexError):
+        raise ValueError(f"band_hz must be two frequencies (low, high) in Hz, got {band_hz!r}") from None
+    fit = fit_frequency_response(f, h, coh, band_hz=band, orders=orders, coherence_min=coherence_min)
+    check_actuator(fit, coherence_min)
+    return fit
+
+
+def _pair(drive_m, displacement_m, fs) -> tuple[np.ndarray, np.ndarray, float]:
     u = np.asarray(drive_m, dtype=float)
     y = np.asarray(displacement_m, dtype=float)
     if u.ndim != 1 or y.shape != u.shape:
         raise ValueError(f"drive_m and displacement_m must be 1-D of the same length, got {u.shape} and {y.shape}")
     if not (isinstance(fs, (int, float, np.integer, np.floating)) and math.isfinite(fs) and fs > 0):
         raise ValueError(f"fs must be a positive sampling rate in Hz, got {fs!r}")
-    if nperseg is None:
-        nperseg = default_nperseg(u.size, float(fs))
-    f, h, coh = h1_estimate(u, y, float(fs), nperseg)
-    try:
-        band = (float(band_hz[0]), min(float(band_hz[1]), 0.45 * float(fs)))
-    except (TypeError, ValueError, IndexError):
-        raise ValueError(f"band_hz must be two frequencies (low, high) in Hz, got {band_hz!r}") from None
-    return fit_frequency_response(f, h, coh, band_hz=band, orders=orders, coherence_min=coherence_min)
+    return u, y, float(fs)
+
+
+def coherence_median(drive_m, displacement_m, fs: float) -> float:
+    """Median coherence of a drive and a displacement in :data:`COHERENCE_BAND_HZ` (its top clipped
+    to 0.45 ``fs``), from :func:`fit_actuator`'s estimate (default segments), 1.
+
+    Parameters
+    ----------
+    drive_m, displacement_m : array_like, m
+        Sampled together, shape (n,).
+    fs : float, Hz
+        Sampling rate.
+    """
+    u, y, fs = _pair(drive_m, displacement_m, fs)
+    f, _, coh = h1_estimate(u, y, fs, default_nperseg(u.size, fs))
+    sel, _, _ = _coherence_band(f, (0.0, 0.45 * fs))
+    return float(np.median(np.nan_to_num(coh[sel], nan=0.0))) if sel.any() else 0.0

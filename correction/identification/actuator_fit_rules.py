@@ -16,8 +16,11 @@ from collections.abc import Mapping
 import numpy as np
 
 __all__ = ["ActuatorFitError", "usable_actuator", "held_out_error", "choose_orders", "rational_response",
-           "CANDIDATE_ORDERS", "ORDER_TOLERANCE", "NON_MINIMUM_PHASE_RATIO", "CANCEL_GAP"]
+           "CANDIDATE_ORDERS", "ORDER_TOLERANCE", "NON_MINIMUM_PHASE_RATIO", "CANCEL_GAP", "TRUSTED_COHERENCE"]
 
+#: Coherence from which a point of the estimate is trusted by default (the fit's ``coherence_min``), 1:
+#: the output is then at least 90 % a linear function of the drive there.
+TRUSTED_COHERENCE = 0.9
 #: Candidate (numerator, denominator) orders: eq. 4's shape (1, 4), plus the spool's second order
 #: and the truck's loading.
 CANDIDATE_ORDERS = ((1, 4), (2, 5), (2, 6), (3, 6), (4, 7))
