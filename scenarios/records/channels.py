@@ -118,12 +118,16 @@ def _names(value, key: str, naming: Naming) -> list[str]:
 
 
 def parse_identify(value, naming: Naming = KEYWORDS) -> list[str]:
-    """``identify`` (``"DRIVE,DISP"`` or two names) as [drive, displacement]; [] when None."""
+    """``identify`` (``"DRIVE,DISP"`` or two names) as [drive, displacement]; [] when None; one
+    channel given twice refused."""
     if value is None:
         return []
     cols = _names(value, "identify", naming)
     if len(cols) != 2:
         raise _error(f"{naming('identify')} needs two columns DRIVE_COL,DISP_COL, got {value!r}")
+    if cols[0].lower() == cols[1].lower():
+        raise _error(f"{naming('identify')} names channel {cols[0]!r} twice (the same channel as drive and "
+                     "displacement); give DRIVE_COL,DISP_COL, the drive and the pan displacement (LVDT)")
     return cols
 
 

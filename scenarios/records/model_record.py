@@ -52,11 +52,14 @@ def _windows(settings) -> tuple[int, int]:
 
 
 def _check_pairs(record, pairs, naming) -> None:
-    """Each pairs channel: in the record, not the time, a length, varying."""
+    """Each pair: two channels, each in the record, not the time, a length, varying."""
     import numpy as np
+
+    from scenarios.records.recorded import check_pair_channels
 
     names, opt = list(record.names), naming("pairs")
     for corner, cols in pairs.items():
+        check_pair_channels(corner, *cols, naming)
         for col in cols:
             if col == record.time_name or col not in names:
                 what = "is the time column" if col == record.time_name else f"is not in {str(record.path)!r}"

@@ -7,6 +7,12 @@ by :func:`correction.identification.actuator_fit.fit_actuator` (single-input H1,
 one fitting policy). For a clean identification the posts should
 be driven by independent random drives; a test drive (front and rear the same profile delayed)
 lets each estimate absorb what the other posts do.
+
+A pair wired wrongly is refused before anything is written, in one sentence naming the corner,
+the likely cause and the fix: the same channel twice at once (:func:`parse_pairs`,
+:func:`pairs_of`, and by the channels the names resolve to), then per corner what its data show
+(:mod:`correction.identification.plausibility`: swapped, inverted, another unit, another post's
+LVDT); an LVDT that follows another corner's drive of ``pairs`` better than its own is named.
 """
 
 from __future__ import annotations
@@ -17,12 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.identification.actuator_fit import ActuatorFitError, fit_actuator
+from correction.identification.actuator_fit import COHERENCE_BAND_HZ, ActuatorFitError, coherence_median, fit_actuator
+from correction.identification.actuator_fit_rules import TRUSTED_COHERENCE
+from correction.identification.plausibility import WiringError
 from scenarios.core.config import ScenarioError
 from scenarios.records.channels import read_record, resolver
 from scenarios.records.naming import KEYWORDS, Naming
 
-__all__ = ["RecordedIdentification", "parse_pairs", "pairs_of", "identify_record", "identify_recorded"]
+__all__ = ["RecordedIdentification", "check_pair_channels", "parse_pairs", "pairs_of", "identify_record",
+           "identify_recorded"]
 
 
 @dataclass(frozen=True)
@@ -65,8 +74,19 @@ class RecordedIdentification:
         return {**self.meta(), "corners": {c: f.to_dict() for c, f in self.fits.items()}}
 
 
+def check_pair_channels(corner: str, drive: str, lvdt: str, naming: Naming = KEYWORDS) -> None:
+    """Refuse ``corner``'s pair when it names one channel as both its drive and its LVDT, by name or
+    by case (the readers match a name to a channel regardless of case); one sentence naming ``pairs``
+    as ``naming`` says."""
+    if drive.lower() == lvdt.lower():
+        raise ScenarioError(f"{naming('pairs')} {corner}: channel {drive!r} is both the drive and the LVDT (the same "
+                            f"channel twice); give {corner}=DRIVE:LVDT, the post's drive and its LVDT (pan "
+                            "displacement)")
+
+
 def parse_pairs(text: str, naming: Naming = KEYWORDS) -> dict[str, tuple[str, str]]:
-    """``"fl=DRIVE:LVDT,fr=..."`` -> ``{"fl": ("DRIVE", "LVDT"), ...}``; one-sentence errors."""
+    """``"fl=DRIVE:LVDT,fr=..."`` -> ``{"fl": ("DRIVE", "LVDT"), ...}``; one-sentence errors (a corner
+    given twice, a channel given as both drive and LVDT)."""
     out: dict[str, tuple[str, str]] = {}
     for item in (p.strip() for p in text.split(",")):
         corner, sep, cols = item.partition("=")
@@ -77,6 +97,7 @@ def parse_pairs(text: str, naming: Naming = KEYWORDS) -> dict[str, tuple[str, st
         corner = corner.strip()
         if corner in out:
             raise ScenarioError(f"{naming('pairs')} names corner {corner!r} twice; give each corner once")
+        check_pair_channels(corner, drive.strip(), lvdt.strip(), naming)
         out[corner] = (drive.strip(), lvdt.strip())
     return out
 
@@ -90,6 +111,7 @@ def pairs_of(pairs, naming: Naming = KEYWORDS) -> dict[str, tuple[str, str]]:
     for corner, cols in dict(pairs).items():
         if isinstance(cols, str) or len(cols) != 2 or not all(str(c).strip() for c in cols):
             raise ScenarioError(f"{naming('pairs')} gives corner {corner!r} {cols!r}; give (DRIVE_COL, LVDT_COL)")
+        check_pair_channels(str(corner), str(cols[0]).strip(), str(cols[1]).strip(), naming)
         out[str(corner)] = (str(cols[0]).strip(), str(cols[1]).strip())
     return out
 
@@ -122,7 +144,8 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
     Raises
     ------
     ScenarioError
-        A channel, unit or pair problem, or a record that cannot support a fit (one sentence).
+        A channel, unit or pair problem, a record that cannot support a fit, or a pair whose data
+        are not an actuator's drive and LVDT (one sentence naming the corner, the cause and the fix).
     """
     from correction.io.acquisition import undo_timing
     from scenarios.records.timing import check_rate, check_timing
@@ -131,8 +154,8 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
     lvdt_filter = check_timing(lvdt_filter, "lvdt_filter", naming)
     check_rate(lvdt_filter, "lvdt_filter", record.fs_hz, naming)
     pairs = {corner: (name(d), name(x)) for corner, (d, x) in pairs_of(pairs, naming).items()}
-    fits = {}
-    for corner, (d, x) in pairs.items():
+    for corner, (d, x) in pairs.items():  # every pair's channels before any fit
+        check_pair_channels(corner, d, x, naming)
         for col in (d, x):
             if col not in record.data:
                 raise ScenarioError(f"{opt} {corner}: channel {col!r} is not in {str(record.path)!r}; its channels "
@@ -140,18 +163,43 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
             if record.units[col] not in ("m", ""):
                 raise ScenarioError(f"{opt} {corner}: channel {col!r} is in {record.source_units[col]}, not a length; "
                                     "give the drive and the LVDT (pan displacement) channels, in m or mm")
-        drive, lvdt = record.data[d], record.data[x]
-        if np.std(drive) == 0 or np.std(lvdt) == 0:
+        if np.std(record.data[d]) == 0 or np.std(record.data[x]) == 0:
             raise ScenarioError(f"{opt} {corner}: columns {d!r} and {x!r} must vary to identify T_a")
+    fits = {}
+    for corner, (d, x) in pairs.items():
+        drive, lvdt = record.data[d], record.data[x]
         if lvdt_filter is not None and np.all(np.isfinite(lvdt)):
             lvdt = undo_timing(lvdt, record.fs_hz, lvdt_filter)
         try:
             fits[corner] = fit_actuator(drive, lvdt, record.fs_hz)
         except ActuatorFitError as exc:
-            raise ScenarioError(f"{opt} {corner}: {exc}") from None
+            raise ScenarioError(_refusal(record, pairs, corner, exc, opt)) from None
     return RecordedIdentification(source=str(pathlib.Path(record.path)), pairs=pairs, fits=fits,
                                   fs_hz=float(record.fs_hz), record_s=float(record.n_samples / record.fs_hz),
                                   lvdt_filter=lvdt_filter)
+
+
+def _refusal(record, pairs, corner: str, exc: ActuatorFitError, opt: str) -> str:
+    """The sentence refusing ``corner``'s pair: the fit's, with the fix in the pair's own channel names;
+    another corner's drive of ``pairs`` that the LVDT follows (median coherence at least the trusted
+    one, above its own drive's) named as the wrong corner."""
+    d, x = pairs[corner]
+    cause = exc.cause if isinstance(exc, WiringError) else None
+    if cause in (None, "wrong corner"):
+        lvdt, fs = record.data[x], record.fs_hz
+        others = {c: coherence_median(record.data[d2], lvdt, fs) for c, (d2, _) in pairs.items()
+                  if d2 not in (d, x) and np.all(np.isfinite(record.data[d2]))}
+        if others:
+            best = max(others, key=others.get)
+            own = coherence_median(record.data[d], lvdt, fs)
+            if others[best] >= TRUSTED_COHERENCE and others[best] > own:
+                band = f"{COHERENCE_BAND_HZ[0]:g}-{COHERENCE_BAND_HZ[1]:g} Hz"
+                return (f"{opt} {corner}: LVDT {x!r} follows {best}'s drive {pairs[best][0]!r} (median coherence "
+                        f"{others[best]:.2f} in {band}), not {d!r} ({own:.2f}): the wrong corner; give {corner} the "
+                        f"LVDT of its own post, {corner}={d}:LVDT")
+    if cause == "swapped":
+        return f"{opt} {corner}: {exc.finding}; give {corner}={x}:{d}"
+    return f"{opt} {corner}: {exc}"
 
 
 def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str | None = None,
