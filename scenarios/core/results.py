@@ -275,19 +275,20 @@ def _csv_rows(block: np.ndarray) -> bytes:
 TIMESERIES_FORMATS = {"csv": ".csv", "mf4": ".mf4", "tdms": ".tdms", "rsp": ".rsp"}
 
 
-def check_timeseries_format(fmt: str) -> None:
-    """Refuse, before any run, a format that is not known or whose library is not installed."""
+def check_timeseries_format(fmt: str, flag: str = "--format") -> None:
+    """Refuse, before any run, a format that is not known or whose library is not installed; the
+    sentence names the command's ``flag``."""
     from scenarios.core.config import ScenarioError
 
     if fmt not in TIMESERIES_FORMATS:
-        raise ScenarioError(f"--format must be one of {', '.join(TIMESERIES_FORMATS)}, got {fmt!r}")
+        raise ScenarioError(f"{flag} must be one of {', '.join(TIMESERIES_FORMATS)}, got {fmt!r}")
     if fmt in ("mf4", "tdms"):
         from correction.io import measured_lab
 
         try:
             measured_lab.need("asammdf" if fmt == "mf4" else "nptdms", TIMESERIES_FORMATS[fmt], "writing")
         except ValueError as exc:
-            raise ScenarioError(f"--format {fmt}: {exc}") from None
+            raise ScenarioError(f"{flag} {fmt}: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -314,10 +315,11 @@ def _channels(result: RunResult) -> _Channels:
 TIMING_KEYS = ("wall_time_s",)
 
 
-def write_run(result: RunResult, out_dir, *, fmt: str = "csv") -> dict[str, pathlib.Path]:
+def write_run(result: RunResult, out_dir, *, fmt: str | None = "csv") -> dict[str, pathlib.Path]:
     """Write ``result.json``, ``timeseries.<ext>`` and ``timings.json`` into ``out_dir``, each atomically.
 
-    ``fmt`` is one of :data:`TIMESERIES_FORMATS` (default CSV).
+    ``fmt`` is one of :data:`TIMESERIES_FORMATS` (default CSV), or None: no time series (``result.json``
+    and ``timings.json`` only; ``rigsim paper`` without ``--series``).
 
     ``result.json`` and ``timeseries.csv`` depend only on the scenario and its seed: two runs give
     byte-identical files. The wall time (s) goes to ``timings.json`` beside them. All files are
@@ -327,20 +329,22 @@ def write_run(result: RunResult, out_dir, *, fmt: str = "csv") -> dict[str, path
     ``pandas.read_csv(p)``.
     """
     out = pathlib.Path(out_dir)
-    names = result.column_names()
     summary = result.summary()
     info = dict(summary["info"])
     timings = {k: info.pop(k) for k in TIMING_KEYS if k in info}
     summary["info"] = info
-    series = "timeseries" + TIMESERIES_FORMATS[fmt]
-    summary["timeseries"] = {"file": series, "format": fmt, "columns": names, "rate_hz": summary["rate_hz"]}
+    paths = {"result": out / "result.json", "timings": out / "timings.json"}
+    if fmt is not None:
+        series = "timeseries" + TIMESERIES_FORMATS[fmt]
+        summary["timeseries"] = {"file": series, "format": fmt, "columns": result.column_names(),
+                                 "rate_hz": summary["rate_hz"]}
+        paths = {"timeseries": out / series, **paths}
     summary["timings"] = {"file": "timings.json"}
     js = to_json(summary)
     tj = to_json(timings)
-    paths = {"timeseries": out / series, "result": out / "result.json", "timings": out / "timings.json"}
     if fmt == "csv":
         atomic_write_bytes(paths["timeseries"], csv_parts(result))
-    else:
+    elif fmt is not None:
         from correction.io.measured import write_channels
 
         write_channels(paths["timeseries"], _channels(result), overwrite=True)

@@ -10,18 +10,31 @@ import sys
 from scenarios.core.flags import (add_command, add_duration, add_force, add_jobs, add_noise, add_out, add_quiet,
                                   add_recording, add_rig)
 
-__all__ = ["add_parser", "cmd_paper"]
+__all__ = ["add_parser", "cmd_paper", "RIG", "SERIES_FORMATS"]
+
+#: The configuration ``rigsim paper`` runs unless ``--rig`` names another: the simulated DYNTRAC,
+#: where the paper's method gives the paper's Table 2 (a key of
+#: :data:`scenarios.core.config.PAPER_CONFIGURATIONS`).
+RIG = "dyntrac"
+#: ``--series`` formats: the keys of :data:`scenarios.core.results.TIMESERIES_FORMATS`, listed here
+#: because importing that module for ``rigsim --help`` would load numpy (the tests pin them equal).
+SERIES_FORMATS = ("csv", "mf4", "rsp", "tdms")
 
 
 def add_parser(subparsers) -> None:
     """Register ``rigsim paper``."""
     pp = add_command(subparsers, "paper", "the paper's three cases: road and rig runs, output correction, Table 2",
-                     "Runs each case on the road and on the rig, corrects the rig's forces, prints Table 2 and the "
-                     "damage table and writes them with the figures.")
-    add_out(pp, holds="paper.json, report.md, figures")
+                     "Runs each case on the road and on the rig (the simulated DYNTRAC fitted to the paper; "
+                     "--rig design: the project's design rig), corrects the rig's forces, prints Table 2 and the "
+                     "damage table and writes them with the figures; --series also writes every run's time series.")
+    add_out(pp, holds="paper.json, report.md, figures, each run's result.json")
     add_jobs(pp)
     add_duration(pp, "every case's analysed record", "the paper's 60 s; shorter for a quick look")
-    add_rig(pp)
+    add_rig(pp, default=RIG)
+    pp.add_argument("--series", default=None, choices=SERIES_FORMATS,
+                    help="also write each road and rig run's time series, timeseries.<ext> beside its result.json: "
+                         "csv (about 30 MB per case of 60 s), mf4 (ASAM MDF4), rsp (MTS RPC III, int16) or tdms "
+                         "(NI); mf4 and tdms need pip install -e \".[lab]\" (default: none)")
     add_noise(pp)  # None: scenarios.studies.scoring.NOISE_N, applied in cmd_paper
     add_recording(pp, "each case")
     pp.add_argument("--model", action="store_true",
@@ -53,6 +66,10 @@ def _check(args) -> None:
         raise ScenarioError(f"--jobs must be at least 1, got {args.jobs}") from None
     if args.noise_N is not None and not (math.isfinite(args.noise_N) and args.noise_N >= 0):
         raise ScenarioError(f"--noise-N must be >= 0 N, got {args.noise_N:g}")
+    if args.series is not None:
+        from scenarios.core.results import check_timeseries_format
+
+        check_timeseries_format(args.series, "--series")
     if getattr(args, "view", False) and getattr(args, "rrd", None) is None:
         raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
     if getattr(args, "rrd", None) is not None:
@@ -101,7 +118,7 @@ def cmd_paper(args) -> int:
         gc.freeze()
         gc.enable()
 
-    paths = paper_scenarios(getattr(args, "rig", "design"))
+    paths = paper_scenarios(args.rig)
     truck = _truck(getattr(args, "truck", None))
     for p in paths:  # validate everything before anything runs
         case_scenario(p, None, truck)
@@ -135,9 +152,9 @@ def cmd_paper(args) -> int:
         result = run_paper(paths, workers=args.jobs, duration_s=args.duration_s, noise_N=noise_N,
                            pose_rate_hz=pose_rate, on_done=progress,
                            case_jobs=functools.partial(case_figure_jobs, out=stage.path),
-                           finish_run=functools.partial(write_case_run, out=stage.path),
+                           finish_run=functools.partial(write_case_run, out=stage.path, series=args.series),
                            on_scored=None if model else report,
-                           configuration=getattr(args, "rig", "design"), truck=truck)
+                           configuration=args.rig, truck=truck)
         if model:
             import dataclasses
 
@@ -172,5 +189,7 @@ def cmd_paper(args) -> int:
     if model_table is not None:
         print()
         print(model_table)
-    print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {n_fig} figures and one folder per case and mode")
+    series = "" if args.series is None else f" with its timeseries.{args.series}"
+    print(f"wrote {out / 'paper.json'}, {out / 'report.md'}, {n_fig} figures and one folder per case and mode"
+          f"{series}")
     return 0

@@ -273,12 +273,29 @@ def case_figure_jobs(case, out) -> list[tuple]:
     return [(write_figure, (out, fname, kind, data)) for fname, (kind, data) in case_figure_data(case).items()]
 
 
-def write_case_run(result, out) -> list[pathlib.Path]:
+def write_case_run(result, out, series: str | None = None) -> list[pathlib.Path]:
     """Write one road or rig run of a case into ``out/<scenario>/<mode>/``: what ``rigsim paper``
-    has the worker that ran it do at once, while the other runs go on."""
+    has the worker that ran it do at once, while the other runs go on.
+
+    Parameters
+    ----------
+    result : scenarios.core.results.RunResult
+        The run.
+    out : path
+        The paper's output folder.
+    series : str, optional
+        A key of :data:`scenarios.core.results.TIMESERIES_FORMATS` (``rigsim paper --series``):
+        also the run's time series in that format. None: ``result.json`` and ``timings.json`` only.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
     from scenarios.core.results import write_run
 
-    return list(write_run(result, pathlib.Path(out) / result.scenario_name / result.mode).values())
+    folder = pathlib.Path(out) / result.scenario_name / result.mode
+    return list(write_run(result, folder, fmt=series).values())
 
 
 def render_report(result, *, case_files: bool = True, tables: tuple | None = None) -> dict[str, bytes]:

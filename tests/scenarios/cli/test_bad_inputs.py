@@ -258,6 +258,8 @@ _add("paper", "bad path", "rrd_folder", "paper", "--out", O, "--rrd", f"{S}/fold
 _add("paper", "bad path", "rrd_exists", "paper", "--out", O, "--rrd", f"{S}/old.rrd")
 _add("paper", "bad path", "rrd_under_file", "paper", "--out", O, "--rrd", f"{S}/file.txt/p.rrd")
 _add("paper", "options", "view_without_rrd", "paper", "--out", O, "--view")
+_add("paper", "bad choice", "rig", "paper", "--out", O, "--rig", "fast")
+_add("paper", "bad choice", "series", "paper", "--out", O, "--series", "xlsx")
 _add("paper", "options", "no_out", "paper")
 
 # rigsim validate

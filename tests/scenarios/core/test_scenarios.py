@@ -245,7 +245,7 @@ def test_cli_paper_short_run_writes_table_with_papers_values(tmp_path, capsys):
     assert main(["paper", "--out", str(out), "--duration-s", "12", "--jobs", "2", "--quiet"]) == 0
     printed = capsys.readouterr().out
     doc = json.loads((out / "paper.json").read_text())
-    assert doc["configuration"] == "design" and "Configuration: the project's design rig" in printed
+    assert doc["configuration"] == "dyntrac" and "Configuration: the simulated DYNTRAC fitted" in printed
     assert (out / "paper.json").stat().st_size < 100_000  # the figures only, never a run's signals
     cases = {c["case"]: c for c in doc["cases"]}
     assert list(cases) == ["paper-medium-72kmh-6360kg", "paper-high-48kmh-3640kg", "paper-high-72kmh-3640kg"]
