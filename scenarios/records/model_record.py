@@ -177,6 +177,9 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         noise = dict.fromkeys(CORNERS) if model_result is None else model_result.residual_noise_N  # probe: the longest
         if noise is not None:
             meta["residual_noise"] = residual_noise_text(noise)
+    outlook = "x " * 200 if model_result is None else (model_result.outlook and model_result.outlook.text())
+    if outlook:  # the derived fallback's figures, where the hybrid was weighed
+        meta["hybrid_outlook"] = outlook
     if method in ("linear", "model", "probe"):
         meta.update({"ta_source": fallback_source or "x",
                      **linear_metadata(lowpass=settings.lowpass, lowpass_hz=settings.lowpass_hz, mode=settings.mode,
@@ -259,9 +262,11 @@ def run_model(plan, progress=None) -> CorrectionResult:
                              workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
                              linear=linear, drift_hz=s.drift_hz)
     cal = res.calibration
-    hint = description_note(cal, s.scenario_file)
-    if hint:
-        say(hint)
+    from scenarios.records.model.skew import skew_note
+
+    for hint in (description_note(cal, s.scenario_file), skew_note(cal)):
+        if hint:
+            say(hint)
     if cal is not None:
         say(f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
             f"{'converged' if cal.converged else 'not converged'}, worst fit NRMSE {cal.worst_fit_nrmse:.3f})"

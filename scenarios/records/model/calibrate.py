@@ -107,7 +107,7 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
 #: body's roll mode sits low (0.3-0.7 Hz: the springs' roll stiffness less the load's height times
 #: its weight), lightly damped, where the road's cross-slope excites it: a roll inertia held at the
 #: catalogue's puts that mode off the truck's, and the front wheels' slow force with it. Searched
-#: 0.5-2 times the catalogue's (:data:`~scenarios.records.model.family.RANGES`). The catalogue truck
+#: 0.75-2 times the catalogue's (:data:`~scenarios.records.model.family.RANGES`). The catalogue truck
 #: holds the XML's.
 DESCRIBED_ROLL = "chassis_roll_inertia_kg_m2"
 

@@ -34,10 +34,12 @@ linear correction's filter transients are not.
 
 :func:`correct_with_model` calibrates the model from the record
 (:func:`scenarios.records.model.calibrate.calibrate`) and corrects, or says in one
-sentence why the linear correction is to be used instead: the calibration did not converge, could
-not run, or the calibrated model does not reproduce F_rig's dynamic part in the correction's band
-beyond the load cells' noise (:data:`HYBRID_LIMIT` with L, :data:`DIFFERENTIAL_LIMIT`
-without), on every wheel or (with L) on the wheels it names.
+sentence why the linear correction is to be used instead: the calibration did not converge or could
+not run; without L, the calibrated model does not reproduce F_rig's dynamic part in the correction's
+band beyond the load cells' noise (:data:`DIFFERENTIAL_LIMIT`); with L, the model's own runs show
+that L could turn the model's residual against the hybrid on the wheels it names
+(:mod:`~scenarios.records.model.fallback`: derived from the linear correction's error on the model
+truck and what L does to the residual, the DLC guarded apart).
 """
 
 from __future__ import annotations
@@ -55,6 +57,7 @@ from scenarios.core.pool import local_executor, run_jobs
 from scenarios.core.watch import SimulationError
 from scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
 from scenarios.records.model.cell_mass import without_cell_mass
+from scenarios.records.model.fallback import hybrid_outlook
 from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from scenarios.records.model.restart import calibrate_again
@@ -86,8 +89,10 @@ START_S = 3.0
 #: measured stays at or below 0.079 (the gradual stiffening included), below the limit.
 #: Another case's forces give ~1.
 DIFFERENTIAL_LIMIT = 0.14
-#: The same for the hybrid correction F_model(x_ref) + L(F_rig - F_model(x_a)) (``linear`` given,
-#: what ``rigsim correct --model`` and ``rigsim paper --model`` use), 1. Where the model explains
+#: The model error past which the hybrid correction F_model(x_ref) + L(F_rig - F_model(x_a)) (``linear``
+#: given, what ``rigsim correct --model`` and ``rigsim paper --model`` use) searches again: a lone wheel
+#: left out (:func:`outlier_wheel`), a fit started anew (:func:`~scenarios.records.model.restart.calibrate_again`),
+#: 1; whether the hybrid is then used is derived from the record (:mod:`~scenarios.records.model.fallback`). Where the model explains
 #: less, the hybrid tends to the linear correction instead of keeping the model's error, so it stays
 #: the better one further out: on the mismatch suite (``benchmarks/mismatch_suite.py``, 24 plants
 #: off the catalogue in several ways at once, a lab's channels, the cab's choice) the hybrid, forced
@@ -150,7 +155,7 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
 
 def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=None, *,
                       drift_hz: float | None = DRIFT_HZ,
-                      drift_rms_N: float | None = DRIFT_RMS_N) -> tuple[np.ndarray, np.ndarray, NoiseGain]:
+                      drift_rms_N: float | None = DRIFT_RMS_N, with_residual: bool = False) -> tuple:
     """F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel: :data:`HYBRID_FORMULA`.
 
     Parameters
@@ -177,13 +182,16 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
         The load cells' drift level (default :data:`~correction.output.denoise.DRIFT_RMS_N`): a
         wheel's slow residual at that level is cut as drift, one far above it is the model's error
         and kept (:func:`~correction.output.denoise.drift_keep`); None: cut whatever its level.
+    with_residual : bool
+        Return the residual L corrected, ``W(F_rig - F_model(x_a))`` (N, (n, 4)), too.
 
     Returns
     -------
     (numpy.ndarray, numpy.ndarray, NoiseGain)
         The corrected force (N, (n, 4)), L's settled samples (bool, (n,)) and W, the gain that took
         the residual's white noise and its slow part (the load cells' drift, below ``drift_hz``)
-        out (its ``noise_rms``, N, and ``measured`` per wheel).
+        out (its ``noise_rms``, N, and ``measured`` per wheel); with ``with_residual``, the
+        residual L corrected fourth.
     """
     residual = np.asarray(force_N, dtype=float) - f_a_N
     first = 0 if settled is None else int(np.argmax(np.asarray(settled, dtype=bool)))
@@ -193,7 +201,8 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
     body = gain.apply(residual[first:])
     denoised = np.concatenate([np.repeat(body[:1], first, axis=0), body], axis=0)
     corrected, lin_settled = linear(denoised)
-    return np.asarray(f_ref_N, dtype=float) + corrected, lin_settled, gain
+    out = (np.asarray(f_ref_N, dtype=float) + corrected, lin_settled, gain)
+    return out + (denoised,) if with_residual else out
 
 
 def fallback_reason(calibration, excess_limit: float = HYBRID_LIMIT) -> str:
@@ -256,10 +265,11 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     actuators as the linear correction corrects the whole. Where the model is exact this is the
     model's road force plus the corrected noise; where it explains nothing it is L(F_rig) above
     W's drift cut (0.7 Hz; below it the model's slow force); in between, L(F_rig) plus the model's
-    estimate of L's own error. A wheel whose model error exceeds
-    ``excess_limit`` is corrected by L alone, the others by the model (the sentence in ``reason``
-    names them). Without ``linear``: F_rig + F_model(x_ref) - F_model(x_a) on every wheel, or the
-    linear correction for all of them.
+    estimate of L's own error. A wheel where the model's runs show that L could turn the model's
+    residual against the hybrid (:func:`~scenarios.records.model.fallback.hybrid_outlook`) is
+    corrected by L alone, the others by the model (the sentence in ``reason`` names them). Without
+    ``linear``: F_rig + F_model(x_ref) - F_model(x_a) on every wheel, or the linear correction for
+    all of them, as the model error stays within ``excess_limit``.
 
     Parameters
     ----------
@@ -271,7 +281,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     workers : int, optional
         Worker processes (default: all cores), one pool for the calibration and the correction.
     excess_limit : float, 1, optional
-        Default :data:`HYBRID_LIMIT` with ``linear``, else :data:`DIFFERENTIAL_LIMIT`.
+        The model error past which (without ``linear``) the linear correction is used, and (with
+        ``linear``) a lone wheel is left out and the truck calibrated again, or a fit searched
+        again: default :data:`HYBRID_LIMIT` with ``linear``, else :data:`DIFFERENTIAL_LIMIT`.
     cab : {"auto", "held", "fitted"}
         Whether the model's cab is held, fitted, or (default) chosen by the two fits
         (:func:`~scenarios.records.model.cab_choice.calibrate_cab`).
@@ -349,19 +361,32 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                 again = dataclasses.replace(again, evaluations=cal.evaluations + again.evaluations,
                                             wall_time_s=timings["calibration_s"])
                 cal, reason = again, fallback_reason(again, excess_limit)
-        holds = (np.asarray(cal.excess_nrmse) <= excess_limit) & np.isin(CORNERS, cal.wheels)
-        if (reason or not holds.all()) and (linear is None or not cal.converged or not holds.any()):
-            return _linear(reason, cal, wall0, timings)
+        if linear is None:  # the differential form: the model error's limit decides
+            holds = np.asarray(cal.excess_nrmse) <= excess_limit
+            if reason or not holds.all():
+                return _linear(reason, cal, wall0, timings)
+        elif not cal.converged:
+            return _linear(fallback_reason(cal, excess_limit), cal, wall0, timings)
+        else:  # the hybrid: decided on the model runs (fallback.hybrid_outlook); a wheel left out stays linear
+            holds = np.isin(CORNERS, cal.wheels)
         t1 = time.perf_counter()
         f_ref, f_a = model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex)
         # the load cells' uncompensated mass, fitted with the truck, taken out
         force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
-        noise = None
+        noise = outlook = None
         if linear is None:
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
-            corrected, settled, gain = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t),
-                                                          drift_hz=drift_hz, drift_rms_N=drift_rms_N)
+            corrected, settled, gain, residual = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t),
+                                                                    drift_hz=drift_hz, drift_rms_N=drift_rms_N,
+                                                                    with_residual=True)
+            outlook = hybrid_outlook(f_ref, f_a, residual, corrected, linear, fs,
+                                     settled_mask(t) & np.asarray(settled, dtype=bool), pans_m=x_a_m)
+            reason = " ".join(r for r in (wheels_reason(cal, holds, excess_limit), outlook.reason(holds, cal.excess_nrmse))
+                              if r)
+            holds = holds & outlook.holds
+            if not holds.any():
+                return _linear(reason, cal, wall0, timings, outlook)
             formula = HYBRID_FORMULA
             noise = {c: float(v) if white else None
                      for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}
@@ -369,13 +394,13 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                 corrected[:, ~holds] = linear(np.asarray(force_N, dtype=float))[0][:, ~holds]
             settled = settled_mask(t) & np.asarray(settled, dtype=bool)
         timings["correction_s"] = round(time.perf_counter() - t1, 3)
-    return ModelCorrection(method=MODEL, reason=wheels_reason(cal, holds, excess_limit) if linear is not None else "",
+    return ModelCorrection(method=MODEL, reason=reason if linear is not None else "",
                            calibration=cal, corrected_N=corrected, settled=settled,
                            wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings,
                            wheels=tuple(c for c, ok in zip(CORNERS, holds) if ok or linear is None), formula=formula,
-                           model_N=(f_ref, f_a), residual_noise_N=noise)
+                           model_N=(f_ref, f_a), residual_noise_N=noise, outlook=outlook)
 
 
-def _linear(reason: str, cal, wall0: float, timings: dict) -> ModelCorrection:
+def _linear(reason: str, cal, wall0: float, timings: dict, outlook=None) -> ModelCorrection:
     return ModelCorrection(method=LINEAR, reason=reason, calibration=cal,
-                           wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings)
+                           wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings, outlook=outlook)

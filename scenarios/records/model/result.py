@@ -110,6 +110,27 @@ class Calibration:
         springs sliding and with each axle's stations held alike
         (:func:`scenarios.records.model.restart.calibrate_again`): one sentence on the fits and
         which is kept; "" otherwise.
+
+    Examples
+    --------
+    What ``CorrectionResult.calibration`` holds after a correction by the truck model; one built
+    by hand here, two fields fitted on two windows:
+
+    >>> from scenarios.records.model.result import Calibration
+    >>> cal = Calibration(names=("payload_kg", "payload_x_m"), units=("kg", "m"),
+    ...                   initial=(6000.0, -1.0), fitted=(6352.4, -1.32), sigma=(8.1, 0.004),
+    ...                   sigma_robust=(21.0, 0.011), fixed={"cab_mount_hz": None},
+    ...                   fit_nrmse=(0.041, 0.043, 0.052, 0.049),
+    ...                   initial_nrmse=(0.31, 0.30, 0.42, 0.40),
+    ...                   windows_s=((5.0, 10.0), (15.0, 20.0)), weighted=True, evaluations=42,
+    ...                   converged=True, message="ftol reached", wall_time_s=95.0)
+    >>> print(cal.table())
+    | parameter | unit | first guess | fitted +- 1 sigma (robust) |
+    | --- | --- | --- | --- |
+    | payload_kg | kg | 6000 | 6352.4 +- 8.1 (21) |
+    | payload_x_m | m | -1 | -1.32 +- 0.004 (0.011) |
+    >>> cal.values()["payload_kg"], cal.worst_fit_nrmse, cal.fitted_cab_hz
+    (6352.4, 0.052, None)
     """
 
     names: tuple
@@ -263,6 +284,9 @@ class ModelCorrection:
         Per wheel the model corrects (by corner), the white noise W took out of the model's
         residual (its rms over the whole band), None for a wheel whose residual was not white above
         the truck's band (W passed it); None without W (the differential form, or method "linear").
+    outlook : HybridOutlook or None
+        The derived fallback's figures per wheel (:mod:`~scenarios.records.model.fallback`), where
+        the hybrid was weighed against the linear correction; None otherwise.
     """
 
     method: str
@@ -276,6 +300,7 @@ class ModelCorrection:
     formula: str = ""
     model_N: tuple | None = None
     residual_noise_N: Mapping | None = None
+    outlook: object | None = None
 
     @property
     def use_linear(self) -> bool:

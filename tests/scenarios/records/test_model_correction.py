@@ -129,7 +129,8 @@ def test_the_cab_is_fitted_only_on_request():
     """The default family holds the cab rigid (a smooth road may not pin its mount frequency: see
     family.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
     assert "cab_mount_hz" in FITTED and "cab_mount_hz" not in DEFAULT_NAMES
-    assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz", *EMPTY_STAND_IN.values(), *AIR_FITTED}
+    assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values(),
+                                                *AIR_FITTED}  # the roll inertia: on a described truck only
 
 
 def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
@@ -204,7 +205,8 @@ def test_calibration_recovers_a_cab_mount_frequency():
     sc, road, force = _road_record(cab_mount_hz=2.0)
     plant = sc.vehicle
     held = {k: getattr(plant, k) for k in FITTED
-            if k not in ("cab_mount_hz", "payload_z_m", *EMPTY_STAND_IN.values()) and not k.startswith("tire_progressive")
+            if k not in ("cab_mount_hz", "payload_z_m", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values())
+            and not k.startswith("tire_progressive")
             and k not in STATION_FITTED and k not in AIR_FITTED}
     assert all(v is not None for v in held.values())  # the stations: held symmetric, the plant's
     cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=("cab_mount_hz",),

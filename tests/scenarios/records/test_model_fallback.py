@@ -8,6 +8,7 @@ runs that produce a real fallback are tests/scenarios/records/test_model_correct
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 import math
 
 import pytest
@@ -129,6 +130,9 @@ def test_the_cab_is_chosen_on_the_calibration_without_the_outlier_wheel(monkeypa
     monkeypatch.setattr(differential, "calibrate_cab", fake_calibrate_cab)
     monkeypatch.setattr(differential, "calibrate_again", lambda cal, again, limit: cal)
     monkeypatch.setattr(differential, "model_force_pair", lambda variant, t, x_ref, x_a, **kw: (np.zeros((n, 4)),) * 2)
+    # the hybrid's own weighing (fallback.hybrid_outlook) keeps every calibrated wheel: not this test's subject
+    monkeypatch.setattr(differential, "hybrid_outlook",
+                        lambda *a, **k: SimpleNamespace(holds=np.ones(4, bool), reason=lambda *a: ""))
     n = 4000
     t = np.arange(n) / 1000.0
     x = np.zeros((n, 4))
