@@ -27,8 +27,11 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    # MathJax 3 served from the built site (_static/mathjax/tex-chtml.js): equations render offline.
+    "sphinx-mathjax-offline",
     "numpydoc",
     "sphinx_gallery.gen_gallery",
+    "sphinx_copybutton",
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
@@ -42,9 +45,9 @@ myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 myst_dmath_double_inline = True
 
-# API reference: one page per public object, generated at build time into api/generated/.
-autosummary_generate = True
-autosummary_imported_members = False
+# API reference: one page, api/index.rst, of the names a lab's script uses (autodoc entries and an
+# autosummary table linking to them); no page per object.
+autosummary_generate = False
 autodoc_default_options = {"members": False}
 autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types and units
 numpydoc_show_class_members = False
@@ -62,7 +65,13 @@ sphinx_gallery_conf = {
     "within_subsection_order": "sphinx_gallery.sorting.FileNameSortKey",
     "abort_on_example_error": True,
     "show_signature": False,
+    # No timing pages: sphinx-gallery's load jQuery and DataTables from a CDN.
+    "write_computation_times": False,
 }
+
+# Copy buttons on code blocks copy the commands and the Python, never the prompts or the output.
+copybutton_prompt_text = r">>> |\.\.\. |\$ "
+copybutton_prompt_is_regexp = True
 
 html_theme = "pydata_sphinx_theme"
 html_title = "rigsim"
@@ -73,5 +82,6 @@ html_theme_options = {
     "footer_start": ["copyright"],
     "footer_end": [],
 }
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["tables.css"]
 html_show_sourcelink = False
