@@ -115,6 +115,21 @@ class ActuatorFit:
         Per candidate ``"n/d"``, held-out errors (1; NaN for one that could not be fitted):
         ``held_out_error`` (the usable fit's), ``model_error`` (the raw fit's, before the
         clean-up) and ``magnitude_error`` (the usable fit's magnitude alone).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy import signal
+    >>> from correction.identification.actuator_fit import fit_actuator
+    >>> t = np.arange(30_000) / 500.0
+    >>> drive = 2e-3 * np.random.default_rng(1).standard_normal(t.size)
+    >>> w = 2 * np.pi * 15.0
+    >>> fit = fit_actuator(drive, signal.lsim(([w * w], [1.0, 1.4 * w, w * w]), drive, t)[1], 500.0)
+    >>> print(np.round(np.abs(fit.frequency_response([1.0, 10.0, 15.0])), 2))
+    [1.   0.92 0.71]
+    >>> num, den = fit.as_tf()
+    >>> sorted(fit.band_errors)
+    ['0.1-1 Hz', '1-10 Hz', '10-30 Hz', '30-60 Hz']
     """
 
     num: np.ndarray
@@ -348,6 +363,25 @@ def fit_actuator(drive_m, displacement_m, fs: float, *, band_hz=(0.1, 60.0), ord
         unit; :func:`correction.identification.plausibility.check_actuator`).
     ValueError
         Records of different lengths, non-finite samples, a record too short.
+
+    Examples
+    --------
+    60 s of random drive and the pan displacement of a second-order actuator at 15 Hz, 0.7 of
+    critical damping:
+
+    >>> import numpy as np
+    >>> from scipy import signal
+    >>> from correction.identification.actuator_fit import fit_actuator
+    >>> fs = 500.0
+    >>> t = np.arange(30_000) / fs
+    >>> drive = 2e-3 * np.random.default_rng(1).standard_normal(t.size)
+    >>> w = 2 * np.pi * 15.0
+    >>> lvdt = signal.lsim(([w * w], [1.0, 1.4 * w, w * w]), drive, t)[1]
+    >>> fit = fit_actuator(drive, lvdt, fs)
+    >>> print(f"-3 dB at {fit.bandwidth_hz:.0f} Hz, T_a(0) = {fit.num[-1] / fit.den[-1]:g}")
+    -3 dB at 15 Hz, T_a(0) = 1
+    >>> bool(np.all(fit.poles().real < 0)), bool(np.all(fit.zeros().real < 0))
+    (True, True)
     """
     u, y, fs = _pair(drive_m, displacement_m, fs)
     check_signals(u, y)

@@ -36,7 +36,24 @@ CANCEL_GAP = 0.01
 
 
 class ActuatorFitError(ValueError):
-    """Data that cannot support a fit of ``T_a``; the message is one sentence naming the band and the fix."""
+    """Data that cannot support a fit of ``T_a``; the message is one sentence naming the band and the fix.
+
+    Examples
+    --------
+    A displacement that does not follow the drive (here: another random signal) cannot support a
+    fit:
+
+    >>> import numpy as np
+    >>> from correction.identification.actuator_fit import ActuatorFitError, fit_actuator
+    >>> rng = np.random.default_rng(1)
+    >>> drive, other = 2e-3 * rng.standard_normal((2, 30_000))
+    >>> try:  # doctest: +ELLIPSIS, +NORMALIZE_WHITESPACE
+    ...     fit_actuator(drive, other, 500.0)
+    ... except ActuatorFitError as exc:
+    ...     print(exc)
+    the drive-to-displacement coherence is >= 0.9 at only 0% of the points in 1-30 Hz (...): the LVDT
+    does not follow this drive (the wrong corner, or not an LVDT); pair the drive with the LVDT of its own post
+    """
 
 
 def _lhp(roots: np.ndarray) -> np.ndarray:

@@ -62,6 +62,20 @@ class ChannelFilter:
         An analog conditioner's filter, or a digital one designed at the record's rate.
     delay_s : float, s
         The channel's delay beyond the filter (a multiplexed converter's skew), 0 to 10 ms.
+
+    Examples
+    --------
+    A 4th-order Butterworth anti-alias filter at 200 Hz and a 0.2 ms converter skew, as given to
+    ``force_filter`` of :func:`~scenarios.records.correct_record` (or as the text ``"200:4"``
+    with the delay apart):
+
+    >>> import numpy as np
+    >>> from correction.io.acquisition import ChannelFilter
+    >>> acq = ChannelFilter(200.0, 4, delay_s=2e-4)
+    >>> print(f"{abs(acq.response([200.0], 2000.0)[0]):.3f}")
+    0.707
+    >>> acq.none, ChannelFilter().none
+    (False, True)
     """
 
     corner_hz: float | None = None

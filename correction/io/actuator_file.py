@@ -67,7 +67,20 @@ _OPTIONAL = ("ti_s",)
 
 
 class ActuatorFileError(ValueError):
-    """An actuator file that cannot be used as written; the message is one sentence naming the key."""
+    """An actuator file that cannot be used as written; the message is one sentence naming the key.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from correction.io.actuator_file import ActuatorFileError, read_actuators_file
+    >>> acts = pathlib.Path(tempfile.mkdtemp()) / "actuators.toml"
+    >>> _ = acts.write_text("[fl]\\nnum = [1.0]\\n")
+    >>> try:
+    ...     read_actuators_file(acts)
+    ... except ActuatorFileError as exc:
+    ...     print(exc)
+    fl.den is missing (coefficients in descending powers of s)
+    """
 
 
 def _coefficients(where: str, value) -> np.ndarray:
@@ -213,6 +226,18 @@ def read_actuators_file(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     ------
     ActuatorFileError
         A missing, unreadable or malformed file, or any error of :func:`parse_actuators`.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from correction.io.actuator_file import read_actuators_file
+    >>> acts = pathlib.Path(tempfile.mkdtemp()) / "actuators.toml"
+    >>> _ = acts.write_text("[fl]\\nnum = [1.0]\\nden = [1.1e-4, 0.0106, 1.0]\\n"
+    ...                     "[fr]\\nnum = [1.0]\\nden = [1.2e-4, 0.0110, 1.0]\\n")
+    >>> for corner, (num, den) in read_actuators_file(acts).items():
+    ...     print(corner, num, den)
+    fl [1.] [1.10e-04 1.06e-02 1.00e+00]
+    fr [1.] [1.2e-04 1.1e-02 1.0e+00]
     """
     return parse_actuators(read_toml(path, "actuator file", ActuatorFileError))
 
@@ -237,6 +262,32 @@ def write_actuators_file(path, actuators: Mapping, meta: Mapping | None = None) 
     ActuatorFileError
         No corner, a corner name that is reserved or empty, coefficients that are not finite, a
         zero denominator (nothing is written).
+
+    Examples
+    --------
+    Two corners' T_a as ``(num, den)``, s in rad/s (an identified
+    :class:`~correction.identification.actuator_fit.ActuatorFit` also writes its diagnostics):
+
+    >>> import pathlib, tempfile
+    >>> from correction.io.actuator_file import read_actuators_file, write_actuators_file
+    >>> acts = pathlib.Path(tempfile.mkdtemp()) / "actuators.toml"
+    >>> write_actuators_file(acts, {"fl": ([1.0], [1.1e-4, 0.0106, 1.0]),
+    ...                             "fr": ([1.0], [1.2e-4, 0.0110, 1.0])},
+    ...                      meta={"source": "sine sweep, 2 mm rms"})
+    >>> print(acts.read_text())
+    [meta]
+    source = "sine sweep, 2 mm rms"
+    <BLANKLINE>
+    [fl]
+    num = [1.0]
+    den = [0.00011, 0.0106, 1.0]
+    <BLANKLINE>
+    [fr]
+    num = [1.0]
+    den = [0.00012, 0.011, 1.0]
+    <BLANKLINE>
+    >>> sorted(read_actuators_file(acts))
+    ['fl', 'fr']
     """
     if not isinstance(actuators, Mapping) or not actuators:
         raise ActuatorFileError("actuators must map at least one corner name to its T_a")

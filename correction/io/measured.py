@@ -193,6 +193,20 @@ def write_channels(path, channels, *, metadata: Mapping | None = None, overwrite
     -------
     pathlib.Path
         The file written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from types import SimpleNamespace
+    >>> import numpy as np
+    >>> from correction.io.measured import read_channels, write_channels
+    >>> t = np.arange(2000) / 1000.0
+    >>> channels = SimpleNamespace(time_s=t, data={"Fz_FL": 40e3 + 1e3 * np.sin(2 * np.pi * t)},
+    ...                            units={"Fz_FL": "N"})
+    >>> path = write_channels(pathlib.Path(tempfile.mkdtemp()) / "forces.rsp", channels)
+    >>> back = read_channels(path)
+    >>> back.format, back.fs_hz, list(back.data)
+    ('rpc3', 1000.0, ['Fz_FL'])
     """
     fmt = format_of(path, WRITE_FORMATS)
     out = check_output(path, overwrite=overwrite, inputs=inputs)

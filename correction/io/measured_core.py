@@ -82,6 +82,31 @@ class MeasuredChannels:
         runs of blanks), ``decimal`` (None: no field decided it), ``thousands`` (as given, else None),
         ``header_line`` (1-based), ``units_row``, ``encoding``; RPC III ``byte_order``, ``data_type``;
         MDF4 ``version``; TDMS ``time`` (``"channel"`` or ``"waveform"`` properties).
+
+    Examples
+    --------
+    A record built in memory: 10 s of one wheel force at 1 kHz.
+
+    >>> import numpy as np
+    >>> from correction.io.measured import MeasuredChannels
+    >>> t = np.arange(10_000) / 1000.0
+    >>> force = 40e3 + 2e3 * np.sin(2 * np.pi * 3.0 * t)
+    >>> record = MeasuredChannels(time_s=t, data={"Fz_FL": force}, units={"Fz_FL": "N"},
+    ...                           source_units={"Fz_FL": "N"}, fs_hz=1000.0, metadata={},
+    ...                           path="", format="csv")
+    >>> print(record.fs_hz, "Hz,", float(record.time_s[-1]), "s,", record.units["Fz_FL"])
+    1000.0 Hz, 9.999 s, N
+
+    A rate the time axis contradicts is refused in one sentence:
+
+    >>> from correction.io.measured import MeasuredDataError
+    >>> try:  # doctest: +ELLIPSIS
+    ...     MeasuredChannels(time_s=t, data={"Fz_FL": force}, units={"Fz_FL": "N"},
+    ...                      source_units={"Fz_FL": "N"}, fs_hz=500.0, metadata={}, path="",
+    ...                      format="csv")
+    ... except MeasuredDataError as exc:
+    ...     print(exc)
+    fs_hz = 500 Hz contradicts time_s, whose steps give 1000 Hz; fix: give fs_hz = ...
     """
 
     time_s: np.ndarray

@@ -6,4 +6,17 @@ __all__ = ["MeasuredDataError"]
 
 
 class MeasuredDataError(ValueError):
-    """A measured-data file that cannot be used as written; the message is one sentence."""
+    """A measured-data file that cannot be used as written; the message is one sentence.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from correction.io.measured import MeasuredDataError, write_channels
+    >>> forces = SimpleNamespace(time_s=np.arange(3) / 1000.0, data={"Fz_FL": np.full(3, 40e3)})
+    >>> try:  # doctest: +ELLIPSIS
+    ...     write_channels("forces.xlsx", forces)
+    ... except MeasuredDataError as exc:
+    ...     print(exc)
+    'forces.xlsx' has extension '.xlsx'; give a .csv/.txt/.dat (text), .rsp/.drv/.tim/.rpc ...
+    """

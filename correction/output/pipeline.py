@@ -35,6 +35,19 @@ class CorrectionError(ValueError):
     ----------
     column : int or None
         The force column whose ``T_a`` was refused (0-based), None when one ``T_a`` serves all.
+
+    Examples
+    --------
+    A T_a with a pole in the right half-plane cannot be inverted; the error names the column:
+
+    >>> import numpy as np
+    >>> from correction.output.pipeline import CorrectionError, correct_forces
+    >>> forces = np.full((2000, 2), 40e3)
+    >>> try:  # doctest: +ELLIPSIS
+    ...     correct_forces(forces, [([1.0], [1e-3, 1.0]), ([1.0], [1e-3, -1.0, 1.0])], 1000.0)
+    ... except CorrectionError as exc:
+    ...     print(f"column {exc.column}: {exc}")
+    column 1: T_a is unstable: it has a pole at 999 rad/s, not in the open left half-plane; ...
     """
 
     def __init__(self, message: str, column: int | None = None):
@@ -59,6 +72,19 @@ class CorrectedForces:
         The low-pass's name ("paper", "regularized" or a LowPass's name).
     mode : str
         "causal" or "zerophase".
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from correction.output.pipeline import correct_forces
+    >>> t = np.arange(5000) / 1000.0
+    >>> force = 40e3 + 2e3 * np.sin(2 * np.pi * 8.0 * t)
+    >>> w = 2 * np.pi * 15.0
+    >>> out = correct_forces(force, ([w * w], [1.0, 1.4 * w, w * w]), 1000.0)
+    >>> out.corrected_N.shape, len(out.filters)
+    ((5000,), 1)
+    >>> print(f"{out.settled_s:.2f} s of {t.size / 1000.0:.0f} s settled")
+    4.74 s of 5 s settled
     """
 
     corrected_N: np.ndarray
@@ -139,6 +165,23 @@ def correct_forces(force_N, actuators, fs: float, *, lowpass="regularized", mode
         ``T_a``, ``T_a(0) != 1``, sampling rate too low ...), one sentence, with the column.
     ValueError
         One sentence: a bad mode or shape, a count of actuators that does not match the columns.
+
+    Examples
+    --------
+    Two wheel forces (N) at 1 kHz, one T_a for both, a second-order actuator at 15 Hz:
+
+    >>> import numpy as np
+    >>> from correction.output.pipeline import correct_forces
+    >>> t = np.arange(5000) / 1000.0
+    >>> forces = np.column_stack([40e3 + 2e3 * np.sin(2 * np.pi * 8.0 * t),
+    ...                           38e3 + 1e3 * np.sin(2 * np.pi * 12.0 * t)])
+    >>> w = 2 * np.pi * 15.0
+    >>> out = correct_forces(forces, ([w * w], [1.0, 1.4 * w, w * w]), 1000.0)
+    >>> out.corrected_N.shape, out.mode, out.lowpass
+    ((5000, 2), 'zerophase', 'regularized')
+    >>> amplitude = (np.ptp(out.corrected_N[out.settled], axis=0) / 2).round(-1)
+    >>> print(amplitude)
+    [2070. 1170.]
     """
     if mode not in _MODES:
         raise ValueError(f"unknown mode {mode!r}; use 'causal' or 'zerophase'")

@@ -40,7 +40,28 @@ __all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_sc
 
 
 class ScenarioError(ValueError):
-    """A scenario that cannot be run as written; the message is one sentence naming the field."""
+    """A scenario that cannot be run as written; the message is one sentence naming the field.
+
+    Examples
+    --------
+    Every refusal of :func:`~scenarios.records.read_record`,
+    :func:`~scenarios.records.correct_record` and :func:`~scenarios.records.identify_record`,
+    before any work:
+
+    >>> import numpy as np
+    >>> from correction.io.measured import MeasuredChannels
+    >>> from scenarios.core.config import ScenarioError
+    >>> from scenarios.records import correct_record
+    >>> t = np.arange(1000) / 1000.0
+    >>> record = MeasuredChannels(time_s=t, data={"Fz_FL": 40e3 + 0 * t}, units={"Fz_FL": "N"},
+    ...                           source_units={"Fz_FL": "N"}, fs_hz=1000.0, metadata={},
+    ...                           path="", format="csv")
+    >>> try:
+    ...     correct_record(record)
+    ... except ScenarioError as exc:
+    ...     print(exc)
+    give exactly one of actuator='ACT.toml', actuators='ACTS.toml' and identify='DRIVE_COL,DISP_COL'
+    """
 
 
 def _number(where: str, value: Any, *, lo: float | None = None, hi: float | None = None, lo_open=False) -> float:

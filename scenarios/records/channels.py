@@ -193,6 +193,22 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
     ScenarioError
         One sentence naming the file and the column, line, unit or option at fault
         (:func:`correction.io.measured.read_channels`).
+
+    Examples
+    --------
+    A semicolon-separated file with decimal commas, a force in kN and a displacement in mm, read
+    in SI:
+
+    >>> import pathlib, tempfile
+    >>> from scenarios.records import read_record
+    >>> rig = pathlib.Path(tempfile.mkdtemp()) / "rig.csv"
+    >>> rows = [f"{i / 500:.3f};{40 + i % 3:.1f};{1.5 + i % 2:.1f}".replace(".", ",") for i in range(6)]
+    >>> _ = rig.write_text("\\n".join(["time;Fz_FL [kN];Weg_FL [mm]", *rows]) + "\\n")
+    >>> record = read_record(rig)
+    >>> record.fs_hz, dict(record.units), dict(record.source_units)
+    (500.0, {'Fz_FL': 'N', 'Weg_FL': 'm'}, {'Fz_FL': 'kN', 'Weg_FL': 'mm'})
+    >>> print(record.data["Fz_FL"][:3], record.data["Weg_FL"][:2])
+    [40000. 41000. 42000.] [0.0015 0.0025]
     """
     from correction.io.measured import MeasuredDataError, read_channels
     from correction.io.tomlfile import path_text

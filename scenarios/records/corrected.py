@@ -41,6 +41,23 @@ class ChannelLoads:
     del5_before_N, del5_after_N : float or None, N
         Damage-equivalent load for the exponent m = 5 at 1 Hz
         (:func:`correction.metrics.damage.damage_equivalent_load`).
+
+    Examples
+    --------
+    A row of :attr:`CorrectionResult.loads` (as :func:`~scenarios.records.correct_record` computes
+    them; by hand here):
+
+    >>> from scenarios.records import ChannelLoads
+    >>> row = ChannelLoads("Fz_FL", dlc_before=0.0363, dlc_after=0.0367, change=0.011,
+    ...                    stress_factor_before=1.0079, stress_factor_after=1.0081,
+    ...                    del5_before_N=5.90e3, del5_after_N=6.11e3)
+    >>> print(f"{row.channel}: DLC {row.dlc_before} -> {row.dlc_after} ({row.change:+.1%})")
+    Fz_FL: DLC 0.0363 -> 0.0367 (+1.1%)
+
+    A channel whose mean is not a compressive load has no DLC:
+
+    >>> ChannelLoads("Fx_FL").dlc_before is None
+    True
     """
 
     channel: str
@@ -131,6 +148,34 @@ class CorrectionResult:
         The linear correction's filter of each channel; empty for the model.
     inputs : tuple of str
         The files the result was made from: :meth:`write` never writes onto one of them.
+
+    Examples
+    --------
+    Two wheels, each corrected with its corner's T_a; the written file marks the settled samples:
+
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> from correction.io.measured import MeasuredChannels
+    >>> from scenarios.records import correct_record, read_record
+    >>> t = np.arange(10_000) / 1000.0
+    >>> wave = 2e3 * np.sin(2 * np.pi * 3.0 * t) + 5e2 * np.sin(2 * np.pi * 12.0 * t)
+    >>> data = {"Fz_FL": 40e3 + wave, "Fz_FR": 38e3 - wave}
+    >>> record = MeasuredChannels(time_s=t, data=data, units=dict.fromkeys(data, "N"),
+    ...                           source_units=dict.fromkeys(data, "kN"), fs_hz=1000.0,
+    ...                           metadata={}, path="", format="csv")
+    >>> w = 2 * np.pi * 15.0
+    >>> acts = {"fl": ([w * w], [1.0, 1.4 * w, w * w]), "fr": ([w * w], [1.0, 1.2 * w, w * w])}
+    >>> result = correct_record(record, actuators=acts, transient="mark")
+    >>> result.corners, result.method
+    (('fl', 'fr'), 'linear')
+    >>> print(result.table())  # doctest: +NORMALIZE_WHITESPACE
+    column                   DLC before  DLC after   change   SF4 before  SF4 after   DEL5 before  DEL5 after
+    Fz_FL                        0.0363     0.0367     1.1%       1.0079     1.0081       5.90 kN     6.11 kN
+    Fz_FR                        0.0382     0.0379    -0.8%       1.0088     1.0086       5.90 kN     5.88 kN
+    >>> out = result.write(pathlib.Path(tempfile.mkdtemp()) / "corrected.rsp")
+    >>> back = read_record(out)
+    >>> list(back.data), back.time_s.size, f"{result.transient_samples} not settled"
+    (['Fz_FL_corrected', 'Fz_FR_corrected', 'settled'], 10000, '264 not settled')
     """
 
     channels: tuple

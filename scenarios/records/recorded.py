@@ -49,6 +49,33 @@ class RecordedIdentification:
     record_s : float, s
     lvdt_filter : correction.io.acquisition.ChannelFilter or None
         The LVDT channels' anti-alias filter and delay, undone before the fit (None: as recorded).
+
+    Examples
+    --------
+    What :func:`~scenarios.records.identify_record` returns, written as the per-corner actuator
+    file that ``actuators=`` of :func:`~scenarios.records.correct_record` reads:
+
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> from scipy import signal
+    >>> from correction.io.actuator_file import read_actuators_file, write_actuators_file
+    >>> from correction.io.measured import MeasuredChannels
+    >>> from scenarios.records import identify_record
+    >>> t = np.arange(30_000) / 500.0
+    >>> drive = 2e-3 * np.random.default_rng(1).standard_normal(t.size)
+    >>> w = 2 * np.pi * 15.0
+    >>> lvdt = signal.lsim(([w * w], [1.0, 1.4 * w, w * w]), drive, t)[1]
+    >>> record = MeasuredChannels(time_s=t, data={"Soll_FL": drive, "Weg_FL": lvdt},
+    ...                           units={"Soll_FL": "m", "Weg_FL": "m"},
+    ...                           source_units={"Soll_FL": "m", "Weg_FL": "m"}, fs_hz=500.0,
+    ...                           metadata={}, path="", format="csv")
+    >>> found = identify_record(record, pairs={"fl": ("Soll_FL", "Weg_FL")})
+    >>> list(found.fits), found.fs_hz, found.record_s
+    (['fl'], 500.0, 60.0)
+    >>> acts = pathlib.Path(tempfile.mkdtemp()) / "actuators.toml"
+    >>> write_actuators_file(acts, found.fits, found.meta())
+    >>> list(read_actuators_file(acts))
+    ['fl']
     """
 
     source: str
