@@ -4,11 +4,13 @@
 
     python benchmarks/paper_overhead.py [--jobs 2] [--duration-s 60] [--repeats 1]
 
-1. Counts the MuJoCo steps ``rigsim paper`` takes: per case the road run, the rig run (both
-   RK4 at 1e-3 s, the lead-in plus the duration) and the rig's identification
+1. Counts the MuJoCo steps ``rigsim paper`` takes on its default rig
+   (:data:`scenarios.studies.paper.command.RIG`): per case the road run, the rig run (both RK4 at
+   1e-3 s, the lead-in plus the duration) and the rig's identification
    (:func:`scenarios.studies.identify.compute.identify_rig`'s drive, RK4).
 2. Times ``rigsim paper --out TMP --jobs J --quiet`` end to end (a subprocess: imports, compiling
-   or loading the hydraulic callbacks, the runs, the scoring, the report and its figures). The
+   or loading the hydraulic callbacks, the runs, the scoring, each run's ``result.json``, the
+   report and its figures; no time series, which only ``--series`` writes). The
    packages are byte-compiled first, as ``pip install`` leaves an installed package (a checkout
    run with ``PYTHONDONTWRITEBYTECODE`` set would otherwise compile every module's source in
    every run).
@@ -46,16 +48,17 @@ CHUNK_STEPS = 20_000
 
 
 def paper_steps(duration_s: float | None) -> dict:
-    """MuJoCo steps of ``rigsim paper`` by integration: ``{"rk4": the road runs', the rig runs' and
+    """MuJoCo steps of ``rigsim paper`` (its default rig) by integration: ``{"rk4": the road runs', the rig runs' and
     the identifications'}``, each at its test's time step (RK4 at 1e-3 s, :mod:`scenarios.core.rig`)."""
     import dataclasses
 
     from scenarios.core.config import load_scenario, paper_scenarios
     from scenarios.core.rig import Rig
     from scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S
+    from scenarios.studies.paper.command import RIG
 
     total = 0
-    for p in paper_scenarios():
+    for p in paper_scenarios(RIG):
         sc = load_scenario(p)
         if duration_s is not None:
             sc = dataclasses.replace(sc, duration_s=float(duration_s))
