@@ -14,16 +14,19 @@ time-invariant filter of the four pans' motion explains (:func:`linear_part`: le
 :data:`LAGS_S` of each pan's motion) commutes with L (L is one filter on the pan motion as on the
 force) and costs nothing; the rest, ``r_nl``, behaves at worst as a residual that does not depend on
 the pan motion (the same on the road as on the rig), which costs ``(L - B) r_nl``. So the hybrid's
-error is ``e_H = |(L - B) r_nl|`` and the linear correction's at least ``|E[M]| - e_H``: where
-``2 e_H < |E[M]|`` the hybrid is the better one in NRMSE whichever way the two errors point;
-elsewhere the wheel is corrected linearly. The model error
+error is estimated as ``e_H = (L - B) r_nl`` and the linear correction's as ``E[M] + e_H``, both as
+time series: the two add as they point, and where ``|e_H| < |E[M] + e_H|`` the hybrid is the better
+one in NRMSE; elsewhere the wheel is corrected linearly. (The hybrid loses only where the model's
+residual undoes the linear correction's own error on the model: ``e_H`` against ``E[M]`` and at
+least half as large.) The model error
 (:attr:`~scenarios.records.model.result.Calibration.excess_nrmse`) enters through r: a model that
 explains less leaves a larger residual for L to move.
 
-The DLC goal is guarded apart: the hybrid's DLC moves by at most what ``(L - B) r`` moves it
-(``DLC(H) - DLC(H - (L - B) r)``); where that exceeds both the DLC goal (:data:`DLC_GOAL`) and the
-linear correction's own DLC error on the model truck (``DLC(L(F_model(x_a))) - DLC(B
-F_model(x_ref))``), the wheel is corrected linearly too.
+The DLC goal is guarded apart, on the road force the estimates imply, ``R = H - e_H`` (H the
+hybrid): the hybrid's DLC error ``DLC(H) - DLC(R)`` and the linear correction's ``DLC(H - e_H +
+E[M] + e_H) - DLC(R)``, i.e. with the linear correction's estimated error in place of the
+hybrid's; where the hybrid's exceeds both the DLC goal (:data:`DLC_GOAL`) and the linear
+correction's, the wheel is corrected linearly too.
 
 Every figure is per wheel over the samples where both corrections have settled, relative to the
 standard deviation of the model's band-limited road force ``B F_model(x_ref)`` (NRMSE) or over its
@@ -66,15 +69,15 @@ class HybridOutlook:
     Attributes
     ----------
     linear_error : numpy.ndarray, (4,), 1
-        ``|E[M]|``: the linear correction's NRMSE on the model truck.
+        ``|E[M] + e_H|``: the linear correction's estimated NRMSE.
     hybrid_bound : numpy.ndarray, (4,), 1
-        ``e_H = |(L - B) r|``: the most the hybrid's NRMSE can be.
+        ``|e_H| = |(L - B) r_nl|``: the hybrid's estimated NRMSE.
     linear_dlc_error : numpy.ndarray, (4,), 1
-        The linear correction's DLC error on the model truck.
+        The linear correction's estimated DLC error.
     hybrid_dlc_bound : numpy.ndarray, (4,), 1
-        The most the hybrid's DLC can be off by what L does to the residual.
+        The hybrid's estimated DLC error, its size.
     holds : numpy.ndarray of bool, (4,)
-        The wheels the hybrid keeps: ``2 e_H < |E[M]|`` and the DLC guard.
+        The wheels the hybrid keeps: ``|e_H| < |E[M] + e_H|`` and the DLC guard.
     """
 
     linear_error: np.ndarray
@@ -94,21 +97,21 @@ class HybridOutlook:
         parts = []
         for i in bad:
             err = "" if model_error is None else f"model error {float(model_error[i]):.3f}: "
-            if not 2 * self.hybrid_bound[i] < self.linear_error[i]:
-                parts.append(f"{CORNERS[i]} ({err}its residual could cost the hybrid NRMSE {self.hybrid_bound[i]:.3f}, "
-                             f"the linear correction's own error is {self.linear_error[i]:.3f})")
+            if not self.hybrid_bound[i] < self.linear_error[i]:
+                parts.append(f"{CORNERS[i]} ({err}its residual costs the hybrid an NRMSE of about {self.hybrid_bound[i]:.3f}, "
+                             f"the linear correction {self.linear_error[i]:.3f})")
             else:
-                parts.append(f"{CORNERS[i]} ({err}its residual could move the DLC by {100 * self.hybrid_dlc_bound[i]:.2f} %, "
+                parts.append(f"{CORNERS[i]} ({err}its residual moves the hybrid's DLC by about {100 * self.hybrid_dlc_bound[i]:.2f} %, "
                              f"the linear correction's by {100 * abs(self.linear_dlc_error[i]):.2f} %)")
         which = "that wheel is" if len(bad) == 1 else "those wheels are"
         return (f"the calibrated truck model leaves a residual on {', '.join(parts)} that the linear correction "
-                f"could turn against the hybrid, so {which} corrected linearly.")
+                f"turns against the hybrid, so {which} corrected linearly.")
 
     def text(self) -> str:
-        """The figures per wheel in one line (a file's metadata): NRMSE and DLC error, the linear
-        correction's on the model truck and the hybrid's bound, and the method kept."""
-        return "; ".join(f"{c}: linear {self.linear_error[i]:.3f} hybrid <= {self.hybrid_bound[i]:.3f}, DLC linear "
-                         f"{100 * self.linear_dlc_error[i]:+.2f} % hybrid <= {100 * self.hybrid_dlc_bound[i]:.2f} %, "
+        """The figures per wheel in one line (a file's metadata): the estimated NRMSE and DLC error of the
+        linear correction and of the hybrid, and the method kept."""
+        return "; ".join(f"{c}: linear {self.linear_error[i]:.3f} hybrid {self.hybrid_bound[i]:.3f}, DLC linear "
+                         f"{100 * self.linear_dlc_error[i]:+.2f} % hybrid {100 * self.hybrid_dlc_bound[i]:.2f} %, "
                          f"{'model' if self.holds[i] else 'linear'}" for i, c in enumerate(CORNERS))
 
     def to_dict(self) -> dict:
@@ -189,10 +192,12 @@ def hybrid_outlook(f_ref_N, f_a_N, residual_N, hybrid_N, linear, fs_hz: float, r
     mean = road.mean(axis=0)
     h = hybrid[rows]
     with np.errstate(divide="ignore", invalid="ignore"):  # a model force without dynamics or load: nan, not kept
-        linear_error = np.sqrt(np.mean((lin_model - road) ** 2, axis=0)) / scale
+        e_lin = lin_model - road + moved  # E[M] + e_H
+        linear_error = np.sqrt(np.mean(e_lin ** 2, axis=0)) / scale
         bound = np.sqrt(np.mean(moved ** 2, axis=0)) / scale
-        lin_dlc = _dlc(lin_model, mean) - _dlc(road, mean)
-        dlc_bound = np.abs(_dlc(h, mean) - _dlc(h - moved, mean))
+        implied = h - moved  # the road force the estimates imply
+        lin_dlc = _dlc(implied + e_lin, mean) - _dlc(implied, mean)
+        dlc_bound = np.abs(_dlc(h, mean) - _dlc(implied, mean))
     dlc_ok = (dlc_bound <= DLC_GOAL) | (dlc_bound <= np.abs(lin_dlc))
     return HybridOutlook(linear_error=linear_error, hybrid_bound=bound, linear_dlc_error=lin_dlc,
-                         hybrid_dlc_bound=dlc_bound, holds=(2.0 * bound < linear_error) & dlc_ok)
+                         hybrid_dlc_bound=dlc_bound, holds=(bound < linear_error) & dlc_ok)

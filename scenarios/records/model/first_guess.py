@@ -24,6 +24,7 @@ import numpy as np
 from hydraulics.params import GRAVITY_M_S2
 from mjcf import names as mjnames
 from mjcf.build import build_model, nominal_values
+from mjcf.physics import EquilibriumError
 from mjcf.description import AIR_DAMPING_NS_PER_M, AIR_RATE_N_PER_M, DESCRIPTION_FIELDS, described, suspension_of
 from mjcf.variant import BOUNDS, TruckVariant
 from mjcf.names import CORNERS, FRONT
@@ -201,7 +202,8 @@ def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_
     Raises
     ------
     ScenarioError
-        A moment no payload on the bed explains (more than 0.8 m off the centreline), in one sentence.
+        A moment no payload on the bed explains (more than 0.8 m off the centreline), or a payload on
+        which the catalogue guess finds no rest, in one sentence.
     """
     if payload_kg <= 0.0:  # an empty truck (static_guess): no payload to place
         return 0.0
@@ -211,11 +213,16 @@ def static_lateral(force_N, base_scenario: Scenario, payload_kg: float, payload_
     cat = catalogue(desc)
 
     def moment(y: float) -> float:
-        return float(static_axle_loads(TruckVariant(payload_kg=payload_kg, payload_x_m=payload_x_m,
-                                                    payload_y_m=y, **cat), base_scenario) @ y_c)
+        try:
+            return float(static_axle_loads(TruckVariant(payload_kg=payload_kg, payload_x_m=payload_x_m,
+                                                        payload_y_m=y, **cat), base_scenario) @ y_c)
+        except EquilibriumError:
+            raise ScenarioError(f"the catalogue guess of the described truck with {payload_kg:.0f} kg at x = "
+                                f"{payload_x_m:.2f} m, {y:+.2f} m off the centreline, finds no rest: the measured "
+                                "static loads place no payload on it; check the description's springs") from None
 
     y0, m0 = 0.0, moment(0.0)
-    y1 = 0.1
+    y1 = 0.05
     m1 = moment(y1)
     for _ in range(2):  # the moment is nearly linear in y: two secant steps
         if m1 == m0:

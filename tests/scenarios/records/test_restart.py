@@ -62,10 +62,21 @@ def test_the_better_fit_is_kept_and_both_are_counted():
     assert unconverged.fit_nrmse == bad.fit_nrmse
 
 
+def _refuse_every_wheel(monkeypatch):
+    """The hybrid's weighing (fallback.hybrid_outlook) refusing every wheel, as it does where the model's
+    residual undoes the linear correction's own error: these tests are about the search before it."""
+    from scenarios.records.model.fallback import HybridOutlook
+
+    four = np.full(4, 0.1)
+    monkeypatch.setattr(differential, "hybrid_outlook",
+                        lambda *a, **k: HybridOutlook(four, 2 * four, four, four, np.zeros(4, bool)))
+
+
 def test_the_correction_searches_a_refused_fit_again(monkeypatch):
-    # Both fits refused on every wheel: the correction falls back, after a second search from the
-    # sliding start.
+    # Both fits past the model error's limit on every wheel: searched again from the sliding start,
+    # then weighed on the record (refused here), the reason quoting each wheel's model error.
     calls = []
+    _refuse_every_wheel(monkeypatch)
 
     def fake(*args, **kw):
         calls.append(kw.get("start"))
@@ -85,6 +96,7 @@ def test_the_correction_searches_a_refused_fit_again(monkeypatch):
 
 def test_a_second_search_that_fails_leaves_the_first(monkeypatch):
     calls = []
+    _refuse_every_wheel(monkeypatch)
 
     def fake(*args, **kw):
         calls.append(kw.get("start"))
