@@ -147,5 +147,6 @@ def model_table(scores) -> str:
     lines.append("record's own signals; DLC and its error against the road on the same samples; linear: L's NRMSE;")
     lines.append("fit NRMSE: the calibrated model, pans following x_a, against the measured F_rig (mean of the wheels);")
     lines.append("model err.: the worst wheel's dynamic fit NRMSE in the correction's band beyond the load cells' noise")
-    lines.append(f"(the fallback's measure, limit {HYBRID_LIMIT:g}); cab: held rigid or fitted on its mounts.")
+    lines.append(f"(past {HYBRID_LIMIT:g} the fit is searched again; which wheels keep the model is weighed on the record, "
+                 "scenarios/records/model/fallback.py); cab: held rigid or fitted on its mounts.")
     return "\n".join(lines)
