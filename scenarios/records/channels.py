@@ -16,7 +16,7 @@ nothing heavy at module level (the parser's start-up stays light).
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from scenarios.records.naming import KEYWORDS, Naming
 
@@ -214,9 +214,19 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
     from correction.io.tomlfile import path_text
     from scenarios.core.config import ScenarioError
 
+    from scenarios.records.arguments import shown
+
     path = path_text(path, "path", ScenarioError)
+    if channels is not None and (isinstance(channels, (str, bytes)) or not isinstance(channels, Sequence)
+                                 or not channels or not all(isinstance(c, str) for c in channels)):
+        raise ScenarioError(f"channels must be a sequence of channel names (str), e.g. ['Fz_FL', 'Weg_FL'], "
+                            f"got {shown(channels)}")
+    for key, value in (("time_col", time_col), ("decimal", decimal), ("thousands", thousands)):
+        if value is not None and not isinstance(value, str):
+            raise ScenarioError(f"{key} must be a text (a column's name or a mark) or None, got {shown(value)}")
     try:
-        return read_channels(path, time_col=time_col, channels=channels, decimal=decimal, thousands=thousands)
+        return read_channels(path, time_col=time_col, channels=list(channels) if channels is not None else None,
+                             decimal=decimal, thousands=thousands)
     except MeasuredDataError as exc:
         raise _error(str(exc)) from None
 

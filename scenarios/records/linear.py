@@ -37,7 +37,7 @@ def _identified(plan):
     try:
         fit = actuator_fit.fit_actuator(drive, disp, rec.fs_hz)
     except ValueError as exc:
-        raise _error(f"cannot identify T_a from {d!r} and {x!r}: {exc}") from None
+        raise _error(f"{n('identify')} {d},{x}: cannot identify T_a from these channels: {exc}") from None
     return fit, (f"identified (orders {fit.orders[0]}/{fit.orders[1]}, held-out error {fit.held_out_error:.1%}, "
                  f"bandwidth {fit.bandwidth_hz:.3g} Hz)")
 

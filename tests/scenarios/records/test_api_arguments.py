@@ -316,3 +316,15 @@ def test_calibration_windows_the_record_cannot_hold_are_refused_before_any_calib
     _refused(lambda: correct_record(short, model=lab.truck, pairs=PAIRS, calibration_windows=2), "calibration_windows")
     with pytest.raises(AssertionError, match="the correction ran"):
         correct_record(short, model=lab.truck, pairs=PAIRS)
+
+
+@pytest.mark.parametrize("kw, name", [({"channels": 123}, "channels"), ({"channels": [1, 2]}, "channels"),
+                                      ({"channels": "Fz_FL"}, "channels"), ({"channels": []}, "channels"),
+                                      ({"time_col": 5}, "time_col"), ({"decimal": 1.0}, "decimal"),
+                                      ({"thousands": b","}, "thousands")])
+def test_read_record_names_a_wrong_keyword_before_reading(kw, name, tmp_path):
+    from scenarios.core.config import ScenarioError
+    from scenarios.records import read_record
+
+    with pytest.raises(ScenarioError, match=f"^{name} must be"):
+        read_record(tmp_path / "absent.csv", **kw)

@@ -104,7 +104,7 @@ def test_swapped_pairs_are_refused_by_the_corrections_before_any_calibration(lab
     assert "--pairs rl:" in line and "swapped; give rl=Soll_RL:Weg_RL" in line, line
     assert main(["correct", lab["csv"], "--identify", "Weg_FL,Soll_FL", "--columns", "Fz_FL", "-o", str(out)]) == 2
     line = one_line(capsys.readouterr().err)
-    assert "'Weg_FL' and 'Soll_FL'" in line and "swapped" in line, line
+    assert "--identify Weg_FL,Soll_FL" in line and "swapped" in line, line
     assert not out.exists()
 
 
