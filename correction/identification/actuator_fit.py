@@ -408,16 +408,9 @@ def _pair(drive_m, displacement_m, fs) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 def coherence_median(drive_m, displacement_m, fs: float) -> float:
-    """Median coherence of a drive and a displacement in :data:`COHERENCE_BAND_HZ` (its top clipped
-    to 0.45 ``fs``), from :func:`fit_actuator`'s estimate (default segments), 1.
-
-    Parameters
-    ----------
-    drive_m, displacement_m : array_like, m
-        Sampled together, shape (n,).
-    fs : float, Hz
-        Sampling rate.
-    """
+    """Median coherence (1) of a drive and a displacement (array_like, m, (n,) each, sampled together at
+    ``fs``, Hz) in :data:`COHERENCE_BAND_HZ` (its top clipped to 0.45 ``fs``), from
+    :func:`fit_actuator`'s estimate (default segments)."""
     u, y, fs = _pair(drive_m, displacement_m, fs)
     f, _, coh = h1_estimate(u, y, fs, default_nperseg(u.size, fs))
     sel, _, _ = _coherence_band(f, (0.0, 0.45 * fs))

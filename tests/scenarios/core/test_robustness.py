@@ -219,10 +219,10 @@ def test_paper_minimum_duration_leaves_the_paper_method_time_to_score(capsys):
         force = np.tile(loads, (n, 1))
         settled = correct_forces(force, tas, 1000.0, lowpass=PAPER.lowpass, mode=PAPER.mode).settled
         assert MIN_SCORED_S + 1.0 < np.count_nonzero(settled) / 1000.0 < 9.0
-    ok = argparse.Namespace(duration_s=10.0, jobs=None, noise_N=None)
+    ok = argparse.Namespace(duration_s=10.0, jobs=None, noise_N=None, series=None)
     _check(ok)
     with pytest.raises(ScenarioError, match="too short"):
-        _check(argparse.Namespace(duration_s=9.9, jobs=None, noise_N=None))
+        _check(argparse.Namespace(duration_s=9.9, jobs=None, noise_N=None, series=None))
 
 
 # ---------------------------------------------------------------------------- sweep grid and ETA

@@ -15,6 +15,8 @@ import sys
 import time
 
 import numpy as np
+import shutil
+
 import pytest
 
 from scenarios.core.config import parse_scenario
@@ -200,8 +202,8 @@ def test_a_recording_that_cannot_be_written_is_exit_2_and_leaves_nothing(runs, t
     sub = tmp_path / "sub"
     sub.mkdir()
 
-    def folder_becomes_file():
-        sub.rmdir()
+    def folder_becomes_file():  # the folder, with the run's claim on x.rrd in it, removed and a file put there
+        shutil.rmtree(sub)
         sub.write_text("")
 
     monkeypatch.setattr(run_module, "run", _fake_run(runs[1], folder_becomes_file))
