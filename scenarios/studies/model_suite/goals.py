@@ -25,9 +25,8 @@ def pct(x: float) -> str:
 
 
 def limit_evidence(scores) -> dict:
-    """Where the fallback's limit belongs, wheel by wheel: each wheel's model error (what the fallback
-    reads) against whether the hybrid model correction, forced, beat the linear correction's NRMSE
-    there. ``beats_up_to``: the largest model error of a wheel where it beat; ``loses_from``: the
+    """Where a limit on the model error would belong, wheel by wheel: each wheel's model error
+    against whether the hybrid model correction, forced, beat the linear correction's NRMSE there. ``beats_up_to``: the largest model error of a wheel where it beat; ``loses_from``: the
     smallest where it did not (None where no wheel did not); a limit between them (when the first is
     below the second) separates the wheels; otherwise the wheels between them overlap, counted in
     ``overlap``."""
@@ -49,7 +48,7 @@ def limit_evidence(scores) -> dict:
 
 def _limit_text(ev: dict) -> str:
     if not ev["wheels"]:
-        return "- the fallback's limit: no calibrated wheel to read it from"
+        return "- the model error against the hybrid's gain: no calibrated wheel to read it from"
     where = (f"beat the linear correction on {ev['beats']} of {ev['wheels']} wheels; the largest model error where it "
              f"beat: {ev['beats_up_to']:.3f}" if ev["beats_up_to"] is not None else
              f"beat the linear correction on none of {ev['wheels']} wheels")
@@ -57,7 +56,8 @@ def _limit_text(ev: dict) -> str:
               ", on every wheel")
     if ev["loses_from"] is not None and ev["beats_up_to"] is not None:
         where += (f" ({ev['overlap']} wheels between them)" if ev["overlap"] else ": a limit between them separates them")
-    return f"- the forced hybrid {where} (the fallback's limit: {HYBRID_LIMIT:g})"
+    return (f"- the forced hybrid {where} (past {HYBRID_LIMIT:g} a fit is searched again; the fallback is weighed on "
+            "each record)")
 
 
 def rows_and_goals(scores, describe) -> tuple[list[str], list[list], str, dict]:
@@ -79,6 +79,7 @@ def rows_and_goals(scores, describe) -> tuple[list[str], list[list], str, dict]:
     d = np.concatenate([s.dlc_error["delivered"] for s in scores])
     ratio = np.concatenate([s.nrmse["delivered"] / s.floor for s in scores])
     above = np.concatenate([s.nrmse["delivered"] - s.nrmse["linear"] for s in scores])
+    lin_ratio = np.concatenate([s.nrmse["delivered"] / s.nrmse["linear"] for s in scores])
     lin = np.concatenate([s.dlc_error["linear"] for s in scores])
     good = np.mean((np.abs(d) <= DLC_GOOD) & (ratio <= FLOOR_RATIO))
     fallbacks = [s for s in scores if s.method != "model"]
@@ -101,6 +102,8 @@ def rows_and_goals(scores, describe) -> tuple[list[str], list[list], str, dict]:
         f"- fallbacks: {len(fallbacks)}, without a reason: {numbers['fallbacks_without_reason']}, where the forced "
         f"model correction (hybrid) was better on every wheel: {len(wrong)} ({', '.join(wrong) or 'none'}): "
         f"{'met' if met['fallbacks'] else 'NOT met'}",
+        f"- within {100 * DLC_GOOD:g} % of the road DLC and at NRMSE <= {FLOOR_RATIO:g} x the linear correction's (not its "
+        f"floor): {100 * np.mean((np.abs(d) <= DLC_GOOD) & (lin_ratio <= FLOOR_RATIO)):.1f} % of the wheels",
         f"- the two goals apart: within {100 * DLC_GOOD:g} % of the road DLC {100 * np.mean(np.abs(d) <= DLC_GOOD):.0f} % "
         f"of the wheels, at NRMSE <= {FLOOR_RATIO:g} x the floor {100 * np.mean(ratio <= FLOOR_RATIO):.0f} %",
         f"- DLC error over the wheels: median {pct(np.median(d))}, {100 * np.mean(d > 0):.0f} % above the road's "
