@@ -12,14 +12,14 @@ CASE.toml --target displacement|force --out DIR`` runs (their ``iteration.json``
 * ``paper_table2.md``: the Table 2 analogue, DLC (mean of the four wheels) of the road, the rig,
   the rig corrected by the paper's method and by this project's, the road through the same
   low-pass, and the NRMSE, each case beside the paper's published values
-  (:data:`scenarios.studies.paper.table.PAPER_TABLE2`);
+  (:data:`rigsim.scenarios.studies.paper.table.PAPER_TABLE2`);
 * ``validate_table1.md``: the Table 1 analogue, DLC of the road test, the rig test and the
   linearized models, beside the paper's;
 * ``iterate_comparison.md``: input correction against output correction, per case the DLC error of
   the rig with the original drive, with the drive iterated to each target, and of the output
   correction, with the rig runs each costs (one ``--iterate`` folder per case and target).
 
-Each file ends in the line saying how it was measured (:mod:`scenarios.studies.results_page`):
+Each file ends in the line saying how it was measured (:mod:`rigsim.scenarios.studies.results_page`):
 the command (with the duration and noise read from the results), the date of the result file,
 and the rigsim version, platform, CPU count and Python of the machine running this script: run
 it where the study ran. A folder that is not given, or has no result file, is skipped with one
@@ -35,8 +35,8 @@ import pathlib
 import re
 import sys
 
-from scenarios.studies.paper.table import PAPER_TABLE1, PAPER_TABLE2
-from scenarios.studies.results_page import write_results_page
+from rigsim.scenarios.studies.paper.table import PAPER_TABLE1, PAPER_TABLE2
+from rigsim.scenarios.studies.results_page import write_results_page
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: What writes the files (their first line says so).
@@ -188,7 +188,7 @@ def readme_rows(result: dict) -> list[list[str]]:
 def write_readme_table(folder: pathlib.Path, readme: pathlib.Path) -> pathlib.Path:
     """Rewrite the block of ``readme`` between :data:`README_BEGIN` and :data:`README_END` with the
     Table 2 of ``folder/paper.json`` and the command that measured it."""
-    from scenarios.studies.results_page import configuration_line, markdown_table, write_block
+    from rigsim.scenarios.studies.results_page import configuration_line, markdown_table, write_block
 
     source = folder / "paper.json"
     result = json.loads(source.read_text())

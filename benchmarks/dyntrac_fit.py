@@ -13,9 +13,9 @@ actuators, the road spectrum's waviness and the level of each of the paper's rou
 the leaf springs' interleaf friction and the truck's axle masses, each bounded by its physical range (and the source of
 that range). Every evaluation runs the three paper cases (``scenarios/data/paper_dyntrac/*.toml``,
 ``rigsim paper --rig dyntrac``) with the values in place, on the road and on the rig
-(:func:`scenarios.core.run.run`), identifies the rig by its test drive, and scores the rig's
+(:func:`rigsim.scenarios.core.run.run`), identifies the rig by its test drive, and scores the rig's
 measured force (100 N load-cell noise) with the paper's method and this project's linear correction
-(:func:`scenarios.studies.scoring.score_pair`, methods ``paper``: eq. 4 and the 16/24 Hz T_F, and
+(:func:`rigsim.scenarios.studies.scoring.score_pair`, methods ``paper``: eq. 4 and the 16/24 Hz T_F, and
 ``best``).
 
 Its goals: each of Table 2's nine numbers within +-5 %, the high-roughness 72 km/h case's road and
@@ -33,7 +33,7 @@ tables of the nine numbers (simulated, paper, error, goal), of the linear correc
 of the unknowns (fitted value, range, source), the goals missed, and a warning for any value at a
 bound of its range (the data want it beyond: a sign that something the fit lacks is being
 absorbed). With ``--out`` it writes them as ``dyntrac_fit.md``, ``dyntrac_linear.md`` and
-``dyntrac_values.md`` (:mod:`scenarios.studies.results_page`; ``--name`` replaces ``dyntrac``).
+``dyntrac_values.md`` (:mod:`rigsim.scenarios.studies.results_page`; ``--name`` replaces ``dyntrac``).
 
 Table 1's linearized-model column is measured by ``rigsim validate`` on the same scenario
 (``benchmarks/docs_tables.py`` writes its table).
@@ -49,13 +49,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from mjcf.variant import BOUNDS
-from scenarios.core.config import Scenario, load_scenario, paper_scenarios
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.studies.paper.table import PAPER_TABLE2
-from scenarios.studies.results_page import script_command, write_results_page
-from scenarios.studies.scoring import BEST, NOISE_N, PAPER, score_pair
+from rigsim.mjcf.variant import BOUNDS
+from rigsim.scenarios.core.config import Scenario, load_scenario, paper_scenarios
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.paper.table import PAPER_TABLE2
+from rigsim.scenarios.studies.results_page import script_command, write_results_page
+from rigsim.scenarios.studies.scoring import BEST, NOISE_N, PAPER, score_pair
 
 #: The worst relative error of a Table 2 number the fit accepts, 1.
 GOAL = 0.05
@@ -89,10 +89,10 @@ UNKNOWNS = (
     Unknown("actuator.kp_per_m", "1/m", 12.0, 80.0,
             "DYNTRAC's loop gains are not published; velocity constant Ksv Kq Kp / A from 18 to 117 1/s "
             "(position bandwidth ~3-19 Hz), the upper end the loop's stability limit with 6 dB margin "
-            "(hydraulics.loop)"),
+            "(rigsim.hydraulics.loop)"),
     Unknown("actuator.kdp_per_Pa", "1/Pa", 0.5e-8, 4e-8,
             "differential-pressure feedback that damps the ~110 Hz oil-column mode: zeta 0.05-0.4 on the "
-            "design station (hydraulics.loop); above ~5e-8 with a slow position loop the loop is unstable"),
+            "design station (rigsim.hydraulics.loop); above ~5e-8 with a slow position loop the loop is unstable"),
     Unknown("road.waviness", "1", 1.5, 3.5,
             "ISO 8608 waviness w: 2 for its class lines; measured road profiles 1.5-3.5 (Andren 2006, "
             "Int. J. Vehicle Design 40)"),
@@ -133,8 +133,8 @@ def _word(scenario: Scenario) -> str:
 
 def shipped_values(paths) -> np.ndarray:
     """The unknowns' values the shipped paper scenarios carry (the fit's start)."""
-    from hydraulics.params import ActuatorParams
-    from mjcf.build import nominal_values
+    from rigsim.hydraulics.params import ActuatorParams
+    from rigsim.mjcf.build import nominal_values
 
     scenarios = [load_scenario(p) for p in paths]
     nominal = nominal_values()
@@ -164,8 +164,8 @@ def evaluate_case(path: str, x: np.ndarray, duration_s: float) -> tuple[float, .
     does) and the road through that correction's low-pass, mean of the wheels
     (:data:`CASE_FIGURES`), of one paper case under ``x``; NaNs if the configuration cannot run
     (an unstable loop) or cannot be corrected."""
-    from scenarios.core.config import ScenarioError
-    from scenarios.studies.identify.compute import identify_rig
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.studies.identify.compute import identify_rig
 
     try:
         scenario = configured(load_scenario(path), x, duration_s)

@@ -6,14 +6,14 @@
                                      [--seed N] [--cab auto|held|fitted] [--workers N] [--noise-N 100]
     python benchmarks/fleet_suite.py --page DEVELOPMENT.txt FRESH.txt [--results docs/results]
 
-Truck ``i`` of a draw (:func:`scenarios.studies.model_suite.fleet.draw_truck`) is a spec sheet
+Truck ``i`` of a draw (:func:`rigsim.scenarios.studies.model_suite.fleet.draw_truck`) is a spec sheet
 (wheelbase 3.6-6.5 m, tracks, dual or single rear tires, leaf or air on each axle with their rates
 and dampers) and a plant truck on the rig that differs from it as the mismatch suite's plants differ
 from the catalogue (payload, stations, masses, rebound, cab, progressive tire) and carries structure
 the model family lacks (a frame that twists and bends, an engine on rubber mounts, dampers
 digressive or worn, air springs' bushings), on its own road (ISO B-D, 30-90 km/h). Per truck, in
 worker processes: the road test (the reference), the rig test and the rig's identification; then
-:func:`scenarios.studies.model_suite.mismatch_score.score_plant`: the rig test through the lab's
+:func:`rigsim.scenarios.studies.model_suite.mismatch_score.score_plant`: the rig test through the lab's
 chain as it was (each filter corner off by up to 5 %, the force delay by up to 10 %), its channels
 aligned with the lab's **nominal** settings, corrected linearly by the identified T_a and by the
 truck model calibrated on the record, the model starting from the spec sheet (``rigsim correct
@@ -23,8 +23,8 @@ The development draw is seed 0: what the method is developed on. ``--draw fresh`
 when it runs (unless ``--seed`` gives one) and prints it: the set the method is scored on, never
 tuned on. Each run prints its table, the goals and one JSON line; ``--page`` writes
 ``docs/results/fleet_suite.md`` from the two runs' printed output, the draws side by side with a
-95 % confidence interval over trucks (:func:`scenarios.studies.model_suite.goals.share_interval`).
-Goals (:mod:`scenarios.studies.model_suite.goals`): at least 95 % of wheels within 1 % of the road
+95 % confidence interval over trucks (:func:`rigsim.scenarios.studies.model_suite.goals.share_interval`).
+Goals (:mod:`rigsim.scenarios.studies.model_suite.goals`): at least 95 % of wheels within 1 % of the road
 DLC at NRMSE at most half the linear floor; no wheel more than 0.05 NRMSE above the linear
 correction.
 """
@@ -46,16 +46,16 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from correction.output.pipeline import CorrectionError  # noqa: E402
-from scenarios.core.files import to_json  # noqa: E402
-from scenarios.core.lab import TYPICAL_LAB  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
-from scenarios.studies import scoring  # noqa: E402
-from scenarios.studies.model_suite.fleet import fleet_job, fleet_trucks, lacks, spec_text  # noqa: E402
-from scenarios.studies.model_suite.goals import pct, rows_and_goals, share_interval  # noqa: E402
-from scenarios.studies.model_suite.mismatch_score import PlantScore, score_plant  # noqa: E402
-from scenarios.studies.results_page import markdown_table, script_command, write_results_page  # noqa: E402
+from rigsim.correction.output.pipeline import CorrectionError  # noqa: E402
+from rigsim.scenarios.core.files import to_json  # noqa: E402
+from rigsim.scenarios.core.lab import TYPICAL_LAB  # noqa: E402
+from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
+from rigsim.scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
+from rigsim.scenarios.studies import scoring  # noqa: E402
+from rigsim.scenarios.studies.model_suite.fleet import fleet_job, fleet_trucks, lacks, spec_text  # noqa: E402
+from rigsim.scenarios.studies.model_suite.goals import pct, rows_and_goals, share_interval  # noqa: E402
+from rigsim.scenarios.studies.model_suite.mismatch_score import PlantScore, score_plant  # noqa: E402
+from rigsim.scenarios.studies.results_page import markdown_table, script_command, write_results_page  # noqa: E402
 
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 DRAWS = ("development", "fresh")

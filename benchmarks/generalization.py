@@ -1,7 +1,7 @@
 """Does the output correction generalize beyond the paper's three cases? A fixed suite of 24 cases.
 
 The generalization suite (``scenarios/data/suites/generalization.toml``, read by
-:func:`scenarios.studies.suites.generalization_cases`): ISO 8608 classes A-D, 30-100 km/h,
+:func:`rigsim.scenarios.studies.suites.generalization_cases`): ISO 8608 classes A-D, 30-100 km/h,
 payload from empty (0 kg) to 8000 kg (this truck's chassis and axles weigh 7100 kg: a ~15 t
 single-unit truck fully laden), identical, independent and coherent tracks, seeds other than the
 paper's. Class D runs with a 25 m high-pass cut-on (40 m otherwise) so that its drive stays
@@ -10,15 +10,15 @@ inside the +-76 mm stroke, as a lab would set it.
 Each case, as a lab would test: the road run (the reference), the rig run, the rig's
 identification before the test (``rigsim identify``: independent random drives at the test
 drive's rms), the correction of the measured rig force (100 N rms load-cell noise on) by the
-project's method, scored by the one scoring of the studies (:func:`scenarios.studies.scoring.
+project's method, scored by the one scoring of the studies (:func:`rigsim.scenarios.studies.scoring.
 score_pair`): the corrected DLC against the road DLC on the same settled samples, per wheel,
 and the NRMSE against the road force through the same 30 Hz band limit. Beside it, the linear
-floor (:func:`correction.output.floor.linear_floor`: the least-squares per-wheel FIR fitted on the road
+floor (:func:`rigsim.correction.output.floor.linear_floor`: the least-squares per-wheel FIR fitted on the road
 force itself, two-sided, +-0.15 s): a diagnostic, never used to correct.
 
 Writes the table and its summary (the fractions of wheels within 2 % and within 1 % of the road
 DLC, the worst wheel) to ``docs/results/generalization.md`` (``--results``: its folder), ending in
-the line that says how and where it was measured (:mod:`scenarios.studies.results_page`); prints
+the line that says how and where it was measured (:mod:`rigsim.scenarios.studies.results_page`); prints
 that file and one JSON line. Goals: every wheel within 2 % of the road DLC, at least 95 % of the
 wheels within 1 %.
 
@@ -37,16 +37,16 @@ import time
 
 import numpy as np
 
-from correction.output.floor import linear_floor
-from mjcf.names import CORNERS
-from scenarios.core.config import parse_scenario
-from scenarios.core.pool import run_jobs
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.results_page import script_command, write_results_page
-from scenarios.studies.scoring import BEST, NOISE_N, score_pair
-from scenarios.studies.suites import generalization_cases
+from rigsim.correction.output.floor import linear_floor
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.config import parse_scenario
+from rigsim.scenarios.core.pool import run_jobs
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.identify.compute import identify_rig
+from rigsim.scenarios.studies.results_page import script_command, write_results_page
+from rigsim.scenarios.studies.scoring import BEST, NOISE_N, score_pair
+from rigsim.scenarios.studies.suites import generalization_cases
 
 FLOOR_TAPS = 150  # each side, samples at 1 kHz: +-0.15 s covers the truck's slowest relevant mode (bounce, ~1.7 Hz)
 #: Goals: every wheel within GOAL_ALL_PCT (%) of the road DLC, at least GOAL_MOST_SHARE (1) of

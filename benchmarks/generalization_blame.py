@@ -5,17 +5,17 @@
     python benchmarks/generalization_blame.py [--cases 24] [--duration-s 30] [--jobs N] [--only gen01 gen02 ...]
                                               [--results docs/results]
 
-For each case of the generalization suite (:func:`scenarios.studies.suites.generalization_cases`,
+For each case of the generalization suite (:func:`rigsim.scenarios.studies.suites.generalization_cases`,
 as ``benchmarks/generalization.py`` runs it) the corrected DLC error (corrected against road, per
 wheel, %) is taken apart along one chain, each step removing one cause with the rest kept
-(the runs and the correction with one cause removed: :mod:`scenarios.studies.decomposition`):
+(the runs and the correction with one cause removed: :mod:`rigsim.scenarios.studies.decomposition`):
 
 1. ``identified``: the project's correction, as ``benchmarks/generalization.py`` scores it (T_a identified
    before the test from independent random drives, ``rigsim identify``; nonlinear DYNTRAC rig;
    leaf-spring friction on; 100 N load-cell noise).
 2. ``linearized``: the same rig run corrected with each wheel's own path of the linearized plant
    (its exact frequency response, zero-phase, under the same 30 Hz low-pass:
-   :class:`scenarios.studies.decomposition.ExactLinearCorrection`). Step 1 - 2: **identification** (what the
+   :class:`rigsim.scenarios.studies.decomposition.ExactLinearCorrection`). Step 1 - 2: **identification** (what the
    fitted T_a gets wrong about the small-signal actuator).
 3. ``linear pans``: a road-mode run whose pans follow the profile through that linear T_a per
    wheel, corrected by it exactly. Step 2 - 3: **actuators** (the rig's own nonlinearity, flow
@@ -38,7 +38,7 @@ of the error's sign ("blame").
 Writes a table (one row per case, means over the wheels that fail, or over all four when none
 does) and the count of wheels blamed on each cause to ``docs/results/generalization_blame.md``
 (``--results``: its folder), ending in the line that says how and where it was measured
-(:mod:`scenarios.studies.results_page`); prints that file and one JSON line with every share per
+(:mod:`rigsim.scenarios.studies.results_page`); prints that file and one JSON line with every share per
 wheel. A diagnostic: nothing here corrects anything in the project.
 """
 
@@ -56,21 +56,21 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from correction.metrics.dlc import dlc  # noqa: E402
-from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
-from correction.output.filters import reference_filter  # noqa: E402
-from correction.output.pipeline import correct_forces  # noqa: E402
-from mjcf.names import CORNERS  # noqa: E402
-from scenarios.core.config import parse_scenario  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.core.rig import Rig  # noqa: E402
-from scenarios.core.run import run  # noqa: E402
-from scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
-from scenarios.studies import scoring  # noqa: E402
-from scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
-from scenarios.studies.identify.compute import identify_rig  # noqa: E402
-from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
-from scenarios.studies.suites import generalization_cases  # noqa: E402
+from rigsim.correction.metrics.dlc import dlc  # noqa: E402
+from rigsim.correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
+from rigsim.correction.output.filters import reference_filter  # noqa: E402
+from rigsim.correction.output.pipeline import correct_forces  # noqa: E402
+from rigsim.mjcf.names import CORNERS  # noqa: E402
+from rigsim.scenarios.core.config import parse_scenario  # noqa: E402
+from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
+from rigsim.scenarios.core.rig import Rig  # noqa: E402
+from rigsim.scenarios.core.run import run  # noqa: E402
+from rigsim.scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
+from rigsim.scenarios.studies import scoring  # noqa: E402
+from rigsim.scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
+from rigsim.scenarios.studies.identify.compute import identify_rig  # noqa: E402
+from rigsim.scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
+from rigsim.scenarios.studies.suites import generalization_cases  # noqa: E402
 
 #: A wheel whose corrected DLC is further than this from the road DLC fails (%): the generalization
 #: suite's goal for most wheels (``benchmarks/generalization.py``).

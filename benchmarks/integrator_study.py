@@ -5,20 +5,20 @@ reference) on three goals (rig DLC within 0.1 %, identified FRF within 0.1 dB an
 24 generalization cases stable), and costed:
 
 1. rig DLC: rig-mode runs of the paper's three cases (``--dlc-s``, default 20 s each after the
-   2 s lead-in), the DLC of each wheel's tire force (:func:`correction.metrics.dlc.dlc`), its relative
+   2 s lead-in), the DLC of each wheel's tire force (:func:`rigsim.correction.metrics.dlc.dlc`), its relative
    error against the reference's (%): goal within 0.1 %. The road drive is made at each step
    and is the same signal at the common instants (checked).
 2. identified FRF: the identification of ``rigsim identify`` on the first paper case
    (independent random drives, 30 s analysed): the per-corner diagonal H1 estimate against the
    reference's at every frequency of its grid up to 30 Hz (3750-sample Welch segments: 0.27 Hz), max |dB| and max |deg|:
    goal 0.1 dB / 1 degree. The identification drive is drawn per time step
-   (:func:`scenarios.core.drive.identification_drive` draws its random phases on the step's
+   (:func:`rigsim.scenarios.core.drive.identification_drive` draws its random phases on the step's
    FFT grid), so two steps see different random drives; the goal's comparison uses one drive,
    made at the reference step and decimated to each step ("same drive"). The estimates of
-   :func:`scenarios.studies.identify.compute.identify_rig` itself ("own drive") and of its fit
+   :func:`rigsim.scenarios.studies.identify.compute.identify_rig` itself ("own drive") and of its fit
    are printed beside it: they contain the drive realisation, not only the integrator.
 3. stability: rig-mode runs of the 24 cases of the generalization suite
-   (:func:`scenarios.studies.suites.generalization_cases`; ``--gen-s``, default 5 s each) per
+   (:func:`rigsim.scenarios.studies.suites.generalization_cases`; ``--gen-s``, default 5 s each) per
    candidate: a SimulationError or a non-finite output is a failure.
 4. cost: one rig run of the first paper case (``--dlc-s``) in this process after a warm-up,
    median of ``--repeats``: the wall time of ``Rig.run`` (stepping and recording), and the
@@ -35,7 +35,7 @@ advances the activations (one step from an off-equilibrium state against ``act +
 and what ``actearly`` changes. The table, the failures, the activations and the cheapest
 configuration passing all three goals (by the wall time of the rig run) go to
 ``docs/results/integrator_study.md`` (``--results``: its folder), ending in the line that says how
-and where it was measured (:mod:`scenarios.studies.results_page`), and prints that file and one
+and where it was measured (:mod:`rigsim.scenarios.studies.results_page`), and prints that file and one
 JSON line. About 7 min of CPU with the defaults (3 min with ``--dlc-s 1 --gen-s 0.5 --repeats 1``:
 the identification runs, 30 s each, are the fixed part); ``--workers`` spreads it over cores.
 
@@ -62,19 +62,19 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 from mujoco import rollout  # noqa: E402
 
-from correction.identification.identify import h1_estimate  # noqa: E402
-from correction.metrics.dlc import dlc  # noqa: E402
-from hydraulics.bridge import hydraulic_callbacks  # noqa: E402
-from mjcf.names import CORNERS  # noqa: E402
-from scenarios.core.config import load_scenario, paper_scenarios, parse_scenario  # noqa: E402
-from scenarios.core.drive import IDENT_SEED, Drive  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.core.road_drive import road_drive  # noqa: E402
-from scenarios.core.rig import Rig  # noqa: E402
-from scenarios.core.watch import SimulationError  # noqa: E402
-from scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S, SEGMENT_S, identify_rig, matched_drive  # noqa: E402
-from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
-from scenarios.studies.suites import generalization_cases  # noqa: E402
+from rigsim.correction.identification.identify import h1_estimate  # noqa: E402
+from rigsim.correction.metrics.dlc import dlc  # noqa: E402
+from rigsim.hydraulics.bridge import hydraulic_callbacks  # noqa: E402
+from rigsim.mjcf.names import CORNERS  # noqa: E402
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios, parse_scenario  # noqa: E402
+from rigsim.scenarios.core.drive import IDENT_SEED, Drive  # noqa: E402
+from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
+from rigsim.scenarios.core.road_drive import road_drive  # noqa: E402
+from rigsim.scenarios.core.rig import Rig  # noqa: E402
+from rigsim.scenarios.core.watch import SimulationError  # noqa: E402
+from rigsim.scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S, SEGMENT_S, identify_rig, matched_drive  # noqa: E402
+from rigsim.scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
+from rigsim.scenarios.studies.suites import generalization_cases  # noqa: E402
 
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER, "RK4": mujoco.mjtIntegrator.mjINT_RK4,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}

@@ -7,17 +7,17 @@
                                         [--cab auto|held|fitted] [--drift-cut-hz 0.7] [--workers N] [--noise-N 100]
                                         [--results docs/results] [--from-json RUN.txt]
 
-Plant ``i`` (:func:`scenarios.studies.model_suite.mismatch.mismatch_plants`, seeded) is a truck
+Plant ``i`` (:func:`rigsim.scenarios.studies.model_suite.mismatch.mismatch_plants`, seeded) is a truck
 drawn from ``scenarios/data/suites/mismatch_plants.toml``: payload mass and position, each wheel
 station's own tire and leaf spring, axle and chassis masses, dampers harder in rebound, and with
 probability 1/2 each a suspended cab and progressive tires; it runs on the generalization suite's
 case ``i`` (ISO classes A-D, 30-100 km/h, payload 0-8000 kg). Per plant, in worker processes:
 the road test (the reference), the rig test and the rig's identification before it; then, one
-plant after the other, :func:`scenarios.studies.model_suite.mismatch_score.score_plant`: the
-rig test through the lab's measurement chain (``--lab``: :data:`scenarios.core.lab.TYPICAL_LAB`
+plant after the other, :func:`rigsim.scenarios.studies.model_suite.mismatch_score.score_plant`: the
+rig test through the lab's measurement chain (``--lab``: :data:`rigsim.scenarios.core.lab.TYPICAL_LAB`
 by default, the same without its load cells' drift, or the ideal load cell), its channels aligned as a lab that knows its anti-alias
 filters and converter skew aligns them (``--channels aligned``, default:
-:func:`scenarios.core.lab.aligned`, the identification's LVDTs too) or as recorded (``raw``),
+:func:`rigsim.scenarios.core.lab.aligned`, the identification's LVDTs too) or as recorded (``raw``),
 corrected linearly by the identified T_a and by the truck
 model calibrated on the record (its fallback honoured, and forced where it refused; its drift
 cut at ``--drift-cut-hz``, 0: none), against each plant's linear floor.
@@ -45,20 +45,20 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 
-from correction.output.denoise import DRIFT_HZ  # noqa: E402
-from scenarios.core.files import to_json  # noqa: E402
-from scenarios.core.lab import TYPICAL_LAB, LabChain  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
-from scenarios.records.model.differential import HYBRID_LIMIT  # noqa: E402
-from scenarios.studies.model_suite.goals import pct, rows_and_goals  # noqa: E402
-from scenarios.records.settings import DRIFT_CUT_MAX_HZ  # noqa: E402
-from scenarios.studies import scoring  # noqa: E402
-from scenarios.studies.model_suite.mismatch import (describe, mismatch_job, mismatch_plants,  # noqa: E402
-                                                    mismatch_scenario)
-from scenarios.studies.model_suite.mismatch_score import PlantScore, score_plant  # noqa: E402
-from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
-from scenarios.studies.suites import case_name, pick_cases  # noqa: E402
+from rigsim.correction.output.denoise import DRIFT_HZ  # noqa: E402
+from rigsim.scenarios.core.files import to_json  # noqa: E402
+from rigsim.scenarios.core.lab import TYPICAL_LAB, LabChain  # noqa: E402
+from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
+from rigsim.scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
+from rigsim.scenarios.records.model.differential import HYBRID_LIMIT  # noqa: E402
+from rigsim.scenarios.studies.model_suite.goals import pct, rows_and_goals  # noqa: E402
+from rigsim.scenarios.records.settings import DRIFT_CUT_MAX_HZ  # noqa: E402
+from rigsim.scenarios.studies import scoring  # noqa: E402
+from rigsim.scenarios.studies.model_suite.mismatch import (describe, mismatch_job, mismatch_plants,  # noqa: E402
+                                                           mismatch_scenario)
+from rigsim.scenarios.studies.model_suite.mismatch_score import PlantScore, score_plant  # noqa: E402
+from rigsim.scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
+from rigsim.scenarios.studies.suites import case_name, pick_cases  # noqa: E402
 
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 LABS = {"typical": TYPICAL_LAB, "typical-no-drift": dataclasses.replace(TYPICAL_LAB, drift_noise_N=0.0),

@@ -7,7 +7,7 @@
                                           [--cab auto|held|fitted] [--plants rigid cab tire smooth]
                                           [--tire-ratio 0.25] [--results docs/results]
 
-Suites (:func:`scenarios.studies.suites.pick_cases`): ``paper``, the paper's three scenarios (60 s
+Suites (:func:`rigsim.scenarios.studies.suites.pick_cases`): ``paper``, the paper's three scenarios (60 s
 by default; a per-wheel table per case with the fitted parameters); ``generalization``, the 24
 cases of the generalization suite (``scenarios/data/suites/generalization.toml``: ISO classes
 A-D, 30-100 km/h, payload 0-8000 kg, track types, seeds; 30 s by default; one table, two rows per
@@ -15,10 +15,10 @@ case: the worse wheel of each axle). ``--cases``: parts of the cases' names.
 
 For each case the truck on the rig (the "plant") differs from the XML's nominal truck as a real
 truck differs from its catalogue (``scenarios/data/suites/model_plants.toml``, read by
-:func:`scenarios.studies.suites.model_plants`; :data:`PLANT_FACTORS`: payload -5 % and 0.1 m
+:func:`rigsim.scenarios.studies.suites.model_plants`; :data:`PLANT_FACTORS`: payload -5 % and 0.1 m
 further forward, tire stiffness +10 % front / -10 % rear, tire damping +20 % / -20 %, leaf
 friction +30 % / -30 %; the payload factor applies to the case's own payload, 0 kg included).
-Four plants (``--plants``, :data:`PLANT_KEYS`; :mod:`scenarios.studies.model_suite.plants`):
+Four plants (``--plants``, :data:`PLANT_KEYS`; :mod:`rigsim.scenarios.studies.model_suite.plants`):
 
 * ``rigid``: that truck with the XML's rigid cab and linear tires;
 * ``cab``: the same with its cab on its own mounts at :data:`CAB_HZ`;
@@ -29,7 +29,7 @@ Four plants (``--plants``, :data:`PLANT_KEYS`; :mod:`scenarios.studies.model_sui
   deflection about 2 cm (``TruckVariant.tire_progressive_spread_m``, five steps), which the
   family's one-kink tire cannot represent: the structural mismatch.
 
-The model's cab (``--cab``, :func:`scenarios.records.model.cab_choice.calibrate_cab`):
+The model's cab (``--cab``, :func:`rigsim.scenarios.records.model.cab_choice.calibrate_cab`):
 ``auto`` (default) calibrates the cab held rigid and the cab's mount frequency fitted and keeps the
 clearly better fit; ``held`` the rigid cab only; ``fitted`` the mount fitted only. The ``rigid``
 plant is in the model family under every mode (under ``fitted`` nearly: the mount range's stiff end,
@@ -37,30 +37,30 @@ plant is in the model family under every mode (under ``fitted`` nearly: the moun
 plant under all three, the ``smooth`` plant under none: a row's mismatch (:func:`mismatch`) is "on"
 where the plant is outside the family, "off" where inside.
 
-Per case and plant, in worker processes (:func:`scenarios.core.pool.run_jobs`, one pool over every
+Per case and plant, in worker processes (:func:`rigsim.scenarios.core.pool.run_jobs`, one pool over every
 case's runs): the road test (the reference, never seen by the correction), the rig test, and the
 rig's identification before the test (for the project's linear correction). Then, one case and
 plant after the other in this process (the calibration starts its own pool of ``--workers``: pools
 do not nest), the model correction of the measured rig force
-(100 N rms load-cell noise on), :func:`scenarios.records.model.differential.correct_with_model`:
+(100 N rms load-cell noise on), :func:`rigsim.scenarios.records.model.differential.correct_with_model`:
 calibration from x_a and F_rig only (first guess from the static loads and catalogue values, never
 the plant's), then F_model(x_ref) + L(W(F_rig - F_model(x_a))), W the residual's white noise taken out, L the
 linear correction by the identified T_a.
 Scored per wheel on the samples where
 every method has settled (the model's start-up, the linear correction's filter transients, the
 band limit's): NRMSE against the road force through the 30 Hz band limit, and DLC against the road
-DLC; beside them the linear floor (:func:`correction.output.floor.linear_floor`, per wheel, taps -50..400
+DLC; beside them the linear floor (:func:`rigsim.correction.output.floor.linear_floor`, per wheel, taps -50..400
 as ``benchmarks/nrmse_decomposition.py``, in-sample) and the project's linear correction
-(:func:`scenarios.studies.scoring.score_pair`, method ``best``).
+(:func:`rigsim.scenarios.studies.scoring.score_pair`, method ``best``).
 
 Goals: NRMSE at most half the linear floor (mismatch off), below it (mismatch on), every wheel
 within 1 % of the road DLC; calibration plus correction of a 60 s case within 5 minutes on 2
 cores (wall time, and CPU time of this process and its workers, are printed: the machine may be shared).
 Scored per wheel is what the method delivers: the model correction, or the linear correction where
-it falls back (:func:`scenarios.studies.model_suite.report.delivered`). Writes the suite's table
+it falls back (:func:`rigsim.scenarios.studies.model_suite.report.delivered`). Writes the suite's table
 (two rows per case, the plants side by side, the cab the calibration chose) and the share of wheels
 meeting each goal to ``docs/results/model_correction_<suite>.md`` (``--results``: its folder),
-ending in the line that says how and where it was measured (:mod:`scenarios.studies.results_page`);
+ending in the line that says how and where it was measured (:mod:`rigsim.scenarios.studies.results_page`);
 prints, for the paper's cases, a per-wheel table per case with the fitted parameters first, then
 that file and one JSON line with every number.
 """
@@ -80,24 +80,24 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from correction.metrics.dlc import dlc, nrmse  # noqa: E402
-from correction.output.apply import band_limit  # noqa: E402
-from correction.output.floor import linear_floor  # noqa: E402
-from mjcf.names import CORNERS  # noqa: E402
-from scenarios.core.files import to_json  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.core.rig import Rig  # noqa: E402
-from scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
-from scenarios.records.model.differential import correct_with_model, settled_mask  # noqa: E402
-from scenarios.records.model.first_guess import xml_nominal  # noqa: E402, F401  (the plants' nominal values)
-from scenarios.records.model.score import LOWPASS, MODE, band_rows  # noqa: E402
-from scenarios.studies import scoring  # noqa: E402
-from scenarios.studies.model_suite.plants import (TIRE_PLANT, mismatch, plant_job, plant_keys,  # noqa: E402
-                                                  plant_name, plant_scenario, plant_truck, plant_variant)
-from scenarios.studies.model_suite.report import (GOAL_S, goals, plants_line, suite_cells, suite_table,  # noqa: E402, F401
-                                                  summary, table)
-from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
-from scenarios.studies.suites import SUITES, case_name, model_plants, pick_cases  # noqa: E402
+from rigsim.correction.metrics.dlc import dlc, nrmse  # noqa: E402
+from rigsim.correction.output.apply import band_limit  # noqa: E402
+from rigsim.correction.output.floor import linear_floor  # noqa: E402
+from rigsim.mjcf.names import CORNERS  # noqa: E402
+from rigsim.scenarios.core.files import to_json  # noqa: E402
+from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
+from rigsim.scenarios.core.rig import Rig  # noqa: E402
+from rigsim.scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
+from rigsim.scenarios.records.model.differential import correct_with_model, settled_mask  # noqa: E402
+from rigsim.scenarios.records.model.first_guess import xml_nominal  # noqa: E402, F401  (the plants' nominal values)
+from rigsim.scenarios.records.model.score import LOWPASS, MODE, band_rows  # noqa: E402
+from rigsim.scenarios.studies import scoring  # noqa: E402
+from rigsim.scenarios.studies.model_suite.plants import (TIRE_PLANT, mismatch, plant_job, plant_keys,  # noqa: E402
+                                                         plant_name, plant_scenario, plant_truck, plant_variant)
+from rigsim.scenarios.studies.model_suite.report import (GOAL_S, goals, plants_line, suite_cells, suite_table,  # noqa: E402, F401
+                                                         summary, table)
+from rigsim.scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
+from rigsim.scenarios.studies.suites import SUITES, case_name, model_plants, pick_cases  # noqa: E402
 
 #: The plants' catalogue offsets: factors on the XML's nominal values (payload: of the case's payload).
 PLANT_FACTORS = dict(model_plants().factors)
@@ -118,7 +118,7 @@ RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 
 def pick(suite: str, keys: list[str] | None, duration_s: float) -> list:
     """The cases of ``suite`` whose names contain each of ``keys`` (all by default): paths or documents
-    (:func:`scenarios.studies.suites.pick_cases`); a key matching no case or several ends the run."""
+    (:func:`rigsim.scenarios.studies.suites.pick_cases`); a key matching no case or several ends the run."""
     try:
         return pick_cases(suite, keys, duration_s)
     except ValueError as exc:

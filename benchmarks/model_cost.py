@@ -39,11 +39,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from correction.io.measured import write_channels
-from mjcf.names import CORNERS
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.core.run import run
-from scenarios.studies.results_page import script_command, write_results_page
+from rigsim.correction.io.measured import write_channels
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.results_page import script_command, write_results_page
 
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 #: The goal: the model correction's wall time over the record's length, 1.

@@ -7,7 +7,7 @@
 
 For every calibrated row of the runs' JSON lines (the last line of each file): the model error per
 wheel as the fallback (``differential.HYBRID_LIMIT``) reads it,
-:attr:`~scenarios.records.model.result.Calibration.excess_nrmse`: the calibrated model's residual
+:attr:`~rigsim.scenarios.records.model.result.Calibration.excess_nrmse`: the calibrated model's residual
 against the measured F_rig on the calibration windows in the correction's band (its mean per window
 taken out), beyond the load cells' noise there, sqrt(band^2 - noise^2); beside it the outcome
 against the road: the model correction's NRMSE over the linear floor and over the linear
@@ -17,7 +17,7 @@ Prints one line per wheel sorted by model error; writes per plant the range of t
 and where it exceeds :data:`LARGE` the ratio of the corrected NRMSE to it (how far the model error
 on the record predicts the correction's error against the road), to ``docs/results/model_error.md``
 (``--results``: its folder), ending in the line that says how and where it was measured
-(:mod:`scenarios.studies.results_page`), and prints that file.
+(:mod:`rigsim.scenarios.studies.results_page`), and prints that file.
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ import sys
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.records.model.differential import HYBRID_LIMIT
-from scenarios.records.model.result import Calibration
-from scenarios.studies.results_page import script_command, write_results_page
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+from rigsim.scenarios.records.model.result import Calibration
+from rigsim.scenarios.studies.results_page import script_command, write_results_page
 
 #: A model error above this (1) is large enough for the corrected NRMSE to follow it.
 LARGE = 0.06

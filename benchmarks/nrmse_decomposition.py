@@ -5,14 +5,14 @@
     python benchmarks/nrmse_decomposition.py [--duration-s 60] [--cases medium_72 high_48 high_72]
                                              [--lead-s 0.05] [--lag-s 0.4] [--workers N] [--results docs/results]
 
-For each case it runs (in worker processes, one MuJoCo run each, :func:`scenarios.core.pool.run_jobs`)
-the road test, the rig's identification (:func:`scenarios.studies.identify.compute.identify_rig`,
+For each case it runs (in worker processes, one MuJoCo run each, :func:`rigsim.scenarios.core.pool.run_jobs`)
+the road test, the rig's identification (:func:`rigsim.scenarios.studies.identify.compute.identify_rig`,
 as ``rigsim paper`` does) and three pan motions, each with the leaf springs' dry friction on and off:
 
 * ``rig``: the nonlinear DYNTRAC rig (the real case), scored by the project's scoring
-  (:func:`scenarios.studies.scoring.score_pair`, method ``best``);
+  (:func:`rigsim.scenarios.studies.scoring.score_pair`, method ``best``);
 * ``linear``: a road-mode run whose pans follow the profile through a linear T_a per wheel (the
-  linearized plant's own path of each wheel, :meth:`scenarios.core.plant.PlantLinearization.simulate`
+  linearized plant's own path of each wheel, :meth:`rigsim.scenarios.core.plant.PlantLinearization.simulate`
   with ``diagonal=True``), corrected with that same T_a (its exact frequency response, zero-phase,
   under the same 30 Hz low-pass): what is left is the truck's own nonlinearity (friction, lift-off,
   large angles), the noise, and the truck's coupling seen through front and rear T_a that differ;
@@ -28,7 +28,7 @@ and for every configuration, on the correction's settled samples:
   linear rows the exact inverse of the pans' T_a);
 * ``floor_per_wheel``, ``floor_4x4``: NRMSE of the best affine FIR filter (taps ``-lead .. lag``)
   fitted by least squares from the measured rig force(s) to the band-limited road force
-  (:func:`correction.output.floor.linear_floor`): the floor of any per-wheel / 4 x 4 linear correction of
+  (:func:`rigsim.correction.output.floor.linear_floor`): the floor of any per-wheel / 4 x 4 linear correction of
   that length; in-sample (a lower bound: the fit also fits part of the residual, much more so
   when the residual is narrow-band, as lift-off bursts are) and ``_cv``, out-of-fold over
   :data:`FOLDS` contiguous folds (what such a filter does on samples it was not fitted on);
@@ -51,14 +51,14 @@ The ``_half`` / ``_double`` columns of every run repeat that check. Where the er
 linear rows without friction) the FIR's missing tail shows: the exact inverse then scores below
 the FIR "floor", so read the floor as a floor only where it lies below the corrections.
 
-NRMSE = rms(x - road_band) / std(road_band) (:func:`correction.metrics.dlc.nrmse`), road_band = the road
+NRMSE = rms(x - road_band) / std(road_band) (:func:`rigsim.correction.metrics.dlc.nrmse`), road_band = the road
 force through ``band_limit(road, fs, "regularized", "zerophase")``; means over the four wheels.
 Writes a table, one row per case and configuration, to ``docs/results/nrmse_decomposition.md``
 (``--results``: its folder), ending in the line that says how and where it was measured
-(:mod:`scenarios.studies.results_page`); prints that file, then one JSON line with every number
+(:mod:`rigsim.scenarios.studies.results_page`); prints that file, then one JSON line with every number
 (per wheel too). Nothing here corrects anything in the project: the floor is a diagnostic.
 The runs through the linearized plant and its exact correction are
-:mod:`scenarios.studies.decomposition`'s.
+:mod:`rigsim.scenarios.studies.decomposition`'s.
 """
 
 from __future__ import annotations
@@ -78,24 +78,24 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from correction.metrics.dlc import nrmse  # noqa: E402
-from correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
-from correction.output.filters import reference_filter  # noqa: E402
-from correction.output.floor import linear_floor  # noqa: E402
-from correction.output.pipeline import correct_forces  # noqa: E402
-from mjcf.names import CORNERS, REAR  # noqa: E402
-from mjcf.physics import tire_forces  # noqa: E402
-from scenarios.core.config import load_scenario  # noqa: E402
-from scenarios.core.files import to_json  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.core.rig import Rig  # noqa: E402
-from scenarios.core.run import run  # noqa: E402
-from scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
-from scenarios.studies import scoring  # noqa: E402
-from scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
-from scenarios.studies.identify.compute import identify_rig  # noqa: E402
-from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
-from scenarios.studies.suites import paper_cases  # noqa: E402
+from rigsim.correction.metrics.dlc import nrmse  # noqa: E402
+from rigsim.correction.output.apply import band_limit, correct_zero_phase  # noqa: E402
+from rigsim.correction.output.filters import reference_filter  # noqa: E402
+from rigsim.correction.output.floor import linear_floor  # noqa: E402
+from rigsim.correction.output.pipeline import correct_forces  # noqa: E402
+from rigsim.mjcf.names import CORNERS, REAR  # noqa: E402
+from rigsim.mjcf.physics import tire_forces  # noqa: E402
+from rigsim.scenarios.core.config import load_scenario  # noqa: E402
+from rigsim.scenarios.core.files import to_json  # noqa: E402
+from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
+from rigsim.scenarios.core.rig import Rig  # noqa: E402
+from rigsim.scenarios.core.run import run  # noqa: E402
+from rigsim.scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
+from rigsim.scenarios.studies import scoring  # noqa: E402
+from rigsim.scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
+from rigsim.scenarios.studies.identify.compute import identify_rig  # noqa: E402
+from rigsim.scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
+from rigsim.scenarios.studies.suites import paper_cases  # noqa: E402
 
 CONFIGS = tuple((k, f) for k in ("rig", "linear", "linear_mimo") for f in (True, False))
 LABELS = {"rig": "nonlinear rig", "linear": "linear T_a per wheel", "linear_mimo": "linear 4x4 T (coupled pans)"}

@@ -7,7 +7,7 @@
 ``benchmarks/paper_overhead.py`` compares the command's wall time with bare MuJoCo's for the same
 steps (goal: at most 1.5x). This script says what the rest is. It runs the jobs of
 ``rigsim paper`` one after the other in this process, exactly as its workers do
-(:mod:`scenarios.studies.paper.compute`'s job functions ``identify_job``, ``run_job`` and
+(:mod:`rigsim.scenarios.studies.paper.compute`'s job functions ``identify_job``, ``run_job`` and
 ``case_job``, with the files the command's ``finish_run`` and ``finish`` write, then the report
 the parent renders), and charges the CPU time (``time.process_time``,
 s; this process only, so a busy machine disturbs it little) to stages:
@@ -46,8 +46,8 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: What ``rigsim paper``'s parent imports before it starts its pool (scenarios/studies/paper/command.py).
-PARENT_IMPORTS = ("import scenarios.cli.main, scenarios.studies.paper.compute, scenarios.studies.paper.report, "
-                  "scenarios.studies.scoring, scenarios.core.files, scenarios.core.outputs")
+PARENT_IMPORTS = ("import rigsim.scenarios.cli.main, rigsim.scenarios.studies.paper.compute, rigsim.scenarios.studies.paper.report, "
+                  "rigsim.scenarios.studies.scoring, rigsim.scenarios.core.files, rigsim.scenarios.core.outputs")
 
 
 def import_cpu_s() -> float:
@@ -101,11 +101,11 @@ def breakdown(duration_s: float | None) -> dict:
     """CPU seconds per stage of the paper's jobs run serially (see the module's description)."""
     from mujoco import rollout
 
-    from scenarios.core.config import paper_scenarios
-    from scenarios.core.files import to_json
-    from scenarios.studies.paper import compute
-    from scenarios.studies.paper.report import render_report, write_case, write_case_run
-    from scenarios.studies.scoring import NOISE_N
+    from rigsim.scenarios.core.config import paper_scenarios
+    from rigsim.scenarios.core.files import to_json
+    from rigsim.scenarios.studies.paper import compute
+    from rigsim.scenarios.studies.paper.report import render_report, write_case, write_case_run
+    from rigsim.scenarios.studies.scoring import NOISE_N
 
     gc.freeze()  # as the command does with its imports' objects before its pool starts
     clock = _Clock()

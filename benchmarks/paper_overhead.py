@@ -5,9 +5,9 @@
     python benchmarks/paper_overhead.py [--jobs 2] [--duration-s 60] [--repeats 1]
 
 1. Counts the MuJoCo steps ``rigsim paper`` takes on its default rig
-   (:data:`scenarios.studies.paper.command.RIG`): per case the road run, the rig run (both RK4 at
+   (:data:`rigsim.scenarios.studies.paper.command.RIG`): per case the road run, the rig run (both RK4 at
    1e-3 s, the lead-in plus the duration) and the rig's identification
-   (:func:`scenarios.studies.identify.compute.identify_rig`'s drive, RK4).
+   (:func:`rigsim.scenarios.studies.identify.compute.identify_rig`'s drive, RK4).
 2. Times ``rigsim paper --out TMP --jobs J --quiet`` end to end (a subprocess: imports, compiling
    or loading the hydraulic callbacks, the runs, the scoring, each run's ``result.json``, the
    report and its figures; no time series, which only ``--series`` writes). The
@@ -17,7 +17,7 @@
 3. Times bare MuJoCo stepping the same number of steps on the same J cores: J worker processes,
    each stepping its share of the steps with ``mujoco.rollout`` on the truck on the pans with a
    stiff built-in position servo per pan instead of the hydraulics, replaying the pan motion of
-   the hydraulic rig (:func:`scenarios.studies.bare_twin.bare_controls`), under the same integration and step,
+   the hydraulic rig (:func:`rigsim.scenarios.studies.bare_twin.bare_controls`), under the same integration and step,
    after a warm-up; the bare wall time is the slowest worker's. This is the cost of the
    multibody physics alone, with no callback, no I/O, no Python between steps.
 
@@ -49,13 +49,13 @@ CHUNK_STEPS = 20_000
 
 def paper_steps(duration_s: float | None) -> dict:
     """MuJoCo steps of ``rigsim paper`` (its default rig) by integration: ``{"rk4": the road runs', the rig runs' and
-    the identifications'}``, each at its test's time step (RK4 at 1e-3 s, :mod:`scenarios.core.rig`)."""
+    the identifications'}``, each at its test's time step (RK4 at 1e-3 s, :mod:`rigsim.scenarios.core.rig`)."""
     import dataclasses
 
-    from scenarios.core.config import load_scenario, paper_scenarios
-    from scenarios.core.rig import Rig
-    from scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S
-    from scenarios.studies.paper.command import RIG
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    from rigsim.scenarios.core.rig import Rig
+    from rigsim.scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S
+    from rigsim.scenarios.studies.paper.command import RIG
 
     total = 0
     for p in paper_scenarios(RIG):
@@ -71,12 +71,12 @@ def paper_steps(duration_s: float | None) -> dict:
 
 def bare_worker(steps: int, integration: str) -> dict:
     """Step the bare truck ``steps`` times (rollouts of :data:`CHUNK_STEPS`) under ``integration``
-    (a key of :data:`scenarios.studies.bare_twin.INTEGRATIONS`); wall and CPU time, s."""
+    (a key of :data:`rigsim.scenarios.studies.bare_twin.INTEGRATIONS`); wall and CPU time, s."""
     import mujoco
     from mujoco import rollout
 
-    from hydraulics.bridge import hydraulic_callbacks
-    from scenarios.studies.bare_twin import bare_controls, build_models, drive_signal, initial_state, static_loads
+    from rigsim.hydraulics.bridge import hydraulic_callbacks
+    from rigsim.scenarios.studies.bare_twin import bare_controls, build_models, drive_signal, initial_state, static_loads
 
     rig, bare, corners = build_models("truck", integration=integration)
     loads = static_loads(bare, corners)
@@ -101,7 +101,7 @@ def bare_worker(steps: int, integration: str) -> dict:
 def time_bare(steps: dict, jobs: int) -> dict:
     """Bare stepping of ``steps`` (per integration) on ``jobs`` workers: each worker steps its
     share of every integration's steps; the wall time is the slowest worker's, s."""
-    from scenarios.core.pool import run_jobs
+    from rigsim.scenarios.core.pool import run_jobs
 
     def shares(n):
         return [n // jobs + (1 if i < n % jobs else 0) for i in range(jobs)]
@@ -121,7 +121,7 @@ def byte_compile() -> None:
 
 def time_paper(jobs: int, duration_s: float | None) -> dict:
     out = pathlib.Path(tempfile.mkdtemp(prefix="paper_overhead_")) / "paper"
-    argv = [sys.executable, "-m", "scenarios.cli.main", "paper", "--out", str(out), "--jobs", str(jobs), "--quiet"]
+    argv = [sys.executable, "-m", "rigsim.scenarios.cli.main", "paper", "--out", str(out), "--jobs", str(jobs), "--quiet"]
     if duration_s is not None:
         argv += ["--duration-s", f"{duration_s:g}"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)

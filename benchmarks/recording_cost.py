@@ -1,11 +1,11 @@
 """Cost of a rerun recording relative to the run it records, and the size of the file.
 
 A 60 s case of the paper (high roughness, 72 km/h, 3640 kg) is run in road mode and in rig
-mode with :func:`scenarios.core.run.run`; their wall times are the reference. The recording
+mode with :func:`rigsim.scenarios.core.run.run`; their wall times are the reference. The recording
 of the case (both runs, the causally corrected rig forces, the body poses at video rate) is
-then written with :func:`scenarios.review.recording.write_recording`, repeated, and the fastest
+then written with :func:`rigsim.scenarios.review.recording.write_recording`, repeated, and the fastest
 write is kept. The poses come from a road-mode loop that mirrors the runner's with a
-:class:`scenarios.core.poses.PoseRecorder` hooked in after every ``mj_step``; what the hook
+:class:`rigsim.scenarios.core.poses.PoseRecorder` hooked in after every ``mj_step``; what the hook
 adds to a run is measured separately, as the cost of calling the recorder once per output
 sample (inside the runner's existing ``if record:`` block; the runner does nothing else for it).
 
@@ -34,14 +34,14 @@ import time
 import mujoco
 import numpy as np
 
-from correction.output.apply import correct
-from correction.output.filters import reference_filter
-from scenarios.core.config import parse_scenario
-from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, PoseRecorder
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.core.watch import output_schedule
-from scenarios.review.recording import write_recording
+from rigsim.correction.output.apply import correct
+from rigsim.correction.output.filters import reference_filter
+from rigsim.scenarios.core.config import parse_scenario
+from rigsim.scenarios.core.poses import DEFAULT_POSE_RATE_HZ, PoseRecorder
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.core.watch import output_schedule
+from rigsim.scenarios.review.recording import write_recording
 
 TARGET_RATIO = 0.05
 

@@ -14,7 +14,7 @@ waited for (the recording process of ``--rrd``) and of the command's own process
 on the critical path when the second core is free; a busy machine also charges the recording
 process's CPU to the wall time: the load average before and after is printed with the number of
 cores), and at the end the fixed part and the part per simulated minute (a line through the
-durations' extra seconds). The command runs as ``python -m scenarios.cli.main`` does, through
+durations' extra seconds). The command runs as ``python -m rigsim.scenarios.cli.main`` does, through
 ``-c`` so that it can report its own CPU time at exit. Goal: an overhead of at most 5 %.
 """
 
@@ -35,7 +35,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCENARIO = "scenarios/data/paper/high_72kmh_3640kg.toml"
 
 
-# ``rigsim run`` as ``python -m scenarios.cli.main`` runs it, writing the CPU time of its own process
+# ``rigsim run`` as ``python -m rigsim.scenarios.cli.main`` runs it, writing the CPU time of its own process
 # (not of the processes it started) at exit to the file named by $E2E_OWN_CPU.
 _COMMAND = """import atexit, os, resource, sys
 def _own_cpu():
@@ -43,7 +43,7 @@ def _own_cpu():
     with open(os.environ["E2E_OWN_CPU"], "w") as fh:
         fh.write(repr(r.ru_utime + r.ru_stime))
 atexit.register(_own_cpu)
-from scenarios.cli.main import main
+from rigsim.scenarios.cli.main import main
 sys.exit(main(sys.argv[1:]))
 """
 

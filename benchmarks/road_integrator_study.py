@@ -3,8 +3,8 @@
 The road test (``Rig(scenario, hydraulic=False)``) steps in ``mujoco.rollout``: the pans are mocap
 bodies, each step holds each pan at the drive's mid-step value moving at its mean velocity over
 the step, and the tire force at t_k is reconstructed with the tire's law
-(:func:`mjcf.physics.tire_law`) from the tendon's length and rate sensors
-(:func:`scenarios.core.stepping.run_kinematic`). Every configuration (integrator, step) runs
+(:func:`rigsim.mjcf.physics.tire_law`) from the tendon's length and rate sensors
+(:func:`rigsim.scenarios.core.stepping.run_kinematic`). Every configuration (integrator, step) runs
 through that code path: ``Rig(sc, hydraulic=False)`` with the step in ``vehicle.timestep_s``,
 the integrator set on the compiled model, ``rig.run(rig.road_source(), rate_hz=1000)``.
 
@@ -15,9 +15,9 @@ baseline: the pans on their slide joints (``build_spec(variant)``), the XML's ex
 "Euler 1e-4 s" goes through rollout and is not that loop: its pans hold the mid-step values.
 
 1. road DLC: the paper's three cases (``--dlc-s``, default 20 s after the 2 s lead-in), the DLC
-   of each wheel's force (:func:`correction.metrics.dlc.dlc`), its error (%) against Euler at 2.5e-5 s
+   of each wheel's force (:func:`rigsim.correction.metrics.dlc.dlc`), its error (%) against Euler at 2.5e-5 s
    (the reference; goal within 0.1 %) and against RK4 at 1e-4 s (a second, higher-order
-   reference); the wheel-force NRMSE (:func:`correction.metrics.dlc.nrmse`) against each at the common
+   reference); the wheel-force NRMSE (:func:`rigsim.correction.metrics.dlc.nrmse`) against each at the common
    output instants. Beside them, against the Euler reference: the raw sensor force (what MuJoCo
    applied over the step: the pan at mid-step, moving at its mean velocity; the rollout's
    sensors and controls captured in the same run), which the reconstruction replaces, and that
@@ -34,7 +34,7 @@ baseline: the pans on their slide joints (``build_spec(variant)``), the XML's ex
 
 Writes the table, the failures and the cheapest configuration passing all goals to
 ``docs/results/road_integrator_study.md`` (``--results``: its folder), ending in the line that
-says how and where it was measured (:mod:`scenarios.studies.results_page`), and prints that file
+says how and where it was measured (:mod:`rigsim.scenarios.studies.results_page`), and prints that file
 and one JSON line. A few minutes of CPU; ``--workers`` spreads it over cores.
 
 Usage::
@@ -60,17 +60,17 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from correction.metrics.dlc import dlc, nrmse  # noqa: E402
-from mjcf.build import build_spec  # noqa: E402
-from mjcf.names import CORNERS, pan_joint  # noqa: E402
-from mjcf.physics import RigIndex, static_equilibrium, tire_law  # noqa: E402
-from scenarios.core import stepping  # noqa: E402
-from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario  # noqa: E402
-from scenarios.core.pool import run_jobs  # noqa: E402
-from scenarios.core.rig import RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S, Rig, actuator_params  # noqa: E402
-from scenarios.core.watch import SimulationError, output_schedule  # noqa: E402
-from scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
-from scenarios.studies.suites import generalization_cases  # noqa: E402
+from rigsim.correction.metrics.dlc import dlc, nrmse  # noqa: E402
+from rigsim.mjcf.build import build_spec  # noqa: E402
+from rigsim.mjcf.names import CORNERS, pan_joint  # noqa: E402
+from rigsim.mjcf.physics import RigIndex, static_equilibrium, tire_law  # noqa: E402
+from rigsim.scenarios.core import stepping  # noqa: E402
+from rigsim.scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario  # noqa: E402
+from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
+from rigsim.scenarios.core.rig import RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S, Rig, actuator_params  # noqa: E402
+from rigsim.scenarios.core.watch import SimulationError, output_schedule  # noqa: E402
+from rigsim.scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
+from rigsim.scenarios.studies.suites import generalization_cases  # noqa: E402
 
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER, "RK4": mujoco.mjtIntegrator.mjINT_RK4,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}
@@ -83,7 +83,7 @@ REFERENCES = (REFERENCE, SECOND_REFERENCE)  # not candidates: no generalization 
 ADOPTED = CONFIGS.index((RIG_INTEGRATOR_NAME, RIG_TIMESTEP_S))
 DLC_GOAL_PCT, OUTPUT_HZ = 0.1, 1000.0
 GEN_CASES, GEN_BATCH = 24, 6
-MAX_STEP_S = 1e-3  # the largest vehicle.timestep_s a scenario accepts (mjcf.variant.BOUNDS)
+MAX_STEP_S = 1e-3  # the largest vehicle.timestep_s a scenario accepts (rigsim.mjcf.variant.BOUNDS)
 #: Where the results file goes by default: docs/results of this repository.
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
 
@@ -161,7 +161,7 @@ def loop_run(model, idx, drive, rate: float) -> dict:
 
 class SensorCapture:
     """Keeps the rollout's sensor and control rows of the output steps of one road run, for the
-    raw sensor force: it stands in for the ``mujoco.rollout`` module that :mod:`scenarios.core.stepping`
+    raw sensor force: it stands in for the ``mujoco.rollout`` module that :mod:`rigsim.scenarios.core.stepping`
     calls (installed with :meth:`installed`), counting the steps of its successive calls."""
 
     def __init__(self, drive, dt_s: float, rate: float) -> None:
@@ -320,7 +320,7 @@ def notes(rows: list[dict], best: dict | None) -> str:
         lines.append("\n".join(failures))
     lines.append(f"Cheapest passing: {best['config'] if best else 'none'}"
                  + (f" (cost ratio {best['cost_ratio']:.2f} of {label(LOOP)})" if best else "")
-                 + f"; adopted (scenarios.core.rig): {label(ADOPTED)}.")
+                 + f"; adopted (rigsim.scenarios.core.rig): {label(ADOPTED)}.")
     return "\n\n".join(lines)
 
 

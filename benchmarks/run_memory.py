@@ -40,7 +40,7 @@ def peak_mb(mode: str, duration_s: float) -> tuple[float, float]:
     """(peak resident memory of the run, MB; size of its timeseries.csv, MB)."""
     out = pathlib.Path(tempfile.mkdtemp(prefix="run_memory_")) / "run"
     argv = [sys.executable, "-c",
-            "import resource, sys; from scenarios.cli.main import main; rc = main(sys.argv[1:]); "
+            "import resource, sys; from rigsim.scenarios.cli.main import main; rc = main(sys.argv[1:]); "
             "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr); sys.exit(rc)",
             "run", SCENARIO, "--mode", mode, "--duration-s", f"{duration_s:g}", "--out", str(out), "--quiet"]
     proc = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True)

@@ -1,6 +1,6 @@
 """Fixed cost of a ``rigsim`` process: start-up of the help and of a short rig run.
 
-Each command runs as its own process (``python -m scenarios.cli.main ...`` from this tree, the
+Each command runs as its own process (``python -m rigsim.scenarios.cli.main ...`` from this tree, the
 same code as the ``rigsim`` console script), ``--repeats`` times (default 5); the median wall
 time (``time.perf_counter`` around ``subprocess.run``) is kept:
 
@@ -12,7 +12,7 @@ time (``time.perf_counter`` around ``subprocess.run``) is kept:
 
 The simulated steps' share of a rig run is ``steps / rig_steps_per_s``: ``steps`` is the run's
 own count (``info.simulated_steps`` in its ``result.json``, lead-in included), the rate is
-measured here on the very model the run builds (:class:`scenarios.core.rig.Rig` of the same
+measured here on the very model the run builds (:class:`rigsim.scenarios.core.rig.Rig` of the same
 scenario), with the hydraulic callbacks installed and ``mujoco.rollout`` stepping the drive
 from rest (fastest of 3). ``fixed_warm_s`` / ``fixed_nocache_s`` = run time minus that share:
 imports, compilation (or cache load), model building, linearization, writing the files.
@@ -71,9 +71,9 @@ def rig_step_rate(duration_s: float, repeats: int = 3) -> tuple[float, int]:
     import numpy as np
     from mujoco import rollout
 
-    from hydraulics.bridge import hydraulic_callbacks
-    from scenarios.core.config import load_scenario
-    from scenarios.core.rig import Rig
+    from rigsim.hydraulics.bridge import hydraulic_callbacks
+    from rigsim.scenarios.core.config import load_scenario
+    from rigsim.scenarios.core.rig import Rig
 
     scenario = dataclasses.replace(load_scenario(SCENARIO), duration_s=duration_s)
     rig = Rig(scenario, hydraulic=True)
@@ -101,7 +101,7 @@ def main(argv=None) -> dict:
     args = ap.parse_args(argv)
 
     py = sys.executable
-    cli = [py, "-m", "scenarios.cli.main"]
+    cli = [py, "-m", "rigsim.scenarios.cli.main"]
     base = {k: v for k, v in os.environ.items() if k not in ("RIGSIM_NO_CACHE", "RIGSIM_CACHE_DIR")}
     with tempfile.TemporaryDirectory() as tmp:
         warm_env = dict(base, RIGSIM_CACHE_DIR=str(pathlib.Path(tmp) / "cache"))

@@ -6,7 +6,7 @@
 2. bare: the same model with a plain built-in actuator per pan instead (no callbacks, no
    activation states) moving the pans as the rig's did: under explicit Euler a motor replaying
    the recorded forces, under RK4 a stiff position servo replaying the recorded pan positions
-   (:func:`scenarios.studies.bare_twin.bare_controls`); the pans follow the same motion, so the
+   (:func:`rigsim.scenarios.studies.bare_twin.bare_controls`); the pans follow the same motion, so the
    ratio measures the hydraulics and not the contact solver.
 
 Both runs are repeated alternately; the fastest of each is printed as one JSON line:
@@ -19,7 +19,7 @@ Usage::
 
 ``--model truck`` (the default) is the project's truck on the four pans (mjcf/), at its static
 equilibrium; ``four``/``single`` are stand-in quarter trucks. The models come from
-:mod:`scenarios.studies.bare_twin`. Goal: the rig at least 0.90 of the bare model's step rate
+:mod:`rigsim.scenarios.studies.bare_twin`. Goal: the rig at least 0.90 of the bare model's step rate
 (``ratio`` >= 0.90).
 
 ``--spec`` names a function returning an ``mujoco.MjSpec`` that contains the slide joints
@@ -36,9 +36,9 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from hydraulics.bridge import hydraulic_callbacks
-from scenarios.studies.bare_twin import (INTEGRATIONS, bare_controls, build_models, drive_signal, initial_state,
-                                         static_loads)
+from rigsim.hydraulics.bridge import hydraulic_callbacks
+from rigsim.scenarios.studies.bare_twin import (INTEGRATIONS, bare_controls, build_models, drive_signal, initial_state,
+                                                static_loads)
 
 #: The goal: rig steps per second over bare steps per second, at least.
 GOAL_RATIO = 0.90

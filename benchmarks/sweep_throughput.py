@@ -5,7 +5,7 @@
     python benchmarks/sweep_throughput.py [--cases 6] [--duration-s 8] [--executor local|dask]
 
 Every case is the same scenario with another road seed (equal cost), run in road and rig mode
-and corrected (:func:`scenarios.studies.sweep.case.evaluate_case`). The workers are warmed up first
+and corrected (:func:`rigsim.scenarios.studies.sweep.case.evaluate_case`). The workers are warmed up first
 (imports and the hydraulic kernels' compilation, a few seconds per process), so the figure is
 the steady throughput of a long sweep. Prints one JSON line with, for judging the speed-up on a
 shared machine, its load average and ``machine_speedup``: the speed-up of pure-Python CPU work on
@@ -23,10 +23,10 @@ import sys
 import tempfile
 import time
 
-from scenarios.core.pool import local_executor
-from scenarios.studies.sweep.executors import dask_executor
-from scenarios.studies.sweep.grid import parse_grid
-from scenarios.studies.sweep.run import run_sweep
+from rigsim.scenarios.core.pool import local_executor
+from rigsim.scenarios.studies.sweep.executors import dask_executor
+from rigsim.scenarios.studies.sweep.grid import parse_grid
+from rigsim.scenarios.studies.sweep.run import run_sweep
 
 TARGET_SPEEDUP = 1.9
 

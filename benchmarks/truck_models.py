@@ -6,7 +6,7 @@
 
 For each scenario file of ``scenarios/data/trucks/`` the truck its ``[vehicle]`` describes stands
 on rigid pans at its payload (``rigsim model SCENARIO.toml``'s computation:
-:func:`mjcf.physics.static_equilibrium`, :func:`mjcf.physics.modal_analysis`, leaf friction off);
+:func:`rigsim.mjcf.physics.static_equilibrium`, :func:`rigsim.mjcf.physics.modal_analysis`, leaf friction off);
 prints the table, and with ``--readme`` writes it between the page's markers.
 """
 
@@ -16,7 +16,7 @@ import argparse
 import pathlib
 import sys
 
-from scenarios.studies.results_page import configuration_line, markdown_table, script_command, write_block
+from rigsim.scenarios.studies.results_page import configuration_line, markdown_table, script_command, write_block
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -30,9 +30,9 @@ def truck_row(path: pathlib.Path) -> list[str]:
     """One shipped truck's row: its file, loads at rest, body and axle-hop modes."""
     import mujoco
 
-    from mjcf.build import build_model
-    from mjcf.physics import modal_analysis, static_equilibrium, tire_forces
-    from scenarios.core.config import load_scenario
+    from rigsim.mjcf.build import build_model
+    from rigsim.mjcf.physics import modal_analysis, static_equilibrium, tire_forces
+    from rigsim.scenarios.core.config import load_scenario
 
     vehicle = load_scenario(path).vehicle
     model = build_model(vehicle, pans="fixed")

@@ -19,7 +19,7 @@ interpreter's ``bin`` folder heads ``PATH`` too.
 
 Writes to ``docs/results`` (``--results``: its folder), each with the command lines as a terminal
 shows them (a here-document's script shortened to ``...``), what they printed and the line that
-says how and where it was measured (:func:`scenarios.studies.results_page.write_output_page`):
+says how and where it was measured (:func:`rigsim.scenarios.studies.results_page.write_output_page`):
 
 * ``walkthrough_messung.md``: the measured file's first lines (``head -3``);
 * ``walkthrough_identify.md``, ``walkthrough_correct.md``: the identification and the linear
@@ -33,7 +33,7 @@ says how and where it was measured (:func:`scenarios.studies.results_page.write_
   ``Fz_RR`` replaced by its mean plus 3 kN rms of noise (seeded), which the truck model cannot
   reproduce: rr is left out of a second calibration and corrected linearly, the other wheels by
   the model;
-* ``walkthrough_dlc.md`` (a table, :func:`scenarios.studies.results_page.write_results_page`):
+* ``walkthrough_dlc.md`` (a table, :func:`rigsim.scenarios.studies.results_page.write_results_page`):
   the DLC of the measured and corrected forces against the road run's on the samples each
   correction keeps.
 
@@ -59,11 +59,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-import scenarios
-from correction.io.measured import read_channels
-from correction.metrics.dlc import dlc
-from mjcf.names import CORNERS
-from scenarios.studies.results_page import (
+import rigsim.scenarios
+from rigsim.correction.io.measured import read_channels
+from rigsim.correction.metrics.dlc import dlc
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.studies.results_page import (
     script_command,
     write_output_page,
     write_results_page,
@@ -154,7 +154,7 @@ def shown(code: str) -> list[str]:
 
 def prepare(folder: pathlib.Path) -> dict:
     """The folder as a repository root looks to the commands; the environment they run in."""
-    (folder / "scenarios").symlink_to(pathlib.Path(scenarios.__file__).resolve().parent, target_is_directory=True)
+    (folder / "scenarios").symlink_to(pathlib.Path(rigsim.scenarios.__file__).resolve().parent, target_is_directory=True)
     if sys.prefix != sys.base_prefix:
         (folder / ".venv").symlink_to(pathlib.Path(sys.prefix).resolve(), target_is_directory=True)
     env = dict(os.environ)

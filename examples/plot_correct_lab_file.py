@@ -18,11 +18,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy import signal
 
-from correction.metrics.dlc import dlc
-from correction.output.eq4 import eq4_coefficients_from
-from hydraulics.linearization import eq4_parameters
-from hydraulics.params import ActuatorParams
-from scenarios.records import correct_record, identify_record, read_record
+from rigsim.correction.metrics.dlc import dlc
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.hydraulics.linearization import eq4_parameters
+from rigsim.hydraulics.params import ActuatorParams
+from rigsim import LinearOptions, correct_record, identify_record, read_record
 
 # %%
 # A synthetic record
@@ -63,7 +63,7 @@ print(path.read_text(encoding="utf-8").splitlines()[2][:100], "...")
 # %%
 # Read, identify, correct
 # -----------------------
-# :func:`~scenarios.records.read_record` finds the delimiter, the decimal comma and the units;
+# :func:`~rigsim.scenarios.records.read_record` finds the delimiter, the decimal comma and the units;
 # every channel comes back in SI under its name without the unit.
 
 record = read_record(path)
@@ -74,7 +74,7 @@ identification = identify_record(record, pairs=pairs)
 for c, fit in identification.fits.items():
     print(c, f"bandwidth {fit.bandwidth_hz:.2f} Hz")
 
-result = correct_record(record, actuators=identification.fits,
+result = correct_record(record, LinearOptions(actuators=identification.fits),
                         corner_map=",".join(f"{c}=Fz_{c.upper()}" for c in corners))
 print(result.table())
 result.write(folder / "corrected.rsp")

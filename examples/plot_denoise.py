@@ -4,7 +4,7 @@ The load cells' white noise and drift taken out of a residual
 
 The truck-model correction corrects the part of the rig force its model does not explain,
 ``F_rig - F_model(x_a)``: the model's error, where the truck's force is, plus the load cells' noise,
-everywhere. :func:`correction.output.denoise.design_noise_gain` reads the white noise's level from
+everywhere. :func:`rigsim.correction.output.denoise.design_noise_gain` reads the white noise's level from
 the residual above the truck's band and returns the gain ``max(0, 1 - N0 / S_x(f))``: ~1 where the
 model's error outweighs the noise, 0 where the residual is noise alone; with ``drift_hz`` it also
 takes out the slow part, where the load cells drift (the model correction's own model carries the
@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy import signal
 
-from correction.output.denoise import DRIFT_HZ, design_noise_gain
+from rigsim.correction.output.denoise import DRIFT_HZ, design_noise_gain
 
 fs = 1000.0
 rng = np.random.default_rng(0)

@@ -4,7 +4,7 @@ The actuator's eq. 4 and the correction filter
 
 The paper's eq. 4 gives the wheelpan actuator's transfer function ``T_a(s) = X_a(s) / X_p(s)``
 from the servovalve, oil column, position loop and the tire spring the pan stands on. Here it is
-built from this project's DYNTRAC parameters, linearized by :mod:`hydraulics.linearization`, at
+built from this project's DYNTRAC parameters, linearized by :mod:`rigsim.hydraulics.linearization`, at
 the catalogue truck's front and rear tire stiffness, and drawn with the two low-passes the
 correction can use and the resulting correction ``T_a^-1 T_F``.
 """
@@ -12,11 +12,11 @@ correction can use and the resulting correction ``T_a^-1 T_F``.
 import matplotlib.pyplot as plt
 import numpy as np
 
-from correction.output.eq4 import eq4_coefficients_from
-from correction.output.lowpass import paper_lowpass, regularized_lowpass
-from correction.output.transfer import eq4_transfer_function, frequency_response_hz, transfer_bandwidth_hz
-from hydraulics.linearization import eq4_parameters
-from hydraulics.params import ActuatorParams
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.lowpass import paper_lowpass, regularized_lowpass
+from rigsim.correction.output.transfer import eq4_transfer_function, frequency_response_hz, transfer_bandwidth_hz
+from rigsim.hydraulics.linearization import eq4_parameters
+from rigsim.hydraulics.params import ActuatorParams
 
 f = np.logspace(-1, 2, 400)
 params = ActuatorParams()

@@ -4,7 +4,7 @@ Identifying an actuator from its drive and LVDT record
 
 A lab that does not trust eq. 4's parameters measures ``T_a`` instead: it drives one post with a
 random signal and records the drive ``x_p`` and the pan's LVDT ``x_a``.
-:func:`correction.identification.actuator_fit.fit_actuator` estimates the frequency response
+:func:`rigsim.correction.identification.actuator_fit.fit_actuator` estimates the frequency response
 (H1, Welch) and fits a rational ``T_a(s)``, choosing its orders by the error on frequencies held
 out of the fit. Here the "rig" is a known ``T_a`` (eq. 4 of the project's DYNTRAC parameters on a
 rear tire) with 20 micrometres of LVDT noise, so the fit can be checked against the truth.
@@ -14,11 +14,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy import signal
 
-from correction.identification.actuator_fit import fit_actuator
-from correction.identification.actuator_fit_rules import rational_response
-from correction.output.eq4 import eq4_coefficients_from
-from hydraulics.linearization import eq4_parameters
-from hydraulics.params import ActuatorParams
+from rigsim.correction.identification.actuator_fit import fit_actuator
+from rigsim.correction.identification.actuator_fit_rules import rational_response
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.hydraulics.linearization import eq4_parameters
+from rigsim.hydraulics.params import ActuatorParams
 
 fs = 1000.0  # Hz
 rng = np.random.default_rng(8608)

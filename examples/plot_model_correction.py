@@ -23,15 +23,15 @@ import tempfile
 import matplotlib.pyplot as plt
 import numpy as np
 
-from correction.metrics.dlc import dlc
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.core.run import run
-from scenarios.records import correct_record, identify_record, read_record
+from rigsim.correction.metrics.dlc import dlc
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.core.run import run
+from rigsim import LinearOptions, ModelOptions, correct_record, identify_record, read_record
 
 # %%
 # A rig test and its road test
 # ----------------------------
-# :func:`scenarios.core.run.run` runs the scenario on the road (the pans follow the profile) and
+# :func:`rigsim.scenarios.core.run.run` runs the scenario on the road (the pans follow the profile) and
 # on the rig (four servo-hydraulic actuators follow it as well as they can).
 
 path = paper_scenarios()[2]
@@ -60,9 +60,10 @@ np.savetxt(csv, np.column_stack(list(columns.values())), delimiter=",", header="
 record = read_record(csv)
 pairs = ",".join(f"{c}=Soll_{c.upper()}:Weg_{c.upper()}" for c in corners)
 fits = identify_record(record, pairs=pairs).fits
-linear = correct_record(record, actuators=fits, corner_map=",".join(f"{c}=Fz_{c.upper()}" for c in corners))
-model = correct_record(record, model=path, pairs=pairs, calibration_windows=1, cab="held", max_evaluations=20,
-                       workers=2)
+linear = correct_record(record, LinearOptions(actuators=fits),
+                        corner_map=",".join(f"{c}=Fz_{c.upper()}" for c in corners))
+model = correct_record(record, ModelOptions(path, pairs=pairs, calibration_windows=1, cab="held", max_evaluations=20,
+                                            workers=2))
 print(model.method, model.reason or "(every wheel by the model)")
 print(model.calibration.table())
 

@@ -2,8 +2,8 @@
 Reading and writing measured files
 ==================================
 
-One reader, :func:`correction.io.measured.read_channels`, reads every file a lab keeps into SI
-channels on a uniform time axis; one writer, :func:`correction.io.measured.write_channels`,
+One reader, :func:`rigsim.correction.io.measured.read_channels`, reads every file a lab keeps into SI
+channels on a uniform time axis; one writer, :func:`rigsim.correction.io.measured.write_channels`,
 writes them in the format of the file's extension. Here a text file in a Swiss locale
 (apostrophe thousands separator, forces in N, LVDT in mm) is read, written as MTS RPC III (int16) and as CSV,
 and read back.
@@ -14,7 +14,7 @@ import tempfile
 
 import numpy as np
 
-from correction.io.measured import read_channels, write_channels
+from rigsim.correction.io.measured import read_channels, write_channels
 
 folder = pathlib.Path(tempfile.mkdtemp())
 t = np.arange(2000) / 500.0

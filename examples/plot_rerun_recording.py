@@ -5,7 +5,7 @@ A road test and a rig test as a rerun recording
 Every command that runs the simulator can also write a recording for the rerun viewer
 (``--rrd FILE.rrd``, ``rigsim paper --rrd``): the truck and the four pans moving, the drive, the
 pan motion and the tire forces as time series, one recording per scenario. From Python the same
-file comes from :func:`scenarios.review.recording.write_recording`. Here a 10 s case of the
+file comes from :func:`rigsim.scenarios.review.recording.write_recording`. Here a 10 s case of the
 paper (high roughness, 72 km/h) runs as a road test and as a rig test with body poses recorded
 at 50 Hz, and both go into one file; ``rerun FILE.rrd`` (or ``--view`` on the command line) opens
 it. The figure shows what the recording's force panel shows for the front left wheel.
@@ -17,9 +17,9 @@ import tempfile
 
 import matplotlib.pyplot as plt
 
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.core.run import run
-from scenarios.review.recording import write_recording
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.review.recording import write_recording
 
 scenario = dataclasses.replace(load_scenario(paper_scenarios()[2]), duration_s=10.0)
 road = run(scenario, "road", pose_rate_hz=50.0)

@@ -15,7 +15,7 @@ import tempfile
 
 import matplotlib.pyplot as plt
 
-from scenarios.cli.main import main
+from rigsim.scenarios.cli.main import main
 
 GRID = """
 [sweep]

@@ -1,7 +1,7 @@
 """Servo-hydraulic DYNTRAC wheelpan actuators: parameters, nonlinear equations, linearization.
 
-Plain numerics (numpy/numba/scipy); only :mod:`hydraulics.bridge` imports mujoco, so import it
-explicitly (``from hydraulics.bridge import add_hydraulic_actuators, hydraulic_callbacks``).
+Plain numerics (numpy/numba/scipy); only :mod:`rigsim.hydraulics.bridge` imports mujoco, so import it
+explicitly (``from rigsim.hydraulics.bridge import add_hydraulic_actuators, hydraulic_callbacks``).
 The package re-exports the names of its modules (python-control style); each is defined once,
 in the module named in its docstring.
 """

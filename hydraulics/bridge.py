@@ -9,7 +9,7 @@
   compiling) and removes them afterwards, also on error. ``fast=True`` installs numba ``cfunc``
   callbacks reading raw mjModel/mjData pointers (byte offsets found with
   ``mujoco.introspect.structs`` and verified against known arrays of the given model;
-  compiled once per process or loaded from the on-disk cache of :mod:`hydraulics.kernels`,
+  compiled once per process or loaded from the on-disk cache of :mod:`rigsim.hydraulics.kernels`,
   and checked against the reference equations on the model before use);
   ``fast=False`` installs the plain-Python reference callbacks (same equations, ~9x slower
   on the single-pan rig). Do not compile models inside a ``fast=False`` block: compiling calls
@@ -31,7 +31,7 @@ import mujoco
 import numpy as np
 from mujoco.introspect import structs as _structs
 
-from mjcf.names import CORNERS, hydraulic_actuator, pan_body, pan_joint
+from rigsim.mjcf.names import CORNERS, hydraulic_actuator, pan_body, pan_joint
 
 from .kernels import RawCallbacks, RawOffsets, make_raw_callbacks
 from .model import MPA, derivatives_core, force_core
@@ -41,7 +41,7 @@ from .params import GRAVITY_M_S2, ActuatorParams
 __all__ = ["add_hydraulic_actuators", "single_pan_spec", "hydraulic_callbacks", "actuator_id",
            "activation_slice", "set_activation", "params_from_model", "LayoutError"]
 
-# Every element name (and CORNERS) comes from mjcf.names.
+# Every element name (and CORNERS) comes from rigsim.mjcf.names.
 
 
 class LayoutError(RuntimeError):
@@ -333,7 +333,7 @@ def _fast_callbacks(model: mujoco.MjModel):
     except Exception as exc:  # pragma: no cover - defensive: anything odd is a layout problem
         raise LayoutError(f"could not locate mjModel/mjData fields ({exc}); use "
                           "hydraulic_callbacks(model, fast=False)") from exc
-    # Compiled once per process (or loaded from the on-disk cache, see hydraulics.kernels) and
+    # Compiled once per process (or loaded from the on-disk cache, see rigsim.hydraulics.kernels) and
     # checked against the reference equations on this model before use.
     callbacks = make_raw_callbacks(offsets, verify=lambda cbs: _agrees_with_reference(model, cbs))
     return callbacks.functions()

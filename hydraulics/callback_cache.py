@@ -1,7 +1,7 @@
-"""On-disk entries of compiled numba ``cfunc`` code, for :func:`hydraulics.kernels.make_raw_callbacks`.
+"""On-disk entries of compiled numba ``cfunc`` code, for :func:`rigsim.hydraulics.kernels.make_raw_callbacks`.
 
 The design (what the key holds and why numba's own cache is not used) is in
-:mod:`hydraulics.kernels`. This module only stores and loads entries, given a key:
+:mod:`rigsim.hydraulics.kernels`. This module only stores and loads entries, given a key:
 
 * :func:`save_entry` writes ``hydraulics-callbacks-<sha256 of the key>.bin``: a magic line, the
   header length, a JSON header (the key itself, the symbol and library names, the byte counts

@@ -15,7 +15,7 @@ __all__ = ["equilibrium_activation", "inverse_soft_clip"]
 
 
 def inverse_soft_clip(y: float, limit: float) -> float:
-    """Inverse of :func:`hydraulics.model.soft_clip` (normalised command for a clipped output)."""
+    """Inverse of :func:`rigsim.hydraulics.model.soft_clip` (normalised command for a clipped output)."""
     knee = CLIP_KNEE * limit
     a = abs(y)
     if a <= knee:

@@ -1,9 +1,9 @@
-"""numba-compiled twin of :mod:`hydraulics.model`, over raw float64 arrays and raw pointers.
+"""numba-compiled twin of :mod:`rigsim.hydraulics.model`, over raw float64 arrays and raw pointers.
 
-The scalar kernels of :mod:`hydraulics.model` are ``register_jitable``: the functions here
+The scalar kernels of :mod:`rigsim.hydraulics.model` are ``register_jitable``: the functions here
 compile that very source, so the compiled and the plain-Python reference paths share one set
 of equations (tests check they agree). Nothing here imports mujoco: the MuJoCo callbacks are
-built by :func:`make_raw_callbacks` from integer byte offsets that :mod:`hydraulics.bridge`
+built by :func:`make_raw_callbacks` from integer byte offsets that :mod:`rigsim.hydraulics.bridge`
 finds and verifies at runtime.
 
 Cache of the compiled callbacks
@@ -11,8 +11,8 @@ Cache of the compiled callbacks
 Compiling the three callbacks takes seconds, so their machine code is kept on disk between
 processes. numba's own ``cfunc(cache=True)`` is not used: its key holds the signature, the CPU,
 the bytecode of the decorated function, its closure variables and the modification time of
-*this* file only, so an edit of :mod:`hydraulics.model` (the equations) or of
-:mod:`hydraulics.packing` (``LAYOUT_TAG`` and the slot indices, frozen into the code as
+*this* file only, so an edit of :mod:`rigsim.hydraulics.model` (the equations) or of
+:mod:`rigsim.hydraulics.packing` (``LAYOUT_TAG`` and the slot indices, frozen into the code as
 constants) would reuse stale machine code. This module keeps its own cache instead; an entry
 is used only if everything the machine code depends on is unchanged. The key (a JSON
 document, stored whole in the entry and compared on load; its SHA-256 names the file) holds:
@@ -25,11 +25,11 @@ document, stored whole in the entry and compared on load; its SHA-256 names the 
 * the versions of Python, numba, llvmlite, LLVM, numpy and mujoco, the LLVM target triple,
   CPU name and CPU features (numba's ``magic_tuple``) and every ``NUMBA_*`` environment variable.
 
-An entry (:mod:`hydraulics.callback_cache`: ``hydraulics-callbacks-<sha256>.bin``) holds a
+An entry (:mod:`rigsim.hydraulics.callback_cache`: ``hydraulics-callbacks-<sha256>.bin``) holds a
 header (the key, symbol names, sizes, the SHA-256 of the payload) and numba's object code of
 each callback; no pickle. It is written atomically (temporary file, then rename; concurrent
 writers are harmless) and verified on load: header, key, payload digest, every external symbol
-resolvable, then :mod:`hydraulics.bridge` runs the loaded callbacks once against the
+resolvable, then :mod:`rigsim.hydraulics.bridge` runs the loaded callbacks once against the
 plain-Python reference equations. Anything unexpected is a miss: the entry is deleted, the
 callbacks are compiled afresh and a new entry written. Each compilation names its callbacks
 with a fresh random suffix, so code loaded from an entry never collides with code compiled in
@@ -249,7 +249,7 @@ def _code_fingerprint(code) -> str:
 
 def _compiled_fingerprint() -> str:
     """SHA-256 over what numba compiles from memory: the functions' bytecode and the constants
-    (numbers and strings) of this module, :mod:`hydraulics.model` and :mod:`hydraulics.packing`."""
+    (numbers and strings) of this module, :mod:`rigsim.hydraulics.model` and :mod:`rigsim.hydraulics.packing`."""
     h = hashlib.sha256()
     for mod in (sys.modules[__name__], _model, _packing):
         for name in sorted(vars(mod)):

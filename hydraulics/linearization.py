@@ -12,11 +12,11 @@ nonlinear valve (smoothed null, laminar core) at the static operating point:
 At the null, unloaded point (``load_N = 0``: xv = 0, P1 = P2 = (Ps + Pr)/2) the two chambers are
 symmetric, the mean-pressure mode decouples, and the two-chamber model linearizes *exactly*
 to eq. 4. Under a static load the two flow paths differ and eq. 4 (one load pressure) is an
-approximation of the two-pressure linearization (see :mod:`hydraulics.loop` for the exact one).
+approximation of the two-pressure linearization (see :mod:`rigsim.hydraulics.loop` for the exact one).
 
 Eq. 4 lumps leakage into its ``Kc``: :func:`eq4_parameters` passes ``Kce = Kc + Ctp`` (valve
 coefficient plus cross-piston leakage), Merritt's total flow-pressure coefficient. The formula
-itself lives in ``correction.output.eq4.eq4_coefficients_from`` (which this package may not import):
+itself lives in ``rigsim.correction.output.eq4.eq4_coefficients_from`` (which this package may not import):
 ``eq4_coefficients_from(**eq4_parameters(params, kt, load))``.
 """
 
@@ -102,8 +102,8 @@ def eq4_parameters(params: ActuatorParams, kt_N_per_m: float, load_N: float = 0.
                    mass_kg: float | None = None) -> dict[str, float]:
     """The physical parameters of the paper's eq. 4 for ``params`` linearized at ``load_N``.
 
-    The keys are exactly the keyword arguments of ``correction.output.eq4.eq4_coefficients_from``
-    (``correction.output.eq4.EQ4_PARAMETERS``), the one implementation of the formula::
+    The keys are exactly the keyword arguments of ``rigsim.correction.output.eq4.eq4_coefficients_from``
+    (``rigsim.correction.output.eq4.EQ4_PARAMETERS``), the one implementation of the formula::
 
         num, den = eq4_coefficients_from(**eq4_parameters(params, kt, load))
 

@@ -7,8 +7,8 @@ differential-pressure feedback, a smooth cavitation floor and a chamber relief.
 
 The scalar kernels here (``*_core`` and the helpers) are written in the subset of Python numba
 compiles and are registered with :func:`numba.extending.register_jitable`: executed by CPython
-they are the plain-Python reference; :mod:`hydraulics.kernels` compiles the very same source.
-They read parameters from a packed vector (:func:`hydraulics.packing.pack`); the public
+they are the plain-Python reference; :mod:`rigsim.hydraulics.kernels` compiles the very same source.
+They read parameters from a packed vector (:func:`rigsim.hydraulics.packing.pack`); the public
 functions :func:`actuator_derivatives` and :func:`actuator_force` take ``ActuatorParams``.
 
 States (``STATE_NAMES``): spool (normalised), spool_rate (1/s), p1_MPa, p2_MPa (MPa, gauge),

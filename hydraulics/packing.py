@@ -66,7 +66,7 @@ _EXPECTED = ("supply_pressure_Pa", "return_pressure_Pa", "rated_flow_m3_s", "rat
              "relief_pressure_Pa", "relief_conductance_m3_s_Pa", "pan_mass_kg", "friction_N_s_m",
              "kp_per_m", "ti_s", "kdp_per_Pa", "design_tire_N_per_m", "design_load_mass_kg")
 if FIELD_NAMES != _EXPECTED or NPACK != 3 + len(FIELD_NAMES) or NSTATE != len(STATE_NAMES):
-    raise ImportError("hydraulics.packing is out of date with ActuatorParams: update the P_* slots")
+    raise ImportError("rigsim.hydraulics.packing is out of date with ActuatorParams: update the P_* slots")
 
 
 def pack(params: ActuatorParams) -> np.ndarray:
@@ -87,6 +87,6 @@ def unpack(vector) -> ActuatorParams:
     v = np.asarray(vector, dtype=np.float64).ravel()
     if v.size < NPACK or v[P_TAG] != LAYOUT_TAG or v[P_NSTATE] != NSTATE or v[P_NPACK] != NPACK:
         raise ValueError("vector is not a packed ActuatorParams (wrong length or layout tag); "
-                         "pack it with hydraulics.packing.pack")
+                         "pack it with rigsim.hydraulics.packing.pack")
     kwargs = {name: float(v[3 + i]) for i, name in enumerate(FIELD_NAMES)}
     return ActuatorParams(**kwargs)

@@ -105,7 +105,7 @@ class ActuatorParams:
         Differential-pressure feedback gain Kdp: normalised command per Pa of ``P1 - P2``.
     design_tire_N_per_m : float, N/m
         Tire stiffness of the reference wheel station the defaults were tuned for (checked by
-        :func:`hydraulics.loop.check_design_station` when a rig is built).
+        :func:`rigsim.hydraulics.loop.check_design_station` when a rig is built).
     design_load_mass_kg : float, kg
         Unsprung mass of that reference wheel station (``math.inf`` = tire to ground).
 
@@ -113,8 +113,8 @@ class ActuatorParams:
     -----
     Construction only validates each value (type, sign, finiteness, pressure ordering); it
     never checks the closed loop. Stability is a property of the parameters *and* a load:
-    use :func:`hydraulics.loop.check_stable` / :func:`hydraulics.loop.assert_stable` with a
-    tire and unsprung mass, or :func:`hydraulics.loop.check_design_station`.
+    use :func:`rigsim.hydraulics.loop.check_stable` / :func:`rigsim.hydraulics.loop.assert_stable` with a
+    tire and unsprung mass, or :func:`rigsim.hydraulics.loop.check_design_station`.
     """
 
     # --- supply and servovalve ------------------------------------------------------------
@@ -150,11 +150,11 @@ class ActuatorParams:
     friction_N_s_m: float = 5.0e3  # seal/guide viscous friction, 1-10 kN s/m for 150 kN actuators
     # --- controller (analog PI position loop + differential-pressure feedback) --------------
     kp_per_m: float = 50.0  # velocity constant Ksv*Kq*Kp/A = 73 1/s: 15.5 Hz bandwidth on a 1 MN/m tire
-    # to ground, 6 dB gain margin (tuned with hydraulics.loop over tires 0.9-1.8 MN/m, 300-600 kg)
+    # to ground, 6 dB gain margin (tuned with rigsim.hydraulics.loop over tires 0.9-1.8 MN/m, 300-600 kg)
     ti_s: float = 1.0  # Ti = 1 s: the structure under which the paper's eq. 4 is exact
     kdp_per_Pa: float = 2.0e-8  # damps the oil-column mode to zeta ~ 0.18 (Euler at 1e-4 s removes
-    # omega^2 dt/2 = 24 1/s of its 126 1/s decay rate; tuned with hydraulics.loop)
-    # --- reference wheel station for hydraulics.loop.check_design_station -------------------
+    # omega^2 dt/2 = 24 1/s of its 126 1/s decay rate; tuned with rigsim.hydraulics.loop)
+    # --- reference wheel station for rigsim.hydraulics.loop.check_design_station -------------------
     design_tire_N_per_m: float = 1.0e6  # truck tire 0.9-1.8 MN/m (brief); the soft end
     design_load_mass_kg: float = 450.0  # unsprung mass per wheel station 300-600 kg (brief)
 

@@ -12,17 +12,17 @@ import importlib.resources
 
 import mujoco
 
-from mjcf import names
-from mjcf.cab import CAB_MASS_KG, add_cab_mount
-from mjcf.dampers import add_digressive_damping
-from mjcf.engine import ENGINE_MASS_KG, add_engine_mount
-from mjcf.frame import add_frame_flex
-from mjcf.description import (SINGLE_TIRE_DAMPING_NS_PER_M, SINGLE_TIRE_STIFFNESS_N_PER_M, apply_geometry,
-                              apply_suspension)
-from mjcf.physics import RigIndex, tire_stiffness
-from mjcf.stations import add_rebound_damping, apply_station_factors, set_masses
-from mjcf.tires import add_progressive_tire, axle_progressive, set_tire, tire_elements
-from mjcf.variant import TruckVariant
+from rigsim.mjcf import names
+from rigsim.mjcf.cab import CAB_MASS_KG, add_cab_mount
+from rigsim.mjcf.dampers import add_digressive_damping
+from rigsim.mjcf.engine import ENGINE_MASS_KG, add_engine_mount
+from rigsim.mjcf.frame import add_frame_flex
+from rigsim.mjcf.description import (SINGLE_TIRE_DAMPING_NS_PER_M, SINGLE_TIRE_STIFFNESS_N_PER_M, apply_geometry,
+                                     apply_suspension)
+from rigsim.mjcf.physics import RigIndex, tire_stiffness
+from rigsim.mjcf.stations import add_rebound_damping, apply_station_factors, set_masses
+from rigsim.mjcf.tires import add_progressive_tire, axle_progressive, set_tire, tire_elements
+from rigsim.mjcf.variant import TruckVariant
 
 __all__ = ["MODEL_FILE", "SCENE_FILE", "resource_path", "load_spec", "build_spec", "build_model", "nominal_values"]
 
@@ -43,7 +43,7 @@ def resource_path(name: str = SCENE_FILE):
     pathlib.Path
         Absolute path of the file as installed.
     """
-    ref = importlib.resources.files("mjcf").joinpath(name)
+    ref = importlib.resources.files("rigsim.mjcf").joinpath(name)
     if not ref.is_file():
         raise FileNotFoundError(f"MJCF resource {name!r} is not shipped with the mjcf package")
     # The package is installed as plain files (not zipped), so the traversable is a real path.
@@ -65,7 +65,7 @@ def _prescribe_pan(spec: mujoco.MjSpec, corner: str) -> None:
     vertical velocity (m/s, + up). The force stays the XML's affine law, clamped to the same
     range: kt (R0 - L) - ct (dL/dt) with dL/dt = (truck side) - v_pan, for the near-vertical
     tendon. Two sensors report the tendon's length (m) and its truck-side rate (m/s), from
-    which the force at any other pan position follows (:func:`mjcf.physics.tire_law`).
+    which the force at any other pan position follows (:func:`rigsim.mjcf.physics.tire_law`).
     """
     spec.body(names.pan_body(corner)).mocap = True
     for act in tire_elements(spec, corner):  # each element's gain is its own damping (the progressive one: 0)
@@ -158,7 +158,7 @@ def build_model(variant: TruckVariant | None = None, *, pans: str = "slide") -> 
 
 
 def nominal_values(model: mujoco.MjModel | None = None) -> dict[str, float]:
-    """The XML's value of each :class:`~mjcf.variant.TruckVariant` field that holds one number in the
+    """The XML's value of each :class:`~rigsim.mjcf.variant.TruckVariant` field that holds one number in the
     nominal truck (SI; the axle fields read from the front-left and rear-left stations), read from the
     compiled model (``model``: the caller's own compile of ``build_model()``; without it the XML is
     compiled once per process): the values a factor or an offset on "the catalogue truck" applies to."""

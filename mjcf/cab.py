@@ -12,7 +12,7 @@ import math
 import mujoco
 import numpy as np
 
-from mjcf import names
+from rigsim.mjcf import names
 
 __all__ = ["CAB_MASS_KG", "CAB_DAMPING_RATIO", "CAB_MOUNT_SPACING_M", "add_cab_mount"]
 

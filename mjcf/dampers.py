@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import mujoco
 
-from mjcf import names
-from mjcf.features import check_field
+from rigsim.mjcf import names
+from rigsim.mjcf.features import check_field
 
 __all__ = ["BOUNDS", "damper_slopes", "add_digressive_damping"]
 
 #: Bounds of the digressive damper's fields: ``{field: (low, high, unit, why)}``, inclusive, SI (the
-#: shape of :data:`mjcf.variant.BOUNDS`).
+#: shape of :data:`rigsim.mjcf.variant.BOUNDS`).
 BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "damper_digressive_knee_m_per_s": (0.05, 0.5, "m/s", "vehicle dampers turn digressive, their blow-off "
                                        "valves opening, at 0.1-0.3 m/s (estimate); a knee below 0.05 m/s leaves "
@@ -38,7 +38,7 @@ def damper_slopes(spec: mujoco.MjSpec, corner: str) -> tuple[float, float]:
     """The low-speed slopes of ``corner``'s leaf-spring damper as the spec has it.
 
     The tendon's own damping c acts on both sides; a rebound element
-    (:func:`mjcf.stations.add_rebound_damping`, its force b2 dL/dt with b2 = -(c_r - c_b) while the
+    (:func:`rigsim.mjcf.stations.add_rebound_damping`, its force b2 dL/dt with b2 = -(c_r - c_b) while the
     spring extends) adds -b2 to the rebound slope.
 
     Returns
@@ -57,13 +57,13 @@ def add_digressive_damping(spec: mujoco.MjSpec, corner: str, knee_m_per_s: float
     Parameters
     ----------
     spec : mujoco.MjSpec
-        A truck spec (:func:`mjcf.build.build_spec`), edited in place. Apply after
-        :func:`mjcf.stations.add_rebound_damping` and after every change of the spring's damping
+        A truck spec (:func:`rigsim.mjcf.build.build_spec`), edited in place. Apply after
+        :func:`rigsim.mjcf.stations.add_rebound_damping` and after every change of the spring's damping
         (the per-station factors, the suspension): the two sides' slopes are read from the spec as
         it is (:func:`damper_slopes`), and a rebound element applied afterwards would split the
         lowered tendon damping as if it were the damper's mean.
     corner : str
-        One of :data:`mjcf.names.CORNERS`.
+        One of :data:`rigsim.mjcf.names.CORNERS`.
     knee_m_per_s : float, m/s
         Spring extension or compression rate |dL/dt| where the slope changes
         (``vehicle.damper_digressive_knee_m_per_s``, :data:`BOUNDS`).
@@ -76,7 +76,7 @@ def add_digressive_damping(spec: mujoco.MjSpec, corner: str, knee_m_per_s: float
     damper's force along the tendon (N, + extending) becomes F = -c_s v for |v| <= knee and
     F = -sign(v) c_s (knee + ratio (|v| - knee)) beyond: ratio c_s |v| at every speed plus
     (1 - ratio) c_s min(|v|, knee). The tendon's damping becomes ratio c_b, a rebound element's
-    slope ratio (c_r - c_b), and two affine actuators (:func:`mjcf.names.spring_digressive_actuator`)
+    slope ratio (c_r - c_b), and two affine actuators (:func:`rigsim.mjcf.names.spring_digressive_actuator`)
     add the saturating part: ``ext`` F = -(1 - ratio) c_r v clamped to [-(1 - ratio) c_r knee, 0]
     (zero while the spring compresses), ``cmp`` F = -(1 - ratio) c_b v clamped to
     [0, (1 - ratio) c_b knee]. Both elements always exist; at ratio 1 their force is zero.

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mjcf import names
+from rigsim.mjcf import names
 
 __all__ = ["DESCRIPTION_FIELDS", "CHOICES", "BOUNDS", "AIR_RATE_N_PER_M", "AIR_DAMPING_NS_PER_M",
            "SINGLE_TIRE_STIFFNESS_N_PER_M", "SINGLE_TIRE_DAMPING_NS_PER_M", "DUAL_HALF_SPACING_M",

@@ -15,8 +15,8 @@ import math
 import mujoco
 import numpy as np
 
-from mjcf import names
-from mjcf.features import box_inertia, check_field, parallel_axis, set_tensor, tensor_of
+from rigsim.mjcf import names
+from rigsim.mjcf.features import box_inertia, check_field, parallel_axis, set_tensor, tensor_of
 
 __all__ = ["ENGINE_MASS_KG", "ENGINE_MOUNT_DAMPING_RATIO", "ENGINE_OFFSET_X_M", "ENGINE_Z_M", "ENGINE_SIZE_M",
            "ENGINE_MOUNT_SPACING_M", "BOUNDS", "add_engine_mount"]
@@ -43,7 +43,7 @@ ENGINE_SIZE_M = (1.8, 0.8, 1.0)
 ENGINE_MOUNT_SPACING_M = 1.2
 
 #: Bounds of the engine mount's fields: ``{field: (low, high, unit, why)}``, inclusive, SI (the
-#: shape of :data:`mjcf.variant.BOUNDS`).
+#: shape of :data:`rigsim.mjcf.variant.BOUNDS`).
 BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "engine_mass_kg": (300.0, 1500.0, "kg", "a truck's engine with its gearbox weighs 0.8-1.3 t (estimate: a 5 l "
                        "engine and gearbox 0.5 t, a 13 l one with a 16-speed gearbox 1.5 t)"),
@@ -58,7 +58,7 @@ def add_engine_mount(spec: mujoco.MjSpec, engine_kg: float, mount_hz: float) -> 
     Parameters
     ----------
     spec : mujoco.MjSpec
-        A truck spec (:func:`mjcf.build.build_spec`), edited in place; apply after every feature
+        A truck spec (:func:`rigsim.mjcf.build.build_spec`), edited in place; apply after every feature
         that sets the chassis' mass (the masses, the geometry), as the engine's mass is taken out of
         the chassis as it finds it.
     engine_kg : float, kg
@@ -68,7 +68,7 @@ def add_engine_mount(spec: mujoco.MjSpec, engine_kg: float, mount_hz: float) -> 
 
     Notes
     -----
-    The engine (body :data:`mjcf.names.ENGINE_BODY`, a uniform box of :data:`ENGINE_SIZE_M`) sits at
+    The engine (body :data:`rigsim.mjcf.names.ENGINE_BODY`, a uniform box of :data:`ENGINE_SIZE_M`) sits at
     front axle x + :data:`ENGINE_OFFSET_X_M`, z = :data:`ENGINE_Z_M` (chassis frame). The chassis
     keeps the truck's mass, centre of mass and inertia tensor: it loses the engine's mass, its
     centre of mass moves so that chassis and engine together keep the old one, and its tensor about

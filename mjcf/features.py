@@ -1,7 +1,7 @@
-"""Helpers of the plant features (:mod:`mjcf.frame`, :mod:`mjcf.engine`, :mod:`mjcf.dampers`).
+"""Helpers of the plant features (:mod:`rigsim.mjcf.frame`, :mod:`rigsim.mjcf.engine`, :mod:`rigsim.mjcf.dampers`).
 
 :func:`check_field` validates a feature's argument against its module's ``BOUNDS`` (the shape of
-:data:`mjcf.variant.BOUNDS`). A feature that takes mass out of a body (the engine out of the
+:data:`rigsim.mjcf.variant.BOUNDS`). A feature that takes mass out of a body (the engine out of the
 chassis) or splits one in two (the flexible frame) keeps the truck's mass, centre of mass and
 inertia tensor: :func:`tensor_of` reads a body's explicit inertial as a 3x3 tensor about its centre
 of mass in the body's axes, :func:`set_tensor` writes one back in MuJoCo's principal form.

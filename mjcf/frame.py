@@ -4,8 +4,8 @@
 The XML's chassis is one rigid body; a truck's ladder frame twists about its length and bends in
 its vertical plane, in first modes at 5-12 Hz with its cab and body on it, within the band the rig
 excites. :func:`add_frame_flex` cuts the chassis at mid-wheelbase into a front half (the body
-``chassis``, its joints on the rig kept) and a rear half (:data:`mjcf.names.FRAME_REAR_BODY`) on
-a torsion and a bending hinge (:data:`mjcf.names.FRAME_JOINTS`) with rotational springs and light
+``chassis``, its joints on the rig kept) and a rear half (:data:`rigsim.mjcf.names.FRAME_REAR_BODY`) on
+a torsion and a bending hinge (:data:`rigsim.mjcf.names.FRAME_JOINTS`) with rotational springs and light
 damping, keeping the truck's mass, centre of mass and inertia tensor (mjcf/README.md, "Flexible
 frame").
 """
@@ -17,8 +17,8 @@ import math
 import mujoco
 import numpy as np
 
-from mjcf import names
-from mjcf.features import check_field, set_tensor, tensor_of
+from rigsim.mjcf import names
+from rigsim.mjcf.features import check_field, set_tensor, tensor_of
 
 __all__ = ["FRAME_DAMPING_RATIO", "BOUNDS", "RAIL_GEOM", "frame_split", "reduced_inertia", "add_frame_flex"]
 
@@ -31,7 +31,7 @@ FRAME_DAMPING_RATIO = 0.04
 RAIL_GEOM = "rail_left"
 
 #: Bounds of the flexible frame's fields: ``{field: (low, high, unit, why)}``, inclusive, SI (the
-#: shape of :data:`mjcf.variant.BOUNDS`).
+#: shape of :data:`rigsim.mjcf.variant.BOUNDS`).
 BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "frame_torsion_hz": (3.0, 20.0, "Hz", "a truck's ladder frame with its cab and body twists in its first mode "
                          "at 5-12 Hz (estimate); below 3 Hz it would twist with the body's roll (0.9 Hz on rigid "
@@ -153,7 +153,7 @@ def reduced_inertia(model: mujoco.MjModel) -> dict[str, float]:
     Parameters
     ----------
     model : mujoco.MjModel
-        The truck compiled with the frame cut (:data:`mjcf.names.FRAME_JOINTS` present), taken at qpos0.
+        The truck compiled with the frame cut (:data:`rigsim.mjcf.names.FRAME_JOINTS` present), taken at qpos0.
 
     Returns
     -------
@@ -175,7 +175,7 @@ def add_frame_flex(spec: mujoco.MjSpec, torsion_hz: float, bending_hz: float) ->
     Parameters
     ----------
     spec : mujoco.MjSpec
-        A truck spec (:func:`mjcf.build.build_spec`), edited in place; apply after every feature
+        A truck spec (:func:`rigsim.mjcf.build.build_spec`), edited in place; apply after every feature
         that sets the chassis' mass or moves its children (the payload, the geometry, a cab or an
         engine mount), since the cut takes the chassis as it finds it.
     torsion_hz : float, Hz

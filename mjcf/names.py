@@ -93,7 +93,7 @@ def wheel_site(corner: str) -> str:
 
 
 def hydraulic_actuator(corner: str) -> str:
-    """The servo-hydraulic user actuator that :mod:`hydraulics.bridge` adds on the pan joint."""
+    """The servo-hydraulic user actuator that :mod:`rigsim.hydraulics.bridge` adds on the pan joint."""
     return f"hyd_{_check(corner)}"
 
 

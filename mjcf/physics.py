@@ -1,8 +1,7 @@
 """Physics accessors for the truck-on-rig model: named indices, static equilibrium, modes.
 
-This is the dm_control-style middle layer: the XML describes the model, this module reads
-and solves it by name, and the scenario layer (``scenarios``) runs tasks on top.
-"""
+The dm_control-style middle layer: the XML describes the model, this module reads and solves it
+by name, and the scenario layer (``scenarios``) runs tasks on top."""
 
 from __future__ import annotations
 
@@ -12,8 +11,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from mjcf.names import (CAB_JOINTS, CORNERS, ENGINE_JOINTS, FRAME_JOINTS, pan_body, pan_joint, tire_actuator,
-                        tire_tendon)
+from rigsim.mjcf.names import (CAB_JOINTS, CORNERS, ENGINE_JOINTS, FRAME_JOINTS, pan_body, pan_joint, tire_actuator,
+                               tire_tendon)
+from rigsim.errors import RigsimError
 
 __all__ = [
     "TRUCK_JOINTS",
@@ -34,7 +34,7 @@ __all__ = [
     "COUPLED_SHARE",
 ]
 
-#: The truck's degrees of freedom (the pans' are :func:`mjcf.names.pan_joint`; a suspended cab, a
+#: The truck's degrees of freedom (the pans' are :func:`rigsim.mjcf.names.pan_joint`; a suspended cab, a
 #: flexible frame and an engine on mounts add :data:`OPTIONAL_JOINTS`).
 TRUCK_JOINTS: tuple[str, ...] = (
     "chassis_z",
@@ -86,7 +86,7 @@ NO_REST = ("the truck finds no rest on its tires: a tire is off its pan or the s
 CONTINUATION_STEP, CONTINUATION_MIN = 0.25, 1.0 / 64.0
 
 
-class EquilibriumError(ValueError):
+class EquilibriumError(RigsimError, ValueError):
     """The truck has no static rest position on the pans (one sentence: why, and what to check)."""
 
 
@@ -100,18 +100,18 @@ class RigIndex:
         qpos and dof addresses of :data:`TRUCK_JOINTS`, in that order, then of each group of
         :data:`OPTIONAL_JOINTS` the model has (a suspended cab, a flexible frame, an engine).
     pan_qpos, pan_dof : numpy.ndarray of int
-        qpos and dof addresses of :func:`mjcf.names.pan_joint` in :data:`mjcf.names.CORNERS` order
+        qpos and dof addresses of :func:`rigsim.mjcf.names.pan_joint` in :data:`rigsim.mjcf.names.CORNERS` order
         (empty when the pans are fixed or prescribed).
     tire_actuator : numpy.ndarray of int
-        Actuator ids of :func:`mjcf.names.tire_actuator`, in the same order.
+        Actuator ids of :func:`rigsim.mjcf.names.tire_actuator`, in the same order.
     tire_extra : numpy.ndarray of int
-        Ids of every other actuator on a tire tendon (:func:`mjcf.names.tire_tendon`; the
+        Ids of every other actuator on a tire tendon (:func:`rigsim.mjcf.names.tire_tendon`; the
         progressive tire's second element, ``TruckVariant.tire_progressive_ratio``), empty for
         the XML's tire; a wheel's tire force is the sum of its tendon's elements.
     tire_extra_corner : numpy.ndarray of int
-        Index in :data:`mjcf.names.CORNERS` of each of :attr:`tire_extra`.
+        Index in :data:`rigsim.mjcf.names.CORNERS` of each of :attr:`tire_extra`.
     pan_body : numpy.ndarray of int
-        Body ids of :func:`mjcf.names.pan_body`, in the same order.
+        Body ids of :func:`rigsim.mjcf.names.pan_body`, in the same order.
     pan_mocap : numpy.ndarray of int
         Mocap ids of the pans when they are prescribed (``build_spec(pans="mocap")``), else empty.
     """
@@ -185,7 +185,7 @@ def friction_disabled(model: mujoco.MjModel):
 
 def tire_stiffness(model: mujoco.MjModel, index: RigIndex | None = None) -> np.ndarray:
     """Vertical stiffness of each wheel station's tire in N/m (fl, fr, rl, rr), as compiled: the
-    tire element's (:func:`mjcf.names.tire_actuator`; a progressive tire's below its onset)."""
+    tire element's (:func:`rigsim.mjcf.names.tire_actuator`; a progressive tire's below its onset)."""
     index = index or RigIndex.of(model)
     return -model.actuator_biasprm[index.tire_actuator, 1].copy()
 
@@ -218,10 +218,10 @@ def tire_law(model: mujoco.MjModel, index: RigIndex, length_m, rate_m_s) -> np.n
     F = b0 + b1 L + b2 dL/dt clamped to the actuator's force range (the XML's affine bias,
     ``actuator_biasprm``, with its parameters as compiled): the force MuJoCo applies for a
     tendon of length ``length_m`` (m) changing at ``rate_m_s`` (m/s), each (..., 4) in
-    :data:`mjcf.names.CORNERS` order; summed over every element on the tire tendon, each clamped
+    :data:`rigsim.mjcf.names.CORNERS` order; summed over every element on the tire tendon, each clamped
     to its own range (a progressive tire's second element, :attr:`RigIndex.tire_extra`). The road
     test evaluates it at the pan position of an output instant while MuJoCo held the pan at
-    mid-step (:mod:`scenarios.core.stepping`).
+    mid-step (:mod:`rigsim.scenarios.core.stepping`).
     """
     length, rate = np.asarray(length_m, float), np.asarray(rate_m_s, float)
     force = _affine_law(model, index.tire_actuator, length, rate)

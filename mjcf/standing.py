@@ -1,9 +1,9 @@
 """Whether a described truck can stand on the rig: a rest found, every tire loaded, every spring in its travel.
 
-A truck built from a spec sheet (:mod:`mjcf.description`) may be one no rig could hold: a payload
+A truck built from a spec sheet (:mod:`rigsim.mjcf.description`) may be one no rig could hold: a payload
 behind the rear axle of a short truck lifts the steer tires, springs too soft for the load close on
 their bump stops, a spring that never reaches its load finds no rest. :func:`check_stands` solves
-the truck's rest on rigid pans at mid-stroke (:func:`mjcf.physics.static_equilibrium`) and refuses
+the truck's rest on rigid pans at mid-stroke (:func:`rigsim.mjcf.physics.static_equilibrium`) and refuses
 such a truck in one sentence naming the field to change, before anything runs.
 """
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from mjcf import names
+from rigsim.mjcf import names
 
 __all__ = ["MIN_TIRE_SHARE", "MIN_GAP_M", "MAX_GAP_M", "check_stands", "truck_layout"]
 
@@ -27,15 +27,15 @@ MAX_GAP_M = 0.55
 
 
 def check_stands(variant) -> None:
-    """Refuse a truck (:class:`mjcf.variant.TruckVariant`) that cannot stand on the rig's pans at mid-stroke.
+    """Refuse a truck (:class:`rigsim.mjcf.variant.TruckVariant`) that cannot stand on the rig's pans at mid-stroke.
 
     Raises
     ------
     ValueError
         One sentence naming the field to change: no rest, a tire lifted, a spring on its stops.
     """
-    from mjcf.build import build_model
-    from mjcf.physics import EquilibriumError, RigIndex, static_equilibrium, tire_forces
+    from rigsim.mjcf.build import build_model
+    from rigsim.mjcf.physics import EquilibriumError, RigIndex, static_equilibrium, tire_forces
 
     model = build_model(variant, pans="fixed")
     data = mujoco.MjData(model)

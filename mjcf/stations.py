@@ -1,9 +1,9 @@
 """Each wheel station's own values, and the masses a real truck differs in: the plant's asymmetries.
 
 The XML (``truck_rig.xml``) gives both stations of an axle the same tire and the same leaf
-spring, and the model family (:mod:`scenarios.records.model`) fits them per axle. A real truck's
+spring, and the model family (:mod:`rigsim.scenarios.records.model`) fits them per axle. A real truck's
 left and right differ: a tire at another pressure, a spring with a broken leaf, a worn damper,
-leaves that rust and rub harder. :class:`mjcf.variant.TruckVariant`'s per-station factors
+leaves that rust and rub harder. :class:`rigsim.mjcf.variant.TruckVariant`'s per-station factors
 (``<quantity>_factor_<corner>``, :data:`STATION_FACTORS`) scale one station's value after its
 axle's; :func:`add_rebound_damping` makes the leaf springs' dampers harder in rebound than in
 bump; :func:`set_masses` sets the axles' and the chassis' masses and inertias. All plant
@@ -15,7 +15,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from mjcf import names
+from rigsim.mjcf import names
 
 __all__ = ["STATION_FACTORS", "station_factor_field", "apply_station_factors", "rebound_coefficients",
            "add_rebound_damping", "set_masses"]
@@ -38,7 +38,7 @@ STATION_FACTORS: dict[str, tuple[float, float, str]] = {
 
 
 def station_factor_field(quantity: str, corner: str) -> str:
-    """The :class:`mjcf.variant.TruckVariant` field of one station's factor, e.g. ``tire_stiffness_factor_fl``."""
+    """The :class:`rigsim.mjcf.variant.TruckVariant` field of one station's factor, e.g. ``tire_stiffness_factor_fl``."""
     if quantity not in STATION_FACTORS:
         raise ValueError(f"quantity must be one of {', '.join(STATION_FACTORS)}, got {quantity!r}")
     if corner not in names.CORNERS:
@@ -84,7 +84,7 @@ def add_rebound_damping(spec: mujoco.MjSpec, corner: str, ratio: float) -> None:
     dL/dt > 0) than in bump, its mean coefficient kept (:func:`rebound_coefficients`).
 
     The tendon's own viscous damping becomes the bump coefficient c_b; a one-sided element
-    (:func:`mjcf.names.spring_rebound_actuator`, an affine actuator on the spring tendon,
+    (:func:`rigsim.mjcf.names.spring_rebound_actuator`, an affine actuator on the spring tendon,
     F = -(c_r - c_b) dL/dt, its force range [-1e7, 0] N) adds the rest in rebound only."""
     spring = spec.tendon(names.spring_tendon(corner))
     damping = np.array(spring.damping, dtype=float)

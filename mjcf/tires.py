@@ -6,14 +6,14 @@ pan top (``truck_rig.xml``): F = kt (R0 - L) - ct dL/dt, clamped to [0, 1e7] N. 
 engages beyond an onset deflection (a bilinear tire, one kink: the calibrated model family's), or
 with ``TruckVariant.tire_progressive_spread_m`` :data:`TIRE_PROGRESSIVE_STEPS` elements engaging one
 after the other across the spread: a tire's stiffness rises smoothly over its working deflection; the
-model family's bilinear tire has one kink. :mod:`mjcf.physics` sums a tendon's elements.
+model family's bilinear tire has one kink. :mod:`rigsim.mjcf.physics` sums a tendon's elements.
 """
 
 from __future__ import annotations
 
 import mujoco
 
-from mjcf import names
+from rigsim.mjcf import names
 
 __all__ = ["TIRE_PROGRESSIVE_ONSET_M", "TIRE_PROGRESSIVE_STEPS", "set_tire", "tire_elements", "progressive_onsets",
            "REAR_FIELDS", "axle_progressive", "check_progressive", "add_progressive_tire"]
@@ -49,7 +49,7 @@ def set_tire(spec: mujoco.MjSpec, corner: str, k: float | None, c: float | None,
 
 def tire_elements(spec: mujoco.MjSpec, corner: str) -> list:
     """The force elements on ``corner``'s tire tendon: the XML's tire, then every progressive element
-    (:func:`mjcf.names.tire_progressive_actuator`) in step order."""
+    (:func:`rigsim.mjcf.names.tire_progressive_actuator`) in step order."""
     extra = [spec.actuator(names.tire_progressive_actuator(corner, k)) for k in range(TIRE_PROGRESSIVE_STEPS)]
     return [spec.actuator(names.tire_actuator(corner))] + [a for a in extra if a is not None]
 
@@ -72,7 +72,7 @@ REAR_FIELDS = {"tire_progressive_ratio": "tire_progressive_ratio_rear",
 
 def axle_progressive(variant, front: bool) -> tuple[float, float] | None:
     """The stiffening (ratio, 1; onset, m) of one axle's tires in ``variant`` (a
-    :class:`mjcf.variant.TruckVariant`), or None for linear tires. Every tire takes
+    :class:`rigsim.mjcf.variant.TruckVariant`), or None for linear tires. Every tire takes
     ``tire_progressive_ratio`` and ``tire_progressive_onset_m`` (default
     :data:`TIRE_PROGRESSIVE_ONSET_M`); the rear tires take ``tire_progressive_ratio_rear`` and
     ``tire_progressive_onset_rear_m`` instead where those are given."""

@@ -2,7 +2,7 @@
 
 The XML (``truck_rig.xml``) holds the nominal truck with every constant explained; a variant
 names the values a scenario changes (``[vehicle]``), each validated here against its physical
-range (:data:`BOUNDS`) before any model is built. :func:`mjcf.build.build_spec` applies them.
+range (:data:`BOUNDS`) before any model is built. :func:`rigsim.mjcf.build.build_spec` applies them.
 """
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from mjcf import dampers, description, engine, frame
-from mjcf.names import CORNERS, FRONT
-from mjcf.stations import STATION_FACTORS, station_factor_field
-from mjcf.tires import check_progressive
+from rigsim.mjcf import dampers, description, engine, frame
+from rigsim.mjcf.names import CORNERS, FRONT
+from rigsim.mjcf.stations import STATION_FACTORS, station_factor_field
+from rigsim.mjcf.tires import check_progressive
 
 __all__ = ["TruckVariant", "BOUNDS"]
 
@@ -142,33 +142,33 @@ class TruckVariant:
         Natural frequency of the cab bouncing on its own suspension against a fixed frame,
         sqrt(k / m_cab) / (2 pi). ``None`` (default): the cab is part of the rigid chassis, the
         model of ``truck_rig.xml``. Set: the cab (geom ``cab``) becomes the body
-        :data:`mjcf.names.CAB_BODY` on the chassis with a vertical slide and a pitch hinge
-        through its centre of mass (:data:`mjcf.names.CAB_JOINTS`), on springs preloaded to hold
-        it at rest at zero deflection, with :data:`mjcf.cab.CAB_DAMPING_RATIO` of critical damping; two
-        mount pairs :data:`mjcf.cab.CAB_MOUNT_SPACING_M` apart give the pitch stiffness. Its mass and
+        :data:`rigsim.mjcf.names.CAB_BODY` on the chassis with a vertical slide and a pitch hinge
+        through its centre of mass (:data:`rigsim.mjcf.names.CAB_JOINTS`), on springs preloaded to hold
+        it at rest at zero deflection, with :data:`rigsim.mjcf.cab.CAB_DAMPING_RATIO` of critical damping; two
+        mount pairs :data:`rigsim.mjcf.cab.CAB_MOUNT_SPACING_M` apart give the pitch stiffness. Its mass and
         inertia are taken out of the chassis so that the truck's mass, centre of mass and roll
         and pitch inertia are unchanged. 0.5 to 30 Hz (see :data:`BOUNDS`). This is the plant
         feature a model of the rigid-cab family lacks.
     cab_mass_kg : float, kg, optional
-        Mass of the suspended cab (default :data:`mjcf.cab.CAB_MASS_KG`; only with ``cab_mount_hz``),
+        Mass of the suspended cab (default :data:`rigsim.mjcf.cab.CAB_MASS_KG`; only with ``cab_mount_hz``),
         a uniform box of the cab geom's size. 200 to 1200 kg (see :data:`BOUNDS`).
     tire_progressive_ratio : float, 1, optional
         A progressive tire (every wheel station): beyond :attr:`tire_progressive_onset_m` of
         deflection the stiffness rises from kt to kt (1 + ratio). ``None`` (default): the XML's
         linear tire. Set: a second affine element on each tire tendon
-        (:func:`mjcf.names.tire_progressive_actuator`), F2 = ratio kt (d - onset) for a deflection
+        (:func:`rigsim.mjcf.names.tire_progressive_actuator`), F2 = ratio kt (d - onset) for a deflection
         d = R0 - L beyond the onset and 0 before it (its force range is [0, 1e7] N: unilateral),
-        without damping; the tire force sensors (:func:`mjcf.names.tire_sensor`) then report the
+        without damping; the tire force sensors (:func:`rigsim.mjcf.names.tire_sensor`) then report the
         sum of the tendon's elements. 0 to 3 (see :data:`BOUNDS`). The calibrated model fits this
         bilinear tire (ratio and onset); :attr:`tire_progressive_spread_m` makes one it cannot.
     tire_progressive_onset_m : float, m, optional
         Deflection at which the progressive element engages (default
-        :data:`mjcf.tires.TIRE_PROGRESSIVE_ONSET_M`; only with ``tire_progressive_ratio``). 0 to 0.1 m.
+        :data:`rigsim.mjcf.tires.TIRE_PROGRESSIVE_ONSET_M`; only with ``tire_progressive_ratio``). 0 to 0.1 m.
     tire_progressive_spread_m : float, m, optional
         Deflection span, centred on the onset, over which the stiffness rises (only with
         ``tire_progressive_ratio``): a tire's stiffness rises smoothly over its working deflection;
         the model family's bilinear tire has one kink. ``None`` or 0: the one kink. s > 0: the ratio
-        is split over :data:`mjcf.tires.TIRE_PROGRESSIVE_STEPS` (5) equal elements of ratio kt / 5
+        is split over :data:`rigsim.mjcf.tires.TIRE_PROGRESSIVE_STEPS` (5) equal elements of ratio kt / 5
         at onsets evenly from onset - s/2 to onset + s/2, a piecewise-linear approximation of a
         smooth stiffening. 0 to 0.05 m (see :data:`BOUNDS`), and onset - s/2 >= 0 m. A plant-only
         feature: the calibrated model (ratio and onset fitted) cannot represent it.
@@ -192,7 +192,7 @@ class TruckVariant:
         ratio to their sum. Plant features.
     damper_rebound_ratio : float, 1, optional
         Each leaf-spring damper's rebound coefficient over its bump one, their mean kept at the
-        spring's viscous damping (:func:`mjcf.stations.rebound_coefficients`): a damper valved
+        spring's viscous damping (:func:`rigsim.mjcf.stations.rebound_coefficients`): a damper valved
         harder in rebound (the spring extending) than in bump, as vehicle dampers are. ``None`` or
         1: the XML's symmetric damper. 1 to 5. A plant feature the linear-damper model lacks: on a
         rough road it also shifts the mean spring force (the damper "jacks down").
@@ -210,47 +210,47 @@ class TruckVariant:
     spring_friction_factor_fl, spring_friction_factor_fr, spring_friction_factor_rl, spring_friction_factor_rr : float, 1, optional
         One spring's interleaf friction over its axle's (``spring_friction_front_N`` or the rear
         one, or the XML's), 0.25 to 4 (lubrication, wear, corrosion). The per-station factors are
-        plant features (:mod:`mjcf.stations`): the model family holds an axle's stations equal.
+        plant features (:mod:`rigsim.mjcf.stations`): the model family holds an axle's stations equal.
     wheelbase_m : float, m, optional
         Distance from the front axle to the rear axle (the XML: 5.0 m), 3 to 7 m. The axles, hangers,
-        pans and the chassis' centre of mass move with it (:func:`mjcf.description.apply_geometry`),
+        pans and the chassis' centre of mass move with it (:func:`rigsim.mjcf.description.apply_geometry`),
         and the road reaches the rear wheels a wheelbase after the front ones.
     track_front_m, track_rear_m : float, m, optional
         Distance between an axle's wheel centres (for duals the pairs' centres; the XML: 2.05 and
         1.83 m); the pans follow. 1.6 to 2.3 m front, 1.5 to 2.2 m rear.
     rear_tires : {"dual", "single"}, optional
         The rear wheel stations' tires: a dual pair (the XML) or one wide-base single, whose default
-        stiffness and damping are :data:`mjcf.description.SINGLE_TIRE_STIFFNESS_N_PER_M` and
-        :data:`mjcf.description.SINGLE_TIRE_DAMPING_NS_PER_M` unless the rear tire fields give them.
+        stiffness and damping are :data:`rigsim.mjcf.description.SINGLE_TIRE_STIFFNESS_N_PER_M` and
+        :data:`rigsim.mjcf.description.SINGLE_TIRE_DAMPING_NS_PER_M` unless the rear tire fields give them.
     suspension_front, suspension_rear : {"leaf", "air"}, optional
         Each axle's springs: multi-leaf (the XML) or air springs with levelling valves and dampers
-        of their own (:mod:`mjcf.description`: no interleaf friction, the ride height levelled at any
+        of their own (:mod:`rigsim.mjcf.description`: no interleaf friction, the ride height levelled at any
         payload, a rate proportional to the load carried).
     spring_rate_front_N_per_m, spring_rate_rear_N_per_m : float, N/m, optional
         Each spring's rate (the XML's leaves: 3e5 and 7e5 N/m); for an air axle its rate at the empty
-        truck's load (default :data:`mjcf.description.AIR_RATE_N_PER_M`). 2e4 to 3e6 N/m.
+        truck's load (default :data:`rigsim.mjcf.description.AIR_RATE_N_PER_M`). 2e4 to 3e6 N/m.
     spring_damping_front_Ns_per_m, spring_damping_rear_Ns_per_m : float, N s/m, optional
         Each spring's viscous damper (the XML's leaves: 6e3 and 1e4 N s/m; an air axle's default
-        :data:`mjcf.description.AIR_DAMPING_NS_PER_M`). 0 to 1e5 N s/m.
+        :data:`rigsim.mjcf.description.AIR_DAMPING_NS_PER_M`). 0 to 1e5 N s/m.
     frame_torsion_hz, frame_bending_hz : float, Hz, optional
-        A frame that twists and bends (:func:`mjcf.frame.add_frame_flex`): the chassis cut at
+        A frame that twists and bends (:func:`rigsim.mjcf.frame.add_frame_flex`): the chassis cut at
         mid-wheelbase into two halves on a torsion and a bending hinge whose springs put the frame's
         first torsion and bending modes at these frequencies. Both or neither; 3 to 20 Hz. A plant
         feature: the model family's frame is rigid.
     engine_mount_hz : float, Hz, optional
-        The engine and gearbox on rubber mounts (:func:`mjcf.engine.add_engine_mount`), bouncing at
+        The engine and gearbox on rubber mounts (:func:`rigsim.mjcf.engine.add_engine_mount`), bouncing at
         this frequency on a held frame; 5 to 20 Hz. A plant feature.
     engine_mass_kg : float, kg, optional
-        Mass of the mounted engine and gearbox (default :data:`mjcf.engine.ENGINE_MASS_KG`; only with
+        Mass of the mounted engine and gearbox (default :data:`rigsim.mjcf.engine.ENGINE_MASS_KG`; only with
         ``engine_mount_hz``), taken out of the chassis; 300 to 1500 kg.
     damper_digressive_knee_m_per_s, damper_digressive_ratio : float, m/s and 1, optional
-        Every spring damper digressive (:func:`mjcf.dampers.add_digressive_damping`): its slope falls
+        Every spring damper digressive (:func:`rigsim.mjcf.dampers.add_digressive_damping`): its slope falls
         to ``ratio`` of the low-speed one beyond the knee speed. Both or neither; 0.05 to 0.5 m/s,
         0.2 to 1. A plant feature: the model family's dampers are linear.
     timestep_s : float, s, optional
         Integration time step of both tests, 1e-6 to 1e-3 s; by default the road test steps by
         explicit Euler at the XML's 1e-4 s and the rig test by RK4 at 1e-3 s (chosen by
-        ``benchmarks/integrator_study.py``; set by ``scenarios.core.rig``). Coarser steps do not
+        ``benchmarks/integrator_study.py``; set by ``rigsim.scenarios.core.rig``). Coarser steps do not
         resolve the tire and hydraulic modes; below 1e-6 s a 60 s run is 6e7 steps (hours,
         gigabytes of drive) for no gain.
     """

@@ -1,5 +1,5 @@
 """rigsim's scenarios: everything that runs a scenario (core, review, studies, cli)."""
 
-from scenarios import scipy_import
+from rigsim.scenarios import scipy_import
 
 scipy_import.install()  # before anything imports scipy.signal: see scenarios/scipy_import.py

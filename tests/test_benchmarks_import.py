@@ -17,7 +17,7 @@ import pytest
 
 BENCHMARKS = sorted((pathlib.Path(__file__).resolve().parents[1] / "benchmarks").glob("*.py"))
 #: The project's packages: a private name of one of them is not a benchmark's to use.
-PACKAGES = ("mjcf", "hydraulics", "correction", "scenarios")
+PACKAGES = ("rigsim",)
 
 
 def _private(name: str) -> bool:
@@ -82,8 +82,8 @@ def test_benchmark_uses_only_the_public_package(path):
 def test_the_benchmark_checker_can_fail():
     """Each rule refuses what it is there for, and a clean script passes."""
     names = {"generalization", "step_rate"}
-    clean = ("import sys\nimport numpy as np\nfrom scenarios.studies.suites import generalization_cases\n"
-             "from scenarios.studies.paper import compute\nnp._NoValue\nsys._getframe\ncompute.run_job\n"
+    clean = ("import sys\nimport numpy as np\nfrom rigsim.scenarios.studies.suites import generalization_cases\n"
+             "from rigsim.scenarios.studies.paper import compute\nnp._NoValue\nsys._getframe\ncompute.run_job\n"
              "compute.__name__\n")
     assert offences(clean, names) == []
     bad = {
@@ -91,10 +91,10 @@ def test_the_benchmark_checker_can_fail():
         'env = {"PYTHONPATH": "."}\n': "PYTHONPATH",
         "from generalization import case_documents\n": "benchmark generalization",
         "import step_rate as sr\n": "benchmark step_rate",
-        "from scenarios.studies.paper.compute import _run_job\n": "private name scenarios.studies.paper.compute._run_job",
-        "from scenarios.studies.paper import compute\ncompute._case_job()\n": "private name compute._case_job",
-        "import scenarios.studies.paper.compute as c\nc._scenario\n": "private name c._scenario",
-        "import scenarios.core._private\n": "private module scenarios.core._private",
+        "from rigsim.scenarios.studies.paper.compute import _run_job\n": "private name rigsim.scenarios.studies.paper.compute._run_job",
+        "from rigsim.scenarios.studies.paper import compute\ncompute._case_job()\n": "private name compute._case_job",
+        "import rigsim.scenarios.studies.paper.compute as c\nc._scenario\n": "private name c._scenario",
+        "import rigsim.scenarios.core._private\n": "private module rigsim.scenarios.core._private",
         "from . import helpers\n": "relative import",
     }
     for source, what in bad.items():

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.studies.paper.table import PAPER_TABLE2
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.studies.paper.table import PAPER_TABLE2
 
 
 

@@ -10,6 +10,9 @@ in a module, including imports inside functions):
   records: the API, the model correction, the recorded identification) imports core; review
   imports core; studies import core, records and review; only cli sits on top;
 - only scenarios/review/recording.py and scenarios/review/blueprint.py import rerun;
+- rigsim/ (the top package) imports none of them: errors.py (the one error class every layer
+  raises) imports nothing, __init__.py loads the lab's names on first use; __main__.py is the
+  command, on top of everything;
 - no import circle between any two modules of the project, and no module over 420 lines.
 """
 
@@ -27,9 +30,12 @@ MAX_LINES = 420
 
 
 def _module_name(path: pathlib.Path) -> str:
+    """The installed name: the design card's folders are sub-packages of ``rigsim``."""
     parts = list(path.relative_to(ROOT).with_suffix("").parts)
     if parts[-1] == "__init__":
         parts.pop()
+    if parts[0] != "rigsim":
+        parts.insert(0, "rigsim")
     return ".".join(parts)
 
 
@@ -56,8 +62,13 @@ def _import_targets(path: pathlib.Path) -> set[str]:
 
 
 def _imports(path: pathlib.Path) -> set[str]:
-    """Top-level package names imported anywhere in the module."""
-    return {n.split(".")[0] for n in _import_targets(path) if n}
+    """Package names imported anywhere in the module: rigsim's sub-packages by their own name
+    (``rigsim.scenarios.core.run`` is ``scenarios``), any other by its top level."""
+    names = set()
+    for n in filter(None, _import_targets(path)):
+        parts = n.split(".")
+        names.add(parts[1] if parts[0] == "rigsim" and len(parts) > 1 else parts[0])
+    return names
 
 
 def _modules(package: str):
@@ -65,7 +76,7 @@ def _modules(package: str):
 
 
 def _project_graph() -> dict[str, set[str]]:
-    modules = {_module_name(p): p for pkg in PACKAGES for p in _modules(pkg)}
+    modules = {_module_name(p): p for pkg in (*PACKAGES, "rigsim") for p in _modules(pkg)}
     graph = {}
     for name, path in modules.items():
         deps = set()
@@ -107,23 +118,27 @@ FORBIDDEN = {
     "correction": {"mjcf", "hydraulics", "scenarios", "mujoco", "rerun"},
     "hydraulics": {"scenarios", "correction", "rerun"},
     "mjcf": {"hydraulics", "correction", "scenarios", "rerun"},
+    # the top package's modules: errors.py imports nothing; __init__.py loads its names on use
+    "rigsim": {"mjcf", "hydraulics", "correction", "scenarios", "mujoco", "rerun", "numpy", "scipy"},
 }
 
 
 @pytest.mark.parametrize("package", sorted(FORBIDDEN))
 def test_package_imports_respect_the_layers(package):
     for path in _modules(package):
+        if path.relative_to(ROOT).as_posix() == "rigsim/__main__.py":  # python -m rigsim: the command, on top
+            continue
         bad = _imports(path) & FORBIDDEN[package]
         assert not bad, f"{path.relative_to(ROOT)} imports {sorted(bad)}"
 
 
 #: scenarios' floors: what each sub-package may import of the others.
 SCENARIO_FLOORS = {
-    "scenarios.core": set(),
-    "scenarios.records": {"scenarios.core"},
-    "scenarios.review": {"scenarios.core"},
-    "scenarios.studies": {"scenarios.core", "scenarios.records", "scenarios.review"},
-    "scenarios.cli": {"scenarios.core", "scenarios.records", "scenarios.review", "scenarios.studies"},
+    "rigsim.scenarios.core": set(),
+    "rigsim.scenarios.records": {"rigsim.scenarios.core"},
+    "rigsim.scenarios.review": {"rigsim.scenarios.core"},
+    "rigsim.scenarios.studies": {"rigsim.scenarios.core", "rigsim.scenarios.records", "rigsim.scenarios.review"},
+    "rigsim.scenarios.cli": {"rigsim.scenarios.core", "rigsim.scenarios.records", "rigsim.scenarios.review", "rigsim.scenarios.studies"},
 }
 
 
@@ -169,9 +184,9 @@ def test_no_private_names_imported_across_modules():
 
 def test_the_floors_checker_can_fail(monkeypatch):
     """A record module that imported a study would be refused."""
-    graph = {"scenarios.records.api": {"scenarios.studies.scoring"}, "scenarios.studies.scoring": set()}
+    graph = {"rigsim.scenarios.records.api": {"rigsim.scenarios.studies.scoring"}, "rigsim.scenarios.studies.scoring": set()}
     monkeypatch.setattr(sys.modules[__name__], "_project_graph", lambda: graph)
-    with pytest.raises(AssertionError, match="scenarios.records.api .scenarios.records. imports"):
+    with pytest.raises(AssertionError, match=r"rigsim.scenarios.records.api \(rigsim.scenarios.records\) imports"):
         test_scenarios_floors()
 
 
@@ -188,5 +203,5 @@ def test_only_the_recording_modules_import_rerun():
 def test_the_checker_sees_imports_inside_functions(tmp_path):
     """The check can fail: a function-level import is found."""
     p = tmp_path / "m.py"
-    p.write_text("def f():\n    from scenarios.core.run import run\n    import rerun as rr\n")
+    p.write_text("def f():\n    from rigsim.scenarios.core.run import run\n    import rerun as rr\n")
     assert _imports(p) == {"scenarios", "rerun"}

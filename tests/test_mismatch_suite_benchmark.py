@@ -9,8 +9,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from scenarios.studies.model_suite.goals import limit_evidence, rows_and_goals, share_interval
-from scenarios.studies.model_suite.mismatch_score import PlantScore
+from rigsim.scenarios.studies.model_suite.goals import limit_evidence, rows_and_goals, share_interval
+from rigsim.scenarios.studies.model_suite.mismatch_score import PlantScore
 
 
 @pytest.fixture(scope="module")

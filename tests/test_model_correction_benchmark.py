@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import pytest
 
-from mjcf.names import CORNERS
-from scenarios.records.model.result import Calibration
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.records.model.result import Calibration
 
 _NAMES = {"rigid": "rigid cab", "cab": "cab on 2 Hz mounts", "tire": "progressive tire +25 %",
           "smooth": "tire stiffening +50 % over 2 cm"}

@@ -13,9 +13,9 @@ import math
 
 import pytest
 
-from mjcf.names import CORNERS
-from scenarios.core.files import to_json
-from scenarios.records.model.result import Calibration
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.files import to_json
+from rigsim.scenarios.records.model.result import Calibration
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
 """The one identification of ``T_a = X_a / X_p``: a usable actuator transfer function from rig data.
 
 A lab that does not know its hydraulic parameters can still correct: the H1 estimate of the
-drive-to-pan frequency response (:func:`correction.identification.identify.h1_estimate`) is fitted with a
-stable rational function (:func:`correction.identification.identify.fit_rational_coefficients`, Sanathanan-Koerner) and made
+drive-to-pan frequency response (:func:`rigsim.correction.identification.identify.h1_estimate`) is fitted with a
+stable rational function (:func:`rigsim.correction.identification.identify.fit_rational_coefficients`, Sanathanan-Koerner) and made
 usable as an inverse. Every caller (``rigsim correct --identify``, ``rigsim identify``, the
 studies' ``identified`` method) uses this one policy:
 
@@ -13,7 +13,7 @@ studies' ``identified`` method) uses this one policy:
   largest weight, pin ``T_a(0)`` (an actuator with integral action follows its drive at steady
   state); the result is then scaled so that ``T_a(0) = 1`` exactly;
 * **orders** chosen by held-out error (the rules and their constants live in
-  :mod:`correction.identification.actuator_fit_rules`): each candidate of ``CANDIDATE_ORDERS`` ((1, 4), (2, 5),
+  :mod:`rigsim.correction.identification.actuator_fit_rules`): each candidate of ``CANDIDATE_ORDERS`` ((1, 4), (2, 5),
   (2, 6), (3, 6), (4, 7)) is fitted on the even-indexed frequency points of the band, made usable
   (below), and scored on the odd-indexed ones (relative rms error on the coherent points,
   ``held_out_error``); the smallest error wins unless a candidate of lower total order is within
@@ -34,12 +34,12 @@ studies' ``identified`` method) uses this one policy:
 * **refusal** only for data that cannot support a fit: fewer than :data:`MIN_COHERENT_FRACTION`
   (70 %) of the points in :data:`COHERENCE_BAND_HZ` (1-30 Hz, clipped to the fitted band) with
   coherence at or above ``coherence_min`` raises :class:`ActuatorFitError` (a
-  :class:`~correction.identification.plausibility.WiringError` naming the wrong corner when their
-  median is below :data:`~correction.identification.plausibility.UNRELATED_COHERENCE`: channels
+  :class:`~rigsim.correction.identification.plausibility.WiringError` naming the wrong corner when their
+  median is below :data:`~rigsim.correction.identification.plausibility.UNRELATED_COHERENCE`: channels
   that do not follow each other at all). A fit whose error is poor in some band is not refused; it
   is reported (:attr:`ActuatorFit.band_errors`). :func:`fit_actuator`, which fits a drive and an
   LVDT channel, also refuses a pair whose data are not an actuator's
-  (:func:`correction.identification.plausibility.check_actuator`: swapped, inverted, another
+  (:func:`rigsim.correction.identification.plausibility.check_actuator`: swapped, inverted, another
   post's, another unit).
 
 Frequencies at the interface are in Hz; ``s`` (and poles and zeros) in rad/s.
@@ -53,13 +53,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from correction.identification.actuator_fit_rules import (CANDIDATE_ORDERS, TRUSTED_COHERENCE, ActuatorFitError,
-                                                          choose_orders, held_out_error, rational_response,
-                                                          usable_actuator)
-from correction.identification.identify import fit_rational_coefficients, h1_estimate
-from correction.identification.plausibility import UNRELATED_COHERENCE, WiringError, check_actuator, check_signals
-from correction.output.lowpass import BAND_HZ
-from correction.output.transfer import describe_roots, transfer_bandwidth_hz
+from rigsim.correction.identification.actuator_fit_rules import (CANDIDATE_ORDERS, TRUSTED_COHERENCE, ActuatorFitError,
+                                                                 choose_orders, held_out_error, rational_response,
+                                                                 usable_actuator)
+from rigsim.correction.identification.identify import fit_rational_coefficients, h1_estimate
+from rigsim.correction.identification.plausibility import UNRELATED_COHERENCE, WiringError, check_actuator, check_signals
+from rigsim.correction.output.lowpass import BAND_HZ
+from rigsim.correction.output.transfer import describe_roots, transfer_bandwidth_hz
 
 __all__ = ["ActuatorFitError", "ActuatorFit", "fit_frequency_response", "fit_actuator", "default_nperseg",
            "coherence_median", "MIN_COHERENT_FRACTION", "COHERENCE_BAND_HZ", "REPORT_BANDS_HZ"]
@@ -107,7 +107,7 @@ class ActuatorFit:
     bandwidth_hz : float, Hz
         -3 dB bandwidth of the fit (NaN if it never falls 3 dB below ``T_a(0)`` by 10 kHz).
     non_minimum_phase : bool
-        True when no usable (minimum-phase) fit came within :data:`~correction.identification.actuator_fit_rules.NON_MINIMUM_PHASE_RATIO` of
+        True when no usable (minimum-phase) fit came within :data:`~rigsim.correction.identification.actuator_fit_rules.NON_MINIMUM_PHASE_RATIO` of
         the best raw fit on the held-out points: the data's phase lags more than their magnitude
         implies (a delay, a right-half-plane zero), so the orders were chosen on the usable fits'
         magnitude error and ``T_a`` is the minimum-phase counterpart (same magnitude, less lag).
@@ -120,7 +120,7 @@ class ActuatorFit:
     --------
     >>> import numpy as np
     >>> from scipy import signal
-    >>> from correction.identification.actuator_fit import fit_actuator
+    >>> from rigsim.correction.identification.actuator_fit import fit_actuator
     >>> t = np.arange(30_000) / 500.0
     >>> drive = 2e-3 * np.random.default_rng(1).standard_normal(t.size)
     >>> w = 2 * np.pi * 15.0
@@ -269,7 +269,7 @@ def fit_frequency_response(f_hz, h, coherence, *, band_hz=(0.1, 60.0), orders=No
         Band fitted (default 0.1-60 Hz).
     orders : (int, int), optional
         Force these (numerator, denominator) orders instead of choosing among
-        :data:`~correction.identification.actuator_fit_rules.CANDIDATE_ORDERS` by held-out error.
+        :data:`~rigsim.correction.identification.actuator_fit_rules.CANDIDATE_ORDERS` by held-out error.
     coherence_min : float, 1
         Coherence from which a point is trusted (refusal rule, errors).
 
@@ -357,10 +357,10 @@ def fit_actuator(drive_m, displacement_m, fs: float, *, band_hz=(0.1, 60.0), ord
     ------
     ActuatorFitError
         Too little coherence (one sentence naming the band and what to record).
-    correction.identification.plausibility.WiringError
+    rigsim.correction.identification.plausibility.WiringError
         An ActuatorFitError naming the likely cause: data that are not an actuator's drive and
         pan displacement (the same samples twice, swapped, another post's, inverted, another
-        unit; :func:`correction.identification.plausibility.check_actuator`).
+        unit; :func:`rigsim.correction.identification.plausibility.check_actuator`).
     ValueError
         Records of different lengths, non-finite samples, a record too short.
 
@@ -371,7 +371,7 @@ def fit_actuator(drive_m, displacement_m, fs: float, *, band_hz=(0.1, 60.0), ord
 
     >>> import numpy as np
     >>> from scipy import signal
-    >>> from correction.identification.actuator_fit import fit_actuator
+    >>> from rigsim.correction.identification.actuator_fit import fit_actuator
     >>> fs = 500.0
     >>> t = np.arange(30_000) / fs
     >>> drive = 2e-3 * np.random.default_rng(1).standard_normal(t.size)

@@ -1,4 +1,4 @@
-"""The rules of the one ``T_a`` fit (:mod:`correction.identification.actuator_fit`): clean-up, scoring, order choice.
+"""The rules of the one ``T_a`` fit (:mod:`rigsim.correction.identification.actuator_fit`): clean-up, scoring, order choice.
 
 * :func:`usable_actuator`: a fitted ``(num, den)`` made usable as an inverse (stable, minimum
   phase, slow pole-zero pairs the data do not locate removed or moved up, ``T_a(0) = 1``);
@@ -14,6 +14,8 @@ import math
 from collections.abc import Mapping
 
 import numpy as np
+
+from rigsim.errors import RigsimError
 
 __all__ = ["ActuatorFitError", "usable_actuator", "held_out_error", "choose_orders", "rational_response",
            "CANDIDATE_ORDERS", "ORDER_TOLERANCE", "NON_MINIMUM_PHASE_RATIO", "CANCEL_GAP", "TRUSTED_COHERENCE"]
@@ -35,7 +37,7 @@ NON_MINIMUM_PHASE_RATIO = 2.0
 CANCEL_GAP = 0.01
 
 
-class ActuatorFitError(ValueError):
+class ActuatorFitError(RigsimError, ValueError):
     """Data that cannot support a fit of ``T_a``; the message is one sentence naming the band and the fix.
 
     Examples
@@ -44,7 +46,7 @@ class ActuatorFitError(ValueError):
     fit:
 
     >>> import numpy as np
-    >>> from correction.identification.actuator_fit import ActuatorFitError, fit_actuator
+    >>> from rigsim.correction.identification.actuator_fit import ActuatorFitError, fit_actuator
     >>> rng = np.random.default_rng(1)
     >>> drive, other = 2e-3 * rng.standard_normal((2, 30_000))
     >>> try:  # doctest: +ELLIPSIS, +NORMALIZE_WHITESPACE

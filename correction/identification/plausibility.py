@@ -11,7 +11,7 @@ predicts the response at frequencies it was not fitted on. A pair wired wrongly 
 * **another corner's LVDT**: with independent road tracks (the project's default, and any rig
   driven by independent random drives for the identification) the LVDT does not follow the drive
   at all, coherence near 0 (:data:`UNRELATED_COHERENCE`, refused in
-  :func:`correction.identification.actuator_fit.fit_frequency_response`); the other axle's LVDT on
+  :func:`rigsim.correction.identification.actuator_fit.fit_frequency_response`); the other axle's LVDT on
   the same track follows the drive delayed by wheelbase over speed (0.1-1 s), a phase that turns
   through the low band as no actuator's does (:data:`PHASE_RESULTANT_MIN`) and that no stable
   ``T_a`` predicts (the best held-out error 0.97-1.05). Where left and right tracks are the same
@@ -22,9 +22,9 @@ predicts the response at frequencies it was not fitted on. A pair wired wrongly 
 * **a unit or scale mistake** (an LVDT in mm read as m): a static gain far from 1.
 
 :func:`check_actuator` applies the criteria to an
-:class:`~correction.identification.actuator_fit.ActuatorFit` (in this order: gain, phase spread,
+:class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` (in this order: gain, phase spread,
 antiphase, lead, held-out error), :func:`plausibility` gives the numbers they read; a refusal is a
-:class:`WiringError`, an :class:`~correction.identification.actuator_fit_rules.ActuatorFitError`
+:class:`WiringError`, an :class:`~rigsim.correction.identification.actuator_fit_rules.ActuatorFitError`
 that names the likely cause (:attr:`WiringError.cause`). Frequencies in Hz, phases in degrees.
 """
 
@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.identification.actuator_fit_rules import TRUSTED_COHERENCE, ActuatorFitError
+from rigsim.correction.identification.actuator_fit_rules import TRUSTED_COHERENCE, ActuatorFitError
 
 __all__ = ["WiringError", "Plausibility", "LOW_BAND_HZ", "GAIN_LIMITS", "PHASE_RESULTANT_MIN", "ANTIPHASE_DEG",
            "LEAD_LIMIT_DEG", "HELD_OUT_LIMIT", "UNRELATED_COHERENCE", "check_signals", "plausibility", "check_actuator"]
@@ -150,7 +150,7 @@ def plausibility(fit, coherence_min: float = TRUSTED_COHERENCE) -> Plausibility:
 
     Parameters
     ----------
-    fit : correction.identification.actuator_fit.ActuatorFit
+    fit : rigsim.correction.identification.actuator_fit.ActuatorFit
     coherence_min : float, 1
         Coherence from which a point of the estimate is trusted (the fit's).
     """
@@ -182,7 +182,7 @@ def check_actuator(fit, coherence_min: float = TRUSTED_COHERENCE) -> Plausibilit
 
     Parameters
     ----------
-    fit : correction.identification.actuator_fit.ActuatorFit
+    fit : rigsim.correction.identification.actuator_fit.ActuatorFit
     coherence_min : float, 1
         Coherence from which a point of the estimate is trusted (the fit's).
 

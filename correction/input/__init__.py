@@ -1,4 +1,4 @@
 """Input correction: drive files iterated on the rig until the response matches a target
-(:mod:`correction.input.iterate`), with measured frequency-response matrices
-(:mod:`correction.input.frf`), the drive update (:mod:`correction.input.update`) and its
-convergence (:mod:`correction.input.convergence`)."""
+(:mod:`rigsim.correction.input.iterate`), with measured frequency-response matrices
+(:mod:`rigsim.correction.input.frf`), the drive update (:mod:`rigsim.correction.input.update`) and its
+convergence (:mod:`rigsim.correction.input.convergence`)."""

@@ -1,6 +1,6 @@
 """When drive iteration converges: the error measure and the stability of the relaxation gain.
 
-The rules by which :func:`correction.input.iterate.iterate_drive` refuses a gain before any run and
+The rules by which :func:`rigsim.correction.input.iterate.iterate_drive` refuses a gain before any run and
 judges its runs:
 
 - the error measure of a run, :func:`nrmse` (per response channel, means removed);
@@ -13,7 +13,7 @@ judges its runs:
   bound reaches 1 is refused (:class:`IterationStabilityError`) unless asked to run anyway; in
   any case two growing errors in a row stop the iteration with ``status = "diverged"`` and the
   best drive so far (the run-by-run stops -- converged, stalled, diverged, drive limit -- are
-  decided in the loop, :func:`correction.input.iterate.iterate_drive`).
+  decided in the loop, :func:`rigsim.correction.input.iterate.iterate_drive`).
 
 numpy only (no simulator): works on data of a real rig. Units SI (m, N, s, Hz).
 """
@@ -22,12 +22,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from correction.input.frf import FRF, as_columns
+from rigsim.correction.input.frf import FRF, as_columns
+from rigsim.errors import RigsimError
 
 __all__ = ["IterationStabilityError", "error_map_spectral_radius", "predicted_spectral_radius", "nrmse"]
 
 
-class IterationStabilityError(ValueError):
+class IterationStabilityError(RigsimError, ValueError):
     """The relaxation gain makes the iteration's error map expand (spectral radius >= 1)."""
 
 
@@ -71,7 +72,7 @@ def nrmse(target, response) -> np.ndarray:
     """Per channel ``rms(e - mean(e)) / std(target)``, ``e = target - response`` (means removed:
     the static level is not what a drive iteration controls).
 
-    Not the project's figure of merit against the road force, :func:`correction.metrics.dlc.nrmse`,
+    Not the project's figure of merit against the road force, :func:`rigsim.correction.metrics.dlc.nrmse`,
     which keeps the mean of the error; a constant target (std 0) is divided by 1 here.
     """
     t = as_columns(target, "target")

@@ -1,8 +1,8 @@
 """Measured frequency-response matrices for drive iteration: identification, resampling, inverse.
 
-The first step of input correction (:mod:`correction.input.iterate`): from a broadband drive of the
+The first step of input correction (:mod:`rigsim.correction.input.iterate`): from a broadband drive of the
 rig and its measured responses, the H1 estimate ``H(f)`` (p x m) with the multiple coherence of
-each response (:func:`identify_frf`, on :func:`correction.identification.identify.h1_estimate`); its values on
+each response (:func:`identify_frf`, on :func:`rigsim.correction.identification.identify.h1_estimate`); its values on
 another frequency grid (:func:`frf_on_grid`); and its regularized per-frequency inverse
 (:func:`inverse_frf`), which the drive update multiplies the error by. The four wheels couple
 through the truck, so ``H`` is the full matrix (MIMO H1 from four independent drives).
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.identification.identify import h1_estimate
+from rigsim.correction.identification.identify import h1_estimate
 
 __all__ = ["FRF", "identify_frf", "frf_on_grid", "inverse_frf"]
 

@@ -16,10 +16,10 @@ and 0 where the identification's coherence is below a threshold, and a stop when
 meets a tolerance or stops improving. The four wheels couple through the truck, so ``H`` is the
 full matrix (MIMO H1 from four independent drives), inverted per frequency.
 
-The pieces: :mod:`correction.input.frf` (identification of ``H`` and its inverse),
-:mod:`correction.input.update` (the update ``g W H^-1 e``), :mod:`correction.input.convergence` (the error
+The pieces: :mod:`rigsim.correction.input.frf` (identification of ``H`` and its inverse),
+:mod:`rigsim.correction.input.update` (the update ``g W H^-1 e``), :mod:`rigsim.correction.input.convergence` (the error
 measure and the stability bound of the gain: a gain whose bound reaches 1 is refused with
-:class:`~correction.input.convergence.IterationStabilityError` unless asked to run anyway). This
+:class:`~rigsim.correction.input.convergence.IterationStabilityError` unless asked to run anyway). This
 module runs the loop and decides when it stops: the error meets the tolerance ("converged"),
 stops improving ("stalled"), grows in two runs in a row ("diverged", with the best drive so
 far), or the next drive would leave its limit ("drive_limit").
@@ -34,10 +34,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from correction.input.convergence import IterationStabilityError, nrmse, predicted_spectral_radius
-from correction.input.frf import FRF, as_columns, frf_on_grid, inverse_frf
-from correction.input.update import band_weight, end_taper, drive_update
-from correction.output.lowpass import BAND_HZ
+from rigsim.correction.input.convergence import IterationStabilityError, nrmse, predicted_spectral_radius
+from rigsim.correction.input.frf import FRF, as_columns, frf_on_grid, inverse_frf
+from rigsim.correction.input.update import band_weight, end_taper, drive_update
+from rigsim.correction.output.lowpass import BAND_HZ
 
 __all__ = ["IterationStep", "IterationResult", "iterate_drive"]
 

@@ -1,10 +1,10 @@
 """The drive update of input correction: ``g IFFT(W H^-1 FFT(e))`` over the whole record.
 
-One step of :func:`correction.input.iterate.iterate_drive`::
+One step of :func:`rigsim.correction.input.iterate.iterate_drive`::
 
     d_{k+1} = d_k + g  W(f) H^-1(f) (target - y_k)
 
-with the relaxation gain ``g``, the weighted inverse ``W H^-1`` (:func:`correction.input.frf.inverse_frf`
+with the relaxation gain ``g``, the weighted inverse ``W H^-1`` (:func:`rigsim.correction.input.frf.inverse_frf`
 times the update weight) and a cosine taper at both ends of the record. The weight ``W`` is 1
 inside the frequency band with cosine edges outside it (:func:`band_weight`); the iteration sets
 it to 0 where the identification's coherence is below a threshold.
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from correction.input.frf import as_columns
+from rigsim.correction.input.frf import as_columns
 
 __all__ = ["drive_update"]
 

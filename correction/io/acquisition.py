@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.output.spectral import through_gain
+from rigsim.correction.output.spectral import through_gain
 
 __all__ = ["KINDS", "DOMAINS", "MIN_CORNER_HZ", "ChannelFilter", "parse_channel_filter", "undo_timing"]
 
@@ -66,11 +66,11 @@ class ChannelFilter:
     Examples
     --------
     A 4th-order Butterworth anti-alias filter at 200 Hz and a 0.2 ms converter skew, as given to
-    ``force_filter`` of :func:`~scenarios.records.correct_record` (or as the text ``"200:4"``
+    ``force_filter`` of :func:`~rigsim.scenarios.records.correct_record` (or as the text ``"200:4"``
     with the delay apart):
 
     >>> import numpy as np
-    >>> from correction.io.acquisition import ChannelFilter
+    >>> from rigsim.correction.io.acquisition import ChannelFilter
     >>> acq = ChannelFilter(200.0, 4, delay_s=2e-4)
     >>> print(f"{abs(acq.response([200.0], 2000.0)[0]):.3f}")
     0.707

@@ -7,7 +7,7 @@ Either coefficients (descending powers of s, s in rad/s)::
     den = [4.82e-6, 2.14e-3, 1.03, 77.5, 73.3]
 
 or the physical parameters of the paper's eq. 4 (SI units; see
-:data:`correction.output.eq4.EQ4_PARAMETERS`)::
+:data:`rigsim.correction.output.eq4.EQ4_PARAMETERS`)::
 
     [parameters]
     ksv = 1.0
@@ -55,9 +55,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from correction.identification.actuator_fit import ActuatorFit
-from correction.output.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
-from correction.io.tomlfile import check_keys, number, read_toml, write_toml
+from rigsim.correction.identification.actuator_fit import ActuatorFit
+from rigsim.correction.output.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
+from rigsim.correction.io.tomlfile import check_keys, number, read_toml, write_toml
+from rigsim.errors import RigsimError
 
 __all__ = ["ActuatorFileError", "parse_actuator", "read_actuator_file", "parse_actuators",
            "read_actuators_file", "write_actuators_file"]
@@ -66,13 +67,13 @@ _TABLES = ("transfer_function", "parameters")
 _OPTIONAL = ("ti_s",)
 
 
-class ActuatorFileError(ValueError):
+class ActuatorFileError(RigsimError, ValueError):
     """An actuator file that cannot be used as written; the message is one sentence naming the key.
 
     Examples
     --------
     >>> import pathlib, tempfile
-    >>> from correction.io.actuator_file import ActuatorFileError, read_actuators_file
+    >>> from rigsim.correction.io.actuator_file import ActuatorFileError, read_actuators_file
     >>> acts = pathlib.Path(tempfile.mkdtemp()) / "actuators.toml"
     >>> _ = acts.write_text("[fl]\\nnum = [1.0]\\n")
     >>> try:
@@ -97,7 +98,7 @@ def parse_actuator(data: Mapping) -> tuple[np.ndarray, np.ndarray]:
     ----------
     data : Mapping
         The TOML document as a mapping: one table ``transfer_function`` (keys ``num``, ``den``)
-        or ``parameters`` (the keys of :data:`correction.output.eq4.EQ4_PARAMETERS`, SI units).
+        or ``parameters`` (the keys of :data:`rigsim.correction.output.eq4.EQ4_PARAMETERS`, SI units).
 
     Returns
     -------
@@ -151,7 +152,7 @@ def read_actuator_file(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     ActuatorFileError
-        A missing, unreadable or malformed file (:func:`correction.io.tomlfile.read_toml`), or any
+        A missing, unreadable or malformed file (:func:`rigsim.correction.io.tomlfile.read_toml`), or any
         error of :func:`parse_actuator`.
     """
     return parse_actuator(read_toml(path, "actuator file", ActuatorFileError))
@@ -230,7 +231,7 @@ def read_actuators_file(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     Examples
     --------
     >>> import pathlib, tempfile
-    >>> from correction.io.actuator_file import read_actuators_file
+    >>> from rigsim.correction.io.actuator_file import read_actuators_file
     >>> acts = pathlib.Path(tempfile.mkdtemp()) / "actuators.toml"
     >>> _ = acts.write_text("[fl]\\nnum = [1.0]\\nden = [1.1e-4, 0.0106, 1.0]\\n"
     ...                     "[fr]\\nnum = [1.0]\\nden = [1.2e-4, 0.0110, 1.0]\\n")
@@ -251,7 +252,7 @@ def write_actuators_file(path, actuators: Mapping, meta: Mapping | None = None) 
         The TOML file (created or replaced; not overwriting an input is the caller's business).
     actuators : Mapping of str to ActuatorFit or (num, den)
         Corner name to ``T_a`` (descending powers of s, s in rad/s); an
-        :class:`~correction.identification.actuator_fit.ActuatorFit` also writes ``[<corner>.fit]`` with its
+        :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` also writes ``[<corner>.fit]`` with its
         diagnostics (orders, band, held-out error, per-band errors, bandwidth, poles, zeros).
     meta : Mapping, optional
         The ``[meta]`` table: strings, numbers, booleans or lists of them (e.g. source, date,
@@ -266,10 +267,10 @@ def write_actuators_file(path, actuators: Mapping, meta: Mapping | None = None) 
     Examples
     --------
     Two corners' T_a as ``(num, den)``, s in rad/s (an identified
-    :class:`~correction.identification.actuator_fit.ActuatorFit` also writes its diagnostics):
+    :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` also writes its diagnostics):
 
     >>> import pathlib, tempfile
-    >>> from correction.io.actuator_file import read_actuators_file, write_actuators_file
+    >>> from rigsim.correction.io.actuator_file import read_actuators_file, write_actuators_file
     >>> acts = pathlib.Path(tempfile.mkdtemp()) / "actuators.toml"
     >>> write_actuators_file(acts, {"fl": ([1.0], [1.1e-4, 0.0106, 1.0]),
     ...                             "fr": ([1.0], [1.2e-4, 0.0110, 1.0])},

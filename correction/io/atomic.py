@@ -10,7 +10,7 @@ Writing: :func:`atomic_write_bytes` writes a temporary file in the target's fold
 disk and renames it onto the target (``os.replace``, atomic on POSIX and Windows). Temporary
 files carry the writer's host and pid, so the next write to the same target removes those of
 writers that no longer run. Inside :func:`no_replace` a target is published only where nothing
-is (:mod:`correction.io.claim`, a command's output file claimed by one command at a time).
+is (:mod:`rigsim.correction.io.claim`, a command's output file claimed by one command at a time).
 
 The one home of these patterns for :mod:`correction` (measured data, actuator and TOML files) and
 :mod:`scenarios` (every result file), which builds on it.
@@ -46,7 +46,7 @@ _NO_REPLACE_LOCK = threading.Lock()
 
 def host_tag() -> str:
     """This machine's name as it appears in temporary file and folder names (letters, digits, '-';
-    16 at most): :mod:`scenarios.core.outputs` names its staging folders with it too."""
+    16 at most): :mod:`rigsim.scenarios.core.outputs` names its staging folders with it too."""
     return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname().split(".")[0])[:16] or "host"
 
 
@@ -220,7 +220,7 @@ def dead_writers_leftovers(path, accept) -> list[tuple[pathlib.Path, int, str]]:
 
     Entries of other hosts (a shared folder), of running processes and of this one are left out;
     POSIX only (elsewhere nothing is found). The one scan behind :func:`remove_stale_temp_files`
-    and the staging folders of :mod:`scenarios.core.outputs`.
+    and the staging folders of :mod:`rigsim.scenarios.core.outputs`.
     """
     path = pathlib.Path(path)
     if os.name != "posix":

@@ -4,7 +4,7 @@ Two commands writing the same file at once would each check that it is free, do 
 rename their result onto it, the second replacing the first. :func:`claimed_output` claims the
 file before the work (a second writer is refused at once, in one sentence naming the file and the
 fix) and, unless the command may replace the file (its ``--force``), makes
-:func:`correction.io.atomic.atomic_path` publish it without replacing a file that appeared there
+:func:`rigsim.correction.io.atomic.atomic_path` publish it without replacing a file that appeared there
 meanwhile. The claim is a lock file beside the output, removed at the end (an error and an
 interrupt too); one left by a killed writer is taken over by the next. :func:`make_parents` and
 :func:`remove_empty` create an output's missing folders and take back those left empty.
@@ -17,7 +17,7 @@ import errno
 import os
 import pathlib
 
-from correction.io.atomic import host_tag, no_replace
+from rigsim.correction.io.atomic import host_tag, no_replace
 
 __all__ = ["claim_file", "claimed_output", "make_parents", "remove_empty"]
 
@@ -97,7 +97,7 @@ def claimed_output(path, *, replace: bool = False, error: type[Exception] = OSEr
     The claim is :func:`claim_file` holding this host's name and this process's pid, locked while
     the block runs (:func:`_lock`): a second claim of the same file, from another process or
     thread, is refused at once, ``replace`` or not. Inside the block
-    :func:`~correction.io.atomic.atomic_path` publishes ``path`` without replacing a file that
+    :func:`~rigsim.correction.io.atomic.atomic_path` publishes ``path`` without replacing a file that
     appeared there meanwhile, unless ``replace``. On leaving the block (an error, an interrupt,
     SIGTERM raised as one too) the claim file is removed, and the folders made for it when ``path``
     was not written.

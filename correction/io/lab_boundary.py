@@ -20,7 +20,7 @@ import os
 import re
 import warnings
 
-from correction.io.measured_core import MeasuredDataError
+from rigsim.correction.io.measured_core import MeasuredDataError
 
 __all__ = ["library_call", "said", "close_half_made"]
 

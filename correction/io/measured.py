@@ -6,27 +6,27 @@ without a simulator. The format follows the file's extension:
 =====================  =========  ===================================================
 extension              format     how
 =====================  =========  ===================================================
-.csv .txt .dat         ``csv``    :mod:`correction.io.measured_csv` (delimiter, decimal mark,
+.csv .txt .dat         ``csv``    :mod:`rigsim.correction.io.measured_csv` (delimiter, decimal mark,
                                   thousands separator, preamble, units row, units
                                   in headers: sniffed; streamed)
-.rsp .drv .tim .rpc    ``rpc3``   :mod:`correction.io.rpc3` (MTS RPC III, own code)
-.mf4 .mdf              ``mdf4``   ``asammdf`` (the ``lab`` extra), :mod:`correction.io.measured_lab`
-.tdms                  ``tdms``   ``nptdms`` (the ``lab`` extra), :mod:`correction.io.measured_lab`
+.rsp .drv .tim .rpc    ``rpc3``   :mod:`rigsim.correction.io.rpc3` (MTS RPC III, own code)
+.mf4 .mdf              ``mdf4``   ``asammdf`` (the ``lab`` extra), :mod:`rigsim.correction.io.measured_lab`
+.tdms                  ``tdms``   ``nptdms`` (the ``lab`` extra), :mod:`rigsim.correction.io.measured_lab`
 =====================  =========  ===================================================
 
-Every channel comes back in SI (:mod:`correction.io.measured_units`: kN -> N, mm -> m, bar -> Pa,
+Every channel comes back in SI (:mod:`rigsim.correction.io.measured_units`: kN -> N, mm -> m, bar -> Pa,
 ms -> s, % -> fraction...), with the unit as written kept in ``source_units``; a channel without
 unit is taken as SI (a name suffix ``_N``, ``_m``, ``_Pa``, ``_s``, ``_ms`` gives its unit; with
 none, its SI unit and ``source_units`` entry are ``""``). The time axis must be uniform (1 % of a
-step, no gap) at a rate of at most :data:`~correction.io.measured_core.MAX_RATE_HZ`; ``fs_hz`` is
+step, no gap) at a rate of at most :data:`~rigsim.correction.io.measured_core.MAX_RATE_HZ`; ``fs_hz`` is
 its rate, read within the axis's resolution
-(:func:`~correction.io.measured_core.uniform_rate`), and ``time_s`` starts at 0: the first
+(:func:`~rigsim.correction.io.measured_core.uniform_rate`), and ``time_s`` starts at 0: the first
 sample's time as the file gives it (a time-of-day clock, epoch seconds, RPC III's START_TIME) is
 ``metadata["time_start_s"]`` when not 0. Every refusal is one :class:`MeasuredDataError`
 sentence naming the file, the column or channel, the line or unit, and the fix.
 
 Metadata: the CSV ``# key: value`` preamble; the RPC III header keys other than those that lay
-out the data (:data:`correction.io.rpc3.STRUCTURAL_KEYS`, ``*.CHAN_n``); the MDF4 header comment and
+out the data (:data:`rigsim.correction.io.rpc3.STRUCTURAL_KEYS`, ``*.CHAN_n``); the MDF4 header comment and
 properties; the TDMS file and group properties. The writers put metadata back in the same places.
 """
 
@@ -37,9 +37,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from correction.io.measured_core import (TIME_KEYS, TIME_START_KEY, MeasuredChannels, MeasuredDataError, atomic_output,
+from rigsim.correction.io.measured_core import (TIME_KEYS, TIME_START_KEY, MeasuredChannels, MeasuredDataError, atomic_output,
                                       check_channel, check_output, make_channels, to_si)
-from correction.io.measured_time import round_rate, time_grid, uniform_rate
+from rigsim.correction.io.measured_time import round_rate, time_grid, uniform_rate
 
 __all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "READ_FORMATS", "WRITE_FORMATS",
            "read_channels", "write_channels", "format_of"]
@@ -78,7 +78,7 @@ def read_channels(path, *, time_col: str | None = None, channels=None, decimal: 
         first lines; text columns are ignored).
     decimal : {".", ","}, optional
         Text files: the decimal mark; default: decided by the fields of the columns read, an
-        ambiguous file refused (:mod:`correction.io.measured_numbers`). Other formats: leave it out.
+        ambiguous file refused (:mod:`rigsim.correction.io.measured_numbers`). Other formats: leave it out.
     thousands : {"none", ",", ".", "'", "space"}, optional
         Text files: the one thousands separator (``"space"``: a space, U+00A0 or U+202F;
         ``","`` implies ``decimal="."``, ``"."`` implies ``decimal=","``); default: detected.
@@ -97,7 +97,7 @@ def read_channels(path, *, time_col: str | None = None, channels=None, decimal: 
         channels = [channels]
     channels = None if channels is None else list(channels)
     if fmt == "csv":
-        from correction.io.measured_csv import read_csv_channels
+        from rigsim.correction.io.measured_csv import read_csv_channels
 
         return read_csv_channels(path, time_col=time_col, channels=channels, decimal=decimal, thousands=thousands)
     if decimal is not None or thousands is not None:
@@ -105,14 +105,14 @@ def read_channels(path, *, time_col: str | None = None, channels=None, decimal: 
                                 "mark and thousands separator (--decimal, --thousands) out")
     if fmt == "rpc3":
         return _read_rpc(path, time_col, channels)
-    from correction.io import measured_lab
+    from rigsim.correction.io import measured_lab
 
     reader = measured_lab.read_mdf if fmt == "mdf4" else measured_lab.read_tdms
     return reader(path, time_col=time_col, channels=channels)
 
 
 def _read_rpc(path, time_col, channels) -> MeasuredChannels:
-    from correction.io.rpc3 import BYTE_ORDERS, STEP_ROUNDING, is_structural, read_rpc3
+    from rigsim.correction.io.rpc3 import BYTE_ORDERS, STEP_ROUNDING, is_structural, read_rpc3
 
     if time_col is not None:
         raise MeasuredDataError(f"RPC III file {str(path)!r} has no time column (DELTA_T gives the time); leave "
@@ -199,7 +199,7 @@ def write_channels(path, channels, *, metadata: Mapping | None = None, overwrite
     >>> import pathlib, tempfile
     >>> from types import SimpleNamespace
     >>> import numpy as np
-    >>> from correction.io.measured import read_channels, write_channels
+    >>> from rigsim.correction.io.measured import read_channels, write_channels
     >>> t = np.arange(2000) / 1000.0
     >>> channels = SimpleNamespace(time_s=t, data={"Fz_FL": 40e3 + 1e3 * np.sin(2 * np.pi * t)},
     ...                            units={"Fz_FL": "N"})
@@ -214,12 +214,12 @@ def write_channels(path, channels, *, metadata: Mapping | None = None, overwrite
     meta = dict(getattr(channels, "metadata", None) or {}) if metadata is None else dict(metadata)
     meta = {str(k): str(v) for k, v in meta.items()}
     if fmt == "csv":
-        from correction.io.measured_csv import check_names, write_csv
+        from rigsim.correction.io.measured_csv import check_names, write_csv
 
         check_names(list(data), "time", "CSV")
         atomic_output(out, lambda tmp: write_csv(tmp, t, data, units, meta))
     elif fmt == "rpc3":
-        from correction.io.rpc3 import write_rpc3
+        from rigsim.correction.io.rpc3 import write_rpc3
 
         fs = uniform_rate(t, "time_s", lambda i: f"sample {i}")
         ext = out.suffix.lower()
@@ -228,7 +228,7 @@ def write_channels(path, channels, *, metadata: Mapping | None = None, overwrite
         atomic_output(out, lambda tmp: write_rpc3(out, list(data), [units[n] for n in data], np.array(list(
             data.values())), 1.0 / fs, start_s=float(t[0]), time_type=kind, extra=extra, dest=tmp))
     else:
-        from correction.io import measured_lab
+        from rigsim.correction.io import measured_lab
 
         if fmt == "mdf4":
             measured_lab.need("asammdf", ".mf4", "writing")

@@ -1,10 +1,10 @@
 """What every reader and writer of measured channels shares: the result (checked as it is built,
-from a file or in Python, on the uniform time axis of :mod:`correction.io.measured_time`), the
-error (:mod:`correction.io.measured_error`), SI conversion of one channel, the safe opening of an
+from a file or in Python, on the uniform time axis of :mod:`rigsim.correction.io.measured_time`), the
+error (:mod:`rigsim.correction.io.measured_error`), SI conversion of one channel, the safe opening of an
 input file (a regular file that fits in memory) and the safe writing of an output file.
 
-Used by :mod:`correction.io.measured` (the public API) and the format modules
-(:mod:`correction.io.measured_csv`, :mod:`correction.io.rpc3`, :mod:`correction.io.measured_lab`); it
+Used by :mod:`rigsim.correction.io.measured` (the public API) and the format modules
+(:mod:`rigsim.correction.io.measured_csv`, :mod:`rigsim.correction.io.rpc3`, :mod:`rigsim.correction.io.measured_lab`); it
 imports none of them.
 """
 
@@ -19,10 +19,10 @@ from types import MappingProxyType
 
 import numpy as np
 
-from correction.io.atomic import atomic_path, available_memory_bytes, open_regular, read_regular, size_text
-from correction.io.measured_error import MeasuredDataError
-from correction.io.measured_time import checked_rate, time_grid
-from correction.io.measured_units import lookup_unit, suffix_unit
+from rigsim.correction.io.atomic import atomic_path, available_memory_bytes, open_regular, read_regular, size_text
+from rigsim.correction.io.measured_error import MeasuredDataError
+from rigsim.correction.io.measured_time import checked_rate, time_grid
+from rigsim.correction.io.measured_units import lookup_unit, suffix_unit
 
 __all__ = ["MeasuredDataError", "MeasuredChannels", "TIME_KEYS", "TIME_START_KEY", "READ_MEMORY_PER_BYTE", "read_bytes",
            "open_input", "is_time_name", "to_si", "make_channels", "check_channel", "check_output", "atomic_output"]
@@ -48,7 +48,7 @@ class MeasuredChannels:
     """Channels of one measured file on one uniform time axis, in SI units.
 
     Built from a file by the readers, or in Python (directly or by :func:`make_channels`): either
-    way ``time_s`` must be a uniform axis (:func:`~correction.io.measured_time.uniform_rate`)
+    way ``time_s`` must be a uniform axis (:func:`~rigsim.correction.io.measured_time.uniform_rate`)
     whose rate ``fs_hz`` is, and each channel one finite value per time; a contradiction is one
     :class:`MeasuredDataError` sentence naming the argument. ``time_s`` is then made relative to
     its first sample, the first sample's time kept as ``metadata[TIME_START_KEY]``.
@@ -66,7 +66,7 @@ class MeasuredChannels:
         Channel name -> the unit as the file wrote it (``"kN"``, ``"mm"``; ``""`` when none).
     fs_hz : float, Hz
         Sampling rate of the uniform time axis (at most
-        :data:`~correction.io.measured_time.MAX_RATE_HZ`).
+        :data:`~rigsim.correction.io.measured_time.MAX_RATE_HZ`).
     metadata : Mapping[str, str]
         What the file carries besides the data: the CSV ``# key: value`` preamble, the RPC III header,
         the MDF4 comment and properties, the TDMS properties; and :data:`TIME_START_KEY`, the time
@@ -88,7 +88,7 @@ class MeasuredChannels:
     A record built in memory: 10 s of one wheel force at 1 kHz.
 
     >>> import numpy as np
-    >>> from correction.io.measured import MeasuredChannels
+    >>> from rigsim.correction.io.measured import MeasuredChannels
     >>> t = np.arange(10_000) / 1000.0
     >>> force = 40e3 + 2e3 * np.sin(2 * np.pi * 3.0 * t)
     >>> record = MeasuredChannels(time_s=t, data={"Fz_FL": force}, units={"Fz_FL": "N"},
@@ -99,7 +99,7 @@ class MeasuredChannels:
 
     A rate the time axis contradicts is refused in one sentence:
 
-    >>> from correction.io.measured import MeasuredDataError
+    >>> from rigsim.correction.io.measured import MeasuredDataError
     >>> try:  # doctest: +ELLIPSIS
     ...     MeasuredChannels(time_s=t, data={"Fz_FL": force}, units={"Fz_FL": "N"},
     ...                      source_units={"Fz_FL": "N"}, fs_hz=500.0, metadata={}, path="",
@@ -212,7 +212,7 @@ def to_si(name: str, values: np.ndarray, unit: str | None, path, what: str = "co
     Raises
     ------
     MeasuredDataError
-        The unit is not in :data:`correction.io.measured_units.UNITS` (naming the channel and the unit).
+        The unit is not in :data:`rigsim.correction.io.measured_units.UNITS` (naming the channel and the unit).
     """
     written = "" if unit is None else unit.strip()
     if written in ("", "NONE", "none", "None"):
@@ -255,7 +255,7 @@ def atomic_output(path: pathlib.Path, write: Callable[[str], None]) -> None:
     (asammdf, nptdms and the RPC III writer pick the format by it), then flush it to disk and
     rename it over ``path``; the temporary file is removed if ``write`` fails.
 
-    The temporary file is :func:`correction.io.atomic.atomic_path`'s, named with this host and pid:
+    The temporary file is :func:`rigsim.correction.io.atomic.atomic_path`'s, named with this host and pid:
     one left by a writer that was killed is removed by the next write to the same ``path``.
     """
     with atomic_path(path, keep_suffix=True) as tmp:

@@ -21,13 +21,13 @@ Read (:func:`read_csv_channels`):
   below the header when none of its fields is a number;
 * numbers: decimal mark ``.`` or ``,``, thousands separators ``,`` ``.`` ``'``, space, U+00A0,
   U+202F, detected from every field of the columns read, or named (``decimal=``,
-  ``thousands=``); :mod:`correction.io.measured_numbers` gives the rules (an ambiguous file is
+  ``thousands=``); :mod:`rigsim.correction.io.measured_numbers` gives the rules (an ambiguous file is
   refused, never guessed).
 
 The file is streamed: the first lines (up to :data:`SAMPLE_LINES` data lines, about
 :data:`SAMPLE_CHARS` characters) give the layout, then blocks of lines of about
-:data:`correction.io.measured_stream.BLOCK_CHARS` characters are parsed; only the columns read are
-kept, as floats (:mod:`correction.io.measured_stream`). Data rows must have as many fields as the
+:data:`rigsim.correction.io.measured_stream.BLOCK_CHARS` characters are parsed; only the columns read are
+kept, as floats (:mod:`rigsim.correction.io.measured_stream`). Data rows must have as many fields as the
 header (line named otherwise). A column with no number in the first lines (a status text) is
 ignored unless selected; a selected column must be numbers on every row, finite and non-empty
 (column, line, value and file named otherwise).
@@ -46,11 +46,11 @@ from types import MappingProxyType
 
 import numpy as np
 
-from correction.io.measured_core import MeasuredChannels, MeasuredDataError, is_time_name, open_input, to_si
-from correction.io.measured_time import uniform_rate
-from correction.io.measured_numbers import NumberFormat, classify
-from correction.io.measured_stream import SKIP_PREFIXES, Stream, check_widths, split_fields
-from correction.io.measured_units import split_name_unit, strip_unit_field
+from rigsim.correction.io.measured_core import MeasuredChannels, MeasuredDataError, is_time_name, open_input, to_si
+from rigsim.correction.io.measured_time import uniform_rate
+from rigsim.correction.io.measured_numbers import NumberFormat, classify
+from rigsim.correction.io.measured_stream import SKIP_PREFIXES, Stream, check_widths, split_fields
+from rigsim.correction.io.measured_units import split_name_unit, strip_unit_field
 
 __all__ = ["COMMENT_PREFIXES", "SAMPLE_LINES", "SAMPLE_CHARS", "MAX_COLUMNS", "read_csv_channels", "check_names",
            "write_csv"]
@@ -71,7 +71,7 @@ _KEY_VALUE = re.compile(r"^\s*(?P<key>[^:=]*?[^:=\s])\s*(?::|=)\s?(?P<value>.*)$
 def _open(path, legacy: bool = False) -> io.TextIOWrapper:
     """The file as text with universal line ends: UTF-16 (BOM), UTF-8, or Windows-1252 when
     ``legacy``; a file that is missing, not a regular file or too large is refused
-    (:func:`~correction.io.measured_core.open_input`: the columns read, float64 from fields of at least
+    (:func:`~rigsim.correction.io.measured_core.open_input`: the columns read, float64 from fields of at least
     two bytes with their delimiter, take at most four times the file)."""
     raw = open_input(path, memory_per_byte=4.0)
     try:
@@ -261,7 +261,7 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 def read_csv_channels(path, *, time_col: str | None = None, channels=None, decimal: str | None = None,
                       thousands: str | None = None) -> MeasuredChannels:
-    """Read a delimited text file as :class:`~correction.io.measured_core.MeasuredChannels`, in SI,
+    """Read a delimited text file as :class:`~rigsim.correction.io.measured_core.MeasuredChannels`, in SI,
     streaming it; see the module docstring.
 
     Parameters
@@ -272,7 +272,7 @@ def read_csv_channels(path, *, time_col: str | None = None, channels=None, decim
     channels : list of str, optional
         Columns to read, in this order; default: every column with a number in the first lines.
     decimal : {".", ","}, optional
-        The decimal mark; default: detected (:mod:`correction.io.measured_numbers`).
+        The decimal mark; default: detected (:mod:`rigsim.correction.io.measured_numbers`).
     thousands : {"none", ",", ".", "'", "space"}, optional
         The thousands separator; default: detected.
 

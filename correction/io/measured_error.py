@@ -1,18 +1,20 @@
-"""The one error of the measured-data readers and writers (:mod:`correction.io.measured`)."""
+"""The one error of the measured-data readers and writers (:mod:`rigsim.correction.io.measured`)."""
 
 from __future__ import annotations
+
+from rigsim.errors import RigsimError
 
 __all__ = ["MeasuredDataError"]
 
 
-class MeasuredDataError(ValueError):
+class MeasuredDataError(RigsimError, ValueError):
     """A measured-data file that cannot be used as written; the message is one sentence.
 
     Examples
     --------
     >>> import numpy as np
     >>> from types import SimpleNamespace
-    >>> from correction.io.measured import MeasuredDataError, write_channels
+    >>> from rigsim.correction.io.measured import MeasuredDataError, write_channels
     >>> forces = SimpleNamespace(time_s=np.arange(3) / 1000.0, data={"Fz_FL": np.full(3, 40e3)})
     >>> try:  # doctest: +ELLIPSIS
     ...     write_channels("forces.xlsx", forces)

@@ -20,8 +20,8 @@ seconds from their first value) or the one named by ``time_col``; else the wavef
 properties on each channel, metadata as file properties.
 
 The file is checked first (a regular file that fits in memory, not empty:
-:func:`correction.io.measured_core.open_input`); both libraries are then called behind one boundary
-(:func:`correction.io.lab_boundary.library_call`): nothing of theirs reaches the console, a file cut
+:func:`rigsim.correction.io.measured_core.open_input`); both libraries are then called behind one boundary
+(:func:`rigsim.correction.io.lab_boundary.library_call`): nothing of theirs reaches the console, a file cut
 short is refused, and any exception of theirs is one sentence naming the file.
 """
 
@@ -36,9 +36,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from correction.io.lab_boundary import library_call, said
-from correction.io.measured_core import MeasuredDataError, is_time_name, make_channels, open_input, to_si
-from correction.io.measured_time import uniform_rate
+from rigsim.correction.io.lab_boundary import library_call, said
+from rigsim.correction.io.measured_core import MeasuredDataError, is_time_name, make_channels, open_input, to_si
+from rigsim.correction.io.measured_time import uniform_rate
 
 __all__ = ["read_mdf", "write_mdf", "read_tdms", "write_tdms", "need"]
 
@@ -149,7 +149,7 @@ def read_mdf(path, *, time_col=None, channels=None):
 
     The path is checked first (:func:`_checked`), then given to asammdf, which maps the file (and
     copies an unfinalised one to finalise it); everything it does is behind
-    :func:`correction.io.lab_boundary.library_call`.
+    :func:`rigsim.correction.io.lab_boundary.library_call`.
     """
     asammdf = need("asammdf", ".mf4")
     _checked(path, "MDF", None).close()
@@ -267,7 +267,7 @@ def read_tdms(path, *, time_col=None, channels=None):
     """Channels of a TDMS file on one uniform time axis, in SI.
 
     nptdms reads the file opened and checked here (:func:`_checked`: no second open by path, no
-    ``.tdms_index`` beside it), behind :func:`correction.io.lab_boundary.library_call`.
+    ``.tdms_index`` beside it), behind :func:`rigsim.correction.io.lab_boundary.library_call`.
     """
     nptdms = need("nptdms", ".tdms")
     with _checked(path, "TDMS", _TDMS_MEMORY_PER_BYTE) as fh, library_call("TDMS", "a TDMS file", "nptdms", path):

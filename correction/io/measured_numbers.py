@@ -42,7 +42,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from correction.io.measured_core import MeasuredDataError
+from rigsim.correction.io.measured_core import MeasuredDataError
 
 __all__ = ["SPACES", "DECIMALS", "THOUSANDS", "WIDE", "LONGEST", "CHUNK", "CHUNK_CHARS", "NumberFormat", "classify"]
 

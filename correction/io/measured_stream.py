@@ -5,7 +5,7 @@
 the result plus one block. A block is parsed by numpy's C reader when it can hold only plain
 numbers in the file's decimal mark, once whole quoted fields are unquoted and one thousands
 separator that groups digits by threes is taken out (the decimal mark known); else field by
-field (:meth:`correction.io.measured_numbers.NumberFormat.read`), which also gathers the evidence
+field (:meth:`rigsim.correction.io.measured_numbers.NumberFormat.read`), which also gathers the evidence
 for the decimal mark and refuses what is not a number. The first block, the lines that gave the
 layout, is always read field by field. Errors name the file line of the row: skipped lines
 (blank, comments) are counted.
@@ -20,8 +20,8 @@ from itertools import repeat
 
 import numpy as np
 
-from correction.io.measured_core import MeasuredDataError
-from correction.io.measured_numbers import SPACES, NumberFormat
+from rigsim.correction.io.measured_core import MeasuredDataError
+from rigsim.correction.io.measured_numbers import SPACES, NumberFormat
 
 __all__ = ["SKIP_PREFIXES", "BLOCK_CHARS", "Stream", "split_fields", "check_widths"]
 

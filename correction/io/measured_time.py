@@ -2,8 +2,8 @@
 record's step, no gap), at most :data:`MAX_RATE_HZ`, and its rate read within the axis's own
 resolution (:func:`uniform_rate`, :func:`round_rate`).
 
-Used by :mod:`correction.io.measured_core` (a record is checked as it is built) and the readers
-and writers; every refusal is one :class:`~correction.io.measured_error.MeasuredDataError`
+Used by :mod:`rigsim.correction.io.measured_core` (a record is checked as it is built) and the readers
+and writers; every refusal is one :class:`~rigsim.correction.io.measured_error.MeasuredDataError`
 sentence naming the time column or argument, the place (file and line, or sample) and the fix.
 """
 
@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from correction.io.measured_error import MeasuredDataError
+from rigsim.correction.io.measured_error import MeasuredDataError
 
 __all__ = ["MAX_RATE_HZ", "STEP_TOLERANCE", "RATE_ROUNDING", "uniform_rate", "checked_rate", "time_grid", "round_rate"]
 
@@ -23,7 +23,7 @@ __all__ = ["MAX_RATE_HZ", "STEP_TOLERANCE", "RATE_ROUNDING", "uniform_rate", "ch
 #: Multipurpose Elite User Manual, "Time History Controller Rates"); 1 MHz is far above any
 #: rig's acquisition. A faster axis is a wrong time unit or a damaged file, and the correction
 #: sizes its filters' impulse responses in samples of the step
-#: (``correction.output.correction_filter.transient_lengths``: GBs at 10 MHz).
+#: (``rigsim.correction.output.correction_filter.transient_lengths``: GBs at 10 MHz).
 MAX_RATE_HZ = 1e6
 #: Largest difference of one step of a time axis from the record's step, as a fraction of it:
 #: times rounded when written (a 1024 Hz axis in whole microseconds is off by 0.05 %) pass; a

@@ -7,7 +7,7 @@ test-lab files wrongly without a word: ``g`` is a gram (an accelerometer's ``g``
 its import with a registry takes 0.7 s. The units of rig channels are few; a table that names
 each one is exact, fast and reviewable.
 
-Conventions (the readers of :mod:`correction.io.measured` rely on them):
+Conventions (the readers of :mod:`rigsim.correction.io.measured` rely on them):
 
 * values in SI: ``si = value * factor + offset`` (the offset only for degC -> K);
 * a unit is looked up as written (``mm``/``Mm``, ``kN``) and, failing that, case-insensitively

@@ -27,7 +27,7 @@ the file, before anything is sized by them, and SAMPLES may not exceed the frame
 DELTA_T must be the step of a measured record (:data:`MIN_DELTA_T_S` to :data:`MAX_DELTA_T_S`),
 START_TIME a finite number, SCALE.CHAN_n finite and not 0, every sample finite, and the byte
 order of FORMAT not contradicted by the channels' LOWER_LIMIT/UPPER_LIMIT
-(:mod:`correction.io.rpc3_layout`). A key given twice with two values is refused (either could
+(:mod:`rigsim.correction.io.rpc3_layout`). A key given twice with two values is refused (either could
 be meant); the same value given twice is read once, as it reads the same whichever record is
 taken.
 
@@ -47,9 +47,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.io.measured_core import MeasuredDataError, read_bytes
-from correction.io.rpc3_layout import (MAX_DELTA_T_S, MIN_DELTA_T_S, REPAIR, STEP_ROUNDING, WHOLE, count, fail, layout,
-                                       samples, times)
+from rigsim.correction.io.measured_core import MeasuredDataError, read_bytes
+from rigsim.correction.io.rpc3_layout import (MAX_DELTA_T_S, MIN_DELTA_T_S, REPAIR, STEP_ROUNDING, WHOLE, count, fail, layout,
+                                              samples, times)
 
 __all__ = ["INT_FULL_SCALE", "MIN_DELTA_T_S", "MAX_DELTA_T_S", "STEP_ROUNDING", "TIME_RESOLUTION", "Rpc3Data",
            "read_rpc3", "write_rpc3", "STRUCTURAL_KEYS", "BYTE_ORDERS"]
@@ -168,7 +168,7 @@ def read_rpc3(path) -> Rpc3Data:
         [:data:`MIN_DELTA_T_S`, :data:`MAX_DELTA_T_S`] s, a START_TIME that is not a finite
         number, a zero or non-finite SCALE.CHAN_n, a FORMAT whose byte order the channels'
         LOWER_LIMIT/UPPER_LIMIT contradict, a NaN or infinite sample
-        (:mod:`correction.io.rpc3_layout`).
+        (:mod:`rigsim.correction.io.rpc3_layout`).
     """
     raw = read_bytes(path, memory_per_byte=9.0)  # 8.9 measured: the bytes, int16 to float64, scaled
     head = _header(raw, path)
@@ -271,7 +271,7 @@ def write_rpc3(path, names: Sequence[str], units: Sequence[str], data: np.ndarra
     head: dict[str, str] = {
         "FORMAT": "BINARY_IEEE_LITTLE_END", "NUM_HEADER_BLOCKS": "", "NUM_PARAMS": "", "FILE_TYPE": "TIME_HISTORY",
         "TIME_TYPE": time_type, "DATE": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S"),
-        "OPERATION": "rigsim correction.io.rpc3", "DELTA_T": _num(dt_s), "CHANNELS": str(n_ch),
+        "OPERATION": "rigsim rigsim.correction.io.rpc3", "DELTA_T": _num(dt_s), "CHANNELS": str(n_ch),
         "PTS_PER_FRAME": str(pts_per_frame), "PTS_PER_GROUP": str(ppg), "FRAMES": str(frames), "SAMPLES": str(n),
         "DATA_TYPE": "SHORT_INTEGER", "INT_FULL_SCALE": str(INT_FULL_SCALE), "BYPASS_FILTER": "0",
         "HALF_FRAMES": "0", "REPEATS": "1", "PARTITIONS": "1", "PART.CHAN_1": "1", "PART.NCHAN_1": str(n_ch)}

@@ -1,7 +1,7 @@
 """The numbers of an MTS RPC III header held to the file before they size anything, and its
 samples held to the header's own limits.
 
-Used by :mod:`correction.io.rpc3` (the reader and writer); imports nothing of it.
+Used by :mod:`rigsim.correction.io.rpc3` (the reader and writer); imports nothing of it.
 
 * Counts (CHANNELS, PTS_PER_FRAME, PTS_PER_GROUP, FRAMES, SAMPLES) are whole numbers, exact for
   any number of digits; the values they lay out must be in the file (FRAMES), and SAMPLES may not
@@ -23,14 +23,14 @@ import re
 
 import numpy as np
 
-from correction.io.measured_core import MeasuredDataError
-from correction.io.measured_time import MAX_RATE_HZ
+from rigsim.correction.io.measured_core import MeasuredDataError
+from rigsim.correction.io.measured_time import MAX_RATE_HZ
 
 __all__ = ["MIN_DELTA_T_S", "MAX_DELTA_T_S", "STEP_ROUNDING", "LIMIT_MARGIN", "REPAIR", "WHOLE", "fail", "count",
            "number", "layout", "times", "samples"]
 
 #: Shortest and longest sampling step (DELTA_T, s) of a measured record: the rate cap of every
-#: format (:data:`correction.io.measured_core.MAX_RATE_HZ`, 1 MHz) and 0.1 Hz (slow channels
+#: format (:data:`rigsim.correction.io.measured_core.MAX_RATE_HZ`, 1 MHz) and 0.1 Hz (slow channels
 #: such as temperatures).
 MIN_DELTA_T_S = 1.0 / MAX_RATE_HZ
 MAX_DELTA_T_S = 10.0

@@ -4,7 +4,7 @@ Every user file the project reads is TOML, and every reader wants the same three
 parsed or refused in one sentence that names it, no key it does not know (a typo must not be
 ignored silently), and numbers that are numbers, finite and in range. This module does them
 once, for any layer: it lives in :mod:`correction`, the lowest layer that reads user files, and
-imports nothing of the project but :mod:`correction.io.atomic` (how a file is opened, read and
+imports nothing of the project but :mod:`rigsim.correction.io.atomic` (how a file is opened, read and
 written), so the correction toolkit works on its own and the scenarios can build on it.
 
 * :func:`path_text`: a path given as ``str``, ``bytes`` or ``os.PathLike`` as text, or one
@@ -85,7 +85,7 @@ def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = Value
     """Read and parse a TOML file (UTF-8), refusing any problem in one sentence.
 
     The file must be a regular file of at most ``max_bytes``: a named pipe, a device (``/dev/zero``)
-    or a socket is refused without waiting on it (:func:`correction.io.atomic.open_regular`), a file
+    or a socket is refused without waiting on it (:func:`rigsim.correction.io.atomic.open_regular`), a file
     larger than any TOML file the project reads without reading it.
 
     Parameters
@@ -116,7 +116,7 @@ def read_toml(path: str | os.PathLike, what: str, error: type[Exception] = Value
         ``"{what} 'PATH' is UTF-16 (its byte-order mark says so), not UTF-8; ..."``;
         ``"{what} 'PATH' is not valid TOML: <tomllib's message with line and column>"``.
     """
-    from correction.io.atomic import read_regular, size_text
+    from rigsim.correction.io.atomic import read_regular, size_text
 
     p = pathlib.Path(path_text(path, what, error))
     name = repr(str(p))
@@ -299,6 +299,6 @@ def toml_text(doc: Mapping) -> str:
 
 def write_toml(path: str | os.PathLike, doc: Mapping) -> None:
     """Write ``doc`` (see :func:`toml_text`) to ``path`` atomically: a temporary file, then a rename."""
-    from correction.io.atomic import atomic_write_text
+    from rigsim.correction.io.atomic import atomic_write_text
 
     atomic_write_text(path, toml_text(doc))

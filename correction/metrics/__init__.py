@@ -1,4 +1,4 @@
 """What a wheel force is worth: the Dynamic Load Coefficient and NRMSE
-(:mod:`correction.metrics.dlc`), pavement and fatigue damage (:mod:`correction.metrics.damage`,
-:mod:`correction.metrics.rainflow_damage`) and spatial load profiles
-(:mod:`correction.metrics.spatial_load`)."""
+(:mod:`rigsim.correction.metrics.dlc`), pavement and fatigue damage (:mod:`rigsim.correction.metrics.damage`,
+:mod:`rigsim.correction.metrics.rainflow_damage`) and spatial load profiles
+(:mod:`rigsim.correction.metrics.spatial_load`)."""

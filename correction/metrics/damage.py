@@ -1,6 +1,6 @@
 """Pavement-damage and fatigue measures of wheel forces, and one result object for the reports.
 
-The DLC (std / mean, :mod:`correction.metrics.dlc`) is the paper's figure, but two forces with the same
+The DLC (std / mean, :mod:`rigsim.correction.metrics.dlc`) is the paper's figure, but two forces with the same
 DLC can do very different damage. This module adds the measures the users of wheel forces judge
 them by:
 
@@ -10,9 +10,9 @@ them by:
   "Dynamic wheel load fluctuations - road stress", Strasse und Autobahn 26(4), 1975; Cebon,
   "Handbook of Vehicle-Road Interaction", Swets & Zeitlinger, 1999), impact factors (percentile
   force over the static load, :func:`impact_factors`), and where along the road the large loads
-  land (:mod:`correction.metrics.spatial_load`: :func:`spatial_profile`, :func:`spatial_correlation` =
+  land (:mod:`rigsim.correction.metrics.spatial_load`: :func:`spatial_profile`, :func:`spatial_correlation` =
   the spatial repeatability index of Cole and Cebon, :func:`top_loads`; re-exported here);
-- vehicle and component engineers: rainflow fatigue damage (:mod:`correction.metrics.rainflow_damage`:
+- vehicle and component engineers: rainflow fatigue damage (:mod:`rigsim.correction.metrics.rainflow_damage`:
   :func:`rainflow_cycles`, :func:`pseudo_damage`, :func:`damage_equivalent_load`,
   :func:`level_crossings`, :data:`WOHLER_PRESETS`, re-exported here).
 
@@ -30,9 +30,9 @@ import math
 
 import numpy as np
 
-from correction.metrics.dlc import column_sum
-from correction.metrics.dlc import dlc as dynamic_load_coefficient
-from correction.metrics.rainflow_damage import (
+from rigsim.correction.metrics.dlc import column_sum
+from rigsim.correction.metrics.dlc import dlc as dynamic_load_coefficient
+from rigsim.correction.metrics.rainflow_damage import (
     WOHLER_PRESETS,
     damage_equivalent_load,
     force_columns,
@@ -40,7 +40,7 @@ from correction.metrics.rainflow_damage import (
     pseudo_damage,
     rainflow_cycles,
 )
-from correction.metrics.spatial_load import spatial_correlation, spatial_profile, top_loads
+from rigsim.correction.metrics.spatial_load import spatial_correlation, spatial_profile, top_loads
 
 __all__ = [
     "WOHLER_PRESETS",

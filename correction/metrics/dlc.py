@@ -124,7 +124,7 @@ def nrmse(x, reference, axis: int = 0) -> np.ndarray:
     constant offset of ``x`` does count in the error). 0 is a perfect match; 1 is an error as large
     as the reference's own fluctuation, which is what ``x`` = the reference's mean would score.
     In this project the reference is the road force passed through the same band limit as the
-    correction (:func:`correction.output.apply.band_limit`), and ``x`` the corrected or the rig's force.
+    correction (:func:`rigsim.correction.output.apply.band_limit`), and ``x`` the corrected or the rig's force.
 
     Parameters
     ----------

@@ -7,7 +7,7 @@ Causal (:func:`correct_causal`, :class:`StreamingCorrector`)
     static level: ``sosfilt_zi`` (the state of a filter that has seen a constant 1 forever) times
     the first sample (or the record's mean, or a given level). The static load therefore starts
     settled; what remains is the unknown dynamic history before the record, whose effect has
-    died out after :attr:`~correction.output.correction_filter.CorrectionFilter.settling_time_s` (``T_a^-1`` has a
+    died out after :attr:`~rigsim.correction.output.correction_filter.CorrectionFilter.settling_time_s` (``T_a^-1`` has a
     slow pole at ``T_a``'s zero, about 1 rad/s for eq. 4 -- mostly cancelled by a nearby pole, so
     the transient is small but long). The corrected force carries ``T_F``'s phase lag.
 
@@ -20,11 +20,11 @@ Offline "zero-phase" (:func:`correct_zero_phase`)
     after (the constant extensions a causal filter started at the first sample would also assume),
     multiplied at the FFT bins by ``|H| e^{j (arg H - arg T_F)}`` (``H`` the discrete correction
     filter, ``T_F`` the discrete low-pass: see
-    :meth:`~correction.output.correction_filter.CorrectionFilter.zero_phase_response`), and transformed
+    :meth:`~rigsim.correction.output.correction_filter.CorrectionFilter.zero_phase_response`), and transformed
     back. Chosen over "causal ``T_a^-1 T_F`` then remove ``T_F``'s phase" because
     that second step is itself a non-causal all-pass with no finite rational form. The kernel is
     two-sided: both ends of the record have a transient,
-    :attr:`~correction.output.correction_filter.CorrectionFilter.zero_phase_margins_s`.
+    :attr:`~rigsim.correction.output.correction_filter.CorrectionFilter.zero_phase_margins_s`.
 
 Both preserve the mean (the static load): ``T_a(0) = 1`` and ``T_F(0) = 1``, checked at design.
 """
@@ -35,8 +35,8 @@ import numpy as np
 from scipy import fft as sp_fft
 from scipy import signal
 
-from correction.output.correction_filter import CorrectionFilter
-from correction.output.filters import reference_filter
+from rigsim.correction.output.correction_filter import CorrectionFilter
+from rigsim.correction.output.filters import reference_filter
 
 __all__ = ["correct", "correct_causal", "correct_zero_phase", "StreamingCorrector", "band_limit"]
 
@@ -79,7 +79,7 @@ def correct_causal(force_N, filt: CorrectionFilter, *, initial="first") -> np.nd
     force_N : array_like, N
         Measured wheel forces, shape (n,) or (n, channels), sampled at ``filt.fs``.
     filt : CorrectionFilter
-        From :func:`correction.output.filters.design_correction`.
+        From :func:`rigsim.correction.output.filters.design_correction`.
     initial : {"first", "mean"} or float or array_like
         Level (N) the filter is assumed to have seen forever before the record: the first
         sample (default), the record's mean, or a given static load per channel.

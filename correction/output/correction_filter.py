@@ -1,8 +1,8 @@
 """The designed correction filter ``T_a^-1 T_F`` as an object: its responses and its transients.
 
-:class:`CorrectionFilter` holds what :func:`correction.output.filters.design_correction` produced
+:class:`CorrectionFilter` holds what :func:`rigsim.correction.output.filters.design_correction` produced
 (discrete second-order sections, the continuous zeros, poles and gain, ``T_a`` and ``T_F``) and
-answers the questions of applying it (:mod:`correction.output.apply`): its continuous, discrete and
+answers the questions of applying it (:mod:`rigsim.correction.output.apply`): its continuous, discrete and
 offline "zero-phase" frequency responses, its white-noise gain, and which samples at the start
 (causal) or at both ends (zero-phase) of a record lie within its transients
 (:meth:`CorrectionFilter.transient_samples`, :meth:`CorrectionFilter.transient_mask`).
@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import signal
 
-from correction.output.lowpass import LowPass
+from rigsim.correction.output.lowpass import LowPass
 
 if TYPE_CHECKING:  # python-control is imported where it is used (it loads matplotlib)
     import control
@@ -40,7 +40,7 @@ SETTLING_TOLERANCE = 1e-3
 class CorrectionFilter:
     """The discretized correction filter ``T_a^-1 T_F`` and what is needed to apply it.
 
-    Build it with :func:`design_correction`; apply it with :mod:`correction.output.apply`.
+    Build it with :func:`design_correction`; apply it with :mod:`rigsim.correction.output.apply`.
 
     Attributes
     ----------

@@ -6,7 +6,7 @@ gain ``S_s / (S_s + N0)`` with the signal's spectrum estimated as ``S_x - N0`` (
 subtraction: S. F. Boll, "Suppression of acoustic noise in speech using spectral subtraction",
 IEEE Trans. ASSP 27(2), 1979): ~1 where the signal outweighs the noise, 0 where the record is noise
 alone. ``N0`` is read from the record over a band above its signal
-(:func:`correction.identification.noise.noise_rms` on each of :data:`SUB_BANDS` parts of it, the
+(:func:`rigsim.correction.identification.noise.noise_rms` on each of :data:`SUB_BANDS` parts of it, the
 least of them), ``S_x`` with Hann windows of :data:`SEGMENT_S` (50 % overlap). Where the parts'
 levels differ by more than :data:`FLAT_RATIO` the band holds more than white noise (a rough road's
 force reaching far above the truck's modes), the noise cannot be read, and the gain is 1 there: the
@@ -23,7 +23,7 @@ would take out. A slow part at the drift's level is cut (k = 0); one far above i
 drift and is kept (k -> 1). Without ``drift_rms`` the slow part is cut whatever its level.
 
 Made for a residual that is mostly noise with a narrow-band remainder: the model correction's
-``F_rig - F_model(x_a)`` (:mod:`scenarios.records.model.differential`), whose truck force the
+``F_rig - F_model(x_a)`` (:mod:`rigsim.scenarios.records.model.differential`), whose truck force the
 model has taken out, leaving the model's error (where the truck's force is) and the load cells'
 noise (everywhere). On a record whose signal fills the band (a wheel force itself) the gain is ~1
 wherever the noise matters little and changes little. Only the white part is estimated: a load
@@ -41,8 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.identification.noise import noise_rms
-from correction.output.spectral import through_gain
+from rigsim.correction.identification.noise import noise_rms
+from rigsim.correction.output.spectral import through_gain
 
 __all__ = ["NOISE_BAND", "SUB_BANDS", "FLAT_RATIO", "SEGMENT_S", "DRIFT_HZ", "DRIFT_RMS_N", "NoiseGain", "design_noise_gain",
            "drift_cut", "drift_keep", "check_drift_hz"]

@@ -1,15 +1,15 @@
 """Design of the output-correction filter ``T_a^-1(s) T_F(s)`` (paper eq. 3-6) as discrete SOS.
 
 The corrected force is the measured force filtered by the inverse of the actuator transfer
-function ``T_a`` times a low-pass ``T_F`` (:mod:`correction.output.lowpass`). ``T_a^-1`` alone is
+function ``T_a`` times a low-pass ``T_F`` (:mod:`rigsim.correction.output.lowpass`). ``T_a^-1`` alone is
 improper (eq. 4 has four poles and one zero, so its inverse grows like ``s^3``) and is never
 discretized on its own: the product is formed first as one rational transfer function, by
 concatenating zeros and poles (the inverse's zeros are ``T_a``'s poles, its poles ``T_a``'s
 zeros), then checked to be proper, then discretized by the bilinear transform (optionally
 prewarped) in zeros-poles-gain form and stored as second-order sections
 (``scipy.signal.bilinear_zpk`` then ``zpk2sos``; scipy.signal's convention: design returns
-coefficients, :mod:`correction.output.apply` applies them). The result, with its responses and
-transients, is a :class:`~correction.output.correction_filter.CorrectionFilter`.
+coefficients, :mod:`rigsim.correction.output.apply` applies them). The result, with its responses and
+transients, is a :class:`~rigsim.correction.output.correction_filter.CorrectionFilter`.
 
 Refusals (``ValueError``, one sentence naming the problem and the fix):
 
@@ -34,9 +34,9 @@ import math
 import numpy as np
 from scipy import signal
 
-from correction.output.correction_filter import CorrectionFilter, transient_lengths
-from correction.output.lowpass import as_lowpass
-from correction.output.transfer import is_transfer_function
+from rigsim.correction.output.correction_filter import CorrectionFilter, transient_lengths
+from rigsim.correction.output.lowpass import as_lowpass
+from rigsim.correction.output.transfer import is_transfer_function
 
 __all__ = ["actuator_coefficients", "design_correction", "reference_filter"]
 
@@ -180,20 +180,20 @@ def design_correction(ta, fs: float, lowpass="paper", *, prewarp_hz: float | str
     ----------
     ta : (array_like, array_like) or control.TransferFunction
         The actuator transfer function ``X_a / X_p``: ``(num, den)`` in descending powers of s
-        (s in rad/s, e.g. :func:`correction.output.eq4.eq4_coefficients_from`) or a continuous SISO
+        (s in rad/s, e.g. :func:`rigsim.correction.output.eq4.eq4_coefficients_from`) or a continuous SISO
         ``control.TransferFunction``. It must be stable and minimum-phase with ``T_a(0) = 1``.
     fs : float, Hz
         Sampling rate of the force record.
     lowpass : {"paper", "regularized"}, LowPass or None
         ``T_F``: the paper's eq. 5 (two critically damped sections at 16 and 24 Hz), this
         project's regularized low-pass (6th-order Butterworth at 30 Hz), or a
-        :class:`~correction.output.lowpass.LowPass` with other parameters
-        (:func:`~correction.output.lowpass.paper_lowpass`, :func:`~correction.output.lowpass.regularized_lowpass`).
+        :class:`~rigsim.correction.output.lowpass.LowPass` with other parameters
+        (:func:`~rigsim.correction.output.lowpass.paper_lowpass`, :func:`~rigsim.correction.output.lowpass.regularized_lowpass`).
         None is refused (the inverse alone is improper). Note: the paper's two critically
         damped sections are already 3 dB down near 8 Hz, in the middle of the axle-hop band,
         so its correction also removes real dynamic load; the regularized one is within 0.4 %
         of the exact inverse up to 20 Hz. Compare either against the road force through the
-        same band limit (:func:`correction.output.apply.band_limit`).
+        same band limit (:func:`rigsim.correction.output.apply.band_limit`).
     prewarp_hz : float (Hz), "band" or None
         Match the discrete and continuous responses exactly at this frequency (bilinear
         transform with prewarping); must lie below ``fs / 2``. "band" (default) prewarps at
@@ -277,7 +277,7 @@ def reference_filter(fs: float, lowpass="paper", *, prewarp_hz: float | str | No
     """The low-pass ``T_F`` alone, discretized like the correction filter (``T_a = 1``).
 
     Passing the road (reference) force through it, with the same ``mode`` as the correction,
-    gives the signal the corrected force should equal: see :func:`correction.output.apply.band_limit`.
+    gives the signal the corrected force should equal: see :func:`rigsim.correction.output.apply.band_limit`.
 
     Parameters
     ----------

@@ -3,7 +3,7 @@
 A diagnostic, never a correction: it needs the road force, which a rig test does not have.
 For a measured rig force ``x`` and the band-limited road force ``y`` it fits, by least squares,
 the FIR filter ``h`` (lags ``-lead .. lag`` samples, so it may be two-sided) that minimizes
-``||y - h * x||^2``, and scores the fit with :func:`correction.metrics.dlc.nrmse`. No linear correction
+``||y - h * x||^2``, and scores the fit with :func:`rigsim.correction.metrics.dlc.nrmse`. No linear correction
 of the same length, per wheel or 4 x 4, can do better on the samples it was fitted on, so the
 NRMSE of the fit is the floor that only a nonlinear correction (or a better plant) can go below.
 
@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from correction.metrics.dlc import nrmse
+from rigsim.correction.metrics.dlc import nrmse
 
 __all__ = ["FirFit", "fir_fit", "fir_filter", "LinearFloor", "linear_floor"]
 
@@ -243,7 +243,7 @@ class LinearFloor:
     rows : numpy.ndarray of bool, (n,)
         Samples fitted and scored.
     nrmse : numpy.ndarray, (channels,), 1
-        :func:`correction.metrics.dlc.nrmse` of ``fitted`` against the reference on ``rows`` (in-sample:
+        :func:`rigsim.correction.metrics.dlc.nrmse` of ``fitted`` against the reference on ``rows`` (in-sample:
         the fit has seen these samples, so it also fits part of their noise).
     nrmse_cv : numpy.ndarray or None, (channels,), 1
         With ``folds``: the NRMSE of out-of-fold predictions (each contiguous fold of ``rows``

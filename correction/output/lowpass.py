@@ -8,7 +8,7 @@ Two choices, both with unit static gain so the mean wheel force (the static load
     8 Hz (each is ``1 / (1 + (f/f_i)^2)`` in magnitude: 0.80 x 0.90 at 8 Hz), in the middle of the
     truck's axle-hop band (8-15 Hz), and about 6 dB down at 12 Hz, so the paper's correction also
     removes real dynamic load. Its corrected DLC should be compared with the road force passed
-    through the same low-pass (:func:`correction.output.apply.band_limit`), not with the raw road force.
+    through the same low-pass (:func:`rigsim.correction.output.apply.band_limit`), not with the raw road force.
 
 ``regularized`` (:func:`regularized_lowpass`)
     This project's choice: a Butterworth low-pass placed above the band of interest (default
@@ -57,7 +57,7 @@ class LowPass:
         Gain ``k`` of ``k prod(s - z) / prod(s - p)``.
     band_hz : float, Hz
         The filter's highest corner frequency: the band inside which a discretization must
-        reproduce the continuous response (see :func:`correction.output.filters.design_correction`).
+        reproduce the continuous response (see :func:`rigsim.correction.output.filters.design_correction`).
     description : str
         One line for reports, e.g. "2 x 2nd order, 16/24 Hz, zeta 1/1".
     """

@@ -2,10 +2,10 @@
 
 Every caller that corrects forces (the studies' scoring, ``rigsim correct``) calls
 :func:`correct_forces`: one correction filter per force column, designed from that column's
-actuator ``T_a`` (:func:`correction.output.filters.design_correction`) and applied in one mode
-(:func:`correction.output.apply.correct`); the settled mask is the AND of every filter's
-:meth:`~correction.output.correction_filter.CorrectionFilter.transient_mask` and the band-limit
-reference filter's (:func:`correction.output.filters.reference_filter`), so a corrected force and the
+actuator ``T_a`` (:func:`rigsim.correction.output.filters.design_correction`) and applied in one mode
+(:func:`rigsim.correction.output.apply.correct`); the settled mask is the AND of every filter's
+:meth:`~rigsim.correction.output.correction_filter.CorrectionFilter.transient_mask` and the band-limit
+reference filter's (:func:`rigsim.correction.output.filters.reference_filter`), so a corrected force and the
 reference force through ``T_F`` are compared on the same samples.
 """
 
@@ -16,20 +16,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.identification.actuator_fit import ActuatorFit
-from correction.output.apply import correct
-from correction.output.correction_filter import SETTLING_TOLERANCE
-from correction.output.filters import design_correction, reference_filter
-from correction.output.transfer import is_transfer_function
+from rigsim.correction.identification.actuator_fit import ActuatorFit
+from rigsim.correction.output.apply import correct
+from rigsim.correction.output.correction_filter import SETTLING_TOLERANCE
+from rigsim.correction.output.filters import design_correction, reference_filter
+from rigsim.correction.output.transfer import is_transfer_function
+from rigsim.errors import RigsimError
 
 __all__ = ["CorrectedForces", "CorrectionError", "correct_forces", "SETTLING_TOLERANCE"]
 
 _MODES = ("causal", "zerophase")
 
 
-class CorrectionError(ValueError):
+class CorrectionError(RigsimError, ValueError):
     """A correction filter that cannot be designed for one ``T_a`` (one sentence, from
-    :func:`correction.output.filters.design_correction`).
+    :func:`rigsim.correction.output.filters.design_correction`).
 
     Attributes
     ----------
@@ -41,7 +42,7 @@ class CorrectionError(ValueError):
     A T_a with a pole in the right half-plane cannot be inverted; the error names the column:
 
     >>> import numpy as np
-    >>> from correction.output.pipeline import CorrectionError, correct_forces
+    >>> from rigsim.correction.output.pipeline import CorrectionError, correct_forces
     >>> forces = np.full((2000, 2), 40e3)
     >>> try:  # doctest: +ELLIPSIS
     ...     correct_forces(forces, [([1.0], [1e-3, 1.0]), ([1.0], [1e-3, -1.0, 1.0])], 1000.0)
@@ -65,7 +66,7 @@ class CorrectedForces:
         Corrected forces, shape (n, k); (n,) when the forces were given as (n,).
     settled : numpy.ndarray of bool, (n,)
         True outside every transient of the k correction filters and of the band-limit
-        reference filter (:func:`correction.output.filters.reference_filter`) at the same tolerance.
+        reference filter (:func:`rigsim.correction.output.filters.reference_filter`) at the same tolerance.
     filters : tuple of CorrectionFilter
         The k filters, one per column (the same object repeated when the columns share ``T_a``).
     lowpass : str
@@ -76,7 +77,7 @@ class CorrectedForces:
     Examples
     --------
     >>> import numpy as np
-    >>> from correction.output.pipeline import correct_forces
+    >>> from rigsim.correction.output.pipeline import correct_forces
     >>> t = np.arange(5000) / 1000.0
     >>> force = 40e3 + 2e3 * np.sin(2 * np.pi * 8.0 * t)
     >>> w = 2 * np.pi * 15.0
@@ -141,16 +142,16 @@ def correct_forces(force_N, actuators, fs: float, *, lowpass="regularized", mode
         Measured forces, shape (n,) or (n, k), sampled at ``fs``.
     actuators : T_a or sequence of k T_a
         Each ``T_a = X_a / X_p`` as ``(num, den)`` (descending powers of s, s in rad/s), an
-        :class:`~correction.identification.actuator_fit.ActuatorFit` or a continuous SISO
+        :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` or a continuous SISO
         ``control.TransferFunction``; one ``T_a`` (or a sequence of one) serves every column.
     fs : float, Hz
         Sampling rate.
     lowpass : {"paper", "regularized"} or LowPass
-        ``T_F`` (:mod:`correction.output.lowpass`).
+        ``T_F`` (:mod:`rigsim.correction.output.lowpass`).
     mode : {"causal", "zerophase"}
-        How the filters are applied (:func:`correction.output.apply.correct`).
+        How the filters are applied (:func:`rigsim.correction.output.apply.correct`).
     settling_tolerance : float, 1
-        Tolerance of the filters' transients (:func:`correction.output.filters.design_correction`).
+        Tolerance of the filters' transients (:func:`rigsim.correction.output.filters.design_correction`).
     normalize_dc : bool
         Scale each ``T_a`` to ``T_a(0) = 1`` instead of refusing one that is off.
 
@@ -161,7 +162,7 @@ def correct_forces(force_N, actuators, fs: float, *, lowpass="regularized", mode
     Raises
     ------
     CorrectionError
-        A refusal of :func:`correction.output.filters.design_correction` (unstable or non-minimum-phase
+        A refusal of :func:`rigsim.correction.output.filters.design_correction` (unstable or non-minimum-phase
         ``T_a``, ``T_a(0) != 1``, sampling rate too low ...), one sentence, with the column.
     ValueError
         One sentence: a bad mode or shape, a count of actuators that does not match the columns.
@@ -171,7 +172,7 @@ def correct_forces(force_N, actuators, fs: float, *, lowpass="regularized", mode
     Two wheel forces (N) at 1 kHz, one T_a for both, a second-order actuator at 15 Hz:
 
     >>> import numpy as np
-    >>> from correction.output.pipeline import correct_forces
+    >>> from rigsim.correction.output.pipeline import correct_forces
     >>> t = np.arange(5000) / 1000.0
     >>> forces = np.column_stack([40e3 + 2e3 * np.sin(2 * np.pi * 8.0 * t),
     ...                           38e3 + 1e3 * np.sin(2 * np.pi * 12.0 * t)])

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.eq4 import eq4_coefficients_from
 
 if TYPE_CHECKING:  # python-control is imported where it is used (it loads matplotlib)
     import control
@@ -40,14 +40,14 @@ __all__ = [
 def eq4_transfer_function(**parameters: float) -> control.TransferFunction:
     """The paper's eq. 4, ``T_a(s) = X_a(s) / X_p(s)`` of one wheelpan actuator, as a transfer function.
 
-    A thin wrapper of :func:`correction.output.eq4.eq4_coefficients_from`, the one implementation of
+    A thin wrapper of :func:`rigsim.correction.output.eq4.eq4_coefficients_from`, the one implementation of
     the formula and of its parameter checks (see there for the coefficients).
 
     Parameters
     ----------
     **parameters : float
-        Exactly the keyword arguments of :func:`correction.output.eq4.eq4_coefficients_from` (names
-        and SI units in :data:`correction.output.eq4.EQ4_PARAMETERS`): ``ksv`` (1), ``kq_m3_s``
+        Exactly the keyword arguments of :func:`rigsim.correction.output.eq4.eq4_coefficients_from` (names
+        and SI units in :data:`rigsim.correction.output.eq4.EQ4_PARAMETERS`): ``ksv`` (1), ``kq_m3_s``
         (m^3/s per unit spool), ``kc_m3_s_Pa`` (m^3/(s Pa), leakage included), ``kp_per_m``
         (1/m), ``kdp_per_Pa`` (1/Pa), ``piston_area_m2`` (m^2), ``fluid_volume_m3`` (m^3),
         ``bulk_modulus_Pa`` (Pa), ``mass_kg`` (kg), ``damping_N_s_m`` (N s/m),
@@ -65,7 +65,7 @@ def eq4_transfer_function(**parameters: float) -> control.TransferFunction:
     ------
     ValueError
         If a parameter is not a finite real number or out of its range (raised by
-        :func:`correction.output.eq4.eq4_coefficients_from`, naming the parameter).
+        :func:`rigsim.correction.output.eq4.eq4_coefficients_from`, naming the parameter).
     TypeError
         If a parameter is missing or unknown.
 

@@ -1,1 +1,1 @@
-"""The rigsim command line: ``main`` in :mod:`scenarios.cli.main` (console command ``rigsim``)."""
+"""The rigsim command line: ``main`` in :mod:`rigsim.scenarios.cli.main` (console command ``rigsim``)."""

@@ -9,63 +9,104 @@
                    [--decimal .|,] [--thousands none|,|.|'|space]
     rigsim correct IN --model TRUCK.toml --pairs fl=DRIVE:LVDT,... -o OUT [--map fl=CH,...] ...
 
-``IN`` is read by :func:`correction.io.measured.read_channels` (any CSV dialect, RPC III, MDF4, TDMS),
+``IN`` is read by :func:`rigsim.correction.io.measured.read_channels` (any CSV dialect, RPC III, MDF4, TDMS),
 its channels named as the reader returns them (``Fz_FL`` for a header ``Fz_FL [kN]``) and in SI,
 so a force in kN is corrected in N; ``--decimal`` and ``--thousands`` say how a text file writes
 its numbers when they leave it ambiguous. Without ``--columns``/``--map`` every numeric channel
 is read and the force channels (unit N, kN... or none) are the candidates; with them only the
 named channels are read. A chosen channel that is not a force is refused. ``T_a`` comes from
-``--actuator`` (one actuator file, :mod:`correction.io.actuator_file`, for every channel),
+``--actuator`` (one actuator file, :mod:`rigsim.correction.io.actuator_file`, for every channel),
 ``--actuators`` (one ``T_a`` per corner; a corner corrects the channel whose name holds the
 corner as a token, ``tire_force_fl_N`` or ``Fz_FL``, case-insensitive, or the one ``--map``
 gives) or ``--identify`` (one drive and pan displacement (LVDT) channel of the same file, fitted by
-:func:`correction.identification.actuator_fit.fit_actuator`; ``--model``'s ``--pairs`` names one
+:func:`rigsim.correction.identification.actuator_fit.fit_actuator`; ``--model``'s ``--pairs`` names one
 such pair per corner). The one correction is
-:func:`correction.output.pipeline.correct_forces`.
+:func:`rigsim.correction.output.pipeline.correct_forces`.
 
-``OUT`` is written by :func:`correction.io.measured.write_channels` in its extension's format: the
+``OUT`` is written by :func:`rigsim.correction.io.measured.write_channels` in its extension's format: the
 time (s) and ``<channel>_corrected`` in N (and ``settled``, 0/1, with ``--transient mark``;
 ``drop``, the default, leaves out the correction's transients, ``keep`` keeps them), with
 metadata on how it was made (input, T_a source, low-pass, mode, settling tolerance, rigsim
 version). The per-channel DLC, stress factor and damage-equivalent load before and after
-correction are printed. Bad input raises :class:`scenarios.core.config.ScenarioError` (one
+correction are printed. Bad input raises :class:`rigsim.scenarios.core.config.ScenarioError` (one
 sentence naming the channel or line and the fix) and nothing is written; ``-o`` naming an input,
 or an existing file without ``--force``, is refused before any work, and so is an ``-o`` another
 command is writing (the file is claimed for the command's run:
-:func:`scenarios.records.output.claimed_out_file`).
+:func:`rigsim.scenarios.records.output.claimed_out_file`).
 
 ``--model TRUCK.toml --pairs fl=DRIVE:LVDT,...`` corrects instead by a truck model calibrated on
-the file's own drive, LVDT and force channels (:mod:`scenarios.cli.correct_model`).
+the file's own drive, LVDT and force channels (:mod:`rigsim.scenarios.cli.correct_model`).
 
 ``--help`` shows one line per option, in groups (input, channels, linear correction, model
 correction, output); each option in full is on the guide's page, ``docs/guide/correct.md``.
 
-This module parses and prints: the work is the records API's (:mod:`scenarios.records.api`; the
-settings checked by :func:`scenarios.records.settings.correction_settings`, the file read and
-the correction planned by their ``read``, then ``check_output``, ``run`` and the result's
-``write``), whose messages name the command's flags (:data:`CLI_NAMING`).
+This module parses and prints: the flags become the option objects a lab's script passes to
+:func:`rigsim.correct_record` (:data:`FLAGS`, one table of flag and field), and the work is the
+records API's (:func:`rigsim.scenarios.records.api.plan_correction`, then the plan's
+``check_output``, ``run`` and the result's ``write``), whose messages name the command's flags
+(:data:`CLI_NAMING`).
 """
 
 from __future__ import annotations
 
 import argparse
 
-from scenarios.core.flags import (add_channel_timing, add_command, add_force, add_number_format, add_out, add_quiet,
-                                  add_time_col)
-from scenarios.records.naming import Naming
-from scenarios.records.output import claimed_out_file
-from scenarios.studies.identify.command import channel_timing
+from rigsim.scenarios.core.flags import (add_channel_timing, add_command, add_force, add_number_format, add_out, add_quiet,
+                                         add_time_col)
+from rigsim.scenarios.records.naming import Naming
+from rigsim.scenarios.records.output import claimed_out_file
+from rigsim.scenarios.studies.identify.command import channel_timing
 
-__all__ = ["CLI_NAMING", "USAGE", "add_parser", "cmd_correct"]
+__all__ = ["FLAGS", "CLI_NAMING", "USAGE", "options_from_args", "refuse_model_options", "add_parser", "cmd_correct"]
 
-#: The records API's keywords as ``rigsim correct`` names them.
-CLI_NAMING = Naming({"actuator": "--actuator", "actuators": "--actuators", "identify": "--identify",
-                     "columns": "--columns", "corner_map": "--map", "lowpass": "--lowpass",
-                     "lowpass_hz": "--lowpass-hz", "mode": "--mode", "transient": "--transient",
-                     "normalize_dc": "--normalize-dc", "model": "--model", "pairs": "--pairs", "workers": "--jobs",
-                     "max_evaluations": "--max-evaluations", "calibration_windows": "--calibration-windows",
-                     "cab": "--cab", "drift_cut_hz": "--drift-cut-hz", "path": "-o", "force_filter": "--force-filter",
-                     "lvdt_filter": "--lvdt-filter"})
+#: Each flag of ``rigsim correct`` that sets a correction's field: (flag, argparse dest, where, field),
+#: where is ``"linear"`` (a :class:`~rigsim.scenarios.records.options.LinearOptions` field),
+#: ``"model"`` (a :class:`~rigsim.scenarios.records.options.ModelOptions` field) or ``"call"`` (a
+#: keyword of :func:`~rigsim.scenarios.records.api.correct_record`). The option objects
+#: (:func:`options_from_args`) and the messages' names of the fields (:data:`CLI_NAMING`) both come
+#: from this table; ``--force-filter`` and ``--lvdt-filter`` take ``--force-delay`` and
+#: ``--lvdt-delay`` with them.
+FLAGS = (
+    ("--actuator", "actuator", "linear", "actuator"),
+    ("--actuators", "actuators", "linear", "actuators"),
+    ("--identify", "identify", "linear", "identify"),
+    ("--lowpass", "lowpass", "linear", "lowpass"),
+    ("--lowpass-hz", "lowpass_hz", "linear", "lowpass_hz"),
+    ("--mode", "mode", "linear", "mode"),
+    ("--normalize-dc", "normalize_dc", "linear", "normalize_dc"),
+    ("--model", "model", "model", "truck"),
+    ("--pairs", "pairs", "model", "pairs"),
+    ("--jobs", "jobs", "model", "workers"),
+    ("--max-evaluations", "max_evaluations", "model", "max_evaluations"),
+    ("--calibration-windows", "calibration_windows", "model", "calibration_windows"),
+    ("--cab", "cab", "model", "cab"),
+    ("--drift-cut-hz", "drift_cut_hz", "model", "drift_cut_hz"),
+    ("--columns", "columns", "call", "columns"),
+    ("--map", "map", "call", "corner_map"),
+    ("--transient", "transient", "call", "transient"),
+    ("--force-filter", "force_filter", "call", "force_filter"),
+    ("--lvdt-filter", "lvdt_filter", "call", "lvdt_filter"),
+)
+
+#: The correction's fields as ``rigsim correct`` names them in its messages (from :data:`FLAGS`; the
+#: model correction as a whole is ``--model``, the output ``-o``).
+CLI_NAMING = Naming({field: flag for flag, _, _, field in FLAGS} | {"model": "--model", "path": "-o"})
+
+
+def options_from_args(args):
+    """(the :class:`~rigsim.scenarios.records.options.LinearOptions` or
+    :class:`~rigsim.scenarios.records.options.ModelOptions`, ``correct_record``'s keywords) that
+    ``rigsim correct``'s flags give, by :data:`FLAGS`."""
+    from rigsim.scenarios.records.options import LinearOptions, ModelOptions
+
+    parts = {"linear": {}, "model": {}, "call": {}}
+    for _, dest, where, field in FLAGS:
+        timing = field in ("force_filter", "lvdt_filter")
+        parts[where][field] = channel_timing(args, field.split("_")[0]) if timing else getattr(args, dest)
+    linear = LinearOptions(**parts["linear"])
+    if parts["model"]["truck"] is None:
+        return linear, parts["call"]
+    return ModelOptions(**(parts["model"] | {"pairs": parts["model"]["pairs"] or None, "linear": linear})), parts["call"]
 
 
 #: ``rigsim correct``'s usage line: the four ways to get T_a (or the model), then the rest.
@@ -77,8 +118,8 @@ USAGE = ("%(prog)s IN -o OUT (--actuators ACTS.toml | --actuator ACT.toml\n"
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``correct`` on an ``argparse`` sub-parsers object; sets ``func=cmd_correct``. One line
     per option; the details are on the guide's page (``docs/guide/correct.md``)."""
-    from correction.output.lowpass import BAND_HZ
-    from scenarios.cli.correct_model import add_model_arguments
+    from rigsim.correction.output.lowpass import BAND_HZ
+    from rigsim.scenarios.cli.correct_model import add_model_arguments
 
     c = add_command(subparsers, "correct",
                     "correct wheel forces measured on a rig (CSV, RPC III, MDF4, TDMS) for the actuator dynamics",
@@ -113,34 +154,37 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return c
 
 
+def refuse_model_options(args) -> None:
+    """Refuse (one sentence) a flag of a :class:`~rigsim.scenarios.records.options.ModelOptions` field
+    (:data:`rigsim.scenarios.cli.correct.FLAGS`) given without ``--model``."""
+    for option, dest, where, _ in FLAGS:
+        if where == "model" and dest != "model" and getattr(args, dest, None) not in (None, False, ""):
+            from rigsim.scenarios.core.config import ScenarioError
+
+            raise ScenarioError(f"{option} goes with --model TRUCK.toml (the model correction); drop it, or give --model")
+
+
 def cmd_correct(args) -> int:
-    """Run ``rigsim correct``; returns 0, raises ScenarioError (one sentence) for bad input."""
-    from scenarios.cli import correct_model
+    """Run ``rigsim correct``: the option objects from the flags, the records API's
+    :func:`~rigsim.scenarios.records.api.plan_correction` (what ``correct_record`` runs), ``-o``
+    checked before the work; returns 0, raises ScenarioError (one sentence) for bad input."""
+    from rigsim.scenarios.cli import correct_model
+    from rigsim.scenarios.records.api import plan_correction
 
     if args.model is None:
-        correct_model.refuse_model_options(args)
+        refuse_model_options(args)
     with claimed_out_file(args.out, [args.input, args.model, args.actuator, args.actuators], args.force):
+        options, call = options_from_args(args)
+        plan = plan_correction(args.input, options, **call, naming=CLI_NAMING, time_col=args.time_col,
+                               decimal=args.decimal, thousands=args.thousands)
+        plan.check_output(args.out)
         if args.model is not None:
-            return correct_model.cmd_correct_model(args, CLI_NAMING)
-        return _correct_linear(args)
-
-
-def _correct_linear(args) -> int:
-    """``rigsim correct`` without ``--model``, ``-o`` checked and claimed."""
-    from scenarios.records.settings import correction_settings
-
-    settings = correction_settings(
-        actuator=args.actuator, actuators=args.actuators, identify=args.identify, columns=args.columns,
-        corner_map=args.map, lowpass=args.lowpass, lowpass_hz=args.lowpass_hz, mode=args.mode,
-        transient=args.transient, normalize_dc=args.normalize_dc, force_filter=channel_timing(args, "force"),
-        lvdt_filter=channel_timing(args, "lvdt"), naming=CLI_NAMING)
-    plan = settings.read(args.input, time_col=args.time_col, decimal=args.decimal, thousands=args.thousands)
-    plan.check_output(args.out)
-    result = plan.run()
-    result.write(args.out, overwrite=args.force)
-    if result.settled.any():
-        print(result.table())
-    print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz "
-          f"({result.description}); {result.transient_samples} transient samples "
-          f"{'dropped' if args.transient == 'drop' else 'kept'}; wrote {args.out}")
-    return 0
+            return correct_model.report_model(args, plan.run(progress=None if args.quiet else correct_model.say))
+        result = plan.run()
+        result.write(args.out, overwrite=args.force)
+        if result.settled.any():
+            print(result.table())
+        print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz "
+              f"({result.description}); {result.transient_samples} transient samples "
+              f"{'dropped' if args.transient == 'drop' else 'kept'}; wrote {args.out}")
+        return 0

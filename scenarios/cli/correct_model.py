@@ -13,11 +13,11 @@ corner the drive x_ref and the LVDT x_a (``--pairs``, the syntax of ``rigsim ide
 --from-file``; lengths, converted to m) and the wheel force F_rig (the force channel whose name
 holds the corner as a token, or ``--map``'s; converted to N); then
 F_corrected = F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel, W the residual's white noise
-and its drift below ``--drift-cut-hz`` (0.7 Hz; 0: none) taken out (correction.output.denoise), L
+and its drift below ``--drift-cut-hz`` (0.7 Hz; 0: none) taken out (rigsim.correction.output.denoise), L
 the linear correction
 T_a^-1 T_F with ``--actuator``/``--actuators`` if given, else T_a identified per corner from the
-``--pairs`` channels (:func:`scenarios.records.model.differential.correct_with_model`). ``TRUCK.toml`` is a
-scenario file (:func:`scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
+``--pairs`` channels (:func:`rigsim.scenarios.records.model.differential.correct_with_model`). ``TRUCK.toml`` is a
+scenario file (:func:`rigsim.scenarios.core.config.load_scenario`): its rig (actuator stroke) is used,
 and its ``[vehicle]`` tire stiffness, tire damping, tire stiffening (``tire_progressive_ratio``,
 ``tire_progressive_onset_m``, and the rear tires' ``_ratio_rear`` / ``_onset_rear_m``, which
 default to the all-wheel values) and leaf friction, where given, are the calibration's first guesses
@@ -26,22 +26,22 @@ start from the record's static loads. The cab (``--cab``): by default the model 
 with the cab held (rigid, or at ``[vehicle] cab_mount_hz`` if given) and, where a cab on its own
 mounts could fit clearly better, once more with the cab's mount frequency fitted (from that value
 or 2.5 Hz), and the clearly better fit is kept
-(:func:`scenarios.records.model.cab_choice.calibrate_cab`); ``--cab held`` or
+(:func:`rigsim.scenarios.records.model.cab_choice.calibrate_cab`); ``--cab held`` or
 ``--cab fitted`` calibrates once. Every fitted value is only a starting guess.
 
 Where the model cannot be trusted on this record (its calibration did not converge or could not
 run, or it does not reproduce F_rig on any wheel) L alone corrects the record; where it does not
 reproduce F_rig on some wheels, L alone corrects those; the reason is printed and written to the
-output's metadata. ``OUT`` is the file :meth:`scenarios.records.corrected.CorrectionResult.write`
+output's metadata. ``OUT`` is the file :meth:`rigsim.scenarios.records.corrected.CorrectionResult.write`
 writes: ``<channel>_corrected`` in N (``settled`` with ``--transient mark``; the model runs' first
-:data:`~scenarios.records.model.differential.START_S` are not settled), with metadata:
+:data:`~rigsim.scenarios.records.model.differential.START_S` are not settled), with metadata:
 the method (and why), the calibration (fitted values with units and 1-sigma, fit NRMSE per
 wheel), the scenario file and the rigsim version. Every refusal comes before any work, as one
-:class:`scenarios.core.config.ScenarioError` sentence. ``--quiet`` silences the progress lines
+:class:`rigsim.scenarios.core.config.ScenarioError` sentence. ``--quiet`` silences the progress lines
 and notes on stderr.
 
-This module parses and prints: the work is the records API's (:mod:`scenarios.records.api`,
-:mod:`scenarios.records.model_record`). Imports nothing heavy at module level.
+This module adds the flags and prints: the option objects and the work are ``rigsim correct``'s
+(:mod:`rigsim.scenarios.cli.correct`, the records API). Imports nothing heavy at module level.
 """
 
 from __future__ import annotations
@@ -49,17 +49,13 @@ from __future__ import annotations
 import sys
 
 
-__all__ = ["add_model_arguments", "refuse_model_options", "cmd_correct_model", "MODEL_OPTIONS"]
-
-#: The options only ``--model`` reads: argparse dest -> option.
-MODEL_OPTIONS = {"pairs": "--pairs", "jobs": "--jobs", "max_evaluations": "--max-evaluations",
-                 "calibration_windows": "--calibration-windows", "cab": "--cab", "drift_cut_hz": "--drift-cut-hz"}
+__all__ = ["add_model_arguments", "report_model", "say"]
 
 
 def add_model_arguments(group) -> None:
     """Add ``--model`` and its options to ``group`` of ``rigsim correct``'s parser, one line each (the
     numbers are literals, pinned to their homes by the tests; the details: ``docs/guide/correct.md``)."""
-    from scenarios.core.flags import add_jobs, add_pairs
+    from rigsim.scenarios.core.flags import add_jobs, add_pairs
 
     group.add_argument("--model", metavar="TRUCK.toml", help="this truck, on at least 10 s of record")
     add_pairs(group)
@@ -74,36 +70,9 @@ def add_model_arguments(group) -> None:
                        help="drift cut, Hz; 0: none (default 0.7, at most 1.5)")
 
 
-def _error(message: str):
-    from scenarios.core.config import ScenarioError
-
-    return ScenarioError(message)
-
-
-def refuse_model_options(args) -> None:
-    """Refuse (one sentence) an option of :data:`MODEL_OPTIONS` given without ``--model``."""
-    for dest, option in MODEL_OPTIONS.items():
-        if getattr(args, dest, None) not in (None, False):
-            raise _error(f"{option} goes with --model TRUCK.toml (the model correction); drop it, or give --model")
-
-
-def cmd_correct_model(args, naming) -> int:
-    """Run ``rigsim correct --model`` (its ``-o`` checked and claimed by the caller:
-    :func:`scenarios.records.output.claimed_out_file`), messages naming the flags as ``naming``
-    says; returns 0, raises ScenarioError (one sentence) for bad input."""
-    from scenarios.records.settings import correction_settings
-    from scenarios.studies.identify.command import channel_timing
-
-    settings = correction_settings(
-        model=args.model, pairs=args.pairs or None, identify=args.identify, actuator=args.actuator,
-        actuators=args.actuators, columns=args.columns, corner_map=args.map, lowpass=args.lowpass,
-        lowpass_hz=args.lowpass_hz, mode=args.mode, transient=args.transient, normalize_dc=args.normalize_dc,
-        workers=args.jobs, max_evaluations=args.max_evaluations, calibration_windows=args.calibration_windows,
-        cab=args.cab, drift_cut_hz=args.drift_cut_hz, force_filter=channel_timing(args, "force"), lvdt_filter=channel_timing(args, "lvdt"),
-        naming=naming)
-    plan = settings.read(args.input, time_col=args.time_col, decimal=args.decimal, thousands=args.thousands)
-    plan.check_output(args.out)
-    result = plan.run(progress=None if args.quiet else _say)
+def report_model(args, result) -> int:
+    """Print what ``rigsim correct --model`` found (the method, the calibration, the model error,
+    the loads) and write ``result`` to ``-o`` (checked and claimed by the caller); returns 0."""
     cal, meta = result.calibration, result.metadata
     if result.method == "linear":
         print(f"linear correction used: {result.reason}")
@@ -131,5 +100,6 @@ def cmd_correct_model(args, naming) -> int:
     return 0
 
 
-def _say(line: str) -> None:
+def say(line: str) -> None:
+    """A progress line or note of the calibration, on stderr."""
     print(line, file=sys.stderr, flush=True)

@@ -5,15 +5,15 @@
 
     rigsim info FILE [--time-col NAME] [--decimal MARK] [--thousands SEP] [--json]
 
-``FILE`` is read by :func:`correction.io.measured.read_channels` (every format of
-:data:`correction.io.measured.READ_FORMATS`); printed are the format and the dialect the reader
-found (:attr:`correction.io.measured.MeasuredChannels.dialect`: a text file's delimiter, decimal
+``FILE`` is read by :func:`rigsim.correction.io.measured.read_channels` (every format of
+:data:`rigsim.correction.io.measured.READ_FORMATS`); printed are the format and the dialect the reader
+found (:attr:`rigsim.correction.io.measured.MeasuredChannels.dialect`: a text file's delimiter, decimal
 mark, thousands separator, header line, units row and encoding; an RPC III file's byte order and
 data type; an MDF4 file's version; where a TDMS file's time comes from), the time column and its
 first sample (s), the rate (Hz), the number of samples, the duration (s: samples / rate) and each
 channel with its unit as the file writes it and its SI unit (the values ``rigsim correct`` works
 on). ``--json`` prints the same as one JSON object. A file the reader refuses is one sentence on
-stderr and exit code 2 (:func:`scenarios.cli.main.main`); nothing is written.
+stderr and exit code 2 (:func:`rigsim.scenarios.cli.main.main`); nothing is written.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import argparse
 import json
 import textwrap
 
-from scenarios.core.flags import add_command, add_number_format, add_time_col
+from rigsim.scenarios.core.flags import add_command, add_number_format, add_time_col
 
 __all__ = ["add_parser", "cmd_info", "summary", "FORMAT_NAMES"]
 
@@ -55,7 +55,7 @@ def summary(record) -> dict:
 
     Parameters
     ----------
-    record : correction.io.measured.MeasuredChannels
+    record : rigsim.correction.io.measured.MeasuredChannels
         The file as read.
 
     Returns
@@ -110,7 +110,7 @@ def _text(info: dict) -> str:
 
 def cmd_info(args) -> int:
     """Run ``rigsim info``; returns 0, raises MeasuredDataError (one sentence) for a file it cannot read."""
-    from correction.io.measured import read_channels
+    from rigsim.correction.io.measured import read_channels
 
     record = read_channels(args.file, time_col=args.time_col, decimal=args.decimal, thousands=args.thousands)
     info = summary(record)

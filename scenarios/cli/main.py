@@ -3,7 +3,7 @@
 Exit codes: 0 success; 2 bad input or a run that cannot go on (one sentence on stderr,
 nothing written); 1 a recording process that failed for another reason (``rigsim run --rrd``,
 one sentence, nothing written); 130 interrupted, 143 terminated (nothing written: every command that writes a
-folder builds it beside the target and renames it at the end, :mod:`scenarios.core.outputs`).
+folder builds it beside the target and renames it at the end, :mod:`rigsim.scenarios.core.outputs`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import sys
 
-from scenarios.cli.parser import EXAMPLES, build_parser
+from rigsim.scenarios.cli.parser import EXAMPLES, build_parser
 
 __all__ = ["main", "exit_main", "build_parser", "EXAMPLES", "INTERRUPTED"]
 
@@ -89,13 +89,12 @@ def main(argv: list[str] | None = None) -> int:
     # The commands draw nothing with MuJoCo (recordings are rerun's): its import then skips loading
     # OpenGL (glfw), ~0.06 s of every process's start (benchmarks/startup.py); a value set is kept.
     os.environ.setdefault("MUJOCO_GL", "disable")
-    from scenarios.core.config import ScenarioError
-    from scenarios.core.watch import SimulationError
+    from rigsim.errors import RigsimError
 
     sigterm = _SigtermAsInterrupt()
     try:
         return args.func(args)
-    except (ScenarioError, SimulationError) as exc:
+    except RigsimError as exc:  # every one-sentence refusal, and MuJoCo's warnings as errors
         print(f"rigsim: error: {exc}", file=sys.stderr)
         return 2
     except ValueError as exc:  # parameter validation of the model layers
@@ -120,7 +119,7 @@ INTERRUPTED = (130, 143)
 
 
 def exit_main(code: int) -> None:
-    """End ``python -m scenarios.cli.main`` with ``code``. After an interrupt (:data:`INTERRUPTED`)
+    """End ``python -m rigsim.scenarios.cli.main`` with ``code``. After an interrupt (:data:`INTERRUPTED`)
     the process ends at once (its outputs are removed and its workers stopped; the standard
     streams are flushed): CPython ends a ``-m`` run by SIGINT, whatever the code, once a
     KeyboardInterrupt has passed through a nested ``PyRun_String`` (MuJoCo's callback module runs

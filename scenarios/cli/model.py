@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from scenarios.core.flags import add_command
+from rigsim.scenarios.core.flags import add_command
 
 __all__ = ["add_parser", "cmd_model"]
 
@@ -27,13 +27,13 @@ def cmd_model(args) -> int:
 
     import mujoco
 
-    from mjcf.build import build_model
-    from mjcf.description import suspension_of
-    from mjcf.variant import TruckVariant
-    from mjcf.names import CORNERS
-    from mjcf.physics import modal_analysis, static_equilibrium, tire_forces
-    from mjcf.standing import truck_layout
-    from scenarios.core.config import ScenarioError, load_scenario
+    from rigsim.mjcf.build import build_model
+    from rigsim.mjcf.description import suspension_of
+    from rigsim.mjcf.variant import TruckVariant
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.mjcf.physics import modal_analysis, static_equilibrium, tire_forces
+    from rigsim.mjcf.standing import truck_layout
+    from rigsim.scenarios.core.config import ScenarioError, load_scenario
 
     base = TruckVariant() if args.scenario is None else load_scenario(args.scenario).vehicle
     payload = args.payload_kg if args.payload_kg is not None else \

@@ -1,5 +1,5 @@
 """The ``rigsim`` argument parser: every command registered by its own module, each shared flag
-worded once (:mod:`scenarios.core.flags`). Building it imports nothing heavy
+worded once (:mod:`rigsim.scenarios.core.flags`). Building it imports nothing heavy
 (``tests/scenarios/cli/test_startup.py``)."""
 
 from __future__ import annotations
@@ -59,12 +59,12 @@ def _version() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``rigsim`` parser; each command's ``func`` runs it."""
-    from scenarios.cli import correct, info, model, run
-    from scenarios.studies.identify import command as identify
-    from scenarios.studies.iterate import command as iterate
-    from scenarios.studies.paper import command as paper
-    from scenarios.studies.sweep import command as sweep
-    from scenarios.studies.validate import command as validate
+    from rigsim.scenarios.cli import correct, info, model, run
+    from rigsim.scenarios.studies.identify import command as identify
+    from rigsim.scenarios.studies.iterate import command as iterate
+    from rigsim.scenarios.studies.paper import command as paper
+    from rigsim.scenarios.studies.sweep import command as sweep
+    from rigsim.scenarios.studies.validate import command as validate
 
     p = _Parser(prog="rigsim", description="Four-post road simulator (DYNTRAC) with a heavy truck, in MuJoCo.",
                 epilog="example: " + EXAMPLES["paper"])

@@ -1,6 +1,6 @@
 """``rigsim run``: one scenario file in road or rig mode, its result folder and, with ``--rrd``, a
 rerun recording (written by a child process while this one writes the rest,
-:mod:`scenarios.review.recording_process`)."""
+:mod:`rigsim.scenarios.review.recording_process`)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import json
 import os
 import sys
 
-from scenarios.core.flags import add_command, add_duration, add_force, add_out, add_quiet, add_recording
+from rigsim.scenarios.core.flags import add_command, add_duration, add_force, add_out, add_quiet, add_recording
 
 __all__ = ["add_parser", "cmd_run"]
 
@@ -55,10 +55,10 @@ def _progress_bar(label: str, quiet: bool):
 def cmd_run(args) -> int:
     """Run ``rigsim run``; returns 0 (1: the recording process failed), raises ScenarioError (one
     sentence) for bad input."""
-    from scenarios.core.config import ScenarioError, load_scenario
-    from scenarios.core.memory import return_freed_arrays
-    from scenarios.core.outputs import check_output_file, claimed_output_file
-    from scenarios.core.results import check_timeseries_format
+    from rigsim.scenarios.core.config import ScenarioError, load_scenario
+    from rigsim.scenarios.core.memory import return_freed_arrays
+    from rigsim.scenarios.core.outputs import check_output_file, claimed_output_file
+    from rigsim.scenarios.core.results import check_timeseries_format
 
     return_freed_arrays()  # freed arrays leave the process: a long run peaks at its record plus one temporary
     check_timeseries_format(args.format)
@@ -77,7 +77,7 @@ def cmd_run(args) -> int:
                             f"{1.0 / rate:g} s")
     if args.view and args.rrd is None:
         raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
-    from scenarios.core.cost import check_disk, run_cost
+    from rigsim.scenarios.core.cost import check_disk, run_cost
 
     cost = run_cost(args.mode, scenario.lead_in_s + scenario.duration_s,
                     int(scenario.duration_s * rate) + 1, args.format)
@@ -97,11 +97,11 @@ def cmd_run(args) -> int:
 
 def _run_and_write(args, scenario, cost) -> int:
     """``rigsim run`` once its arguments are checked (and ``--rrd`` claimed): the run, its folder and recording."""
-    from scenarios.core.outputs import staged_output
-    from scenarios.core.results import write_run
-    from scenarios.review.recording_process import RecordingError, RecordingProcess
+    from rigsim.scenarios.core.outputs import staged_output
+    from rigsim.scenarios.core.results import write_run
+    from rigsim.scenarios.review.recording_process import RecordingError, RecordingProcess
 
-    # --rrd: a child process imports rerun and writes the recording (scenarios.review.recording_process);
+    # --rrd: a child process imports rerun and writes the recording (rigsim.scenarios.review.recording_process);
     # it starts before the simulation's imports, so that its own overlap them and the run
     recording = RecordingProcess() if args.rrd is not None else contextlib.nullcontext()
     if cost.long and not args.quiet:
@@ -109,8 +109,8 @@ def _run_and_write(args, scenario, cost) -> int:
               flush=True)
     try:
         with staged_output(args.out, force=args.force, inputs=scenario.input_files) as stage, recording as recorder:
-            from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
-            from scenarios.core.run import run
+            from rigsim.scenarios.core.poses import DEFAULT_POSE_RATE_HZ
+            from rigsim.scenarios.core.run import run
 
             with _progress_bar(f"{scenario.name} [{args.mode}]", args.quiet) as progress:
                 result = run(scenario, args.mode, progress=progress,
@@ -127,7 +127,7 @@ def _run_and_write(args, scenario, cost) -> int:
     if args.rrd is not None:
         print(f"wrote recording {args.rrd}" + (" and opened the viewer" if args.view else ""))
         if args.view:
-            from scenarios.review.recording import open_viewer
+            from rigsim.scenarios.review.recording import open_viewer
 
             open_viewer(args.rrd)
     print(table)

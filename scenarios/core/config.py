@@ -1,9 +1,9 @@
 """Scenario files: strict TOML into frozen, validated dataclasses.
 
 A scenario file names a road, a speed, a payload and a duration, and may override any
-parameter of the truck (``[vehicle]``, the fields of :class:`mjcf.variant.TruckVariant`) or
+parameter of the truck (``[vehicle]``, the fields of :class:`rigsim.mjcf.variant.TruckVariant`) or
 of the hydraulic actuators (``[actuator]``, the fields of
-:class:`hydraulics.params.ActuatorParams`). Every key is checked: an unknown key is an error
+:class:`rigsim.hydraulics.params.ActuatorParams`). Every key is checked: an unknown key is an error
 that names it and the closest valid key; a wrong type or a value out of range names the
 field. Errors are :class:`ScenarioError`, one sentence each.
 
@@ -31,33 +31,34 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from correction.io.tomlfile import check_keys, number, read_toml
-from mjcf.variant import TruckVariant
-from scenarios.core.lab import LabChain
+from rigsim.correction.io.tomlfile import check_keys, number, read_toml
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.lab import LabChain
+from rigsim.errors import RigsimError
 
 __all__ = ["ScenarioError", "RoadConfig", "Scenario", "load_scenario", "parse_scenario", "paper_scenarios",
            "PAPER_CONFIGURATIONS"]
 
 
-class ScenarioError(ValueError):
+class ScenarioError(RigsimError, ValueError):
     """A scenario that cannot be run as written; the message is one sentence naming the field.
 
     Examples
     --------
-    Every refusal of :func:`~scenarios.records.read_record`,
-    :func:`~scenarios.records.correct_record` and :func:`~scenarios.records.identify_record`,
+    Every refusal of :func:`~rigsim.scenarios.records.read_record`,
+    :func:`~rigsim.scenarios.records.correct_record` and :func:`~rigsim.scenarios.records.identify_record`,
     before any work:
 
     >>> import numpy as np
-    >>> from correction.io.measured import MeasuredChannels
-    >>> from scenarios.core.config import ScenarioError
-    >>> from scenarios.records import correct_record
+    >>> from rigsim.correction.io.measured import MeasuredChannels
+    >>> from rigsim.scenarios.core.config import ScenarioError
+    >>> from rigsim import LinearOptions, correct_record
     >>> t = np.arange(1000) / 1000.0
     >>> record = MeasuredChannels(time_s=t, data={"Fz_FL": 40e3 + 0 * t}, units={"Fz_FL": "N"},
     ...                           source_units={"Fz_FL": "N"}, fs_hz=1000.0, metadata={},
     ...                           path="", format="csv")
     >>> try:
-    ...     correct_record(record)
+    ...     correct_record(record, LinearOptions())
     ... except ScenarioError as exc:
     ...     print(exc)
     give exactly one of actuator='ACT.toml', actuators='ACTS.toml' and identify='DRIVE_COL,DISP_COL'
@@ -76,7 +77,7 @@ class RoadConfig:
     ----------
     roughness : str, optional
         ISO 8608 class letter ("A".."H") or the paper's word ("medium", "high"); see
-        :data:`scenarios.core.roads.ROUGHNESS_WORDS`. Exactly one of ``roughness``,
+        :data:`rigsim.scenarios.core.roads.ROUGHNESS_WORDS`. Exactly one of ``roughness``,
         ``gd_n0_m3`` and ``profile_csv`` is given.
     gd_n0_m3 : float, m^3, optional
         Displacement PSD at n0 = 0.1 cycle/m (ISO 8608).
@@ -91,7 +92,7 @@ class RoadConfig:
         domain, identically for road and rig mode (a rig's stroke is 15.2 cm).
     envelope_length_m : float, m
         Tire enveloping: moving average of the profile over this length before anything else
-        (0.25 m, the IRI's tire model; 0 turns it off). See :func:`scenarios.core.profiles.envelope`.
+        (0.25 m, the IRI's tire model; 0 turns it off). See :func:`rigsim.scenarios.core.profiles.envelope`.
     n_min_cyc_per_m, n_max_cyc_per_m : float, cycle/m
         Spatial band of a synthesized profile (ISO 8608 roughness or gd_n0_m3).
     """
@@ -131,9 +132,9 @@ class Scenario:
         so the run starts from rest and the statistics see no start-up transient.
     output_rate_hz : float, Hz
         Rate of the written time series (a divisor of the simulation rate, >= 1 kHz).
-    lab : scenarios.core.lab.LabChain
+    lab : rigsim.scenarios.core.lab.LabChain
         How the lab measures the rig test (``[lab]``, the fields of
-        :class:`~scenarios.core.lab.LabChain`; default: the ideal load cell and LVDT).
+        :class:`~rigsim.scenarios.core.lab.LabChain`; default: the ideal load cell and LVDT).
     source : pathlib.Path, optional
         The file the scenario was read from (for relative paths).
     """
@@ -191,7 +192,7 @@ def _road(table: Any) -> RoadConfig:
         )
     kw: dict[str, Any] = {}
     if "roughness" in table:
-        from scenarios.core.roads import ISO_CLASSES, ROUGHNESS_WORDS
+        from rigsim.scenarios.core.roads import ISO_CLASSES, ROUGHNESS_WORDS
 
         r = table["roughness"]
         valid = list(ISO_CLASSES) + list(ROUGHNESS_WORDS)
@@ -240,7 +241,7 @@ def _dataclass_overrides(table: Any, cls, where: str):
 
 def _actuator_fields():
     try:
-        from hydraulics.params import ActuatorParams
+        from rigsim.hydraulics.params import ActuatorParams
     except ImportError:  # pragma: no cover - hydraulics is part of this distribution
         return None
     return ActuatorParams
@@ -276,10 +277,10 @@ def parse_scenario(doc: Mapping, *, source: pathlib.Path | None = None) -> Scena
     if "vehicle" in doc:
         try:
             kw["vehicle"] = TruckVariant(**_dataclass_overrides(doc["vehicle"], TruckVariant, "vehicle"))
-            from mjcf.description import described
+            from rigsim.mjcf.description import described
 
             if described(kw["vehicle"]):  # a truck of its own: refused here if it cannot stand on the rig
-                from mjcf.standing import check_stands
+                from rigsim.mjcf.standing import check_stands
 
                 check_stands(kw["vehicle"])
         except ValueError as exc:
@@ -338,6 +339,6 @@ def paper_scenarios(configuration: str = "design") -> list[pathlib.Path]:
     if configuration not in PAPER_CONFIGURATIONS:
         raise ScenarioError(f"the paper's configuration must be one of {sorted(PAPER_CONFIGURATIONS)}, "
                             f"got {configuration!r}")
-    base = importlib.resources.files("scenarios").joinpath("data", PAPER_CONFIGURATIONS[configuration])
+    base = importlib.resources.files("rigsim.scenarios").joinpath("data", PAPER_CONFIGURATIONS[configuration])
     names = ("medium_72kmh_6360kg.toml", "high_48kmh_3640kg.toml", "high_72kmh_3640kg.toml")
     return [pathlib.Path(str(base.joinpath(n))) for n in names]

@@ -14,8 +14,8 @@ import os
 import shutil
 from dataclasses import dataclass
 
-from correction.io.atomic import size_text
-from scenarios.core.config import ScenarioError
+from rigsim.correction.io.atomic import size_text
+from rigsim.scenarios.core.config import ScenarioError
 
 __all__ = ["RunCost", "run_cost", "check_disk", "LONG_RUN_S", "LARGE_FILES_BYTES"]
 

@@ -2,7 +2,7 @@
 
 * :class:`Drive` holds a drive at every time step; a run reads any drive through the same few
   methods (``n_steps``, ``dt_s``, ``times``, ``time_at``, ``first_step``, ``chunk``, ``held``),
-  which :class:`scenarios.core.road_drive.RoadDrive` (a scenario's road, made on demand) also has;
+  which :class:`rigsim.scenarios.core.road_drive.RoadDrive` (a scenario's road, made on demand) also has;
 * :func:`identification_drive` gives four independent road-like random drives (for
   identifying the rig's transfer functions), :func:`step_drive` a step on every corner;
 * :func:`check_stroke` refuses a drive that leaves the actuator's stroke.
@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.core.profiles import check_positive, readonly_copy
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.profiles import check_positive, readonly_copy
 
 __all__ = ["Drive", "check_stroke", "identification_drive", "step_drive", "IDENT_RMS_M", "IDENT_CORNER_HZ",
            "IDENT_BAND_HZ", "IDENT_SEED", "IDENT_FADE_S", "CHUNK_STEPS"]
@@ -43,7 +43,7 @@ class Drive:
     v_mps : array_like, m/s
         Vertical velocity per corner, shape (N, 4).
     corners : tuple of str
-        Column names, :data:`mjcf.names.CORNERS`.
+        Column names, :data:`rigsim.mjcf.names.CORNERS`.
     held_m : array_like, m, optional
         The value each step holds in the rig test, shape (N, 4): the drive at mid-step,
         t_k + dt / 2 (see :meth:`held`). Given by the drives that know their signal between the
@@ -190,7 +190,7 @@ def check_stroke(drive, half_stroke_m: float) -> None:
 
     Parameters
     ----------
-    drive : Drive or scenarios.core.road_drive.RoadDrive
+    drive : Drive or rigsim.scenarios.core.road_drive.RoadDrive
         Read :data:`CHUNK_STEPS` steps at a time.
     half_stroke_m : float, m
         Allowed |z| about mid-stroke (DYNTRAC: 0.076 m).

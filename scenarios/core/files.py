@@ -1,7 +1,7 @@
 """Writing results: atomic files, and JSON from result objects in one place.
 
 Every file a command writes goes through :func:`atomic_write_bytes`
-(:mod:`correction.io.atomic`: a temporary file in the same folder, then a rename), so a reader never
+(:mod:`rigsim.correction.io.atomic`: a temporary file in the same folder, then a rename), so a reader never
 sees half a file. Every JSON document
 is made by :func:`to_json` from a result object (frozen dataclasses, mappings, sequences,
 numpy arrays and scalars), so units and rounding live in the objects, not in the writers.
@@ -17,9 +17,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-# The atomic writer's one home is correction.io.atomic (correction may not import scenarios); these
+# The atomic writer's one home is rigsim.correction.io.atomic (correction may not import scenarios); these
 # names are re-exported here for the result writers of scenarios.
-from correction.io.atomic import atomic_write_bytes, atomic_write_text, remove_stale_temp_files  # noqa: E402
+from rigsim.correction.io.atomic import atomic_write_bytes, atomic_write_text, remove_stale_temp_files  # noqa: E402
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "remove_stale_temp_files", "to_plain", "to_json", "write_json"]
 

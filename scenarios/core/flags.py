@@ -78,7 +78,7 @@ def add_recording(parser, of: str) -> None:
 
 def add_rig(parser, default: str = "design") -> None:
     """``--rig design|dyntrac``: the configuration of the paper's cases (the choices are
-    ``scenarios.studies.paper.PAPER_CONFIGURATIONS``, pinned by the tests)."""
+    ``rigsim.scenarios.studies.paper.PAPER_CONFIGURATIONS``, pinned by the tests)."""
     parser.add_argument("--rig", choices=("design", "dyntrac"), default=default,
                         help="design: the project's actuator gains, ISO class roads and leaf friction; dyntrac: the "
                              "rig's loop gains, the roads and the leaf friction fitted to the paper's Table 2 "
@@ -86,7 +86,7 @@ def add_rig(parser, default: str = "design") -> None:
 
 
 def add_noise(parser) -> None:
-    """``--noise-N``: the load cells' white noise (None: ``scenarios.studies.scoring.NOISE_N``,
+    """``--noise-N``: the load cells' white noise (None: ``rigsim.scenarios.studies.scoring.NOISE_N``,
     which importing here would load the simulator for ``rigsim --help``; the tests pin the number)."""
     parser.add_argument("--noise-N", type=float, default=None, metavar="N",
                         help="rms of the white noise added to the measured rig force, N (default 100; 0: off)")
@@ -105,7 +105,7 @@ def add_pairs(parser) -> None:
 
 def add_number_format(parser) -> None:
     """``--decimal`` and ``--thousands``: how a text input writes its numbers."""
-    from correction.io.measured_numbers import DECIMALS, THOUSANDS
+    from rigsim.correction.io.measured_numbers import DECIMALS, THOUSANDS
 
     parser.add_argument("--decimal", choices=DECIMALS, default=None, metavar="MARK",
                         help="decimal mark, . or , (default: from the numbers)")

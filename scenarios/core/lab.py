@@ -9,7 +9,7 @@ correction proven only on exact channels proves little; :class:`LabChain` says w
 measurement does to them and :func:`measure` applies it to a rig run.
 
 All off (``LabChain()``): the load cell measures the tire force itself plus white noise, the LVDT
-the pan's position exactly: what :func:`scenarios.studies.scoring.measured_force` has always given,
+the pan's position exactly: what :func:`rigsim.scenarios.studies.scoring.measured_force` has always given,
 to the bit. :data:`TYPICAL_LAB` is a servo-hydraulic lab's chain (estimates; sources beside each
 value).
 """
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.io.acquisition import MIN_CORNER_HZ, ChannelFilter, undo_timing
+from rigsim.correction.io.acquisition import MIN_CORNER_HZ, ChannelFilter, undo_timing
 
 __all__ = ["LabChain", "LabMeasurement", "TYPICAL_LAB", "LAB_BOUNDS", "measure", "measure_lvdt", "aligned",
            "pan_acceleration"]
@@ -168,7 +168,7 @@ def measure(run, chain: LabChain, noise_N: float, seed: int) -> LabMeasurement:
 
     Parameters
     ----------
-    run : scenarios.core.results.RunResult
+    run : rigsim.scenarios.core.results.RunResult
         A rig-mode run (signals ``tire_force_N`` and ``pan_m``, rate ``rate_hz``).
     chain : LabChain
     noise_N : float, N
@@ -225,7 +225,7 @@ def measure_lvdt(pan_m, fs_hz: float, chain: LabChain, seed: int) -> np.ndarray:
 
 def aligned(measurement: LabMeasurement, fs_hz: float, chain: LabChain) -> LabMeasurement:
     """``measurement`` (at ``fs_hz``, Hz) with the chain's anti-alias filters' phase and delays taken
-    out of each channel (:func:`correction.io.acquisition.undo_timing`): what a lab that knows its
+    out of each channel (:func:`rigsim.correction.io.acquisition.undo_timing`): what a lab that knows its
     conditioners does before correcting (``rigsim correct --force-filter ... --lvdt-filter ...``)."""
     pan = measurement.pan_m
     return LabMeasurement(force_N=undo_timing(measurement.force_N, fs_hz, chain.force_channel),

@@ -11,20 +11,20 @@ at once (glibc's malloc otherwise keeps much of it in the process).
 from __future__ import annotations
 
 
-from correction.io.atomic import available_memory_bytes, size_text
-from scenarios.core.config import ScenarioError
+from rigsim.correction.io.atomic import available_memory_bytes, size_text
+from rigsim.scenarios.core.config import ScenarioError
 
 __all__ = ["BASE_BYTES", "BYTES_PER_STEP", "BYTES_PER_OUTPUT", "MMAP_THRESHOLD_BYTES", "available_memory_bytes",
            "check_memory", "malloc_thresholds", "return_freed_arrays"]
 
 #: Peak memory of a road or rig run per simulation step, bytes. The drive is made chunk by chunk
-#: (:class:`scenarios.core.road_drive.RoadDrive`, on the slice of the profile each chunk reads) and
+#: (:class:`rigsim.scenarios.core.road_drive.RoadDrive`, on the slice of the profile each chunk reads) and
 #: not held; what grows with the run's length is the road profile (0.02 m spacing) and its
-#: filtering: measured (tracemalloc peak of scenarios.core.run.run, 120 km/h, 1e-4 s, 2 s against
+#: filtering: measured (tracemalloc peak of rigsim.scenarios.core.run.run, 120 km/h, 1e-4 s, 2 s against
 #: 8 s: tests/scenarios/core/test_memory.py) ~3.5 B per step; 8 with a margin.
 BYTES_PER_STEP = 8
 #: Memory per output sample, bytes: the records and the result's signals (~280 B measured in rig
-#: mode); ``timeseries.csv`` is streamed in blocks (scenarios.core.results.csv_parts).
+#: mode); ``timeseries.csv`` is streamed in blocks (rigsim.scenarios.core.results.csv_parts).
 BYTES_PER_OUTPUT = 512
 #: What a run takes whatever its length, bytes: the rest state, the stability linearization and
 #: the rollout's chunk buffers (~2.5 MB measured in rig mode), rounded up.
@@ -94,7 +94,7 @@ def return_freed_arrays() -> bool:
 def malloc_thresholds(mmap_threshold_bytes: int) -> bool:
     """Fix glibc malloc's mmap threshold at ``mmap_threshold_bytes`` (bytes) and its trim threshold at
     twice it, for the rest of the process (``mallopt``): the one place the project sets them
-    (:func:`return_freed_arrays` for memory, :func:`scenarios.core.pool.keep_heap_memory` for
+    (:func:`return_freed_arrays` for memory, :func:`rigsim.scenarios.core.pool.keep_heap_memory` for
     speed). Returns whether both were set: False where the C library has no ``mallopt`` (not
     glibc) or refused it."""
     import ctypes

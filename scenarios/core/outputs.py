@@ -14,8 +14,8 @@ does not list: a folder rigsim did not write, or one where something was added s
 with one sentence, ``--force`` or not. An output folder may never be, or contain, an input file
 of the command, the working folder or the home folder. :func:`check_output_file` checks a single output file (``--rrd``, ``rigsim correct
 -o``) before any work and :func:`claimed_output_file` claims it for the command's run, so that a
-second command writing it is refused (:mod:`correction.io.claim`). Files inside the staging folder
-are still written by :func:`correction.io.atomic.atomic_write_bytes`.
+second command writing it is refused (:mod:`rigsim.correction.io.claim`). Files inside the staging folder
+are still written by :func:`rigsim.correction.io.atomic.atomic_write_bytes`.
 """
 
 from __future__ import annotations
@@ -27,10 +27,10 @@ import pathlib
 import shutil
 import sys
 
-from correction.io.atomic import dead_writers_leftovers, host_tag
-from correction.io.claim import claimed_output, make_parents, remove_empty
-from scenarios.core.config import ScenarioError
-from scenarios.core.ownership import (MARKER, check_not_over, check_owned, count_files, entries, plural,
+from rigsim.correction.io.atomic import dead_writers_leftovers, host_tag
+from rigsim.correction.io.claim import claimed_output, make_parents, remove_empty
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.ownership import (MARKER, check_not_over, check_owned, count_files, entries, plural,
                                        read_marker, write_marker)
 
 _KINDS = ("partial", "old")  # staging folders, and previous results moved aside by --force
@@ -322,7 +322,7 @@ def check_output_file(path, option: str, *, force: bool = False, folder=None) ->
 @contextlib.contextmanager
 def claimed_output_file(path, option: str, *, force: bool = False, check=None):
     """Check the output file ``path`` (:func:`check_output_file`, or ``check()`` when given) and
-    claim it for the block (:func:`correction.io.claim.claimed_output`): a second command writing
+    claim it for the block (:func:`rigsim.correction.io.claim.claimed_output`): a second command writing
     it is refused, and a file that appears there meanwhile is not replaced without ``force``.
 
     Raises

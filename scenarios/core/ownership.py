@@ -4,7 +4,7 @@ that keep a command's output folder off anything it did not write.
 :data:`MARKER` lists the entries a command wrote. :func:`check_owned` refuses a folder that holds
 anything else (a folder rigsim did not write, or a file added to a result since); :func:`check_not_over`
 refuses an output folder that is or contains an input file, the working folder or the home folder.
-:mod:`scenarios.core.outputs` applies them before any work and again before it replaces a folder.
+:mod:`rigsim.scenarios.core.outputs` applies them before any work and again before it replaces a folder.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import json
 import os
 import pathlib
 
-from correction.io.atomic import read_regular
-from scenarios.core.config import ScenarioError
+from rigsim.correction.io.atomic import read_regular
+from rigsim.scenarios.core.config import ScenarioError
 
 __all__ = ["MARKER", "check_not_over", "check_owned", "count_files", "entries", "plural", "read_marker",
            "write_marker"]

@@ -1,6 +1,6 @@
 """The rig's plant linearized about static rest: a discrete-time state-space model.
 
-:meth:`scenarios.core.rig.Rig.linearize` makes it with ``mujoco.mjd_transitionFD`` (truck,
+:meth:`rigsim.scenarios.core.rig.Rig.linearize` makes it with ``mujoco.mjd_transitionFD`` (truck,
 pans and the four hydraulic actuators, all states); this module evaluates it: frequency
 responses in Hz, poles and zeros in rad/s, and simulation by modes.
 """
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from correction.output.transfer import state_space_frequency_response
+from rigsim.correction.output.transfer import state_space_frequency_response
 
 __all__ = ["PlantLinearization", "fine_factor", "simulate"]
 
@@ -74,11 +74,11 @@ class PlantLinearization:
         ``drive``'s own steps (for a road test whose pans follow the linear model).
 
         The model runs on its own step (:attr:`dt_s`): ``drive`` is refined onto it
-        (:meth:`~scenarios.core.drive.Drive.refined`, cubic Hermite), each fine step holds the
+        (:meth:`~rigsim.scenarios.core.drive.Drive.refined`, cubic Hermite), each fine step holds the
         drive at its middle (as MuJoCo's steps hold ``ctrl``), and the result is taken back at
-        every run step with exact mid-step values (:meth:`~scenarios.core.drive.Drive.every`).
+        every run step with exact mid-step values (:meth:`~rigsim.scenarios.core.drive.Drive.every`).
         ``drive``'s step must be an even multiple of :attr:`dt_s` (ValueError otherwise)."""
-        from scenarios.core.drive import Drive
+        from rigsim.scenarios.core.drive import Drive
 
         r = fine_factor(drive.dt_s, self.dt_s)
         fine = drive.refined(r)

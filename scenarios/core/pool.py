@@ -29,10 +29,10 @@ def keep_heap_memory(mmap_threshold_bytes: int = 64 * 2**20) -> bool:
     nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which freezes the threshold at
     128 KiB, and a sweep case then runs 23 % slower (4.9 against 4.0 s, measured). Setting the
     thresholds explicitly (``mallopt``) restores the reuse; the memory stays with the process
-    for its next case (:func:`scenarios.core.memory.malloc_thresholds`). Returns whether it was
+    for its next case (:func:`rigsim.scenarios.core.memory.malloc_thresholds`). Returns whether it was
     applied (False off glibc).
     """
-    from scenarios.core.memory import malloc_thresholds
+    from rigsim.scenarios.core.memory import malloc_thresholds
 
     return malloc_thresholds(mmap_threshold_bytes)
 

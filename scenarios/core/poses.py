@@ -1,7 +1,7 @@
 """Body poses sampled during a run at video rate, for the 3D view of a recording.
 
 Numpy on MuJoCo's arrays, no rerun: the runs record poses here when a recording is asked
-for, and :mod:`scenarios.review.recording` draws them.
+for, and :mod:`rigsim.scenarios.review.recording` draws them.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ __all__ = ["DEFAULT_POSE_RATE_HZ", "Geoms", "PoseTrack", "PoseRecorder", "model_
 DEFAULT_POSE_RATE_HZ = 50.0
 #: The drawable geom types by their ``mjtGeom`` name. MuJoCo is imported where a model is read
 #: (:func:`model_geoms`, :func:`drawn_bodies`), not by this module: the recording process
-#: (:mod:`scenarios.review.recording_process`) unpickles poses and never steps (0.19 s of CPU less
+#: (:mod:`rigsim.scenarios.review.recording_process`) unpickles poses and never steps (0.19 s of CPU less
 #: beside the run).
 _KIND_NAMES = {"mjGEOM_PLANE": "plane", "mjGEOM_SPHERE": "sphere", "mjGEOM_CAPSULE": "capsule",
                "mjGEOM_CYLINDER": "cylinder", "mjGEOM_BOX": "box"}

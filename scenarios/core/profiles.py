@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
-from correction.io.atomic import open_regular
+from rigsim.correction.io.atomic import open_regular
+from rigsim.errors import RigsimError
 
 __all__ = ["ProfileError", "Profile", "write_profile_csv", "read_profile_csv", "envelope", "highpass",
            "check_positive", "readonly_copy"]
@@ -24,7 +25,7 @@ __all__ = ["ProfileError", "Profile", "write_profile_csv", "read_profile_csv", "
 _UNIFORM_RTOL = 1e-6
 
 
-class ProfileError(ValueError):
+class ProfileError(RigsimError, ValueError):
     """A road profile file cannot be read; the message names file, row and fix."""
 
 

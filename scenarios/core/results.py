@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from correction.metrics.dlc import force_statistics
-from scenarios.core.files import atomic_write_bytes, atomic_write_text, to_json
-from mjcf.names import CORNERS
+from rigsim.correction.metrics.dlc import force_statistics
+from rigsim.scenarios.core.files import atomic_write_bytes, atomic_write_text, to_json
+from rigsim.mjcf.names import CORNERS
 
 __all__ = ["RunResult", "write_run", "csv_parts", "CSV_BLOCK_ROWS", "SIGNALS", "TIMING_KEYS", "TIMESERIES_FORMATS",
            "check_timeseries_format"]
@@ -44,13 +44,13 @@ class RunResult:
     t_s : numpy.ndarray, s
         Sample times, shape (N,), from 0 (the end of the lead-in).
     signals : Mapping[str, numpy.ndarray]
-        Per-wheel signals, each (N, 4) in :data:`mjcf.names.CORNERS` order; names and
+        Per-wheel signals, each (N, 4) in :data:`rigsim.mjcf.names.CORNERS` order; names and
         units in :data:`SIGNALS`.
     vehicle_mass_kg : float, kg
         Mass of the truck (chassis, payload and axles; pans excluded).
     events : Mapping[str, object]
         Saturation and cavitation events (rig mode), empty in road mode.
-    poses : scenarios.core.poses.PoseTrack, optional
+    poses : rigsim.scenarios.core.poses.PoseTrack, optional
         Body poses at video rate for the 3D view of a recording (None unless asked for).
     info : Mapping[str, object]
         Run facts: time step, wall time, seed, speed...
@@ -64,7 +64,7 @@ class RunResult:
     events: Mapping = field(default_factory=dict)
     info: Mapping = field(default_factory=dict)
     corners: tuple[str, ...] = CORNERS
-    poses: object = None  # scenarios.core.poses.PoseTrack at video rate, when asked for (--rrd)
+    poses: object = None  # rigsim.scenarios.core.poses.PoseTrack at video rate, when asked for (--rrd)
 
     @property
     def rate_hz(self) -> float:
@@ -94,8 +94,8 @@ class RunResult:
     def table(self) -> str:
         """The per-wheel table for the terminal and the recording: mean, std and DLC of the tire
         force, its stress factor E[(F/F_static)^4] (pavements) and damage-equivalent load (m = 5,
-        1 Hz; components), from :mod:`correction.metrics.damage`."""
-        from correction.metrics.damage import damage_equivalent_load, stress_factor
+        1 Hz; components), from :mod:`rigsim.correction.metrics.damage`."""
+        from rigsim.correction.metrics.damage import damage_equivalent_load, stress_factor
 
         f = np.asarray(self.signals["tire_force_N"], dtype=float)
         sf = np.atleast_1d(stress_factor(f))
@@ -267,7 +267,7 @@ def _csv_rows(block: np.ndarray) -> bytes:
 
 #: ``timeseries.<ext>`` formats of a run (``rigsim run --format``): name -> extension. CSV for
 #: people who open files in a spreadsheet; the binary ones are written by the toolkit's one writer
-#: of measured data (:func:`correction.io.measured.write_channels`), in the formats test labs already
+#: of measured data (:func:`rigsim.correction.io.measured.write_channels`), in the formats test labs already
 #: read: ASAM MDF4 (``mf4``: float64, the standard of vehicle DAQ, read by asammdf, MATLAB's
 #: mdfRead, CANape, DIAdem), NI TDMS (``tdms``) and MTS RPC III (``rsp``: int16 per channel, as
 #: the rig controllers store it: quantized to 1/32767 of each channel's range). MDF4 and TDMS
@@ -278,12 +278,12 @@ TIMESERIES_FORMATS = {"csv": ".csv", "mf4": ".mf4", "tdms": ".tdms", "rsp": ".rs
 def check_timeseries_format(fmt: str, flag: str = "--format") -> None:
     """Refuse, before any run, a format that is not known or whose library is not installed; the
     sentence names the command's ``flag``."""
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     if fmt not in TIMESERIES_FORMATS:
         raise ScenarioError(f"{flag} must be one of {', '.join(TIMESERIES_FORMATS)}, got {fmt!r}")
     if fmt in ("mf4", "tdms"):
-        from correction.io import measured_lab
+        from rigsim.correction.io import measured_lab
 
         try:
             measured_lab.need("asammdf" if fmt == "mf4" else "nptdms", TIMESERIES_FORMATS[fmt], "writing")
@@ -345,7 +345,7 @@ def write_run(result: RunResult, out_dir, *, fmt: str | None = "csv") -> dict[st
     if fmt == "csv":
         atomic_write_bytes(paths["timeseries"], csv_parts(result))
     elif fmt is not None:
-        from correction.io.measured import write_channels
+        from rigsim.correction.io.measured import write_channels
 
         write_channels(paths["timeseries"], _channels(result), overwrite=True)
     atomic_write_text(paths["result"], js)

@@ -9,11 +9,11 @@ Two kinds of rig:
 
 * ``Rig(scenario, hydraulic=True)``, the rig test: the drive is the actuators' reference
   x_ref in ``ctrl``; the actuator states live in MuJoCo's activation vector and are advanced
-  by the callbacks of :mod:`hydraulics.bridge`, installed for a run only.
+  by the callbacks of :mod:`rigsim.hydraulics.bridge`, installed for a run only.
 * ``Rig(scenario, hydraulic=False)``, the road test: the pans follow the drive exactly
   (mocap bodies whose positions and velocities each step prescribes).
 
-:meth:`Rig.run` hands the stepping to :mod:`scenarios.core.stepping` (the loops themselves).
+:meth:`Rig.run` hands the stepping to :mod:`rigsim.scenarios.core.stepping` (the loops themselves).
 """
 
 from __future__ import annotations
@@ -23,20 +23,20 @@ import dataclasses
 import mujoco
 import numpy as np
 
-from hydraulics.bridge import add_hydraulic_actuators, hydraulic_callbacks
-from hydraulics.equilibrium import equilibrium_activation
-from hydraulics.loop import check_design_station
-from hydraulics.params import ActuatorParams
-from mjcf import names
-from mjcf.build import build_spec
-from mjcf.physics import RigIndex, friction_disabled, static_equilibrium, tire_forces, tire_stiffness
-from scenarios.core.config import Scenario, ScenarioError
-from scenarios.core.drive import Drive
-from scenarios.core.memory import check_memory
-from scenarios.core.plant import PlantLinearization
-from scenarios.core.road_drive import RoadDrive, road_source
-from scenarios.core.stepping import RigRecord, run_hydraulic, run_kinematic
-from scenarios.core.watch import mujoco_warnings_captured, output_schedule
+from rigsim.hydraulics.bridge import add_hydraulic_actuators, hydraulic_callbacks
+from rigsim.hydraulics.equilibrium import equilibrium_activation
+from rigsim.hydraulics.loop import check_design_station
+from rigsim.hydraulics.params import ActuatorParams
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_spec
+from rigsim.mjcf.physics import RigIndex, friction_disabled, static_equilibrium, tire_forces, tire_stiffness
+from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.core.drive import Drive
+from rigsim.scenarios.core.memory import check_memory
+from rigsim.scenarios.core.plant import PlantLinearization
+from rigsim.scenarios.core.road_drive import RoadDrive, road_source
+from rigsim.scenarios.core.stepping import RigRecord, run_hydraulic, run_kinematic
+from rigsim.scenarios.core.watch import mujoco_warnings_captured, output_schedule
 
 __all__ = ["actuator_params", "Rig", "RIG_INTEGRATOR", "RIG_INTEGRATOR_NAME", "RIG_TIMESTEP_S"]
 
@@ -73,7 +73,7 @@ class Rig:
         follow their drive exactly (road test).
     check_stability : bool
         With ``hydraulic``: refuse actuator parameters whose loop is unstable under the design
-        wheel station (:func:`hydraulics.loop.check_design_station`) or whose closed loop under
+        wheel station (:func:`rigsim.hydraulics.loop.check_design_station`) or whose closed loop under
         this truck is unstable (:meth:`check_stable`). False only to study an unstable rig.
 
     Raises
@@ -271,7 +271,7 @@ class Rig:
         ----------
         drive : Drive or RoadDrive
             One sample per time step of the model (times may start below 0: a lead-in); read
-            chunk by chunk (:mod:`scenarios.core.stepping`).
+            chunk by chunk (:mod:`rigsim.scenarios.core.stepping`).
         rate_hz : float, Hz
             Output rate; must divide the simulation rate.
         progress : callable, optional

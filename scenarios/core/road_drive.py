@@ -9,7 +9,7 @@ A road drive is a pure function of the step index, so :class:`RoadDrive` holds o
 and makes any range of steps on demand (:meth:`RoadDrive.chunk`): a run steps through it chunk by
 chunk and never holds the drive at the step rate (at the 1e-4 s step a whole drive takes 0.7 MB per
 simulated second, 2.5 MB/s while it is made). :meth:`RoadDrive.drive` makes the whole signal as a
-:class:`~scenarios.core.drive.Drive` for the studies that need it at once (identification at the
+:class:`~rigsim.scenarios.core.drive.Drive` for the studies that need it at once (identification at the
 test's rms, iteration); the values are the same, bit for bit, however the steps are chunked.
 """
 
@@ -19,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.core import roads
-from scenarios.core.drive import Drive, check_stroke
-from scenarios.core.profiles import Profile, ProfileError, check_positive, envelope, highpass, read_profile_csv
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core import roads
+from rigsim.scenarios.core.drive import Drive, check_stroke
+from rigsim.scenarios.core.profiles import Profile, ProfileError, check_positive, envelope, highpass, read_profile_csv
 
 __all__ = ["RoadDrive", "START_MARGIN_M", "PROFILE_DX_M", "sample_wheels", "road_source", "road_drive"]
 
@@ -118,7 +118,7 @@ class RoadDrive:
 
     def held(self, k0: int, k1: int) -> np.ndarray:
         """The value (m) each of steps ``k0`` .. ``k1 - 1`` holds in the rig test, (k1 - k0, 4):
-        the drive at mid-step, t_k + dt / 2 (see :meth:`scenarios.core.drive.Drive.held`)."""
+        the drive at mid-step, t_k + dt / 2 (see :meth:`rigsim.scenarios.core.drive.Drive.held`)."""
         return self._at((np.arange(k0, k1) + 0.5) / self.fs_hz)[0]
 
     def _at(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,12 +146,12 @@ class RoadDrive:
         return z, vz
 
     def drive(self) -> Drive:
-        """The whole drive as a :class:`~scenarios.core.drive.Drive` (arrays at the step rate)."""
+        """The whole drive as a :class:`~rigsim.scenarios.core.drive.Drive` (arrays at the step rate)."""
         z, vz = self.chunk(0, self.n_steps)
         return Drive(self.times(0, self.n_steps), z, vz, self.corners, held_m=self.held(0, self.n_steps))
 
     def check_stroke(self, half_stroke_m: float) -> None:
-        """Raise ValueError if a drive leaves +-``half_stroke_m`` (m); see :func:`~scenarios.core.drive.check_stroke`."""
+        """Raise ValueError if a drive leaves +-``half_stroke_m`` (m); see :func:`~rigsim.scenarios.core.drive.check_stroke`."""
         check_stroke(self, half_stroke_m)
 
 
@@ -201,7 +201,7 @@ def sample_wheels(profile: Profile, speed_mps: float, wheelbase_m: float, fs_hz:
 
 
 def _road_profile(scenario, length_m: float) -> Profile:
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     rc = scenario.road
     if rc.profile_csv is not None:
@@ -224,7 +224,7 @@ def road_source(scenario, *, dt_s: float, wheelbase_m: float, half_stroke_m: flo
 
     Parameters
     ----------
-    scenario : scenarios.core.config.Scenario
+    scenario : rigsim.scenarios.core.config.Scenario
     dt_s : float, s
         Simulation time step (the drive has one sample per step).
     wheelbase_m : float, m
@@ -244,7 +244,7 @@ def road_source(scenario, *, dt_s: float, wheelbase_m: float, half_stroke_m: flo
         If the profile cannot be made or read, or the drive leaves the stroke (naming the
         corner, the time and the margin).
     """
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     v = scenario.speed_mps
     total_s = scenario.lead_in_s + scenario.duration_s
@@ -276,7 +276,7 @@ def road_source(scenario, *, dt_s: float, wheelbase_m: float, half_stroke_m: flo
 def _check_band(scenario, nmax: float, fs: float) -> None:
     """Refuse, naming the scenario's keys, a speed at which the road's band reaches above half the
     drive's rate (``1 / vehicle.timestep_s``): the sampled drive would alias."""
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     v = scenario.speed_mps
     if v * nmax <= fs / 2 * (1 + 1e-9):
@@ -292,5 +292,5 @@ def _check_band(scenario, nmax: float, fs: float) -> None:
 
 
 def road_drive(scenario, *, dt_s: float, wheelbase_m: float, half_stroke_m: float) -> Drive:
-    """:func:`road_source`'s drive made whole (a :class:`~scenarios.core.drive.Drive`)."""
+    """:func:`road_source`'s drive made whole (a :class:`~rigsim.scenarios.core.drive.Drive`)."""
     return road_source(scenario, dt_s=dt_s, wheelbase_m=wheelbase_m, half_stroke_m=half_stroke_m).drive()

@@ -2,9 +2,9 @@
 
 A road is described by the ISO 8608 displacement PSD Gd(n) = Gd(n0) (n/n0)^-w
 (n in cycle/m, Gd in m^3, n0 = 0.1 cycle/m). Two-track profiles
-(:class:`scenarios.core.profiles.Profile`) are synthesised by the deterministic-amplitude
+(:class:`rigsim.scenarios.core.profiles.Profile`) are synthesised by the deterministic-amplitude
 random-phase method, the tracks identical, independent or coherent. Only numpy and scipy
-are used; sampling a profile as the four wheel-pan drives is :mod:`scenarios.core.drive`.
+are used; sampling a profile as the four wheel-pan drives is :mod:`rigsim.scenarios.core.drive`.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 from scipy import fft as sp_fft
 from scipy import signal
 
-from scenarios.core.profiles import Profile, check_positive
+from rigsim.scenarios.core.profiles import Profile, check_positive
 
 __all__ = ["N0_CYC_PER_M", "ISO_CLASSES", "ROUGHNESS_WORDS", "TRACK_MODES", "iso8608_psd", "RoadSpec",
            "generate_profile", "welch_psd_spatial"]

@@ -1,7 +1,7 @@
 """Run a scenario in road mode (pans follow the profile) or rig mode (hydraulic actuators).
 
-Builds the :class:`scenarios.core.rig.Rig`, makes the road's drive, runs it and returns a
-:class:`scenarios.core.results.RunResult`. It never prints (progress goes through a callback).
+Builds the :class:`rigsim.scenarios.core.rig.Rig`, makes the road's drive, runs it and returns a
+:class:`rigsim.scenarios.core.results.RunResult`. It never prints (progress goes through a callback).
 """
 
 from __future__ import annotations
@@ -11,13 +11,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.core.config import Scenario, ScenarioError
-from scenarios.core.drive import Drive
-from scenarios.core.memory import check_memory
-from scenarios.core.results import RunResult
-from scenarios.core.rig import Rig
-from scenarios.core.watch import ProgressFn, output_schedule
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.core.drive import Drive
+from rigsim.scenarios.core.memory import check_memory
+from rigsim.scenarios.core.results import RunResult
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.watch import ProgressFn, output_schedule
 
 __all__ = ["MODES", "run"]
 

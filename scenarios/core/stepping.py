@@ -1,8 +1,8 @@
-"""Stepping a :class:`~scenarios.core.rig.Rig` through a drive: the only MuJoCo stepping loops.
+"""Stepping a :class:`~rigsim.scenarios.core.rig.Rig` through a drive: the only MuJoCo stepping loops.
 
 * :func:`run_hydraulic`, the rig test: the drive is the actuators' reference x_ref in ``ctrl``;
   the actuator states live in MuJoCo's activation vector, advanced by the callbacks of
-  :mod:`hydraulics.bridge` (installed for the run only). Steps in C with ``mujoco.rollout``,
+  :mod:`rigsim.hydraulics.bridge` (installed for the run only). Steps in C with ``mujoco.rollout``,
   about :data:`ROLLOUT_STEPS` steps (whole warning windows) per call (the constraint warm start carried from call to
   call: bit-identical to a loop of ``mj_step``); a call that warned or diverged is replayed window
   by window from its first state so that the error names its 10 ms of simulated time.
@@ -10,7 +10,7 @@
   whose positions (and, through the tires' ``ctrl``, velocities) each step of the rollout sets.
 
 Both step in rollouts of about :data:`ROLLOUT_STEPS` steps and read the drive one rollout at a
-time (``drive.chunk``, ``drive.held``), so a road drive made on demand (:class:`~scenarios.core.road_drive.RoadDrive`) is never held at
+time (``drive.chunk``, ``drive.held``), so a road drive made on demand (:class:`~rigsim.scenarios.core.road_drive.RoadDrive`) is never held at
 the step rate: memory grows with the output samples only.
 """
 
@@ -23,21 +23,21 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from hydraulics.bridge import hydraulic_callbacks
-from hydraulics.events import events as hydraulic_events
-from hydraulics.params import STATE_NAMES
-from mjcf import names
-from mjcf.physics import tire_law
-from scenarios.core.watch import SimulationError, Watch, output_schedule
+from rigsim.hydraulics.bridge import hydraulic_callbacks
+from rigsim.hydraulics.events import events as hydraulic_events
+from rigsim.hydraulics.params import STATE_NAMES
+from rigsim.mjcf import names
+from rigsim.mjcf.physics import tire_law
+from rigsim.scenarios.core.watch import SimulationError, Watch, output_schedule
 
 __all__ = ["RigRecord", "run_hydraulic", "run_kinematic", "ROLLOUT_STEPS", "RECORDED_STATES"]
 
-MPA = 1e6  # Pa per MPa: the pressure states are in MPa (see hydraulics.params.STATE_NAMES)
+MPA = 1e6  # Pa per MPa: the pressure states are in MPa (see rigsim.hydraulics.params.STATE_NAMES)
 #: The actuator states a rig run records: name in the record -> (index in STATE_NAMES, scale to SI).
 RECORDED_STATES = {"spool": (STATE_NAMES.index("spool"), 1.0), "p1_Pa": (STATE_NAMES.index("p1_MPa"), MPA),
                    "p2_Pa": (STATE_NAMES.index("p2_MPa"), MPA)}
 #: Steps per rollout call of a hydraulic run, rounded down to whole warning windows
-#: (scenarios.core.watch.CHECK_EVERY_S; at least one): 1 s at the rig test's 1e-3 s step, so the
+#: (rigsim.scenarios.core.watch.CHECK_EVERY_S; at least one): 1 s at the rig test's 1e-3 s step, so the
 #: calls' Python overhead (output rows, events, warning check) is ~1 % of the stepping.
 ROLLOUT_STEPS = 1000
 #: What a road-test step's controls set: ``ctrl`` (the tires' pan velocities) and the mocap
@@ -61,11 +61,11 @@ class RigRecord:
     hydraulic : Mapping or None
         Rig only: the recorded actuator states in SI, each (n, 4): ``spool`` (1, normalised),
         ``p1_Pa`` and ``p2_Pa`` (chamber pressures, Pa); the other activation states
-        (:data:`hydraulics.params.STATE_NAMES`) are not kept (memory grows with the record).
+        (:data:`rigsim.hydraulics.params.STATE_NAMES`) are not kept (memory grows with the record).
     events : Mapping
         ``{event: {corner: {"samples": int, "first_time_s": float (s)}}}`` for the events that
         occurred (spool saturation, cavitation, over-pressure; rig only).
-    poses : scenarios.core.poses.PoseTrack or None
+    poses : rigsim.scenarios.core.poses.PoseTrack or None
         Body poses at video rate when asked for.
     """
 
@@ -81,7 +81,7 @@ class RigRecord:
 def _pose_recorder(model, drive, decim: int, pose_rate_hz):
     if pose_rate_hz is None:
         return None
-    from scenarios.core.poses import PoseRecorder
+    from rigsim.scenarios.core.poses import PoseRecorder
 
     return PoseRecorder(model, drive.times(0, drive.n_steps), pose_rate_hz, every=decim)
 
@@ -97,9 +97,9 @@ def run_kinematic(rig, drive, rate_hz: float, progress, pose_rate_hz) -> RigReco
     """The road test of ``rig`` (``hydraulic=False``): the pans follow ``drive`` exactly.
 
     The pans are mocap bodies (``build_spec(pans="mocap")``): each step holds each pan at the
-    drive's mid-step value (:meth:`~scenarios.core.drive.Drive.held`) moving at its mean velocity
+    drive's mid-step value (:meth:`~rigsim.scenarios.core.drive.Drive.held`) moving at its mean velocity
     over the step, (z_k+1 - z_k) / dt, fed to the tire's damping through ``ctrl``. The tire force
-    recorded at t_k is the tire's law (:func:`mjcf.physics.tire_law`) with the pan at z_k moving
+    recorded at t_k is the tire's law (:func:`rigsim.mjcf.physics.tire_law`) with the pan at z_k moving
     at v_k, from the tendon's length and rate MuJoCo computed at the step's start with the pan at
     mid-step: the tendon is near vertical, so it is longer by (held - z_k).
     """
@@ -265,7 +265,7 @@ def _replay_windows(model, watch: Watch, data, state, warm, ctrl, k0: int,
 
 
 class _EventLog:
-    """Hydraulic events (:func:`hydraulics.events.events`) counted chunk by chunk: per event and
+    """Hydraulic events (:func:`rigsim.hydraulics.events.events`) counted chunk by chunk: per event and
     corner the output samples it held on and the first time, s."""
 
     def __init__(self, params) -> None:
@@ -284,7 +284,7 @@ class _EventLog:
 
     def summary(self) -> dict:
         """``{event: {corner: {"samples": int, "first_time_s": float (s)}}}`` in the event
-        function's order, corners in :data:`mjcf.names.CORNERS` order."""
+        function's order, corners in :data:`rigsim.mjcf.names.CORNERS` order."""
         order = list(hydraulic_events(np.zeros((1, 4, len(STATE_NAMES))), self.params))
         return {name: {c: self.log[name][c] for c in names.CORNERS if c in self.log[name]}
                 for name in order if name in self.log}

@@ -14,6 +14,8 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
+from rigsim.errors import RigsimError
+
 __all__ = ["SimulationError", "ProgressFn", "SayFn", "Watch", "mujoco_warnings_captured", "output_schedule",
            "CHECK_EVERY_S"]
 
@@ -27,7 +29,7 @@ SayFn = Callable[[str], None]
 """say(line): one line of progress text of a study (which step it is at), for the terminal."""
 
 
-class SimulationError(RuntimeError):
+class SimulationError(RigsimError, RuntimeError):
     """A run that went wrong while simulating (MuJoCo warning, divergence); names the time."""
 
 

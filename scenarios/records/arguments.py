@@ -1,10 +1,10 @@
 """What a lab's script passes to the records API, checked: values, paths, T_a, the record and its length.
 
-:mod:`scenarios.records.api` and :mod:`scenarios.records.settings` take their arguments from a
+:mod:`rigsim.scenarios.records.api` and :mod:`rigsim.scenarios.records.settings` take their arguments from a
 script as well as from ``rigsim correct``'s parser: a value of the wrong type, NaN, infinite,
 negative or huge, a path as ``bytes``, something else than a record. Each is refused here in one
-:class:`~scenarios.core.config.ScenarioError` sentence naming the argument (by its keyword, or the
-command's flag: :class:`~scenarios.records.naming.Naming`) and the fix, before any work:
+:class:`~rigsim.scenarios.core.config.ScenarioError` sentence naming the argument (by its keyword, or the
+command's flag: :class:`~rigsim.scenarios.records.naming.Naming`) and the fix, before any work:
 
 * numbers and names: :func:`finite`, :func:`count`, :func:`flag`, :func:`checked_names`,
   :func:`checked_corner_map`, :func:`checked_pairs`, :func:`shown` (a value in a message);
@@ -23,14 +23,14 @@ import math
 import numbers
 from collections.abc import Mapping, Sequence
 
-from scenarios.records.naming import KEYWORDS, Naming
+from rigsim.scenarios.records.naming import KEYWORDS, Naming
 
 __all__ = ["shown", "finite", "count", "flag", "checked_names", "checked_corner_map", "checked_pairs", "file_path",
            "ta_form", "checked_record", "SETTLED_SHARE", "lowest_corner_hz", "check_corner", "check_windows"]
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
@@ -115,19 +115,19 @@ def checked_pairs(pairs, naming: Naming = KEYWORDS):
 
 def file_path(value, what: str) -> str:
     """A path argument (``str``, ``bytes`` or ``os.PathLike``) as text
-    (:func:`correction.io.tomlfile.path_text`), refused naming ``what``."""
-    from correction.io.tomlfile import path_text
-    from scenarios.core.config import ScenarioError
+    (:func:`rigsim.correction.io.tomlfile.path_text`), refused naming ``what``."""
+    from rigsim.correction.io.tomlfile import path_text
+    from rigsim.scenarios.core.config import ScenarioError
 
     return path_text(value, what, ScenarioError)
 
 
 def ta_form(value, where: str):
     """``value`` when a T_a of a form the correction takes: ``(num, den)``, an ActuatorFit or a
-    ``control.TransferFunction`` (:func:`correction.output.filters.actuator_coefficients`); else one
+    ``control.TransferFunction`` (:func:`rigsim.correction.output.filters.actuator_coefficients`); else one
     sentence naming ``where``."""
-    from correction.identification.actuator_fit import ActuatorFit
-    from correction.output.filters import actuator_coefficients
+    from rigsim.correction.identification.actuator_fit import ActuatorFit
+    from rigsim.correction.output.filters import actuator_coefficients
 
     if not isinstance(value, ActuatorFit):
         try:
@@ -138,9 +138,9 @@ def ta_form(value, where: str):
 
 
 def checked_record(record):
-    """``record`` when a :class:`~correction.io.measured.MeasuredChannels` (whose own checks hold its
+    """``record`` when a :class:`~rigsim.correction.io.measured.MeasuredChannels` (whose own checks hold its
     time axis, rate and values as a reader's) with a unit for every channel; one sentence otherwise."""
-    from correction.io.measured import MeasuredChannels
+    from rigsim.correction.io.measured import MeasuredChannels
 
     if not isinstance(record, MeasuredChannels):
         raise _error(f"record must be a MeasuredChannels (read_record's, or make_channels') or a record file's path, "
@@ -162,8 +162,8 @@ def _transient_s_hz(mode: str) -> float:
     """Seconds times Hz of the regularized low-pass's transients in ``mode`` (start and end together):
     a Butterworth's transients scale as 1 / its corner, measured once at ``BAND_HZ`` sampled at
     40 times that (where the discrete filter is the continuous one)."""
-    from correction.output.filters import reference_filter
-    from correction.output.lowpass import BAND_HZ, regularized_lowpass
+    from rigsim.correction.output.filters import reference_filter
+    from rigsim.correction.output.lowpass import BAND_HZ, regularized_lowpass
 
     filt = reference_filter(40.0 * BAND_HZ, regularized_lowpass(BAND_HZ))
     return sum(filt.transient_samples(mode)) / filt.fs * BAND_HZ
@@ -198,13 +198,13 @@ def check_corner(settings, record) -> None:
 
 def check_windows(settings, record) -> None:
     """Refuse a model correction's ``calibration_windows`` that ``record`` cannot hold side by side (the
-    windows of :func:`scenarios.records.model.calibrate.fit_windows` whose fitted spans overlap fit the
+    windows of :func:`rigsim.scenarios.records.model.calibrate.fit_windows` whose fitted spans overlap fit the
     same samples twice, at the cost of another model run each)."""
     asked = settings.calibration_windows
     if settings.method != "model" or asked is None or asked == 1:
         return
-    from scenarios.core.config import ScenarioError
-    from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, fit_windows
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, fit_windows
 
     def holds(k: int) -> bool:
         spans = fit_windows(record.time_s, k, WINDOW_S, WINDOW_LEAD_S)

@@ -1,6 +1,6 @@
 """Which channels of a record are corrected, and the corner of each.
 
-Shared by the linear correction and the model correction (:mod:`scenarios.records.api`):
+Shared by the linear correction and the model correction (:mod:`rigsim.scenarios.records.api`):
 ``columns``, ``corner_map`` and ``identify`` read in their text form (``"A,B"``,
 ``"fl=Fz_FL,..."``, ``"DRIVE,DISP"``) or as Python sequences (:func:`parse_columns`,
 :func:`parse_corner_map`, :func:`parse_identify`), the channels they name so that a file is read
@@ -8,8 +8,8 @@ with only those (:func:`wanted_channels`), each name as given matched to the nam
 (:func:`resolver`), and the force channels chosen and checked (:func:`plan_channels`): a corner
 corrects the force channel whose name holds the corner as a token (``tire_force_fl_N``,
 ``Fz_FL``, case-insensitive, :func:`names_corner`) or the one ``corner_map`` gives. Every refusal
-is a :class:`scenarios.core.config.ScenarioError` of one sentence naming the channel and the fix,
-the parameter named as the caller's :class:`~scenarios.records.naming.Naming` says. Imports
+is a :class:`rigsim.scenarios.core.config.ScenarioError` of one sentence naming the channel and the fix,
+the parameter named as the caller's :class:`~rigsim.scenarios.records.naming.Naming` says. Imports
 nothing heavy at module level (the parser's start-up stays light).
 """
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping, Sequence
 
-from scenarios.records.naming import KEYWORDS, Naming
+from rigsim.scenarios.records.naming import KEYWORDS, Naming
 
 __all__ = ["FORCE_UNITS", "LENGTH_UNITS", "split_columns", "names_corner", "map_items", "check_map", "auto_map",
            "parse_columns", "parse_corner_map", "parse_identify", "wanted_channels", "read_record", "resolver",
@@ -32,7 +32,7 @@ ACTUATOR_FILE = "the actuator file"
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
@@ -184,7 +184,7 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
 
     Returns
     -------
-    correction.io.measured.MeasuredChannels
+    rigsim.correction.io.measured.MeasuredChannels
         ``time_s`` (s), ``data`` in SI (a force in kN is read in N, a length in mm in m), ``units``,
         ``source_units``, ``fs_hz`` (Hz), ``metadata``, ``path``.
 
@@ -192,7 +192,7 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
     ------
     ScenarioError
         One sentence naming the file and the column, line, unit or option at fault
-        (:func:`correction.io.measured.read_channels`).
+        (:func:`rigsim.correction.io.measured.read_channels`).
 
     Examples
     --------
@@ -200,7 +200,7 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
     in SI:
 
     >>> import pathlib, tempfile
-    >>> from scenarios.records import read_record
+    >>> from rigsim import read_record
     >>> rig = pathlib.Path(tempfile.mkdtemp()) / "rig.csv"
     >>> rows = [f"{i / 500:.3f};{40 + i % 3:.1f};{1.5 + i % 2:.1f}".replace(".", ",") for i in range(6)]
     >>> _ = rig.write_text("\\n".join(["time;Fz_FL [kN];Weg_FL [mm]", *rows]) + "\\n")
@@ -210,11 +210,11 @@ def read_record(path, *, time_col: str | None = None, channels=None, decimal: st
     >>> print(record.data["Fz_FL"][:3], record.data["Weg_FL"][:2])
     [40000. 41000. 42000.] [0.0015 0.0025]
     """
-    from correction.io.measured import MeasuredDataError, read_channels
-    from correction.io.tomlfile import path_text
-    from scenarios.core.config import ScenarioError
+    from rigsim.correction.io.measured import MeasuredDataError, read_channels
+    from rigsim.correction.io.tomlfile import path_text
+    from rigsim.scenarios.core.config import ScenarioError
 
-    from scenarios.records.arguments import shown
+    from rigsim.scenarios.records.arguments import shown
 
     path = path_text(path, "path", ScenarioError)
     if channels is not None and (isinstance(channels, (str, bytes)) or not isinstance(channels, Sequence)
@@ -255,7 +255,7 @@ def unit_text(mc, name: str) -> str:
 def plan_channels(mc, asked, items, id_cols, corners, owner: str = ACTUATOR_FILE, naming: Naming = KEYWORDS):
     """(channels to correct, ``id_cols``, corner of each channel or None); checks only.
 
-    ``mc``: the record (:class:`correction.io.measured.MeasuredChannels`); ``asked``, ``items``: the
+    ``mc``: the record (:class:`rigsim.correction.io.measured.MeasuredChannels`); ``asked``, ``items``: the
     columns and corner-map pairs (names as read), None when not given; ``id_cols``: the drive and
     displacement channels (``identify``, ``pairs``), never corrected; ``corners``: the corner
     names of ``owner`` (the per-corner actuator file, the truck model), None: no corners.

@@ -1,10 +1,10 @@
 """A record's corrected forces as data: :class:`CorrectionResult`, its load table and its file.
 
-:func:`scenarios.records.api.correct_record` returns a :class:`CorrectionResult`: the corrected
+:func:`rigsim.scenarios.records.api.correct_record` returns a :class:`CorrectionResult`: the corrected
 forces in N per channel, where they are settled, how they were corrected and why, and per
 channel the loads before and after (:class:`ChannelLoads`: DLC, stress factor, damage-equivalent
 load; :meth:`CorrectionResult.table` as text). :meth:`CorrectionResult.write` writes the file
-``rigsim correct`` writes, through :func:`correction.io.measured.write_channels`: the time (s) and
+``rigsim correct`` writes, through :func:`rigsim.correction.io.measured.write_channels`: the time (s) and
 ``<channel>_corrected`` in N, the settled samples only (``transient="drop"``) or all of them,
 with a ``settled`` 0/1 channel (``"mark"``) or without (``"keep"``), and the metadata. Imports
 nothing heavy at module level.
@@ -20,7 +20,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from scenarios.records.output import fit_metadata, output_units
+from rigsim.scenarios.records.output import fit_metadata, output_units
 
 __all__ = ["ChannelLoads", "channel_loads", "loads_table", "CorrectionResult"]
 
@@ -37,17 +37,17 @@ class ChannelLoads:
     change : float or None, 1
         ``dlc_after / dlc_before - 1`` (NaN when ``dlc_before`` is 0).
     stress_factor_before, stress_factor_after : float or None, 1
-        ``E[(F / F_static)^4]`` (:func:`correction.metrics.damage.stress_factor`).
+        ``E[(F / F_static)^4]`` (:func:`rigsim.correction.metrics.damage.stress_factor`).
     del5_before_N, del5_after_N : float or None, N
         Damage-equivalent load for the exponent m = 5 at 1 Hz
-        (:func:`correction.metrics.damage.damage_equivalent_load`).
+        (:func:`rigsim.correction.metrics.damage.damage_equivalent_load`).
 
     Examples
     --------
-    A row of :attr:`CorrectionResult.loads` (as :func:`~scenarios.records.correct_record` computes
+    A row of :attr:`CorrectionResult.loads` (as :func:`~rigsim.scenarios.records.correct_record` computes
     them; by hand here):
 
-    >>> from scenarios.records import ChannelLoads
+    >>> from rigsim import ChannelLoads
     >>> row = ChannelLoads("Fz_FL", dlc_before=0.0363, dlc_after=0.0367, change=0.011,
     ...                    stress_factor_before=1.0079, stress_factor_after=1.0081,
     ...                    del5_before_N=5.90e3, del5_after_N=6.11e3)
@@ -72,8 +72,8 @@ class ChannelLoads:
 
 def channel_loads(cols, before_N, after_N, fs: float) -> tuple[ChannelLoads, ...]:
     """Per column of ``before_N`` and ``after_N`` (N, (n, k), sampled at ``fs`` Hz) its :class:`ChannelLoads`."""
-    from correction.metrics.damage import damage_equivalent_load, stress_factor
-    from correction.metrics.dlc import dlc
+    from rigsim.correction.metrics.damage import damage_equivalent_load, stress_factor
+    from rigsim.correction.metrics.dlc import dlc
 
     rows = []
     for j, col in enumerate(cols):
@@ -139,11 +139,11 @@ class CorrectionResult:
         What :meth:`write` puts in the file's metadata (fitted there to the format).
     loads : tuple of ChannelLoads
         Per channel the loads on the settled samples; empty when no sample is settled.
-    calibration : scenarios.records.model.result.Calibration or None
+    calibration : rigsim.scenarios.records.model.result.Calibration or None
         The truck model's calibration, when the model was asked for and could be calibrated.
     actuators : tuple
         The T_a of each channel (linear; ``(num, den)`` or an identified
-        :class:`~correction.identification.actuator_fit.ActuatorFit`); empty for the model.
+        :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit`); empty for the model.
     filters : tuple of CorrectionFilter
         The linear correction's filter of each channel; empty for the model.
     inputs : tuple of str
@@ -155,8 +155,8 @@ class CorrectionResult:
 
     >>> import pathlib, tempfile
     >>> import numpy as np
-    >>> from correction.io.measured import MeasuredChannels
-    >>> from scenarios.records import correct_record, read_record
+    >>> from rigsim.correction.io.measured import MeasuredChannels
+    >>> from rigsim import LinearOptions, correct_record, read_record
     >>> t = np.arange(10_000) / 1000.0
     >>> wave = 2e3 * np.sin(2 * np.pi * 3.0 * t) + 5e2 * np.sin(2 * np.pi * 12.0 * t)
     >>> data = {"Fz_FL": 40e3 + wave, "Fz_FR": 38e3 - wave}
@@ -165,7 +165,7 @@ class CorrectionResult:
     ...                           metadata={}, path="", format="csv")
     >>> w = 2 * np.pi * 15.0
     >>> acts = {"fl": ([w * w], [1.0, 1.4 * w, w * w]), "fr": ([w * w], [1.0, 1.2 * w, w * w])}
-    >>> result = correct_record(record, actuators=acts, transient="mark")
+    >>> result = correct_record(record, LinearOptions(actuators=acts), transient="mark")
     >>> result.corners, result.method
     (('fl', 'fr'), 'linear')
     >>> print(result.table())  # doctest: +NORMALIZE_WHITESPACE
@@ -218,7 +218,7 @@ class CorrectionResult:
         ----------
         path : str, bytes or os.PathLike
             .csv/.txt/.dat, .rsp/.drv/.tim/.rpc (RPC III), .mf4/.mdf, .tdms
-            (:func:`correction.io.measured.write_channels`).
+            (:func:`rigsim.correction.io.measured.write_channels`).
         overwrite : bool
             Replace an existing file; a file the result was made from is never replaced.
 
@@ -237,9 +237,9 @@ class CorrectionResult:
         """
         from types import SimpleNamespace
 
-        from correction.io.measured import MeasuredDataError, write_channels
-        from scenarios.records.arguments import file_path, flag
-        from scenarios.records.naming import KEYWORDS
+        from rigsim.correction.io.measured import MeasuredDataError, write_channels
+        from rigsim.scenarios.records.arguments import file_path, flag
+        from rigsim.scenarios.records.naming import KEYWORDS
 
         path, overwrite = file_path(path, "path"), flag(KEYWORDS, "overwrite", overwrite)
 
@@ -252,6 +252,6 @@ class CorrectionResult:
             return write_channels(path, out, metadata=fit_metadata(path, self.metadata), overwrite=overwrite,
                                   inputs=self.inputs)
         except MeasuredDataError as exc:
-            from scenarios.core.config import ScenarioError
+            from rigsim.scenarios.core.config import ScenarioError
 
             raise ScenarioError(str(exc)) from None

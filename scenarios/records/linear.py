@@ -1,10 +1,10 @@
 """The linear correction of a planned record, ``T_a^-1 T_F``, as a :class:`CorrectionResult`.
 
-:func:`run_linear` corrects a :class:`~scenarios.records.plan.CorrectionPlan`'s channels each with
+:func:`run_linear` corrects a :class:`~rigsim.scenarios.records.plan.CorrectionPlan`'s channels each with
 its T_a: one for all, one per corner, or identified from the record's own drive and displacement
-channels (:func:`correction.identification.actuator_fit.fit_actuator`);
+channels (:func:`rigsim.correction.identification.actuator_fit.fit_actuator`);
 :func:`linear_result` is that correction with any T_a, also the model correction's fallback.
-The one correction is :func:`scenarios.records.output.linear_correction`. Imports nothing heavy at
+The one correction is :func:`rigsim.scenarios.records.output.linear_correction`. Imports nothing heavy at
 module level.
 """
 
@@ -12,14 +12,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from scenarios.records.corrected import CorrectionResult, channel_loads
-from scenarios.records.output import GIVEN, linear_correction, lowpass_filter
+from rigsim.scenarios.records.corrected import CorrectionResult, channel_loads
+from rigsim.scenarios.records.output import GIVEN, linear_correction, lowpass_filter
 
 __all__ = ["run_linear", "linear_result", "ta_text"]
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
@@ -28,7 +28,7 @@ def _identified(plan):
     """(T_a fitted on the plan's drive and displacement channels, its one-line source)."""
     import numpy as np
 
-    from correction.identification import actuator_fit
+    from rigsim.correction.identification import actuator_fit
 
     rec, (d, x), n = plan.record, plan.id_cols, plan.settings.naming
     drive, disp = rec.data[d], rec.data[x]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.config import ScenarioError
 
 __all__ = ["NOISE_N", "Method", "PAPER", "BEST", "METHODS", "method_named"]
 
@@ -30,9 +30,9 @@ class Method:
         Where T_a comes from: eq. 4 from the actuator parameters, or identified per wheel from
         the rig run's drive and pan displacement.
     lowpass : {"paper", "regularized"}
-        The low-pass T_F (:mod:`correction.output.lowpass`).
+        The low-pass T_F (:mod:`rigsim.correction.output.lowpass`).
     mode : {"causal", "zerophase"}
-        How the filter is applied (:func:`correction.output.apply.correct`).
+        How the filter is applied (:func:`rigsim.correction.output.apply.correct`).
     description : str
     """
 

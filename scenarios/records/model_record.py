@@ -5,16 +5,16 @@ The truck model (the truck the scenario's ``[vehicle]`` describes, the catalogue
 corner the drive x_ref and the LVDT x_a (``pairs``; lengths in m) and the wheel force F_rig (the
 force channel whose name holds the corner as a token, or ``corner_map``'s; in N); then
 F_corrected = F_model(x_ref) + L(W(F_rig - F_model(x_a))) per wheel, W the residual's white noise
-taken out (:mod:`correction.output.denoise`), L the linear correction
+taken out (:mod:`rigsim.correction.output.denoise`), L the linear correction
 ``T_a^-1 T_F`` with the given T_a, else T_a identified per corner from the ``pairs`` channels
-(:func:`scenarios.records.model.differential.correct_with_model`). The scenario's rig (actuator
+(:func:`rigsim.scenarios.records.model.differential.correct_with_model`). The scenario's rig (actuator
 stroke) is used, and its ``[vehicle]`` tire and leaf-friction values, where given, are the
 calibration's first guesses (:func:`first_guess`); the payload and its position always start
 from the record's static loads.
 
 Where the model cannot be trusted on this record (its calibration did not converge or could not
 run, or it does not reproduce F_rig on any wheel) the linear correction L is used instead
-(:func:`scenarios.records.linear.linear_result`); where it does not reproduce F_rig on some wheels,
+(:func:`rigsim.scenarios.records.linear.linear_result`); where it does not reproduce F_rig on some wheels,
 those are corrected by L alone; the reason goes into the result and the file's metadata (:func:`model_metadata`: the method
 and why, the calibration's fitted values with units and 1-sigma, the fit NRMSE per wheel).
 Imports nothing heavy at module level.
@@ -22,11 +22,11 @@ Imports nothing heavy at module level.
 
 from __future__ import annotations
 
-from scenarios.records.channels import LENGTH_UNITS, plan_channels, resolver, unit_text
-from scenarios.records.corrected import CorrectionResult, channel_loads
-from scenarios.records.linear import linear_result, ta_text
-from scenarios.records.output import linear_correction, linear_metadata, lowpass_filter, rigsim_version
-from scenarios.records.timing import timing_metadata
+from rigsim.scenarios.records.channels import LENGTH_UNITS, plan_channels, resolver, unit_text
+from rigsim.scenarios.records.corrected import CorrectionResult, channel_loads
+from rigsim.scenarios.records.linear import linear_result, ta_text
+from rigsim.scenarios.records.output import linear_correction, linear_metadata, lowpass_filter, rigsim_version
+from rigsim.scenarios.records.timing import timing_metadata
 
 __all__ = ["FROM_STATIC_LOADS", "MODEL_TEXT", "first_guess", "description_note", "cal_key", "calibration_meta", "model_metadata",
            "plan_model", "run_model"]
@@ -38,14 +38,14 @@ MODEL_TEXT = "the truck model calibrated on the record (F_model(drive) + L(W(F_r
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
 
 def _windows(settings) -> tuple[int, int]:
     """(calibration windows, most fit evaluations) of the settings, the calibration's defaults where not given."""
-    from scenarios.records.model.calibrate import MAX_NFEV, WINDOWS
+    from rigsim.scenarios.records.model.calibrate import MAX_NFEV, WINDOWS
 
     return (WINDOWS if settings.calibration_windows is None else int(settings.calibration_windows),
             MAX_NFEV if settings.max_evaluations is None else int(settings.max_evaluations))
@@ -55,7 +55,7 @@ def _check_pairs(record, pairs, naming) -> None:
     """Each pair: two channels, each in the record, not the time, a length, varying."""
     import numpy as np
 
-    from scenarios.records.recorded import check_pair_channels
+    from rigsim.scenarios.records.recorded import check_pair_channels
 
     names, opt = list(record.names), naming("pairs")
     for corner, cols in pairs.items():
@@ -77,9 +77,9 @@ def plan_model(settings, record, as_read=None):
     before any work, one ScenarioError sentence otherwise."""
     import numpy as np
 
-    from mjcf.names import CORNERS
-    from scenarios.core.config import ScenarioError
-    from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, fit_windows
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, fit_windows
 
     n, name = settings.naming, resolver(record, as_read)
     pairs = {corner: (name(d), name(x)) for corner, (d, x) in settings.pairs.items()}
@@ -107,9 +107,9 @@ def plan_model(settings, record, as_read=None):
 
 def first_guess(scenario) -> tuple[dict, list[str]]:
     """(fitted fields' first guesses from the scenario's [vehicle], its other given fields: not used)."""
-    from mjcf.tires import REAR_FIELDS
-    from scenarios.records.model.family import FITTED
-    from scenarios.records.model.first_guess import SPEC_FIELDS
+    from rigsim.mjcf.tires import REAR_FIELDS
+    from rigsim.scenarios.records.model.family import FITTED
+    from rigsim.scenarios.records.model.first_guess import SPEC_FIELDS
 
     given = {k: getattr(scenario.vehicle, k) for k in type(scenario.vehicle).field_names()
              if getattr(scenario.vehicle, k) is not None and k not in SPEC_FIELDS}  # the description: the model's own
@@ -129,8 +129,8 @@ def cal_key(name: str) -> str:
 
 def calibration_meta(cal) -> dict[str, str]:
     """The calibration in metadata: one key per fitted value (unit, 1-sigma, first guess), fit NRMSE per wheel."""
-    from mjcf.names import CORNERS
-    from scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
 
     meta = {cal_key(n): f"{v:.6g} {u} +- {s:.2g} (robust {sr:.2g}; first guess {g:.6g})"
             for n, u, g, v, s, sr in zip(cal.names, cal.units, cal.initial, cal.fitted, cal.sigma, cal.sigma_robust)}
@@ -156,8 +156,8 @@ def residual_noise_text(noise_N) -> str:
 def model_metadata(settings, record, pairs, force_cols, model_result, fallback_source: str | None) -> dict[str, str]:
     """How the output was made; ``model_result`` the ModelCorrection (None: every key the file may
     carry, with the longest sentences, to check an output before the work)."""
-    from mjcf.names import CORNERS
-    from scenarios.records.model.differential import HYBRID_FORMULA, START_S
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.scenarios.records.model.differential import HYBRID_FORMULA, START_S
 
     method = "probe" if model_result is None else model_result.method
     meta = {"made_by": "rigsim correct --model", "rigsim_version": rigsim_version(), "input": str(record.path),
@@ -186,7 +186,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
                                        transient=settings.transient, normalize_dc=settings.normalize_dc)})
     cal = None if model_result is None else model_result.calibration
     if model_result is None:
-        from scenarios.records.model.family import FITTED, UNITS
+        from rigsim.scenarios.records.model.family import FITTED, UNITS
 
         meta.update({cal_key(n): f"0 {UNITS[n]}" for n in FITTED})
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})
@@ -211,8 +211,8 @@ def description_note(cal, scenario_file) -> str:
         return ""
     import numpy as np
 
-    from mjcf.names import CORNERS
-    from scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
 
     excess = np.asarray(cal.excess_nrmse, dtype=float)
     worst = int(np.argmax(excess))
@@ -226,10 +226,10 @@ def description_note(cal, scenario_file) -> str:
 def run_model(plan, progress=None) -> CorrectionResult:
     """Calibrate the truck model on the planned record and correct it, or correct it linearly and say why.
 
-    ``plan``: a :class:`~scenarios.records.plan.CorrectionPlan` of the model correction;
+    ``plan``: a :class:`~rigsim.scenarios.records.plan.CorrectionPlan` of the model correction;
     ``progress``: called with each progress line and note (None: silent)."""
-    from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S
-    from scenarios.records.model.differential import correct_with_model
+    from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S
+    from rigsim.scenarios.records.model.differential import correct_with_model
 
     s, record, pairs = plan.settings, plan.record, plan.pairs
     say = progress or (lambda line: None)
@@ -245,7 +245,7 @@ def run_model(plan, progress=None) -> CorrectionResult:
     if s.ta is not None:
         tas, source = s.ta, ta_text(s.ta_source)
     else:
-        from scenarios.records.recorded import identify_record
+        from rigsim.scenarios.records.recorded import identify_record
 
         say("identifying T_a per corner from the drive and LVDT channels for the linear correction L")
         fits = identify_record(record, pairs=pairs, naming=s.naming).fits
@@ -262,7 +262,7 @@ def run_model(plan, progress=None) -> CorrectionResult:
                              workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
                              linear=linear, drift_hz=s.drift_hz)
     cal = res.calibration
-    from scenarios.records.model.skew import skew_note
+    from rigsim.scenarios.records.model.skew import skew_note
 
     for hint in (description_note(cal, s.scenario_file), skew_note(cal)):
         if hint:

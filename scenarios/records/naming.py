@@ -1,6 +1,6 @@
 """How a message of the records API names a parameter: by its keyword, or by a command's flag.
 
-Every refusal of :mod:`scenarios.records.api` is one sentence naming the parameter at fault and
+Every refusal of :mod:`rigsim.scenarios.records.api` is one sentence naming the parameter at fault and
 the fix. Called from Python, the sentence names the keyword (``corner_map``) and writes a fix as
 a call would (``corner_map='fl=COLUMN'``); called by a command, it names the command's flag
 (``--map``) and writes the fix as a command line would (``--map fl=COLUMN``): the command passes

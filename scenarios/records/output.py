@@ -1,7 +1,7 @@
 """The output side of a record's correction: checks before any work, the linear correction, the metadata.
 
 Shared by the linear correction and the model correction (which falls back to the linear one) of
-:mod:`scenarios.records.api`: an output file refused before any work (:func:`check_out_file`,
+:mod:`rigsim.scenarios.records.api`: an output file refused before any work (:func:`check_out_file`,
 :func:`probe_output`) and claimed for the command's run (:func:`claimed_out_file`), the one linear
 correction with its options (:func:`linear_correction`, :func:`lowpass_filter`), and the metadata
 that says how a corrected file was made (:func:`linear_metadata`), fitted to what the output's
@@ -13,7 +13,7 @@ from __future__ import annotations
 import pathlib
 import textwrap
 
-from scenarios.records.naming import KEYWORDS, Naming
+from rigsim.scenarios.records.naming import KEYWORDS, Naming
 
 __all__ = ["SENTENCE_KEYS", "GIVEN", "check_out_file", "claimed_out_file", "header_value", "fit_metadata",
            "rigsim_version", "lowpass_filter", "linear_metadata", "output_units", "probe_output", "linear_correction"]
@@ -26,7 +26,7 @@ GIVEN = "given in the call"
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
@@ -34,9 +34,9 @@ def _error(message: str):
 def check_out_file(out, inputs, force: bool) -> None:
     """Refuse an empty output path, one that names an input file, an existing file without
     ``--force``, a folder, an unwritable folder or an extension no writer knows (before any work)."""
-    from correction.io.measured import WRITE_FORMATS, MeasuredDataError, format_of
-    from correction.io.measured_core import check_output
-    from scenarios.core.outputs import check_output_file
+    from rigsim.correction.io.measured import WRITE_FORMATS, MeasuredDataError, format_of
+    from rigsim.correction.io.measured_core import check_output
+    from rigsim.scenarios.core.outputs import check_output_file
 
     check_output_file(out, "-o", force=True)  # empty, a folder, no permission; an existing file: below
     try:
@@ -48,9 +48,9 @@ def check_out_file(out, inputs, force: bool) -> None:
 
 def claimed_out_file(out, inputs, force: bool):
     """A context manager: :func:`check_out_file` of ``-o`` ``out``, then ``out`` claimed for the
-    block (:func:`scenarios.core.outputs.claimed_output_file`): a second command writing it is
+    block (:func:`rigsim.scenarios.core.outputs.claimed_output_file`): a second command writing it is
     refused in one sentence, and a file that appears there meanwhile is not replaced without ``force``."""
-    from scenarios.core.outputs import claimed_output_file
+    from rigsim.scenarios.core.outputs import claimed_output_file
 
     return claimed_output_file(out, "-o", force=force, check=lambda: check_out_file(out, inputs, force))
 
@@ -65,7 +65,7 @@ def header_value(text: str) -> str:
 def fit_metadata(out, meta) -> dict[str, str]:
     """``meta`` as ``out``'s format can hold it: in RPC III each :data:`SENTENCE_KEYS` value split
     over numbered keys at word boundaries, and :func:`header_value` of every value."""
-    from correction.io.measured import format_of
+    from rigsim.correction.io.measured import format_of
 
     if format_of(out) != "rpc3":
         return {k: str(v) for k, v in meta.items()}
@@ -88,9 +88,9 @@ def rigsim_version() -> str:
 
 def lowpass_filter(lowpass: str, lowpass_hz: float | None = None):
     """The low-pass T_F: ``"paper"`` (eq. 5) or ``"regularized"``, the Butterworth of order
-    :data:`~correction.output.lowpass.BAND_ORDER` at ``lowpass_hz`` (Hz; default
-    :data:`~correction.output.lowpass.BAND_HZ`). Returns a :class:`~correction.output.lowpass.LowPass`."""
-    from correction.output.lowpass import as_lowpass, regularized_lowpass
+    :data:`~rigsim.correction.output.lowpass.BAND_ORDER` at ``lowpass_hz`` (Hz; default
+    :data:`~rigsim.correction.output.lowpass.BAND_HZ`). Returns a :class:`~rigsim.correction.output.lowpass.LowPass`."""
+    from rigsim.correction.output.lowpass import as_lowpass, regularized_lowpass
 
     if lowpass == "regularized" and lowpass_hz is not None:
         return regularized_lowpass(corner_hz=lowpass_hz)
@@ -101,7 +101,7 @@ def linear_metadata(*, lowpass: str, lowpass_hz: float | None, mode: str, transi
                     normalize_dc: bool) -> dict[str, str]:
     """How the linear correction was made: its formula, low-pass (``lowpass`` with its corner
     ``lowpass_hz``, Hz), mode, tolerance, transients, static-gain scaling."""
-    from correction.output.pipeline import SETTLING_TOLERANCE
+    from rigsim.correction.output.pipeline import SETTLING_TOLERANCE
 
     return {"correction": "F_corrected = T_a^-1 T_F F_measured", "force_unit": "N",
             "lowpass": f"{lowpass}: {lowpass_filter(lowpass, lowpass_hz).description}", "mode": mode,
@@ -124,7 +124,7 @@ def probe_output(out, units, meta, option: str = "-o") -> None:
     import tempfile
     from types import SimpleNamespace
 
-    from correction.io.measured import MeasuredDataError, write_channels
+    from rigsim.correction.io.measured import MeasuredDataError, write_channels
 
     probe = SimpleNamespace(time_s=[0.0, 1.0], data={n: [0.0, 1.0] for n in units}, units=units)
     with tempfile.TemporaryDirectory() as tmp:
@@ -136,15 +136,15 @@ def probe_output(out, units, meta, option: str = "-o") -> None:
 
 def linear_correction(forces, tas, fs: float, cols, corners, *, lowpass, mode: str, normalize_dc: bool,
                       transient: str, lowpass_hz: float | None = None, naming: Naming = KEYWORDS):
-    """The linear correction :func:`correction.output.pipeline.correct_forces` of ``forces`` (N, (n, k))
+    """The linear correction :func:`rigsim.correction.output.pipeline.correct_forces` of ``forces`` (N, (n, k))
     with ``tas`` (one T_a or one per column), the low-pass ``lowpass`` (a
-    :class:`~correction.output.lowpass.LowPass`, whose corner the caller set as ``lowpass_hz``, Hz),
+    :class:`~rigsim.correction.output.lowpass.LowPass`, whose corner the caller set as ``lowpass_hz``, Hz),
     ``mode`` and ``normalize_dc``; a refused T_a, or (``transient="drop"``) a record no longer
     than the filters' transients, as one sentence naming the corner and channel. Returns the
-    :class:`~correction.output.pipeline.CorrectedForces`."""
+    :class:`~rigsim.correction.output.pipeline.CorrectedForces`."""
     import numpy as np
 
-    from correction.output.pipeline import SETTLING_TOLERANCE, CorrectionError, correct_forces
+    from rigsim.correction.output.pipeline import SETTLING_TOLERANCE, CorrectionError, correct_forces
 
     try:
         res = correct_forces(forces, tas, fs, lowpass=lowpass, mode=mode, normalize_dc=normalize_dc,

@@ -1,14 +1,14 @@
 """A record's correction planned and checked before any work, then run: :class:`CorrectionPlan`.
 
-:func:`make_plan` matches the settings (:class:`~scenarios.records.settings.CorrectionSettings`)
+:func:`make_plan` matches the settings (:class:`~rigsim.scenarios.records.settings.CorrectionSettings`)
 to a record: which force channels are corrected and at which corner
-(:func:`scenarios.records.channels.plan_channels`; the model's in
-:func:`scenarios.records.model_record.plan_model`), the low-pass's and the channel filters'
+(:func:`rigsim.scenarios.records.channels.plan_channels`; the model's in
+:func:`rigsim.scenarios.records.model_record.plan_model`), the low-pass's and the channel filters'
 corners held against the record's Nyquist frequency, and the metadata the corrected file will
 carry. A plan can check an output file before the work (:meth:`CorrectionPlan.check_output`: whatever the writer would
 refuse) and runs the correction (:meth:`CorrectionPlan.run`): the linear one by
-:func:`scenarios.records.linear.run_linear`, the model one by
-:func:`scenarios.records.model_record.run_model`. Imports nothing heavy at module level.
+:func:`rigsim.scenarios.records.linear.run_linear`, the model one by
+:func:`rigsim.scenarios.records.model_record.run_model`. Imports nothing heavy at module level.
 """
 
 from __future__ import annotations
@@ -18,17 +18,17 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-from scenarios.records.channels import plan_channels, resolver
-from scenarios.records.corrected import CorrectionResult
-from scenarios.records.linear import run_linear
-from scenarios.records.output import fit_metadata, linear_metadata, output_units, probe_output, rigsim_version
-from scenarios.records.timing import aligned_record, check_rates, lvdt_columns, timing_metadata
+from rigsim.scenarios.records.channels import plan_channels, resolver
+from rigsim.scenarios.records.corrected import CorrectionResult
+from rigsim.scenarios.records.linear import run_linear
+from rigsim.scenarios.records.output import fit_metadata, linear_metadata, output_units, probe_output, rigsim_version
+from rigsim.scenarios.records.timing import aligned_record, check_rates, lvdt_columns, timing_metadata
 
 __all__ = ["CorrectionPlan", "make_plan"]
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
@@ -39,8 +39,8 @@ class CorrectionPlan:
 
     Attributes
     ----------
-    settings : scenarios.records.settings.CorrectionSettings
-    record : correction.io.measured.MeasuredChannels
+    settings : rigsim.scenarios.records.settings.CorrectionSettings
+    record : rigsim.correction.io.measured.MeasuredChannels
     channels : tuple of str
         The force channels corrected, as named in the record (the model's in corner order).
     corners : tuple of str or None
@@ -74,7 +74,7 @@ class CorrectionPlan:
         """Refuse, before the work, an output ``path`` whose writer would refuse these channels or this
         metadata (a name, a value, an extension, a missing extra): a scratch file of the same format is
         written with two samples."""
-        from correction.io.measured import MeasuredDataError
+        from rigsim.correction.io.measured import MeasuredDataError
 
         try:
             meta = fit_metadata(path, self.metadata)
@@ -86,13 +86,13 @@ class CorrectionPlan:
     def run(self, progress=None) -> CorrectionResult:
         """Correct the record. ``progress``: called with each progress line or note of a long run
         (the model's calibration), None: silent. The force and LVDT channels' timing, where the
-        settings give it, is undone first (:func:`scenarios.records.timing.aligned_record`)."""
+        settings give it, is undone first (:func:`rigsim.scenarios.records.timing.aligned_record`)."""
         s = self.settings
         record = aligned_record(self.record, self.record.fs_hz,
                                 [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)])
         plan = self if record is self.record else dataclasses.replace(self, record=record)
         if s.method == "model":
-            from scenarios.records.model_record import run_model
+            from rigsim.scenarios.records.model_record import run_model
 
             return run_model(plan, progress)
         return run_linear(plan)
@@ -109,7 +109,7 @@ def _check_band(settings, record) -> None:
 def make_plan(settings, record, as_read: Mapping | None = None) -> CorrectionPlan:
     """Plan the correction of ``record`` with ``settings``; ``as_read``: channel name as given -> as read."""
     if settings.method == "model":
-        from scenarios.records.model_record import plan_model
+        from rigsim.scenarios.records.model_record import plan_model
 
         channels, corners, pairs, meta = plan_model(settings, record, as_read)
         _check_band(settings, record)

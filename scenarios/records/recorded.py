@@ -1,9 +1,9 @@
 """T_a per corner from a recorded file of a real rig: the drive and the LVDT channel of each post.
 
-No simulator: the file is read by :func:`scenarios.records.channels.read_record` (any CSV dialect,
+No simulator: the file is read by :func:`rigsim.scenarios.records.channels.read_record` (any CSV dialect,
 RPC III, MDF4, TDMS; only the channels the pairs name: :func:`identify_recorded`), each channel in SI
 (an LVDT in mm is fitted in m), and each pair of the record (:func:`identify_record`) is fitted
-by :func:`correction.identification.actuator_fit.fit_actuator` (single-input H1, the project's
+by :func:`rigsim.correction.identification.actuator_fit.fit_actuator` (single-input H1, the project's
 one fitting policy). For a clean identification the posts should
 be driven by independent random drives; a test drive (front and rear the same profile delayed)
 lets each estimate absorb what the other posts do.
@@ -11,7 +11,7 @@ lets each estimate absorb what the other posts do.
 A pair wired wrongly is refused before anything is written, in one sentence naming the corner,
 the likely cause and the fix: the same channel twice at once (:func:`parse_pairs`,
 :func:`pairs_of`, and by the channels the names resolve to), then per corner what its data show
-(:mod:`correction.identification.plausibility`: swapped, inverted, another unit, another post's
+(:mod:`rigsim.correction.identification.plausibility`: swapped, inverted, another unit, another post's
 LVDT); an LVDT that follows another corner's drive of ``pairs`` better than its own is named.
 """
 
@@ -23,12 +23,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.identification.actuator_fit import COHERENCE_BAND_HZ, ActuatorFitError, coherence_median, fit_actuator
-from correction.identification.actuator_fit_rules import TRUSTED_COHERENCE
-from correction.identification.plausibility import WiringError
-from scenarios.core.config import ScenarioError
-from scenarios.records.channels import read_record, resolver
-from scenarios.records.naming import KEYWORDS, Naming
+from rigsim.correction.identification.actuator_fit import COHERENCE_BAND_HZ, ActuatorFitError, coherence_median, fit_actuator
+from rigsim.correction.identification.actuator_fit_rules import TRUSTED_COHERENCE
+from rigsim.correction.identification.plausibility import WiringError
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.records.channels import read_record, resolver
+from rigsim.scenarios.records.naming import KEYWORDS, Naming
 
 __all__ = ["RecordedIdentification", "check_pair_channels", "parse_pairs", "pairs_of", "identify_record",
            "identify_recorded"]
@@ -44,23 +44,23 @@ class RecordedIdentification:
         The file.
     pairs : Mapping[str, tuple[str, str]]
         Per corner the (drive, LVDT) column names.
-    fits : Mapping[str, correction.identification.actuator_fit.ActuatorFit]
+    fits : Mapping[str, rigsim.correction.identification.actuator_fit.ActuatorFit]
     fs_hz : float, Hz
     record_s : float, s
-    lvdt_filter : correction.io.acquisition.ChannelFilter or None
+    lvdt_filter : rigsim.correction.io.acquisition.ChannelFilter or None
         The LVDT channels' anti-alias filter and delay, undone before the fit (None: as recorded).
 
     Examples
     --------
-    What :func:`~scenarios.records.identify_record` returns, written as the per-corner actuator
-    file that ``actuators=`` of :func:`~scenarios.records.correct_record` reads:
+    What :func:`~rigsim.scenarios.records.identify_record` returns, written as the per-corner actuator
+    file that ``actuators=`` of :func:`~rigsim.scenarios.records.correct_record` reads:
 
     >>> import pathlib, tempfile
     >>> import numpy as np
     >>> from scipy import signal
-    >>> from correction.io.actuator_file import read_actuators_file, write_actuators_file
-    >>> from correction.io.measured import MeasuredChannels
-    >>> from scenarios.records import identify_record
+    >>> from rigsim.correction.io.actuator_file import read_actuators_file, write_actuators_file
+    >>> from rigsim.correction.io.measured import MeasuredChannels
+    >>> from rigsim import identify_record
     >>> t = np.arange(30_000) / 500.0
     >>> drive = 2e-3 * np.random.default_rng(1).standard_normal(t.size)
     >>> w = 2 * np.pi * 15.0
@@ -92,7 +92,7 @@ class RecordedIdentification:
         meta = {"source": f"rigsim identify --from-file {self.source}", "fs_hz": self.fs_hz,
                 "record_s": self.record_s, "pairs": {c: f"{d}:{x}" for c, (d, x) in self.pairs.items()}}
         if self.lvdt_filter is not None:
-            from scenarios.records.timing import describe
+            from rigsim.scenarios.records.timing import describe
 
             meta["lvdt_timing"] = f"{describe(self.lvdt_filter)}: phase and delay undone before the fit"
         return meta
@@ -149,8 +149,8 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
 
     Parameters
     ----------
-    record : correction.io.measured.MeasuredChannels
-        The record (:func:`scenarios.records.api.read_record`); drive and LVDT channels are
+    record : rigsim.correction.io.measured.MeasuredChannels
+        The record (:func:`rigsim.scenarios.records.api.read_record`); drive and LVDT channels are
         lengths in m (a file's mm are read as m) or carry no unit (taken as m).
     pairs : Mapping[str, tuple[str, str]] or str
         Per corner the drive and LVDT channel names, ``{"fl": ("Soll_FL", "Weg_FL"), ...}`` or
@@ -159,9 +159,9 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
         How messages name ``pairs`` (a command passes its flag).
     as_read : Mapping[str, str], optional
         Channel name as given -> as the reader returned it (it may match a header as written).
-    lvdt_filter : correction.io.acquisition.ChannelFilter or str, optional
+    lvdt_filter : rigsim.correction.io.acquisition.ChannelFilter or str, optional
         The LVDT channels' anti-alias filter and delay as the lab's acquisition applied them
-        (``"150:4"``: :func:`correction.io.acquisition.parse_channel_filter`): taken out before
+        (``"150:4"``: :func:`rigsim.correction.io.acquisition.parse_channel_filter`): taken out before
         the fit, so that T_a is the actuator's and not the actuator's times the LVDT filter's.
 
     Returns
@@ -174,8 +174,8 @@ def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
         A channel, unit or pair problem, a record that cannot support a fit, or a pair whose data
         are not an actuator's drive and LVDT (one sentence naming the corner, the cause and the fix).
     """
-    from correction.io.acquisition import undo_timing
-    from scenarios.records.timing import check_rate, check_timing
+    from rigsim.correction.io.acquisition import undo_timing
+    from rigsim.scenarios.records.timing import check_rate, check_timing
 
     opt, name = naming("pairs"), resolver(record, as_read)
     lvdt_filter = check_timing(lvdt_filter, "lvdt_filter", naming)
@@ -237,7 +237,7 @@ def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str 
     Parameters
     ----------
     path : str or os.PathLike
-        Any file :func:`correction.io.measured.read_channels` reads.
+        Any file :func:`rigsim.correction.io.measured.read_channels` reads.
     pairs : str or Mapping[str, tuple[str, str]]
         ``"fl=DRIVE:LVDT,fr=..."`` or ``{"fl": (DRIVE, LVDT), ...}``, channel names as the reader
         returns them (``Weg_FL`` for a header ``Weg_FL [mm]``).
@@ -247,7 +247,7 @@ def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str 
         A text file's decimal mark and thousands separator (``read_channels``); default: detected.
     naming : Naming
         How messages name ``pairs`` (a command passes its flag).
-    lvdt_filter : correction.io.acquisition.ChannelFilter or str, optional
+    lvdt_filter : rigsim.correction.io.acquisition.ChannelFilter or str, optional
         As :func:`identify_record`'s.
 
     Raises

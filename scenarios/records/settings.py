@@ -1,15 +1,17 @@
 """What to correct and how: the options of a record's correction checked, and their files read.
 
-:func:`correction_settings` checks every option of :func:`scenarios.records.api.correct_record`
-before any record is read (types, choices, the low-pass corner, which T_a source and its form,
-the model's options) and reads the files they name (the actuator files, the truck's scenario
+:func:`correction_settings` checks every field of a correction's options
+(:class:`~rigsim.scenarios.records.options.LinearOptions`,
+:class:`~rigsim.scenarios.records.options.ModelOptions`) and the keywords of
+:func:`rigsim.scenarios.records.api.correct_record` before any record is read (types, choices,
+the low-pass corner, which T_a source and its form, the model's options) and reads the files they name (the actuator files, the truck's scenario
 file; paths as ``str``, ``bytes`` or ``os.PathLike``); the :class:`CorrectionSettings` it returns
 knows which channels a record needs (:attr:`CorrectionSettings.channels`) and plans the
 correction of a record (:meth:`CorrectionSettings.plan`, :meth:`CorrectionSettings.read`:
-:mod:`scenarios.records.plan`), holding the settings against the record before any work: the
+:mod:`rigsim.scenarios.records.plan`), holding the settings against the record before any work: the
 low-pass's transients against its length and the calibration windows it holds
-(:mod:`scenarios.records.arguments`). Every refusal is one
-:class:`~scenarios.core.config.ScenarioError` sentence naming the parameter as ``naming`` says.
+(:mod:`rigsim.scenarios.records.arguments`). Every refusal is one
+:class:`~rigsim.scenarios.core.config.ScenarioError` sentence naming the parameter as ``naming`` says.
 Imports nothing heavy at module level.
 """
 
@@ -19,12 +21,12 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from scenarios.records.arguments import (check_corner, check_windows, checked_corner_map, checked_names, checked_pairs,
-                                         checked_record, count, file_path, finite, flag, shown, ta_form)
-from scenarios.records.channels import parse_columns, parse_corner_map, parse_identify, wanted_channels
-from scenarios.records.naming import KEYWORDS, Naming
-from scenarios.records.output import GIVEN
-from scenarios.records.timing import check_timing
+from rigsim.scenarios.records.arguments import (check_corner, check_windows, checked_corner_map, checked_names, checked_pairs,
+                                                checked_record, count, file_path, finite, flag, shown, ta_form)
+from rigsim.scenarios.records.channels import parse_columns, parse_corner_map, parse_identify, wanted_channels
+from rigsim.scenarios.records.naming import KEYWORDS, Naming
+from rigsim.scenarios.records.output import GIVEN
+from rigsim.scenarios.records.timing import check_timing
 
 __all__ = ["LOWPASSES", "MODES", "TRANSIENTS", "CABS", "CorrectionSettings", "correction_settings"]
 
@@ -35,7 +37,7 @@ CABS = ("auto", "held", "fitted")
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
@@ -64,15 +66,15 @@ class CorrectionSettings:
     per_corner : bool
         ``ta`` is a corner -> T_a mapping (linear correction).
     ta_source : str or None
-        The T_a's file as given, or :data:`~scenarios.records.output.GIVEN`.
+        The T_a's file as given, or :data:`~rigsim.scenarios.records.output.GIVEN`.
     pairs : Mapping[str, tuple[str, str]] or None
         The model's (drive, LVDT) channels per corner, in corner order.
-    scenario : scenarios.core.config.Scenario or None
+    scenario : rigsim.scenarios.core.config.Scenario or None
         The truck model's scenario (the model correction).
     scenario_file : str or None
     lowpass : {"paper", "regularized"}
     lowpass_hz : float or None, Hz
-        The regularized low-pass's corner; None: :data:`correction.output.lowpass.BAND_HZ`.
+        The regularized low-pass's corner; None: :data:`rigsim.correction.output.lowpass.BAND_HZ`.
     mode : {"causal", "zerophase"}
     transient : {"drop", "mark", "keep"}
     normalize_dc : bool
@@ -85,11 +87,11 @@ class CorrectionSettings:
         The files read besides the record (a corrected file never replaces one).
     naming : Naming
         How messages name the parameters.
-    force_filter, lvdt_filter : correction.io.acquisition.ChannelFilter or None
+    force_filter, lvdt_filter : rigsim.correction.io.acquisition.ChannelFilter or None
         The force and LVDT channels' anti-alias filters and delays, undone before correcting
-        (:mod:`scenarios.records.timing`); None: the channels as recorded.
+        (:mod:`rigsim.scenarios.records.timing`); None: the channels as recorded.
     drift_hz : float or None, Hz
-        The model correction's drift cut (:func:`scenarios.records.model.differential.hybrid_correction`);
+        The model correction's drift cut (:func:`rigsim.scenarios.records.model.differential.hybrid_correction`);
         None: no cut (asked for with 0), or the linear correction.
     """
 
@@ -127,11 +129,11 @@ class CorrectionSettings:
                                None if self.corner_map is None else list(self.corner_map), extra)
 
     def plan(self, record, as_read: Mapping | None = None):
-        """The correction of ``record`` (a :class:`~correction.io.measured.MeasuredChannels`) planned and
-        checked (:class:`scenarios.records.plan.CorrectionPlan`); ``as_read``: channel name as given ->
+        """The correction of ``record`` (a :class:`~rigsim.correction.io.measured.MeasuredChannels`) planned and
+        checked (:class:`rigsim.scenarios.records.plan.CorrectionPlan`); ``as_read``: channel name as given ->
         as the reader returned it (default: matched exactly, else by case). The calibration windows
         the record holds and the low-pass's transients against its length are checked too."""
-        from scenarios.records.plan import make_plan
+        from rigsim.scenarios.records.plan import make_plan
 
         record = checked_record(record)
         check_windows(self, record)
@@ -141,8 +143,8 @@ class CorrectionSettings:
 
     def read(self, path, *, time_col: str | None = None, decimal: str | None = None, thousands: str | None = None):
         """Read ``path`` with only the channels these settings need (:attr:`channels`;
-        :func:`scenarios.records.channels.read_record`'s options) and plan its correction."""
-        from scenarios.records.channels import read_record
+        :func:`rigsim.scenarios.records.channels.read_record`'s options) and plan its correction."""
+        from rigsim.scenarios.records.channels import read_record
 
         wanted = self.channels
         record = read_record(path, time_col=time_col, channels=wanted, decimal=decimal, thousands=thousands)
@@ -172,7 +174,7 @@ def _one_ta(value, naming: Naming):
     opt = naming("actuator")
     if not _is_path(value):
         return ta_form(value, opt), GIVEN
-    from correction.io.actuator_file import read_actuator_file
+    from rigsim.correction.io.actuator_file import read_actuator_file
 
     path = file_path(value, opt)
     try:
@@ -189,7 +191,7 @@ def _corner_tas(value, naming: Naming) -> tuple[dict, str]:
             raise _error(f"{opt} must be a per-corner actuator file or a mapping of corner -> T_a, got "
                          f"{shown(value)}")
         return {str(c): ta_form(ta, f"{opt} {c!r}") for c, ta in value.items()}, GIVEN
-    from correction.io.actuator_file import read_actuators_file
+    from rigsim.correction.io.actuator_file import read_actuators_file
 
     path = file_path(value, opt)
     try:
@@ -200,9 +202,9 @@ def _corner_tas(value, naming: Naming) -> tuple[dict, str]:
 
 def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers):
     """(pairs in corner order, workers); the model's options only."""
-    from mjcf.names import CORNERS
-    from scenarios.core.pool import worker_count
-    from scenarios.records.recorded import pairs_of
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.scenarios.core.pool import worker_count
+    from rigsim.scenarios.records.recorded import pairs_of
 
     n = naming
     if identify is not None:
@@ -242,7 +244,7 @@ DRIFT_CUT_MAX_HZ = 1.5
 
 def _drift_hz(naming: Naming, drift_cut_hz) -> float | None:
     """The model correction's drift-cut corner (Hz) or None (no cut) from the option (None: the default)."""
-    from correction.output.denoise import DRIFT_HZ
+    from rigsim.correction.output.denoise import DRIFT_HZ
 
     if drift_cut_hz is None:
         return DRIFT_HZ
@@ -255,23 +257,23 @@ def _drift_hz(naming: Naming, drift_cut_hz) -> float | None:
 
 
 def _scenario(naming: Naming, model) -> tuple:
-    """(the truck's scenario, its file or :data:`~scenarios.records.output.GIVEN`) from ``model``."""
-    from scenarios.core.config import Scenario, ScenarioError, load_scenario
+    """(the truck's scenario, its file or :data:`~rigsim.scenarios.records.output.GIVEN`) from ``model``."""
+    from rigsim.scenarios.core.config import Scenario, ScenarioError, load_scenario
 
     if isinstance(model, Scenario):
         return model, GIVEN
     if not _is_path(model):
-        raise _error(f"{naming('model')} must be a scenario file (TRUCK.toml) or a Scenario, got {shown(model)}")
-    path = file_path(model, naming("model"))
+        raise _error(f"{naming('truck')} must be a scenario file (TRUCK.toml) or a Scenario, got {shown(model)}")
+    path = file_path(model, naming("truck"))
     try:
         return load_scenario(path), path
     except ScenarioError as exc:
-        raise _error(f"{naming('model')}: {exc}") from None
+        raise _error(f"{naming('truck')}: {exc}") from None
 
 
 def _fallback_tas(naming: Naming, actuator, actuators):
     """(the model's linear fallback T_a: one, or one per corner in corner order, or None; its source)."""
-    from mjcf.names import CORNERS
+    from rigsim.mjcf.names import CORNERS
 
     if actuator is not None:
         return _one_ta(actuator, naming)
@@ -285,22 +287,40 @@ def _fallback_tas(naming: Naming, actuator, actuators):
     return [table[c] for c in CORNERS], source
 
 
-def correction_settings(*, actuator=None, actuators=None, identify=None, model=None, pairs=None, columns=None,
-                        corner_map=None, lowpass: str = "regularized", lowpass_hz: float | None = None,
-                        mode: str = "zerophase", transient: str = "drop", normalize_dc: bool = False,
-                        workers: int | None = None, max_evaluations: int | None = None,
-                        calibration_windows: int | None = None, cab: str | None = None,
-                        drift_cut_hz: float | None = None, force_filter=None, lvdt_filter=None,
-                        naming: Naming = KEYWORDS) -> CorrectionSettings:
-    """Check the options of a correction and read their files; the parameters are
-    :func:`scenarios.records.api.correct_record`'s (``naming``: how messages name them).
+def _options(options, naming: Naming):
+    """(the model's options or None, the linear correction's options) from ``options``."""
+    from rigsim.scenarios.records.options import LinearOptions, ModelOptions
+
+    if isinstance(options, LinearOptions):
+        return None, options
+    if isinstance(options, ModelOptions):
+        linear = LinearOptions() if options.linear is None else options.linear
+        if not isinstance(linear, LinearOptions):
+            raise _error(f"{naming('linear')} must be a rigsim.LinearOptions (L's T_a and low-pass) or None, got "
+                         f"{shown(linear)}")
+        return options, linear
+    raise _error(f"{naming('options')} must be rigsim.LinearOptions(actuators=...) (the linear correction) or "
+                 f"rigsim.ModelOptions(truck, pairs=...) (a truck model calibrated on the record), got {shown(options)}")
+
+
+def correction_settings(options, *, columns=None, corner_map=None, transient: str = "drop", force_filter=None,
+                        lvdt_filter=None, naming: Naming = KEYWORDS) -> CorrectionSettings:
+    """Check the options of a correction and read their files: ``options`` a
+    :class:`~rigsim.scenarios.records.options.LinearOptions` or
+    :class:`~rigsim.scenarios.records.options.ModelOptions`, the rest
+    :func:`rigsim.scenarios.records.api.correct_record`'s keywords (``naming``: how messages name
+    the fields, by keyword or by flag).
 
     Raises
     ------
     ScenarioError
-        One sentence naming the parameter (an option, a file, a T_a source) and the fix.
+        One sentence naming the field (an option, a file, a T_a source) and the fix.
     """
     n = naming
+    model, linear = _options(options, n)
+    actuator, actuators, identify = linear.actuator, linear.actuators, linear.identify
+    lowpass, lowpass_hz, mode, normalize_dc = linear.lowpass, linear.lowpass_hz, linear.mode, linear.normalize_dc
+    cab = None if model is None else model.cab
     identify = checked_names(n, "identify", identify, "'DRIVE,DISP' or the two channel names")
     columns = checked_names(n, "columns", columns, "'A,B' or a sequence of channel names")
     corner_map = checked_corner_map(n, corner_map)
@@ -318,12 +338,6 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
                   normalize_dc=normalize_dc, cab="auto" if cab is None else cab, naming=n,
                   force_filter=force_filter, lvdt_filter=lvdt_filter)
     if model is None:
-        extra = {"pairs": pairs, "workers": workers, "max_evaluations": max_evaluations,
-                 "calibration_windows": calibration_windows, "cab": cab, "drift_cut_hz": drift_cut_hz}
-        given = [k for k, v in extra.items() if v is not None]
-        if given:
-            raise _error(f"{n(given[0])} goes with {n.setting('model', 'TRUCK.toml')} (the model correction); drop "
-                         f"it, or give {n('model')}")
         id_cols = parse_identify(identify, n)
         asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
         sources = [k for k, v in (("actuator", actuator), ("actuators", actuators), ("identify", identify))
@@ -342,11 +356,11 @@ def correction_settings(*, actuator=None, actuators=None, identify=None, model=N
             per_corner=actuators is not None, ta_source=source, pairs=None, scenario=None, scenario_file=None,
             workers=None, max_evaluations=None, calibration_windows=None,
             inputs=(source,) if _is_path(actuator) or _is_path(actuators) else (), **common)
-    pairs, workers = _model_options(n, identify, actuator, actuators, pairs, workers)
-    max_evaluations = count(n, "max_evaluations", max_evaluations)
-    calibration_windows = count(n, "calibration_windows", calibration_windows)
-    drift_hz = _drift_hz(n, drift_cut_hz)
-    scenario, scenario_file = _scenario(n, model)
+    pairs, workers = _model_options(n, identify, actuator, actuators, model.pairs, model.workers)
+    max_evaluations = count(n, "max_evaluations", model.max_evaluations)
+    calibration_windows = count(n, "calibration_windows", model.calibration_windows)
+    drift_hz = _drift_hz(n, model.drift_cut_hz)
+    scenario, scenario_file = _scenario(n, model.truck)
     asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
     ta, source = _fallback_tas(n, actuator, actuators)
     return CorrectionSettings(

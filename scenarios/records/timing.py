@@ -1,35 +1,35 @@
 """The record's channel timing: the lab's anti-alias filters and converter skew, given, checked and undone.
 
 A lab that knows its conditioners says so (``force_filter`` / ``lvdt_filter``: a
-:class:`correction.io.acquisition.ChannelFilter` or its text ``"HZ[:ORDER[:KIND][:DOMAIN]]"``;
+:class:`rigsim.correction.io.acquisition.ChannelFilter` or its text ``"HZ[:ORDER[:KIND][:DOMAIN]]"``;
 ``rigsim correct --force-filter 200:4 --force-delay 0.0002 --lvdt-filter 150:4``), and the
 correction takes each filter's phase and delay out of the force and the LVDT channels before
 anything else (:func:`aligned_record`): the force then no longer leads or lags the pan's motion,
 which to a calibrated truck model would look like tire damping, and the corrected force is
 aligned with the road it describes. The drive is the controller's own command and is never
-filtered. Refusals name the option (:class:`~scenarios.records.naming.Naming`). Imports nothing heavy.
+filtered. Refusals name the option (:class:`~rigsim.scenarios.records.naming.Naming`). Imports nothing heavy.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from scenarios.records.naming import KEYWORDS, Naming
+from rigsim.scenarios.records.naming import KEYWORDS, Naming
 
 __all__ = ["check_timing", "channel_filter", "check_rate", "check_rates", "aligned_record", "lvdt_columns", "describe",
            "timing_metadata"]
 
 
 def _error(message: str):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
 
 
 def channel_filter(spec, delay_s=None, *, option: str, delay_option: str | None = None):
-    """A :class:`~correction.io.acquisition.ChannelFilter` from a command's options: the filter's
+    """A :class:`~rigsim.correction.io.acquisition.ChannelFilter` from a command's options: the filter's
     text ``spec`` (None: no filter) and a delay in s (None: 0); None when neither is given."""
-    from correction.io.acquisition import ChannelFilter, parse_channel_filter
+    from rigsim.correction.io.acquisition import ChannelFilter, parse_channel_filter
 
     if spec is None and delay_s is None:
         return None
@@ -46,7 +46,7 @@ def channel_filter(spec, delay_s=None, *, option: str, delay_option: str | None 
 
 def check_timing(value, key: str, naming: Naming = KEYWORDS):
     """``value`` (a ChannelFilter, its text, or None) as a ChannelFilter or None; one sentence naming ``key``."""
-    from correction.io.acquisition import ChannelFilter, parse_channel_filter
+    from rigsim.correction.io.acquisition import ChannelFilter, parse_channel_filter
 
     if value is None or isinstance(value, ChannelFilter):
         return value
@@ -101,7 +101,7 @@ def aligned_record(record, fs_hz: float, groups: Sequence[tuple[Sequence[str], o
 
     Parameters
     ----------
-    record : correction.io.measured.MeasuredChannels
+    record : rigsim.correction.io.measured.MeasuredChannels
     fs_hz : float, Hz
         Its rate.
     groups : sequence of (channel names, ChannelFilter or None)
@@ -118,7 +118,7 @@ def aligned_record(record, fs_hz: float, groups: Sequence[tuple[Sequence[str], o
 
     import numpy as np
 
-    from correction.io.acquisition import undo_timing
+    from rigsim.correction.io.acquisition import undo_timing
 
     data = dict(record.data)
     changed = False

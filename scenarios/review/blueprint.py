@@ -1,6 +1,6 @@
 """How a scenario is put into a rerun recording and laid out in the viewer.
 
-- :func:`log_case`: the entity tree of one scenario (described in :mod:`scenarios.review.recording`):
+- :func:`log_case`: the entity tree of one scenario (described in :mod:`rigsim.scenarios.review.recording`):
   the per-wheel series grouped by plot (:func:`case_series`, :data:`PLOTS`), the 3D scene
   (:func:`geom_shapes`, MuJoCo's wxyz quaternions turned into rerun's xyzw; the road under
   the tracks, :func:`road_lines`) and the text panels (:func:`dlc_markdown`,
@@ -11,7 +11,7 @@
   the truck seen from above (fl fr / rl rr); road, rig and corrected tire forces of a wheel
   are overlaid on one plot.
 
-Imported only by :func:`scenarios.review.recording.write_recording`, so rerun is loaded only when a
+Imported only by :func:`rigsim.scenarios.review.recording.write_recording`, so rerun is loaded only when a
 recording is written.
 """
 
@@ -23,8 +23,8 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from correction.metrics.dlc import force_statistics
-from mjcf.names import pan_body
+from rigsim.correction.metrics.dlc import force_statistics
+from rigsim.mjcf.names import pan_body
 
 __all__ = ["COLORS", "PLOTS", "case_series", "log_case", "road_lines", "xyzw", "series_lines", "geom_shapes",
            "review_blueprint", "dlc_markdown", "parameters_markdown"]
@@ -72,7 +72,7 @@ def series_lines(names, unit: str) -> rr.SeriesLines:
 
 
 def geom_shapes(geoms) -> dict[str, dict[str, object]]:
-    """Rerun shapes of :class:`scenarios.core.poses.Geoms`: ``{body: {kind: archetype}}``, each
+    """Rerun shapes of :class:`rigsim.scenarios.core.poses.Geoms`: ``{body: {kind: archetype}}``, each
     in its body's frame (one archetype per body and geom type)."""
     g = geoms
     rgba = np.array(g.rgba, dtype=float)
@@ -150,7 +150,7 @@ def log_case(rec, name: str, runs, *, track, corrected=None, dlc_table: str | No
         The scenario, also the recording's name.
     runs : mapping of str to RunResult
         Mode -> result, on one time axis.
-    track : scenarios.core.poses.PoseTrack
+    track : rigsim.scenarios.core.poses.PoseTrack
         The poses and geoms of the 3D scene.
     corrected : numpy.ndarray, N, optional
         (N, 4) corrected tire forces.
@@ -254,7 +254,7 @@ def review_blueprint(corners, plots=("tire_force", "displacement", "pressure", "
     Parameters
     ----------
     corners : sequence of str
-        Wheel names, in :data:`mjcf.names.CORNERS` order (two per axle, left first).
+        Wheel names, in :data:`rigsim.mjcf.names.CORNERS` order (two per axle, left first).
     plots : sequence of str
         The per-wheel plots ``/rig/<corner>/<plot>``, one tab each, the first one shown.
     """
@@ -278,7 +278,7 @@ def review_blueprint(corners, plots=("tire_force", "displacement", "pressure", "
 
 def dlc_markdown(name: str, stats: Mapping[str, Mapping[str, Mapping[str, float]]]) -> str:
     """The DLC table of one scenario: ``stats[source][corner]`` holds ``mean_force_N`` and
-    ``dlc`` (as :meth:`scenarios.core.results.RunResult.statistics`)."""
+    ``dlc`` (as :meth:`rigsim.scenarios.core.results.RunResult.statistics`)."""
     head = "| wheel | " + " | ".join(f"{m} mean (N) | {m} DLC" for m in stats) + " |"
     lines = [f"# DLC: {name}", "", head, "|---" * (1 + 2 * len(stats)) + "|"]
     for c in next(iter(stats.values())):

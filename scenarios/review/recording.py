@@ -2,7 +2,7 @@
 
 One file holds one recording per scenario (its road-mode and/or rig-mode runs, the corrected
 forces, the body poses), all under the application id :data:`APPLICATION_ID`, so the one
-blueprint of :mod:`scenarios.review.blueprint` lays out every case; the viewer lists the recordings
+blueprint of :mod:`rigsim.scenarios.review.blueprint` lays out every case; the viewer lists the recordings
 by scenario name. Each recording holds, on the time line ``time`` (s, 0 at the end of the
 lead-in, as ``RunResult.t_s``):
 
@@ -18,9 +18,9 @@ lead-in, as ``RunResult.t_s``):
 
 Pose sampling (:class:`PoseRecorder`) is numpy on MuJoCo's arrays and imports no rerun: rerun
 is imported inside :func:`write_recording` and :func:`warm_up` only (and by
-:mod:`scenarios.review.blueprint`, which only they import), so a run without a recording never
+:mod:`rigsim.scenarios.review.blueprint`, which only they import), so a run without a recording never
 loads rerun, and ``rigsim run --rrd`` loads it in its recording process only
-(:mod:`scenarios.review.recording_process`). Each recording is logged through its own
+(:mod:`rigsim.scenarios.review.recording_process`). Each recording is logged through its own
 ``rerun.RecordingStream`` (never the global one) with ``send_columns`` of the finished arrays.
 """
 
@@ -38,10 +38,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mjcf.names import CORNERS, pan_body
-from correction.io.atomic import atomic_path
-from scenarios.core.poses import DEFAULT_POSE_RATE_HZ, Geoms, PoseTrack, drawn_bodies, model_geoms
-from scenarios.core.results import RunResult
+from rigsim.mjcf.names import CORNERS, pan_body
+from rigsim.correction.io.atomic import atomic_path
+from rigsim.scenarios.core.poses import DEFAULT_POSE_RATE_HZ, Geoms, PoseTrack, drawn_bodies, model_geoms
+from rigsim.scenarios.core.results import RunResult
 
 __all__ = ["APPLICATION_ID", "rest_track", "write_recording", "open_viewer", "warm_up"]
 
@@ -52,15 +52,15 @@ APPLICATION_ID = "rigsim"
 def rest_track(result: RunResult, rate_hz: float = DEFAULT_POSE_RATE_HZ) -> PoseTrack:
     """A stand-in :class:`PoseTrack` when a run recorded no poses.
 
-    The nominal truck (:class:`mjcf.variant.TruckVariant` defaults) stands still at its static
+    The nominal truck (:class:`rigsim.mjcf.variant.TruckVariant` defaults) stands still at its static
     equilibrium; the pans move with the result's ``pan_m``, decimated to ``rate_hz``. The
     chassis and axles do not move: only a :class:`PoseRecorder` in the run can show that.
     """
     import mujoco
 
-    from mjcf.build import build_model
-    from mjcf.variant import TruckVariant
-    from mjcf.physics import static_equilibrium
+    from rigsim.mjcf.build import build_model
+    from rigsim.mjcf.variant import TruckVariant
+    from rigsim.mjcf.physics import static_equilibrium
 
     model = build_model(TruckVariant())
     data = mujoco.MjData(model)
@@ -170,7 +170,7 @@ def write_recording(
     Notes
     -----
     Each scenario is logged through rerun's file sink into a temporary file beside ``path``
-    (:func:`correction.io.atomic.atomic_path`). One scenario's file is the recording; several are
+    (:func:`rigsim.correction.io.atomic.atomic_path`). One scenario's file is the recording; several are
     merged by the ``rerun rrd merge`` of the pinned wheel's CLI, because an RRD stream ends with
     a footer that indexes its own chunks and streams cannot be concatenated byte-wise.
     """
@@ -199,7 +199,7 @@ def _save(cases: list[_Case], pose_rate_hz: float, files: Sequence[pathlib.Path]
     disk) raises ``OSError``."""
     import rerun as rr
 
-    from scenarios.review import blueprint as bp
+    from rigsim.scenarios.review import blueprint as bp
 
     plots = dict.fromkeys(["tire_force", "displacement"])
     for case in cases:
@@ -229,7 +229,7 @@ def warm_up() -> None:
     The first recording a process writes costs about 0.25 s more than the next ones (measured on
     a 30 s rig run: 0.42 s against 0.18 s): on first use rerun's converters have pyarrow import
     pandas (which the recording process refuses) and rerun starts its logging machinery. A process
-    that will write a recording later (:mod:`scenarios.review.recording_process`) calls this while
+    that will write a recording later (:mod:`rigsim.scenarios.review.recording_process`) calls this while
     it waits, so that the write itself costs only its data (0.20 s against 0.18 s). Writes a
     temporary file only.
     """

@@ -4,15 +4,15 @@
 child is a fresh interpreter (``python -c``, never a fork of a process that has MuJoCo or numba
 loaded, and not multiprocessing's ``spawn``, which would run the caller's main script again in
 the child and start a resource tracker process too); it imports rerun and does rerun's first-use
-work (:func:`scenarios.review.recording.warm_up`) on the second core while the parent imports
+work (:func:`rigsim.scenarios.review.recording.warm_up`) on the second core while the parent imports
 the simulation and steps. When the run returns, :meth:`RecordingProcess.submit` hands the results
 to the child through a socket pair, pickled and sent on a thread, so the parent goes on writing
 its own files at once (the record of a 30 s rig run with its poses pickles to 7 MB; 30 MB take
 0.10-0.15 s through a pipe, the GIL released while it waits, against 0.05 s of the parent's own
 time to copy them into ``multiprocessing.shared_memory``, which needs the resource tracker's
 bookkeeping in both processes as well). The child writes the .rrd with
-:func:`scenarios.review.recording.write_recording` (the code a single process runs) to a
-temporary file beside the target, named as :mod:`correction.io.atomic` names its temporary files
+:func:`rigsim.scenarios.review.recording.write_recording` (the code a single process runs) to a
+temporary file beside the target, named as :mod:`rigsim.correction.io.atomic` names its temporary files
 (``.{name}.{host}.{parent pid}.{random}.tmp``: a killed parent's is removed by the next write of
 the same file); :meth:`RecordingProcess.commit` waits for the child and renames that file into
 place. The parent never imports rerun.
@@ -43,17 +43,18 @@ import uuid
 from collections.abc import Sequence
 from multiprocessing.connection import Connection
 
-from correction.io.atomic import host_tag
+from rigsim.correction.io.atomic import host_tag
+from rigsim.errors import RigsimError
 
 __all__ = ["RecordingError", "RecordingProcess", "serve"]
 
 _STOP_WAIT_S = 5.0  # s; how long a stopped child may take to end before it is killed
 # The child's command: the parent's import path first (a script may have extended it), then serve().
 _BOOT = ("import json, sys; sys.path[:0] = [p for p in json.loads(sys.argv[2]) if p not in sys.path]; "
-         "from scenarios.review.recording_process import serve; serve(int(sys.argv[1]))")
+         "from rigsim.scenarios.review.recording_process import serve; serve(int(sys.argv[1]))")
 
 
-class RecordingError(RuntimeError):
+class RecordingError(RigsimError, RuntimeError):
     """The recording process failed for a reason that is not bad input nor an unwritable file
     (one sentence); ``rigsim run`` reports it and exits 1."""
 
@@ -86,7 +87,7 @@ def serve(fd: int) -> None:
     signal.signal(signal.SIGTERM, _stop)
     sys.meta_path.insert(0, _NoPandas)
     try:
-        from scenarios.review import recording
+        from rigsim.scenarios.review import recording
     except Exception as exc:  # noqa: BLE001 (reported with the job, so the parent sees it once)
         failure: BaseException | None = exc
     else:
@@ -171,14 +172,14 @@ class RecordingProcess:
         path : str or path-like
             The .rrd file; the child writes a temporary file beside it.
         results : sequence of RunResult
-            As :func:`scenarios.review.recording.write_recording` takes them (with their poses).
+            As :func:`rigsim.scenarios.review.recording.write_recording` takes them (with their poses).
         dlc_table : str, optional
             The DLC table as text, shown in the recording.
         """
         if self._conn is None or self._sender is not None:
             raise RuntimeError("submit() once, inside the with block")
         self._path = pathlib.Path(path)
-        # named as correction.io.atomic names temporary files: a killed parent's is removed by the next write
+        # named as rigsim.correction.io.atomic names temporary files: a killed parent's is removed by the next write
         self._tmp = self._path.parent / f".{self._path.name}.{host_tag()}.{os.getpid()}.{uuid.uuid4().hex}.tmp"
         job = (str(self._tmp), list(results), dlc_table)
 

@@ -17,9 +17,9 @@ import math
 import mujoco
 import numpy as np
 
-from hydraulics import ActuatorParams, equilibrium_activation
-from hydraulics.bridge import activation_slice, add_hydraulic_actuators
-from mjcf.names import CORNERS
+from rigsim.hydraulics import ActuatorParams, equilibrium_activation
+from rigsim.hydraulics.bridge import activation_slice, add_hydraulic_actuators
+from rigsim.mjcf.names import CORNERS
 
 __all__ = ["PARAMS", "STATE_SPEC", "INTEGRATIONS", "SERVO_KP", "SERVO_KV", "bare_controls", "quarter_truck_spec",
            "truck_spec", "build_models", "static_loads", "drive_signal", "initial_state"]
@@ -29,7 +29,7 @@ PARAMS = ActuatorParams()
 #: The state :func:`initial_state` gives (what ``mujoco.rollout`` starts from).
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 #: Integrations (integrator, step in s): RK4 at 1e-3 s (the road and rig tests',
-#: :mod:`scenarios.core.rig`), explicit Euler at 1e-4 s; :func:`build_models` sets one on both models.
+#: :mod:`rigsim.scenarios.core.rig`), explicit Euler at 1e-4 s; :func:`build_models` sets one on both models.
 INTEGRATIONS = {"rk4": (mujoco.mjtIntegrator.mjINT_RK4, 1e-3), "euler": (mujoco.mjtIntegrator.mjINT_EULER, 1e-4)}
 #: The bare model's pan servos under RK4, N/m and N s/m: 316 rad/s on a 500 kg pan, 70 % of critical
 #: damping, well inside RK4's region at 1e-3 s; they hold the tire load with a 0.6 mm error.
@@ -88,9 +88,9 @@ def quarter_truck_spec(corners=CORNERS, *, tire=1.0e6, unsprung=450.0, sprung=25
 def truck_spec() -> mujoco.MjSpec:
     """The project's truck on the rig (pan mass from the actuator parameters) with a keyframe
     at its static equilibrium on the pans at mid-stroke."""
-    from mjcf.build import build_spec
-    from mjcf.variant import TruckVariant
-    from mjcf.physics import static_equilibrium
+    from rigsim.mjcf.build import build_spec
+    from rigsim.mjcf.variant import TruckVariant
+    from rigsim.mjcf.physics import static_equilibrium
 
     variant = TruckVariant(pan_mass_kg=PARAMS.pan_mass_kg)
     model = build_spec(variant).compile()

@@ -21,12 +21,12 @@ import dataclasses
 
 import numpy as np
 
-from correction.output.filters import reference_filter
-from scenarios.core.config import Scenario
-from scenarios.core.drive import Drive
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.records.model.score import LOWPASS, MODE
+from rigsim.correction.output.filters import reference_filter
+from rigsim.scenarios.core.config import Scenario
+from rigsim.scenarios.core.drive import Drive
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.records.model.score import LOWPASS, MODE
 
 __all__ = ["KERNEL_WINDOW_S", "with_friction", "linear_pans_run", "kernel_tail", "ExactLinearCorrection"]
 
@@ -55,8 +55,8 @@ def linear_pans_run(sc: Scenario, diagonal: bool):
 
     Returns
     -------
-    scenarios.core.results.RunResult
-        As :func:`scenarios.core.run.run` in road mode, the pans' motion replaced.
+    rigsim.scenarios.core.results.RunResult
+        As :func:`rigsim.scenarios.core.run.run` in road mode, the pans' motion replaced.
     """
     plant = Rig(sc).linearize()
 
@@ -76,17 +76,17 @@ def kernel_tail(h: np.ndarray, tol: float) -> int:
 class ExactLinearCorrection:
     """Zero-phase correction of one wheel by the linearized plant's own path: ``|T_F| / T_a(f)``.
 
-    Duck-types what :func:`correction.output.apply.correct_zero_phase` needs of a
-    :class:`~correction.output.correction_filter.CorrectionFilter` (``fs``,
+    Duck-types what :func:`rigsim.correction.output.apply.correct_zero_phase` needs of a
+    :class:`~rigsim.correction.output.correction_filter.CorrectionFilter` (``fs``,
     ``zero_phase_response``, ``transient_samples``); its margins come from its own kernel (on a
     :data:`KERNEL_WINDOW_S` grid) at ``tolerance``. T_F is the project's band limit
-    (:data:`scenarios.records.model.score.LOWPASS`).
+    (:data:`rigsim.scenarios.records.model.score.LOWPASS`).
 
     Parameters
     ----------
-    plant : scenarios.core.plant.PlantLinearization
+    plant : rigsim.scenarios.core.plant.PlantLinearization
     wheel : int
-        The wheel (0-3, :data:`mjcf.names.CORNERS`' order) whose own path T_a = x_a / x_ref is inverted.
+        The wheel (0-3, :data:`rigsim.mjcf.names.CORNERS`' order) whose own path T_a = x_a / x_ref is inverted.
     fs : float, Hz
         Sample rate of the forces it corrects.
     tolerance : float, 1

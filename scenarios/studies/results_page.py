@@ -7,7 +7,7 @@ version, the machine). A command's terminal output goes the same way with
 page of ``docs/`` includes the file (myst's ``{include}``), so the numbers on the page are the
 ones the script measured, never copied by hand.
 
-Light imports only (standard library and :mod:`correction.io.atomic`): nothing here is on a
+Light imports only (standard library and :mod:`rigsim.correction.io.atomic`): nothing here is on a
 simulation's or a correction's path.
 """
 
@@ -21,7 +21,7 @@ import shlex
 import sys
 from collections.abc import Sequence
 
-from correction.io.atomic import atomic_write_text
+from rigsim.correction.io.atomic import atomic_write_text
 
 __all__ = ["configuration_line", "markdown_table", "output_page", "results_page", "script_command", "write_block",
            "write_output_page", "write_results_page"]

@@ -8,22 +8,22 @@ Per wheel: the road-test force (what the truck does on the road), the force meas
 rig (the simulated load cell plus white measurement noise, as a real load cell has), and the
 rig force corrected by each :class:`Method`:
 
-- ``paper``: the paper's method. T_a(s) from eq. 4 (:func:`correction.output.eq4.eq4_coefficients_from`)
+- ``paper``: the paper's method. T_a(s) from eq. 4 (:func:`rigsim.correction.output.eq4.eq4_coefficients_from`)
   with Merritt's coefficients linearized at the wheel's static actuator load (mean measured tire
-  force plus the pan's weight, :func:`hydraulics.linearization.eq4_parameters`), the station's
+  force plus the pan's weight, :func:`rigsim.hydraulics.linearization.eq4_parameters`), the station's
   tire stiffness and the rig's pan mass; inverted times the paper's low-pass T_F (16 and 24 Hz,
   damping 1), applied as a causal filter.
 - ``best``: this project's method. T_a identified per corner as a lab characterizes its rig
-  before a test (:func:`scenarios.studies.identify.compute.identify_rig`: independent random
+  before a test (:func:`rigsim.scenarios.studies.identify.compute.identify_rig`: independent random
   drives on the four posts at the test drive's rms, the one fitting policy of
-  :mod:`correction.identification.actuator_fit`; no hydraulic parameters needed), inverted under the
+  :mod:`rigsim.correction.identification.actuator_fit`; no hydraulic parameters needed), inverted under the
   regularized low-pass (6th-order Butterworth at 30 Hz), applied offline zero-phase.
 
-Both are applied by the one correction function, :func:`correction.output.pipeline.correct_forces`,
+Both are applied by the one correction function, :func:`rigsim.correction.output.pipeline.correct_forces`,
 which ``rigsim correct`` also uses: the same data give the same numbers.
 
 Each corrected force is compared with the road force through the same band limit (a correction
-cannot restore what its low-pass removes): DLC and NRMSE (:mod:`correction.metrics.dlc`) on the samples
+cannot restore what its low-pass removes): DLC and NRMSE (:mod:`rigsim.correction.metrics.dlc`) on the samples
 where that method's correction filters and its band-limit filter have all settled (the union
 of their transients is left out); the corrected DLC is compared with the unfiltered road DLC on
 those same samples (``dlc_road_settled``). The road and rig DLCs of the test as a lab reports
@@ -37,16 +37,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.output.apply import band_limit
-from correction.metrics.damage import damage_equivalent_load, rainflow_cycles, stress_factor
-from correction.metrics.dlc import dlc, nrmse
-from correction.output.eq4 import eq4_coefficients_from
-from correction.output.pipeline import SETTLING_TOLERANCE, correct_forces
-from hydraulics.linearization import eq4_parameters
-from hydraulics.params import GRAVITY_M_S2
-from scenarios.core.config import ScenarioError
-from scenarios.core.lab import LabChain, measure
-from scenarios.records.methods import BEST, METHODS, NOISE_N, PAPER, Method, method_named
+from rigsim.correction.output.apply import band_limit
+from rigsim.correction.metrics.damage import damage_equivalent_load, rainflow_cycles, stress_factor
+from rigsim.correction.metrics.dlc import dlc, nrmse
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.pipeline import SETTLING_TOLERANCE, correct_forces
+from rigsim.hydraulics.linearization import eq4_parameters
+from rigsim.hydraulics.params import GRAVITY_M_S2
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.lab import LabChain, measure
+from rigsim.scenarios.records.methods import BEST, METHODS, NOISE_N, PAPER, Method, method_named
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "MIN_DURATION_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
            "PairScore", "score_pair", "SETTLING_TOLERANCE", "check_noise", "measured_force", "shortest_scorable_s",
@@ -86,7 +86,7 @@ class MethodScore:
     cycles : Mapping[str, list] or None
         The rainflow cycles behind the DELs, counted once: for ``road``, ``rig`` and ``corrected``
         on the settled samples, per wheel ``(ranges_N, means_N, counts)``
-        (:func:`correction.metrics.damage.rainflow_cycles`); the report's histograms read them
+        (:func:`rigsim.correction.metrics.damage.rainflow_cycles`); the report's histograms read them
         where the pair is scored. None in a copy sent to another process (pickled): they are
         left out, as large as the forces and read nowhere else.
     """
@@ -174,10 +174,10 @@ class PairScore:
 
 def shortest_scorable_s(rate_hz: float, method: Method) -> float:
     """A record shorter than this cannot be scored by ``method`` whatever its T_a, s: the band
-    limit's own transients (:func:`correction.output.filters.reference_filter` at
+    limit's own transients (:func:`rigsim.correction.output.filters.reference_filter` at
     :data:`SETTLING_TOLERANCE`, start and end) plus :data:`MIN_SCORED_S`. A necessary condition,
     checked before any run (the correction's transients, known once T_a is, come on top)."""
-    from correction.output.filters import reference_filter
+    from rigsim.correction.output.filters import reference_filter
 
     head, tail = reference_filter(rate_hz, method.lowpass,
                                   settling_tolerance=SETTLING_TOLERANCE).transient_samples(method.mode)
@@ -193,12 +193,12 @@ def check_noise(noise_N: float) -> None:
 def measured_force(rig, noise_N: float, seed: int, chain: LabChain | None = None) -> np.ndarray:
     """The rig run's tire forces as a load cell measures them: plus white noise of ``noise_N``
     (N rms, >= 0: ScenarioError otherwise) from ``numpy.random.default_rng((seed, 8))``, through
-    the lab's measurement ``chain`` (:func:`scenarios.core.lab.measure`; default: nothing more)."""
+    the lab's measurement ``chain`` (:func:`rigsim.scenarios.core.lab.measure`; default: nothing more)."""
     check_noise(noise_N)
     return measure(rig, chain or LabChain(), noise_N, seed).force_N
 
 
-#: The damage figures every score carries (:mod:`correction.metrics.damage`): the dynamic load stress
+#: The damage figures every score carries (:mod:`rigsim.correction.metrics.damage`): the dynamic load stress
 #: factor E[(F/F_static)^4] (pavements: the fourth-power law) and the damage-equivalent load for
 #: a Woehler exponent of 5 at one equivalent cycle per second (components), of the road, the
 #: measured rig and the corrected force on the same settled samples.
@@ -220,7 +220,7 @@ def _actuators(method: Method, rig_model, force_N: np.ndarray, identified) -> li
     if method.actuator == "identified":
         if identified is None:
             raise ValueError(f"the {method.name} method corrects with identified T_a: pass identified= "
-                             "(scenarios.studies.identify.compute.identify_rig(...).actuators())")
+                             "(rigsim.scenarios.studies.identify.compute.identify_rig(...).actuators())")
         return [tuple(np.asarray(x, float) for x in ta) for ta in identified]
     out = []
     for i in range(force_N.shape[1]):
@@ -236,9 +236,9 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
 
     Parameters
     ----------
-    road, rig : scenarios.core.results.RunResult
+    road, rig : rigsim.scenarios.core.results.RunResult
         Road-mode and rig-mode runs of the same scenario (same drive, same time axis).
-    rig_model : scenarios.core.rig.Rig
+    rig_model : rigsim.scenarios.core.rig.Rig
         The rig of the scenario (actuator parameters, pan mass, tire stiffness for eq. 4).
     methods : sequence of Method
     identified : sequence of 4 (num, den), optional
@@ -249,7 +249,7 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
         Seed of the noise.
     settling_tolerance : float, 1
         Samples inside the filters' transients at this tolerance are not scored.
-    lab : scenarios.core.lab.LabChain, optional
+    lab : rigsim.scenarios.core.lab.LabChain, optional
         How the lab measures the rig force (:func:`measured_force`); default: the scenario's of
         ``rig_model`` (``[lab]``).
 

@@ -12,9 +12,9 @@ The cases a study runs are data, not code: each suite is a TOML file under
   from the XML's nominal one and the plants (rigid cab, cab on mounts, progressive tire,
   gradually stiffening tire), ``scenarios/data/suites/model_plants.toml`` (:func:`model_plants`);
 * the mismatch suite's ranges of real trucks, ``scenarios/data/suites/mismatch_plants.toml``
-  (:func:`scenarios.studies.model_suite.mismatch.plant_ranges`);
+  (:func:`rigsim.scenarios.studies.model_suite.mismatch.plant_ranges`);
 * the fleet suite's spec sheets and plants of other trucks, ``scenarios/data/suites/fleet.toml``
-  (:mod:`scenarios.studies.model_suite.fleet`).
+  (:mod:`rigsim.scenarios.studies.model_suite.fleet`).
 
 :func:`pick_cases` picks cases of a suite by parts of their names, as a command line gives them.
 """
@@ -29,15 +29,15 @@ import types
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 
-from mjcf.variant import TruckVariant
-from scenarios.core.config import paper_scenarios
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.config import paper_scenarios
 
 __all__ = ["SUITES", "SUITE_FILES", "Plant", "ModelPlants", "suite_file", "generalization_cases", "paper_cases",
            "pick_cases", "case_name", "case_scenario", "case_payload_kg", "model_plants"]
 
 #: The suites of cases :func:`pick_cases` knows.
 SUITES = ("paper", "generalization")
-#: The data files of :mod:`scenarios.studies.suites`, under ``scenarios/data/suites/``.
+#: The data files of :mod:`rigsim.scenarios.studies.suites`, under ``scenarios/data/suites/``.
 SUITE_FILES = ("generalization.toml", "model_plants.toml", "mismatch_plants.toml", "fleet.toml")
 
 
@@ -56,7 +56,7 @@ def suite_file(name: str):
     """
     if name not in SUITE_FILES:
         raise ValueError(f"no suite file {name!r}; the suite files are {', '.join(SUITE_FILES)}")
-    return importlib.resources.files("scenarios").joinpath("data", "suites", name)
+    return importlib.resources.files("rigsim.scenarios").joinpath("data", "suites", name)
 
 
 def _read(name: str) -> dict:
@@ -76,7 +76,7 @@ def generalization_cases(n: int = 24, duration_s: float | None = None) -> list[d
     Returns
     -------
     list of dict
-        Scenario documents (:func:`scenarios.core.config.parse_scenario` reads each): ``name``
+        Scenario documents (:func:`rigsim.scenarios.core.config.parse_scenario` reads each): ``name``
         (``gen<i>-<class>-<speed>kmh-<payload>kg-<tracks>``), ``speed_kmh``, ``duration_s``,
         ``seed``, ``road`` (``roughness``, ``tracks``, and for class D ``cuton_wavelength_m``)
         and ``vehicle`` (``payload_kg``). Fresh dicts on every call.
@@ -117,7 +117,7 @@ def paper_cases(keys: Sequence[str] | None = None) -> list[pathlib.Path]:
     Returns
     -------
     list of pathlib.Path
-        In the order of ``keys``; without keys, Table 2's order (:func:`scenarios.core.config.paper_scenarios`).
+        In the order of ``keys``; without keys, Table 2's order (:func:`rigsim.scenarios.core.config.paper_scenarios`).
 
     Raises
     ------
@@ -169,16 +169,16 @@ def case_name(case) -> str:
 
 
 def case_scenario(case):
-    """A case as a :class:`scenarios.core.config.Scenario`: a scenario document parsed (dict), a
+    """A case as a :class:`rigsim.scenarios.core.config.Scenario`: a scenario document parsed (dict), a
     scenario file read (path)."""
-    from scenarios.core.config import load_scenario, parse_scenario
+    from rigsim.scenarios.core.config import load_scenario, parse_scenario
 
     return parse_scenario(case) if isinstance(case, Mapping) else load_scenario(case)
 
 
 def case_payload_kg(scenario) -> float:
     """The payload (kg) a case's scenario carries: its ``[vehicle] payload_kg``, else the XML's."""
-    from mjcf.build import nominal_values
+    from rigsim.mjcf.build import nominal_values
 
     given = scenario.vehicle.payload_kg
     return float(given) if given is not None else nominal_values()["payload_kg"]
@@ -193,10 +193,10 @@ class Plant:
     key : str
         Its name in the data (``rigid``, ``cab``, ``tire``, ``smooth``).
     truck : Mapping[str, float]
-        The :class:`mjcf.variant.TruckVariant` fields it sets beyond the catalogue offsets
+        The :class:`rigsim.mjcf.variant.TruckVariant` fields it sets beyond the catalogue offsets
         (SI units, as the fields' names say).
     outside_family : tuple of str
-        The model's cab modes (:data:`scenarios.records.model.cab_choice.CAB_CHOICES`) under which
+        The model's cab modes (:data:`rigsim.scenarios.records.model.cab_choice.CAB_CHOICES`) under which
         the plant lies outside the calibrated model family; inside it under the others.
     """
 
@@ -212,7 +212,7 @@ class ModelPlants:
     Attributes
     ----------
     factors : Mapping[str, float], 1
-        Per :class:`mjcf.variant.TruckVariant` field, the factor on the XML's nominal value
+        Per :class:`rigsim.mjcf.variant.TruckVariant` field, the factor on the XML's nominal value
         (``payload_kg``: on the case's own payload).
     payload_x_shift_m : float, m
         The payload's position against the XML's, forward positive.
@@ -237,10 +237,10 @@ def model_plants() -> ModelPlants:
     Raises
     ------
     ValueError
-        A file that names a field :class:`mjcf.variant.TruckVariant` does not have, a cab mode
+        A file that names a field :class:`rigsim.mjcf.variant.TruckVariant` does not have, a cab mode
         that does not exist, or a table or key this reader does not know.
     """
-    from scenarios.records.model.cab_choice import CAB_CHOICES  # the model correction's imports: only here
+    from rigsim.scenarios.records.model.cab_choice import CAB_CHOICES  # the model correction's imports: only here
 
     doc = _read("model_plants.toml")
     variant_fields = {f.name for f in fields(TruckVariant)}

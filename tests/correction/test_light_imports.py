@@ -14,9 +14,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 _CODE = """
 import sys
 import numpy as np
-from correction.identification.actuator_fit import fit_actuator
-from correction.output.pipeline import correct_forces
-from correction.output.transfer import is_transfer_function
+from rigsim.correction.identification.actuator_fit import fit_actuator
+from rigsim.correction.output.pipeline import correct_forces
+from rigsim.correction.output.transfer import is_transfer_function
 
 fs = 1000.0
 rng = np.random.default_rng(3)
@@ -48,6 +48,6 @@ def test_identifying_and_correcting_load_neither_control_nor_matplotlib():
 
 
 def test_a_control_transfer_function_is_still_recognised():  # the probe above can fail
-    code = ("import control\nfrom correction.output.transfer import is_transfer_function\n"
+    code = ("import control\nfrom rigsim.correction.output.transfer import is_transfer_function\n"
             "print(is_transfer_function(control.tf([1.0], [1.0, 1.0])), is_transfer_function(([1.0], [1.0, 1.0])))")
     assert _loaded(code) == "True False"

@@ -27,9 +27,9 @@ import math
 import numpy as np
 import pytest
 
-from hydraulics import ActuatorParams, actuator_derivatives, actuator_force, pack
-from hydraulics.model import (bulk_factor, chamber_flows, land_openings, orifice_root, orifice_root_slope,
-                              smooth_opening, smooth_opening_slope, soft_clip, soft_clip_slope)
+from rigsim.hydraulics import ActuatorParams, actuator_derivatives, actuator_force, pack
+from rigsim.hydraulics.model import (bulk_factor, chamber_flows, land_openings, orifice_root, orifice_root_slope,
+                                     smooth_opening, smooth_opening_slope, soft_clip, soft_clip_slope)
 
 MPA = 1e6  # Pa per MPa (the states hold pressures in MPa: hydraulics/params.py STATE_NAMES)
 
@@ -374,12 +374,12 @@ def test_public_functions_refuse_wrong_shapes():
 
 
 def test_every_scalar_helper_compiles_with_numba_and_agrees_with_python():
-    # model docstring: the scalar kernels are register_jitable so hydraulics.kernels compiles the
+    # model docstring: the scalar kernels are register_jitable so rigsim.hydraulics.kernels compiles the
     # very same source; a helper numba cannot compile would break the compiled path only. Reference:
     # the plain-Python value of each helper at the same arguments.
     from numba import njit
 
-    from hydraulics import model
+    from rigsim.hydraulics import model
 
     names = ("smooth_opening", "smooth_opening_slope", "orifice_root", "orifice_root_slope", "soft_clip",
              "soft_clip_slope")

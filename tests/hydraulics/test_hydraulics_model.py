@@ -12,15 +12,15 @@ import pathlib
 import numpy as np
 import pytest
 
-from correction.output.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
-from hydraulics import (STATE_NAMES, ActuatorParams, actuator_derivatives, actuator_force,
-                        check_design_station, check_stable, eq4_parameters, equilibrium_activation,
-                        events, linearization, loop_matrices, pack, unpack)
-from hydraulics.kernels import derivatives_array, force_array, step_euler
-from hydraulics.loop import frequency_response
-from hydraulics.model import (MPA, chamber_flows, orifice_root, orifice_root_slope, soft_clip,
-                              soft_clip_slope)
-from hydraulics.packing import FIELD_NAMES, NPACK
+from rigsim.correction.output.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
+from rigsim.hydraulics import (STATE_NAMES, ActuatorParams, actuator_derivatives, actuator_force,
+                               check_design_station, check_stable, eq4_parameters, equilibrium_activation,
+                               events, linearization, loop_matrices, pack, unpack)
+from rigsim.hydraulics.kernels import derivatives_array, force_array, step_euler
+from rigsim.hydraulics.loop import frequency_response
+from rigsim.hydraulics.model import (MPA, chamber_flows, orifice_root, orifice_root_slope, soft_clip,
+                                     soft_clip_slope)
+from rigsim.hydraulics.packing import FIELD_NAMES, NPACK
 
 PKG = pathlib.Path(__file__).resolve().parents[2] / "hydraulics"
 
@@ -32,14 +32,20 @@ def default() -> ActuatorParams:
 
 
 # --- project rules --------------------------------------------------------------------------
+def _top(name: str) -> str:
+    """The package a module name is in: rigsim's layers by their own name (``rigsim.scenarios.x``: ``scenarios``)."""
+    parts = name.split(".")
+    return parts[1] if parts[0] == "rigsim" and len(parts) > 1 else parts[0]
+
+
 def _imported_modules(path):
     tree = ast.parse(path.read_text())
     names = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            names.update(a.name.split(".")[0] for a in node.names)
+            names.update(_top(a.name) for a in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            names.add(node.module.split(".")[0])
+            names.add(_top(node.module))
     return names
 
 
@@ -89,7 +95,7 @@ def test_pack_roundtrip_and_slots():
     assert v.shape == (NPACK,) and v.dtype == np.float64
     assert unpack(v) == default()
     # Every P_* slot constant points at the field of the same declaration position.
-    import hydraulics.packing as pk
+    import rigsim.hydraulics.packing as pk
     slots = sorted((getattr(pk, n), n) for n in dir(pk) if n.startswith("P_") and n not in
                    ("P_TAG", "P_NSTATE", "P_NPACK"))
     assert [s for s, _ in slots] == list(range(3, NPACK))
@@ -339,16 +345,16 @@ def test_eq4_parameters_feed_the_one_formula(kt, load, mass, ti):
 
 
 def test_tire_stiffness_is_checked_by_the_formula_only():
-    # One rule (correction.output.eq4): tire_N_per_m >= 0; eq4_parameters passes the value through.
+    # One rule (rigsim.correction.output.eq4): tire_N_per_m >= 0; eq4_parameters passes the value through.
     with pytest.raises(ValueError, match="tire_N_per_m must be >= 0"):
         eq4_coefficients_from(**eq4_parameters(default(), -1.0))
 
 
 def test_params_are_plain_data_and_the_stability_check_is_separate():
     # ActuatorParams only validates values: a set without pressure feedback constructs (no
-    # stability check runs on construction); hydraulics.loop.check_design_station refuses it,
+    # stability check runs on construction); rigsim.hydraulics.loop.check_design_station refuses it,
     # naming the gain to change. (Import circles are tested project-wide in tests/test_layers.py.)
-    from hydraulics.loop import check_design_station
+    from rigsim.hydraulics.loop import check_design_station
 
     p = default().replace(kdp_per_Pa=0.0)
     assert p.kdp_per_Pa == 0.0

@@ -12,14 +12,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from correction.output.eq4 import eq4_coefficients_from
-from hydraulics import (ActuatorParams, check_design_station, check_stable, eq4_parameters,
-                        equilibrium_activation, events)
-from hydraulics.bridge import (LayoutError, _find_offsets, _layout, _verify_offsets, activation_slice,
-                               add_hydraulic_actuators, hydraulic_callbacks, params_from_model,
-                               set_activation, single_pan_spec)
-from hydraulics.model import MPA
-from hydraulics.params import GRAVITY_M_S2
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.hydraulics import (ActuatorParams, check_design_station, check_stable, eq4_parameters,
+                               equilibrium_activation, events)
+from rigsim.hydraulics.bridge import (LayoutError, _find_offsets, _layout, _verify_offsets, activation_slice,
+                                      add_hydraulic_actuators, hydraulic_callbacks, params_from_model,
+                                      set_activation, single_pan_spec)
+from rigsim.hydraulics.model import MPA
+from rigsim.hydraulics.params import GRAVITY_M_S2
 
 DEFAULT = ActuatorParams()
 TIRE = 1.0e6  # N/m, a soft truck tire (brief: 0.9-1.8 MN/m)
@@ -274,10 +274,10 @@ def test_transition_fd_reproduces_eq4():
 
 
 def test_python_loop_linearization_matches_mujoco():
-    # hydraulics.loop (central differences of the reference equations, MuJoCo's Euler map built
+    # rigsim.hydraulics.loop (central differences of the reference equations, MuJoCo's Euler map built
     # by hand) and mjd_transitionFD of the compiled rig must have the same discrete eigenvalues:
     # pins the loop model used by check_stable to what MuJoCo integrates.
-    from hydraulics.loop import euler_map, loop_matrices
+    from rigsim.hydraulics.loop import euler_map, loop_matrices
 
     model, a_fd, _ = _transition_matrices(DEFAULT)
     a, _, _, names = loop_matrices(DEFAULT, TIRE, math.inf, load_N=_pan_load())

@@ -1,8 +1,8 @@
-"""The on-disk cache of the compiled hydraulic callbacks (hydraulics.kernels, hydraulics.callback_cache).
+"""The on-disk cache of the compiled hydraulic callbacks (rigsim.hydraulics.kernels, rigsim.hydraulics.callback_cache).
 
 Every check that involves compiling or loading runs in a fresh process (the callbacks are
 memoized per process) against a private cache folder, and is counted, not timed: the process
-reports through :func:`hydraulics.kernels.cache_info` whether it compiled, loaded or rejected.
+reports through :func:`rigsim.hydraulics.kernels.cache_info` whether it compiled, loaded or rejected.
 """
 
 from __future__ import annotations
@@ -17,14 +17,14 @@ import sys
 import numpy as np
 import pytest
 
-from hydraulics import callback_cache, kernels
+from rigsim.hydraulics import callback_cache, kernels
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 PRELUDE = """
 import json, mujoco
-from hydraulics import ActuatorParams, callback_cache, kernels
-from hydraulics.bridge import _find_offsets, hydraulic_callbacks, single_pan_spec
+from rigsim.hydraulics import ActuatorParams, callback_cache, kernels
+from rigsim.hydraulics.bridge import _find_offsets, hydraulic_callbacks, single_pan_spec
 model = single_pan_spec(ActuatorParams()).compile()
 offsets = _find_offsets(model, mujoco.MjData(model))
 """
@@ -36,9 +36,9 @@ print(json.dumps(dict(kernels.cache_info(), source=kernels.make_raw_callbacks(of
 RUN = """
 import dataclasses, json, sys
 import numpy as np
-from hydraulics import kernels
-from scenarios.core.config import load_scenario
-from scenarios.core.run import run
+from rigsim.hydraulics import kernels
+from rigsim.scenarios.core.config import load_scenario
+from rigsim.scenarios.core.run import run
 scenario = dataclasses.replace(load_scenario("scenarios/data/paper/high_72kmh_3640kg.toml"), duration_s=1.0)
 result = run(scenario, "rig")
 np.savez(sys.argv[1], t_s=result.t_s, **result.signals)
@@ -113,8 +113,8 @@ def test_the_key_holds_what_the_machine_code_depends_on():
     key = kernels.cache_key(off)
     assert key["offsets"]["d_act"] == off.d_act
     assert key["layout"]["LAYOUT_TAG"] == kernels.LAYOUT_TAG and key["layout"]["P_TAG"] == 0
-    assert set(key["sources"]) == {"hydraulics.kernels", "hydraulics.model", "hydraulics.packing",
-                                   "hydraulics.params"}
+    assert set(key["sources"]) == {"rigsim.hydraulics.kernels", "rigsim.hydraulics.model", "rigsim.hydraulics.packing",
+                                   "rigsim.hydraulics.params"}
     assert {"python", "numba", "llvmlite", "llvm", "numpy", "mujoco"} <= set(key["versions"])
     assert key["target"][1]  # CPU name
     digest = callback_cache.key_digest(key)
@@ -124,8 +124,8 @@ def test_the_key_holds_what_the_machine_code_depends_on():
 
 @pytest.mark.parametrize("change", [
     "offsets = offsets._replace(d_act=offsets.d_act + 8)",  # another mujoco layout
-    "kernels._SOURCES = dict(kernels._SOURCES, **{'hydraulics.model': '0' * 64})",  # an edited file
-    "import hydraulics.model; hydraulics.model.CLIP_KNEE = 0.79",  # a constant numba bakes in
+    "kernels._SOURCES = dict(kernels._SOURCES, **{'rigsim.hydraulics.model': '0' * 64})",  # an edited file
+    "import rigsim.hydraulics.model; rigsim.hydraulics.model.CLIP_KNEE = 0.79",  # a constant numba bakes in
 ])
 def test_a_changed_key_input_compiles_anew(cache, change):
     code = PRELUDE + change + """
@@ -159,9 +159,9 @@ def test_stale_code_under_a_matching_key_fails_the_reference_check(tmp_path):
     # plain-Python equations on load, deleted and compiled anew.
     folder = tmp_path / "cache"
     code = PRELUDE + """
-import hydraulics.model
+import rigsim.hydraulics.model
 key = kernels.cache_key(offsets)
-hydraulics.model.MPA = 1.1e6
+rigsim.hydraulics.model.MPA = 1.1e6
 kernels.cache_key = lambda off: key
 kernels.make_raw_callbacks(offsets)
 print(json.dumps(kernels.cache_info()))

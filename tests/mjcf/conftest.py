@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, static_equilibrium
+from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, static_equilibrium
 
 
 def _at_rest(model, pan_z_m=None):
@@ -49,14 +49,14 @@ def _held_frame_modes(spec) -> dict:
 @pytest.fixture()
 def held_frame_modes():
     """``held_frame_modes(spec) -> {name: Mode}``: the modes of ``spec``'s truck (edited: its
-    chassis' joints deleted) with the chassis held, about qpos0 (:func:`mjcf.physics.modal_analysis`)."""
+    chassis' joints deleted) with the chassis held, about qpos0 (:func:`rigsim.mjcf.physics.modal_analysis`)."""
     return _held_frame_modes
 
 
 @pytest.fixture()
 def at_rest():
     """``at_rest(model, pan_z_m=None) -> (model, data)``: ``data`` at the truck's static rest
-    (:func:`mjcf.physics.static_equilibrium`, the pans at ``pan_z_m``, default mid-stroke)."""
+    (:func:`rigsim.mjcf.physics.static_equilibrium`, the pans at ``pan_z_m``, default mid-stroke)."""
     return _at_rest
 
 
@@ -65,5 +65,5 @@ def same_rigid_truck():
     """``same_rigid_truck(rigid, model, bodies)``: assert that ``model`` (a plant feature added to
     ``rigid``'s spec), at qpos0, keeps ``rigid``'s truck mass (the masses of those of ``bodies`` each
     model has), its centre of mass (MuJoCo's ``subtree_com`` of the chassis) and the mass matrix
-    (``mj_fullM``) of ``rigid``'s truck joints (:class:`mjcf.physics.RigIndex`, a cab's included)."""
+    (``mj_fullM``) of ``rigid``'s truck joints (:class:`rigsim.mjcf.physics.RigIndex`, a cab's included)."""
     return _same_rigid_truck

@@ -18,12 +18,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import names
-from mjcf.build import build_model, build_spec, resource_path
-from mjcf.cab import CAB_DAMPING_RATIO, CAB_MASS_KG, CAB_MOUNT_SPACING_M
-from mjcf.variant import TruckVariant
-from mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, static_equilibrium, tire_forces
-from scenarios.core.config import ScenarioError, load_scenario, parse_scenario
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_model, build_spec, resource_path
+from rigsim.mjcf.cab import CAB_DAMPING_RATIO, CAB_MASS_KG, CAB_MOUNT_SPACING_M
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, static_equilibrium, tire_forces
+from rigsim.scenarios.core.config import ScenarioError, load_scenario, parse_scenario
 
 G = 9.81  # m/s^2, the model's gravity
 CAB_LENGTH_M, CAB_HEIGHT_M = 1.8, 1.9  # the cab geom of truck_rig.xml (half sizes 0.9 and 0.95 m)
@@ -152,7 +152,7 @@ def test_scenario_key_and_bad_values(tmp_path):
 
 @pytest.fixture(scope="module")
 def runs():
-    from scenarios.core.run import run
+    from rigsim.scenarios.core.run import run
 
     out = {}
     for label, vehicle in (("rigid", {}), ("cab", {"cab_mount_hz": 2.0})):

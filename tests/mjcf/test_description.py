@@ -14,11 +14,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import description, names
-from mjcf.build import build_model
-from mjcf.physics import static_equilibrium, tire_forces
-from mjcf.standing import check_stands, truck_layout
-from mjcf.variant import TruckVariant
+from rigsim.mjcf import description, names
+from rigsim.mjcf.build import build_model
+from rigsim.mjcf.physics import static_equilibrium, tire_forces
+from rigsim.mjcf.standing import check_stands, truck_layout
+from rigsim.mjcf.variant import TruckVariant
 
 G = 9.81  # m/s^2, the model's gravity
 

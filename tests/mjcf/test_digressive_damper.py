@@ -1,4 +1,4 @@
-"""Tests of the digressive dampers (:func:`mjcf.dampers.add_digressive_damping`), a plant feature
+"""Tests of the digressive dampers (:func:`rigsim.mjcf.dampers.add_digressive_damping`), a plant feature
 the calibrated model family (linear dampers) lacks.
 
 Reference, independent of the code under test: the piecewise force law of a digressive damper,
@@ -15,12 +15,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import names
-from mjcf.build import build_spec
-from mjcf.dampers import BOUNDS, add_digressive_damping
-from mjcf.physics import modal_analysis, static_equilibrium, tire_forces
-from mjcf.stations import add_rebound_damping
-from mjcf.variant import TruckVariant
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_spec
+from rigsim.mjcf.dampers import BOUNDS, add_digressive_damping
+from rigsim.mjcf.physics import modal_analysis, static_equilibrium, tire_forces
+from rigsim.mjcf.stations import add_rebound_damping
+from rigsim.mjcf.variant import TruckVariant
 
 OBJ = mujoco.mjtObj
 XML_DAMPING = {"fl": 6e3, "fr": 6e3, "rl": 1e4, "rr": 1e4}  # N s/m, truck_rig.xml

@@ -1,4 +1,4 @@
-"""Tests of the engine on its mounts (:func:`mjcf.engine.add_engine_mount`), a plant feature the
+"""Tests of the engine on its mounts (:func:`rigsim.mjcf.engine.add_engine_mount`), a plant feature the
 calibrated model family (engine rigid in the chassis) lacks.
 
 References, independent of the code under test: the rigid truck compiled by MuJoCo (masses,
@@ -17,13 +17,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import names
-from mjcf.build import build_spec
-from mjcf.cab import add_cab_mount
-from mjcf.engine import (BOUNDS, ENGINE_MOUNT_DAMPING_RATIO, ENGINE_MOUNT_SPACING_M, ENGINE_SIZE_M, add_engine_mount)
-from mjcf.frame import add_frame_flex
-from mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, tire_forces
-from mjcf.variant import TruckVariant
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_spec
+from rigsim.mjcf.cab import add_cab_mount
+from rigsim.mjcf.engine import (BOUNDS, ENGINE_MOUNT_DAMPING_RATIO, ENGINE_MOUNT_SPACING_M, ENGINE_SIZE_M, add_engine_mount)
+from rigsim.mjcf.frame import add_frame_flex
+from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, tire_forces
+from rigsim.mjcf.variant import TruckVariant
 
 OBJ = mujoco.mjtObj
 BODIES = names.TRUCK_BODIES + (names.ENGINE_BODY, names.CAB_BODY, names.FRAME_REAR_BODY)

@@ -1,4 +1,4 @@
-"""Tests of the flexible frame (:func:`mjcf.frame.add_frame_flex`), a plant feature the calibrated
+"""Tests of the flexible frame (:func:`rigsim.mjcf.frame.add_frame_flex`), a plant feature the calibrated
 rigid-frame model family lacks.
 
 References, independent of the code under test: the rigid truck compiled by MuJoCo (masses,
@@ -17,11 +17,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import names
-from mjcf.build import build_spec
-from mjcf.frame import BOUNDS, FRAME_DAMPING_RATIO, add_frame_flex
-from mjcf.physics import OPTIONAL_JOINTS, TRUCK_JOINTS, RigIndex, modal_analysis, tire_forces
-from mjcf.variant import TruckVariant
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_spec
+from rigsim.mjcf.frame import BOUNDS, FRAME_DAMPING_RATIO, add_frame_flex
+from rigsim.mjcf.physics import OPTIONAL_JOINTS, TRUCK_JOINTS, RigIndex, modal_analysis, tire_forces
+from rigsim.mjcf.variant import TruckVariant
 
 OBJ = mujoco.mjtObj
 BODIES = names.TRUCK_BODIES + (names.FRAME_REAR_BODY,)
@@ -158,7 +158,7 @@ def test_a_chassis_without_its_cab_and_engine_is_cut_into_rigid_halves(same_rigi
     x-z product (the tall cab came off its front); the halves follow it (frame_split's regression of z
     on x) and stay rigid bodies, and the truck's mass, centre of mass and mass matrix are the uncut
     truck's: a 4.0 m truck on rear air springs with a 1.25 t engine, at the least roll inertia the fleet
-    suite gives a truck with both (scenarios.studies.model_suite.fleet.CAB_AND_ENGINE_ROLL_KG_M2)."""
+    suite gives a truck with both (rigsim.scenarios.studies.model_suite.fleet.CAB_AND_ENGINE_ROLL_KG_M2)."""
     variant = dict(wheelbase_m=4.0, suspension_rear="air", cab_mount_hz=2.0, engine_mount_hz=8.0,
                    engine_mass_kg=1250.0, chassis_roll_inertia_kg_m2=3200.0)
     rigid, spec = _flex(payload_kg=6000.0, **variant)

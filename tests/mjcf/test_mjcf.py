@@ -12,10 +12,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf.build import build_model, build_spec, resource_path
-from mjcf.variant import TruckVariant
-from mjcf.names import CORNERS
-from mjcf.physics import RigIndex, modal_analysis, static_equilibrium, tire_forces
+from rigsim.mjcf.build import build_model, build_spec, resource_path
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.mjcf.names import CORNERS
+from rigsim.mjcf.physics import RigIndex, modal_analysis, static_equilibrium, tire_forces
 
 G = 9.81  # m/s^2, the model's gravity (checked below)
 PAPER_PAYLOADS_KG = (3640.0, 6360.0)  # the paper's two payloads
@@ -195,12 +195,12 @@ def test_every_element_named_with_parallel_corners():
 
 
 def test_every_name_of_mjcf_names_exists_in_the_compiled_model():
-    """mjcf.names is the one home of element names: each name it gives is an element of the
-    compiled rig (the hydraulic actuators once hydraulics.bridge has added them), of the
+    """rigsim.mjcf.names is the one home of element names: each name it gives is an element of the
+    compiled rig (the hydraulic actuators once rigsim.hydraulics.bridge has added them), of the
     right kind and attached where its docstring says."""
-    from hydraulics import ActuatorParams
-    from hydraulics.bridge import add_hydraulic_actuators
-    from mjcf import names
+    from rigsim.hydraulics import ActuatorParams
+    from rigsim.hydraulics.bridge import add_hydraulic_actuators
+    from rigsim.mjcf import names
 
     spec = build_spec()
     add_hydraulic_actuators(spec, ActuatorParams(), names.CORNERS)
@@ -209,7 +209,7 @@ def test_every_name_of_mjcf_names_exists_in_the_compiled_model():
 
     def eid(kind, name):
         i = mujoco.mj_name2id(model, kind, name)
-        assert i >= 0, f"{kind.name} {name!r} of mjcf.names is not in the compiled model"
+        assert i >= 0, f"{kind.name} {name!r} of rigsim.mjcf.names is not in the compiled model"
         return i
 
     assert names.CORNERS == names.FRONT + names.REAR
@@ -284,10 +284,10 @@ def test_payload_off_the_centreline_shifts_the_load_by_the_moment_balance(y_m):
     which the rolled truck carries further out than the payload's share alone."""
     import mujoco
 
-    from mjcf import names
-    from mjcf.build import build_model
-    from mjcf.variant import TruckVariant
-    from mjcf.physics import static_equilibrium, tire_forces
+    from rigsim.mjcf import names
+    from rigsim.mjcf.build import build_model
+    from rigsim.mjcf.variant import TruckVariant
+    from rigsim.mjcf.physics import static_equilibrium, tire_forces
 
     model = build_model(TruckVariant(payload_kg=5000.0, payload_y_m=y_m))
     data = mujoco.MjData(model)
@@ -306,7 +306,7 @@ def test_payload_off_the_centreline_shifts_the_load_by_the_moment_balance(y_m):
 
 @pytest.mark.parametrize("bad", [0.81, -1.0, float("nan"), True, "0.2"])
 def test_payload_y_beyond_the_bed_is_refused(bad):
-    from mjcf.variant import TruckVariant
+    from rigsim.mjcf.variant import TruckVariant
 
     with pytest.raises(ValueError, match="vehicle.payload_y_m must lie within 0.8 m"):
         TruckVariant(payload_y_m=bad)

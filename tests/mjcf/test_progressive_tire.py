@@ -19,13 +19,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import names
-from mjcf.build import build_model, build_spec, resource_path
-from mjcf.variant import TruckVariant
-from mjcf.physics import RigIndex, static_equilibrium, tire_forces, tire_law
-from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
-from scenarios.core.config import ScenarioError, parse_scenario
-from scenarios.core.rig import Rig
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_model, build_spec, resource_path
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.mjcf.physics import RigIndex, static_equilibrium, tire_forces, tire_law
+from rigsim.mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
+from rigsim.scenarios.core.config import ScenarioError, parse_scenario
+from rigsim.scenarios.core.rig import Rig
 
 KT = np.array([0.9e6, 0.9e6, 1.8e6, 1.8e6])  # N/m, truck_rig.xml's comment (Cebon 1999)
 R0 = 0.527  # m, 11R22.5 free radius (Tire and Rim Association: 1.054 m overall diameter)

@@ -1,8 +1,8 @@
-"""Each wheel station's own values and the truck's masses (mjcf.stations): the plant's asymmetries.
+"""Each wheel station's own values and the truck's masses (rigsim.mjcf.stations): the plant's asymmetries.
 
 References: the XML's nominal values (a factor scales exactly one station's element), statics
 (an axle's own weight goes to its own wheels; the truck's weight to its tires), the damper law
-F = -c dL/dt with c = c_b in bump and c_r in rebound (mjcf.stations.rebound_coefficients).
+F = -c dL/dt with c = c_b in bump and c_r in rebound (rigsim.mjcf.stations.rebound_coefficients).
 """
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import names
-from mjcf.build import build_model
-from mjcf.physics import static_equilibrium, tire_forces
-from mjcf.stations import STATION_FACTORS, rebound_coefficients, station_factor_field
-from mjcf.variant import BOUNDS, TruckVariant
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_model
+from rigsim.mjcf.physics import static_equilibrium, tire_forces
+from rigsim.mjcf.stations import STATION_FACTORS, rebound_coefficients, station_factor_field
+from rigsim.mjcf.variant import BOUNDS, TruckVariant
 
 OBJ = mujoco.mjtObj
 G = 9.81
@@ -183,7 +183,7 @@ def test_a_station_factor_may_not_take_the_tire_past_its_axles_bounds():
 
 def test_nominal_values_are_the_xmls():
     """The XML's numbers as written in truck_rig.xml (tire law F = kt R0 - kt L - ct dL/dt)."""
-    from mjcf.build import nominal_values
+    from rigsim.mjcf.build import nominal_values
 
     v = nominal_values()
     assert v == pytest.approx({"payload_kg": 3640.0, "payload_x_m": -1.3, "payload_y_m": 0.0, "payload_z_m": 0.56,

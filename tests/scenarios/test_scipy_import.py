@@ -1,4 +1,4 @@
-"""scenarios.scipy_import: scipy.signal imported without SciPy re-parsing its docstrings.
+"""rigsim.scenarios.scipy_import: scipy.signal imported without SciPy re-parsing its docstrings.
 
 The reference is SciPy itself in a fresh process without the hook (``RIGSIM_SCIPY_DOCS=1``): the
 functions' docstrings keep all of their own text (only SciPy's appended array-API note is
@@ -17,7 +17,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 PROBE = r"""
 import json, sys
-import scenarios  # installs the hook
+import rigsim.scenarios  # installs the hook
 import scipy.signal as s
 import scipy._lib._array_api as a
 docs = {n: getattr(s, n).__doc__ for n in ("butter", "sosfiltfilt", "welch", "freqz")}
@@ -37,7 +37,7 @@ def test_the_hook_keeps_every_docstring_and_changes_only_the_parser():
     fast, full = _probe(), _probe(RIGSIM_SCIPY_DOCS="1")
     if full["parser"] == fast["parser"]:  # a SciPy without the parsing decorator: nothing to do
         return
-    assert fast["parser"] == "scenarios.scipy_import._KeepDoc"
+    assert fast["parser"] == "rigsim.scenarios.scipy_import._KeepDoc"
     for name, doc in fast["docs"].items():
         # SciPy's version is the same text, re-flowed by its parser, plus a note; compare words
         words = doc.split()
@@ -48,7 +48,7 @@ def test_the_hook_keeps_every_docstring_and_changes_only_the_parser():
 STATS_PROBE = r"""
 import json, sys
 import numpy as np
-import scenarios  # installs the hook
+import rigsim.scenarios  # installs the hook
 import scipy.signal as s
 deferred = "scipy.stats" not in sys.modules
 x = np.sin(np.linspace(0.0, 20.0, 500)) + 0.1 * np.cos(np.linspace(0.0, 130.0, 500))

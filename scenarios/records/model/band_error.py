@@ -6,9 +6,9 @@ noise there. The fit NRMSE over the whole band (:attr:`Calibration.fit_nrmse`) c
 model error the fallback reads is the dynamic one inside the band: the residual (model force, pans
 following the measured x_a, minus the measured force; its mean on each window, a static bias the
 model correction cancels, taken out) and the measured force passed through the
-correction's own band limit (:func:`correction.output.apply.band_limit`, zero-phase), the rms of
+correction's own band limit (:func:`rigsim.correction.output.apply.band_limit`, zero-phase), the rms of
 the one over the std of the other on the calibration windows. The noise that is left in the band
-is the white noise's level (:func:`correction.identification.noise.noise_rms`) through the
+is the white noise's level (:func:`rigsim.correction.identification.noise.noise_rms`) through the
 low-pass's noise bandwidth, over the same std: a few percent of the noise's whole-band power,
 so an estimate that a lab's anti-alias filter biases (it reads the noise where the filter has
 attenuated it) moves the model error little.
@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from correction.output.apply import band_limit
-from correction.output.lowpass import as_lowpass
+from rigsim.correction.output.apply import band_limit
+from rigsim.correction.output.lowpass import as_lowpass
 
 __all__ = ["BAND_LOWPASS", "band_errors", "noise_bandwidth_hz"]
 

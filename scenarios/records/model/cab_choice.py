@@ -16,7 +16,7 @@ below the held cab's, and the mount frequency not at its search range's bottom
 practically rigid, and a fit that is still clearly better there found a better minimum of the
 truck's other values than the cab-held fit did: it is kept. Convergence is not
 part of the choice: the chosen calibration's is checked where every calibration's is (a fit that did not converge falls back to the linear
-correction, :func:`~scenarios.records.model.differential.fallback_reason`). Measured on generalization cases (30 s, docs/model_correction.md): a
+correction, :func:`~rigsim.scenarios.records.model.differential.fallback_reason`). Measured on generalization cases (30 s, docs/model_correction.md): a
 truck with its cab on 2 Hz mounts fits 0.10 against the rigid cab's 0.50 (front wheels), a
 rigid-cab truck 0.095 held against 0.35 fitted (gen00) or 0.057 against 0.057 (gen05, the mount
 at the range's top, 30 Hz): the two families are far apart where the cab matters and level where
@@ -25,7 +25,7 @@ it does not, so the choice does not hinge on the exact threshold.
 The price is a second calibration, from the same first guess; ``benchmarks/model_cost.py`` times
 both against the cab held alone. Each fit's uncertainties (a finite-difference Jacobian at its
 optimum, one truck run per fitted value) are computed only for the calibration kept
-(:func:`~scenarios.records.model.calibrate.with_sigma`), and for the cab-held one where the scan
+(:func:`~rigsim.scenarios.records.model.calibrate.with_sigma`), and for the cab-held one where the scan
 needs its Jacobian. Started instead where the cab-held one ended
 (``calibrate(start=...)``), it cost more on that benchmark's rigid-cab truck, not less (the
 mount's crawl from its 2.5 Hz guess went on to the range's top). It is skipped where a cab could
@@ -56,13 +56,13 @@ import time
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.core.config import ScenarioError
-from scenarios.core.pool import local_executor
-from scenarios.core.watch import SimulationError
-from scenarios.records.model.calibrate import calibrate, with_sigma
-from scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
-from scenarios.records.model.result import Calibration
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.pool import local_executor
+from rigsim.scenarios.core.watch import SimulationError
+from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
+from rigsim.scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
+from rigsim.scenarios.records.model.result import Calibration
 
 __all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "scan_error",
            "cab_scan", "choose", "check_cab", "calibrate_cab"]
@@ -80,7 +80,7 @@ MIN_GAIN = 0.2
 #: A mount frequency within this fraction of an end of its search range is at the edge (1).
 EDGE = 0.02
 #: The cab mounts tried at the cab-held optimum (:func:`cab_scan`), Hz: 1-8 Hz a quarter octave
-#: apart, around a suspended cab's 1.5-3 Hz (``mjcf.variant.BOUNDS``) from the fitted cab's
+#: apart, around a suspended cab's 1.5-3 Hz (``rigsim.mjcf.variant.BOUNDS``) from the fitted cab's
 #: search range's bottom.
 SCAN_HZ = tuple(float(v) for v in np.round(1.0 * 2.0 ** (np.arange(13) / 4.0), 2))
 #: Largest model error of the cab-held fit (:attr:`Calibration.excess_nrmse` of its second-worst
@@ -110,7 +110,7 @@ def cab_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
     Parameters
     ----------
     state : FitState
-        The cab-held fit (:func:`~scenarios.records.model.calibrate.calibrate` ``with_state``), its
+        The cab-held fit (:func:`~rigsim.scenarios.records.model.calibrate.calibrate` ``with_state``), its
         worker pool running.
     hz : sequence of float, Hz
         The mount frequencies tried, each one truck run per window at the optimum with the cab on them.
@@ -173,10 +173,10 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     Parameters
     ----------
     t_s, x_a_m, force_N
-        The record, as for :func:`~scenarios.records.model.calibrate.calibrate`: time
+        The record, as for :func:`~rigsim.scenarios.records.model.calibrate.calibrate`: time
         (s), measured pan displacement (m, (n, 4)), measured wheel force (N, (n, 4)).
     cab : {"auto", "held", "fitted"}
-        "held": :data:`~scenarios.records.model.family.DEFAULT_NAMES` (the cab rigid,
+        "held": :data:`~rigsim.scenarios.records.model.family.DEFAULT_NAMES` (the cab rigid,
         or at ``fitted_guess["cab_mount_hz"]``); "fitted": the cab's mount frequency fitted too
         (from that value or 2.5 Hz); "auto": both, and :func:`choose`.
     fitted_guess : dict, optional
@@ -192,7 +192,7 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         as it is, its :attr:`~Calibration.cab_choice` saying so.
     symmetric : bool
         Hold each axle's left and right wheel stations alike: the fields of
-        :data:`~scenarios.records.model.family.STATION_FITTED` left out of every calibration
+        :data:`~rigsim.scenarios.records.model.family.STATION_FITTED` left out of every calibration
         (``names`` included).
     **calibrate_kw
         Passed to ``calibrate`` (``base_scenario`` required; ``x_ref_m``, ``windows``, ``max_nfev``...);

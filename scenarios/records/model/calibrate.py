@@ -1,23 +1,23 @@
 """Calibrating the truck model from the rig's own signals (x_a and F_rig), never the road run.
 
-The fields fitted, their units and search ranges: :mod:`scenarios.records.model.family`.
+The fields fitted, their units and search ranges: :mod:`rigsim.scenarios.records.model.family`.
 
-First guess: :mod:`scenarios.records.model.first_guess` (payload from the record's
+First guess: :mod:`rigsim.scenarios.records.model.first_guess` (payload from the record's
 static loads, the rest a catalogue guess that never reads a plant).
 
 The fit: ``scipy.optimize.least_squares`` (trust-region reflective, bounded) of the residual
 (F_model(x_a) - F_rig) / std(F_rig) per wheel over a few windows of the record (each run starts
 from rest with a lead-in of measured x_a before its scored span, so the unknown truck state at
 the window's start has decayed). Given the drive x_ref, the residual is weighted towards the
-frequencies where the pans miss the drive (:mod:`scenarios.records.model.weighting`):
+frequencies where the pans miss the drive (:mod:`rigsim.scenarios.records.model.weighting`):
 what the differential correction takes from the model. With the plant in the model family it
 changes nothing; with a structural mismatch it keeps the mismatch from bending the parameters
 where the correction needs them. The leaves' dry friction is MuJoCo's ``frictionloss``, a soft
 constraint (smoothed), so the forces are smooth in the parameters and a forward-difference
-Jacobian (step :data:`~scenarios.records.model.problem.FD_STEP` of each scaled parameter) works; its
-perturbed runs go to the worker pool (:func:`scenarios.core.pool.run_jobs`) together, one model
+Jacobian (step :data:`~rigsim.scenarios.records.model.problem.FD_STEP` of each scaled parameter) works; its
+perturbed runs go to the worker pool (:func:`rigsim.scenarios.core.pool.run_jobs`) together, one model
 run per window and variant. The problem itself (its scaling, residual, Jacobian reuse and the load
-cells' mass): :mod:`scenarios.records.model.problem`.
+cells' mass): :mod:`rigsim.scenarios.records.model.problem`.
 
 Results: ``benchmarks/model_correction.py`` measures the calibration on the paper's cases and the
 generalization suite (fitted values and their 1-sigma, fit and corrected NRMSE per wheel against
@@ -32,22 +32,22 @@ import time
 
 import numpy as np
 
-from correction.identification.noise import noise_rms
-from mjcf.names import CORNERS, FRONT, REAR
-from mjcf.variant import BOUNDS
-from scenarios.core.config import Scenario, ScenarioError
-from scenarios.core.pool import local_executor
-from scenarios.records.model.band_error import band_errors
-from scenarios.records.model.cell_mass import band_acceleration
-from scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
-from scenarios.records.model.first_guess import (catalogue, description, is_light, spring_fields, static_guess,
-                                                 static_lateral, xml_nominal)
-from scenarios.records.model.model_runs import check_record
-from scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
-from scenarios.records.model.problem import FitProblem, FitState
-from scenarios.records.model.result import Calibration
-from scenarios.records.model.uncertainty import uncertainties
-from scenarios.records.model.weighting import differential_kernel
+from rigsim.correction.identification.noise import noise_rms
+from rigsim.mjcf.names import CORNERS, FRONT, REAR
+from rigsim.mjcf.variant import BOUNDS
+from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.core.pool import local_executor
+from rigsim.scenarios.records.model.band_error import band_errors
+from rigsim.scenarios.records.model.cell_mass import band_acceleration
+from rigsim.scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
+from rigsim.scenarios.records.model.first_guess import (catalogue, description, is_light, spring_fields, static_guess,
+                                                        static_lateral, xml_nominal)
+from rigsim.scenarios.records.model.model_runs import check_record
+from rigsim.scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
+from rigsim.scenarios.records.model.problem import FitProblem, FitState
+from rigsim.scenarios.records.model.result import Calibration
+from rigsim.scenarios.records.model.uncertainty import uncertainties
+from rigsim.scenarios.records.model.weighting import differential_kernel
 
 __all__ = ["fit_windows", "calibrate", "with_sigma", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "MAX_NFEV", "FTOL",
            "BLOCK_S"]
@@ -107,7 +107,7 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
 #: body's roll mode sits low (0.3-0.7 Hz: the springs' roll stiffness less the load's height times
 #: its weight), lightly damped, where the road's cross-slope excites it: a roll inertia held at the
 #: catalogue's puts that mode off the truck's, and the front wheels' slow force with it. Searched
-#: 0.75-2 times the catalogue's (:data:`~scenarios.records.model.family.RANGES`). The catalogue truck
+#: 0.75-2 times the catalogue's (:data:`~rigsim.scenarios.records.model.family.RANGES`). The catalogue truck
 #: holds the XML's.
 DESCRIBED_ROLL = "chassis_roll_inertia_kg_m2"
 
@@ -148,7 +148,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         The rig (actuator stroke) and output rate; its truck is never used.
     x_ref_m : array_like, m, (n, 4), optional
         The drive: given, the residual is weighted by where the differential correction uses the
-        model (:mod:`scenarios.records.model.weighting`); None: unweighted.
+        model (:mod:`rigsim.scenarios.records.model.weighting`); None: unweighted.
     names : sequence of str
         The fields to fit (default :data:`DEFAULT_NAMES`); the others of :data:`FITTED` are held at
         their first guess (:attr:`Calibration.fixed`), the cab mount rigid (None) unless
@@ -176,10 +176,10 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     executor : concurrent.futures.Executor, optional
         A running pool to use instead of starting one.
     cell_mass : bool
-        Fit the load cells' uncompensated mass too (:mod:`~scenarios.records.model.cell_mass`,
+        Fit the load cells' uncompensated mass too (:mod:`~rigsim.scenarios.records.model.cell_mass`,
         default); False holds it at 0 (a lab whose mass compensation is known to be exact).
     with_state : bool
-        Return the fit's :class:`~scenarios.records.model.problem.FitState` too (for model runs
+        Return the fit's :class:`~rigsim.scenarios.records.model.problem.FitState` too (for model runs
         at the optimum through the same residual, with ``executor`` still running).
     sigma : bool
         Compute the fitted values' uncertainties (default): one more Jacobian at the optimum, by
@@ -317,7 +317,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
 
 def _sigmas(prob: FitProblem, theta, jac, residual) -> tuple[np.ndarray, np.ndarray]:
     """The fitted values' formal and block-robust 1-sigma (SI) at ``theta`` from the residual's
-    ``jac`` and ``residual`` there (:func:`~scenarios.records.model.uncertainty.uncertainties`, blocks
+    ``jac`` and ``residual`` there (:func:`~rigsim.scenarios.records.model.uncertainty.uncertainties`, blocks
     of :data:`BLOCK_S`)."""
     block = int(round(BLOCK_S / (prob.t[1] - prob.t[0])))
     return uncertainties(jac, residual, block, prob.mapping(theta), int(prob.use.sum()))

@@ -2,7 +2,7 @@
 
 A rig's load cell sits under the wheelpan: it reads the tire force plus the pan plate's mass times
 the pan's acceleration, and the lab subtracts its estimate of that mass times an accelerometer's
-reading (:class:`scenarios.core.lab.LabChain`). What is left, ``m_u a_pan`` with ``m_u`` the
+reading (:class:`rigsim.scenarios.core.lab.LabChain`). What is left, ``m_u a_pan`` with ``m_u`` the
 cell's mass less the lab's estimate, grows with frequency squared: a few kilograms of it are a
 few percent of the tire force at 20-30 Hz, which the truck model does not have and the linear
 correction carries into the corrected force.
@@ -21,7 +21,7 @@ typical lab's compensation 7.5 kg too large): worst DLC error 3.1 % with a mass 
 with one shared (both read by plain least squares, below), 2.6 % without the fit.
 
 The acceleration is band-limited by the correction's own low-pass H
-(:data:`~scenarios.records.model.band_error.BAND_LOWPASS`, zero-phase): the LVDT's noise
+(:data:`~rigsim.scenarios.records.model.band_error.BAND_LOWPASS`, zero-phase): the LVDT's noise
 differentiated twice dominates above the truck's band, and the correction passes nothing above it.
 The cells' force in the residual is not band-limited, so the mass is read against ``H a``
 (``test``: the regressor band-limited twice) over ``|H a|^2``: ``(H^2 a) . (m a) = m |H a|^2``
@@ -34,9 +34,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from correction.output.apply import band_limit
-from scenarios.core.lab import pan_acceleration
-from scenarios.records.model.band_error import BAND_LOWPASS
+from rigsim.correction.output.apply import band_limit
+from rigsim.scenarios.core.lab import pan_acceleration
+from rigsim.scenarios.records.model.band_error import BAND_LOWPASS
 
 __all__ = ["band_acceleration", "without_cell_mass", "mass_of", "mass_sigma"]
 

@@ -13,11 +13,11 @@ to use it:
   instead of being kept as the rig made it. It equals L(F_rig) plus the model's estimate of L's
   own error, so it tends to the linear correction as the model explains less. W takes the load
   cells' white noise out of that residual where it outweighs the model's error
-  (:mod:`correction.output.denoise`): with the truck's force explained by the model, the residual
+  (:mod:`rigsim.correction.output.denoise`): with the truck's force explained by the model, the residual
   is mostly noise, and on a smooth road that noise is a large part of what is left to correct.
-  W also takes the residual's slow part out, below :data:`~correction.output.denoise.DRIFT_HZ`
+  W also takes the residual's slow part out, below :data:`~rigsim.correction.output.denoise.DRIFT_HZ`
   (0.7 Hz), as far as it is at the load cells' drift level
-  (:data:`~correction.output.denoise.DRIFT_RMS_N`): there the load cells drift (a lab's coloured
+  (:data:`~rigsim.correction.output.denoise.DRIFT_RMS_N`): there the load cells drift (a lab's coloured
   noise, tens of newtons) and the pans follow the drive, so the model's F_model(x_ref) carries the
   slow force alone; a slow residual far above any drift is the model's own error (a body roll mode
   at 0.3-0.7 Hz that it misses) and is kept, corrected like the rest. On a loaded truck
@@ -33,12 +33,12 @@ first :data:`START_S` of the corrected force are not settled (:func:`settled_mas
 linear correction's filter transients are not.
 
 :func:`correct_with_model` calibrates the model from the record
-(:func:`scenarios.records.model.calibrate.calibrate`) and corrects, or says in one
+(:func:`rigsim.scenarios.records.model.calibrate.calibrate`) and corrects, or says in one
 sentence why the linear correction is to be used instead: the calibration did not converge or could
 not run; without L, the calibrated model does not reproduce F_rig's dynamic part in the correction's
 band beyond the load cells' noise (:data:`DIFFERENTIAL_LIMIT`); with L, the model's own runs show
 that L could turn the model's residual against the hybrid on the wheels it names
-(:mod:`~scenarios.records.model.fallback`: derived from the linear correction's error on the model
+(:mod:`~rigsim.scenarios.records.model.fallback`: derived from the linear correction's error on the model
 truck and what L does to the residual, the DLC guarded apart).
 """
 
@@ -49,19 +49,19 @@ import time
 
 import numpy as np
 
-from correction.output.denoise import DRIFT_HZ, DRIFT_RMS_N, NoiseGain, check_drift_hz, design_noise_gain
-from mjcf.variant import TruckVariant
-from mjcf.names import CORNERS
-from scenarios.core.config import Scenario, ScenarioError
-from scenarios.core.pool import local_executor, run_jobs
-from scenarios.core.watch import SimulationError
-from scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
-from scenarios.records.model.cell_mass import without_cell_mass
-from scenarios.records.model.fallback import hybrid_outlook
-from scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
-from scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
-from scenarios.records.model.restart import calibrate_again
-from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
+from rigsim.correction.output.denoise import DRIFT_HZ, DRIFT_RMS_N, NoiseGain, check_drift_hz, design_noise_gain
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.core.pool import local_executor, run_jobs
+from rigsim.scenarios.core.watch import SimulationError
+from rigsim.scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
+from rigsim.scenarios.records.model.cell_mass import without_cell_mass
+from rigsim.scenarios.records.model.fallback import hybrid_outlook
+from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
+from rigsim.scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
+from rigsim.scenarios.records.model.restart import calibrate_again
+from rigsim.scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 
 __all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "hybrid_correction", "settled_mask", "correct_with_model",
            "fallback_reason"]
@@ -91,8 +91,8 @@ START_S = 3.0
 DIFFERENTIAL_LIMIT = 0.14
 #: The model error past which the hybrid correction F_model(x_ref) + L(F_rig - F_model(x_a)) (``linear``
 #: given, what ``rigsim correct --model`` and ``rigsim paper --model`` use) searches again: a lone wheel
-#: left out (:func:`outlier_wheel`), a fit started anew (:func:`~scenarios.records.model.restart.calibrate_again`),
-#: 1; whether the hybrid is then used is derived from the record (:mod:`~scenarios.records.model.fallback`). Where the model explains
+#: left out (:func:`outlier_wheel`), a fit started anew (:func:`~rigsim.scenarios.records.model.restart.calibrate_again`),
+#: 1; whether the hybrid is then used is derived from the record (:mod:`~rigsim.scenarios.records.model.fallback`). Where the model explains
 #: less, the hybrid tends to the linear correction instead of keeping the model's error, so it stays
 #: the better one further out: on the mismatch suite (``benchmarks/mismatch_suite.py``, 24 plants
 #: off the catalogue in several ways at once, a lab's channels, the cab's choice) the hybrid, forced
@@ -133,7 +133,7 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
     Parameters
     ----------
     variant : TruckVariant
-        The model truck (a calibration's :meth:`~scenarios.records.model.result.Calibration.variant`).
+        The model truck (a calibration's :meth:`~rigsim.scenarios.records.model.result.Calibration.variant`).
     t_s : array_like, s, (n,)
         The record's time axis (uniform, 1 kHz).
     x_ref_m, x_a_m : array_like, m, (n, 4)
@@ -175,13 +175,13 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
         shift the whole record by that transient's share of the mean. Before them the residual
         entering L is held at W's first settled value. None: every sample is settled.
     drift_hz : float or None, Hz
-        The corner of W's drift cut (default :data:`~correction.output.denoise.DRIFT_HZ`): below it
+        The corner of W's drift cut (default :data:`~rigsim.correction.output.denoise.DRIFT_HZ`): below it
         the residual is taken for the load cells' drift and the model's slow force stands alone.
         None: no drift cut, for a lab whose cells do not drift (W takes the white noise only).
     drift_rms_N : float or None, N
-        The load cells' drift level (default :data:`~correction.output.denoise.DRIFT_RMS_N`): a
+        The load cells' drift level (default :data:`~rigsim.correction.output.denoise.DRIFT_RMS_N`): a
         wheel's slow residual at that level is cut as drift, one far above it is the model's error
-        and kept (:func:`~correction.output.denoise.drift_keep`); None: cut whatever its level.
+        and kept (:func:`~rigsim.correction.output.denoise.drift_keep`); None: cut whatever its level.
     with_residual : bool
         Return the residual L corrected, ``W(F_rig - F_model(x_a))`` (N, (n, 4)), too.
 
@@ -266,7 +266,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     model's road force plus the corrected noise; where it explains nothing it is L(F_rig) above
     W's drift cut (0.7 Hz; below it the model's slow force); in between, L(F_rig) plus the model's
     estimate of L's own error. A wheel where the model's runs show that L could turn the model's
-    residual against the hybrid (:func:`~scenarios.records.model.fallback.hybrid_outlook`) is
+    residual against the hybrid (:func:`~rigsim.scenarios.records.model.fallback.hybrid_outlook`) is
     corrected by L alone, the others by the model (the sentence in ``reason`` names them). Without
     ``linear``: F_rig + F_model(x_ref) - F_model(x_a) on every wheel, or the linear correction for
     all of them, as the model error stays within ``excess_limit``.
@@ -286,7 +286,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         again: default :data:`HYBRID_LIMIT` with ``linear``, else :data:`DIFFERENTIAL_LIMIT`.
     cab : {"auto", "held", "fitted"}
         Whether the model's cab is held, fitted, or (default) chosen by the two fits
-        (:func:`~scenarios.records.model.cab_choice.calibrate_cab`).
+        (:func:`~rigsim.scenarios.records.model.cab_choice.calibrate_cab`).
     linear : callable, optional
         ``linear(forces)`` -> ``(corrected, settled)``: the linear correction of (n, 4) forces (N) and
         its settled samples (bool, (n,)).
@@ -297,7 +297,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         The load cells' drift level the cut subtracts (:func:`hybrid_correction`); None: every
         wheel's slow residual cut.
     **calibrate_kw
-        Passed to :func:`~scenarios.records.model.calibrate.calibrate` (windows, max_nfev,
+        Passed to :func:`~rigsim.scenarios.records.model.calibrate.calibrate` (windows, max_nfev,
         fitted_guess...).
 
     Returns

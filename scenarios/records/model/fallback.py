@@ -19,7 +19,7 @@ time series: the two add as they point, and where ``|e_H| < |E[M] + e_H|`` the h
 one in NRMSE; elsewhere the wheel is corrected linearly. (The hybrid loses only where the model's
 residual undoes the linear correction's own error on the model: ``e_H`` against ``E[M]`` and at
 least half as large.) The model error
-(:attr:`~scenarios.records.model.result.Calibration.excess_nrmse`) enters through r: a model that
+(:attr:`~rigsim.scenarios.records.model.result.Calibration.excess_nrmse`) enters through r: a model that
 explains less leaves a larger residual for L to move.
 
 The DLC goal is guarded apart, on the road force the estimates imply, ``R = H - e_H`` (H the
@@ -39,9 +39,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.output.apply import band_limit
-from mjcf.names import CORNERS
-from scenarios.records.model.band_error import BAND_LOWPASS
+from rigsim.correction.output.apply import band_limit
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.records.model.band_error import BAND_LOWPASS
 
 __all__ = ["LAGS_S", "FIT_RATE_HZ", "RIDGE", "DLC_GOAL", "HybridOutlook", "linear_part", "hybrid_outlook"]
 

@@ -1,28 +1,28 @@
 """The model family: which fields of the truck model the calibration can fit, their units and search ranges.
 
-What is fitted, and why (:data:`FITTED`): the fields of :class:`mjcf.variant.TruckVariant` that a
+What is fitted, and why (:data:`FITTED`): the fields of :class:`rigsim.mjcf.variant.TruckVariant` that a
 lab does not know to better than ~10-30 % and that change the wheel forces:
 
 * ``payload_kg``, ``payload_x_m``: the ballast's mass and its position along the truck set the
   static loads and the body's bounce and pitch; the first guess comes from the measured static
-  loads (:func:`~scenarios.records.model.first_guess.static_guess`), the fit refines them;
+  loads (:func:`~rigsim.scenarios.records.model.first_guess.static_guess`), the fit refines them;
   ``payload_y_m``, its centre across the truck, is held where the measured left/right moment puts it
-  (:func:`~scenarios.records.model.first_guess.static_lateral`): the four static loads pin it;
+  (:func:`~rigsim.scenarios.records.model.first_guess.static_lateral`): the four static loads pin it;
 * ``payload_z_m``, the height of the payload's centre of mass, fitted from the XML's 0.56 m (a
-  0.8 m stack on the bed), searched 0.5 m either way within :data:`mjcf.variant.BOUNDS`: the
+  0.8 m stack on the bed), searched 0.5 m either way within :data:`rigsim.mjcf.variant.BOUNDS`: the
   static loads say nothing of it, but it sets the sprung mass's pitch and roll inertia about its
   centre of mass, and so the body's bounce and pitch modes the front wheels feel; a lab knows a
   stack's height only roughly (a taller stack of lighter goods, or a low one of steel), and a
   model that holds the XML's height puts the difference into the front leaf friction and tire
   values. Where the truck is empty there is no payload to raise or lower (and where it is light,
-  under :data:`~scenarios.records.model.first_guess.LIGHT_FRACTION` of the empty truck, its
+  under :data:`~rigsim.scenarios.records.model.first_guess.LIGHT_FRACTION` of the empty truck, its
   height barely matters), and the chassis' pitch inertia (``chassis_pitch_inertia_kg_m2``,
   from the XML's 25 200 kg m^2, searched 0.5-2 times it, :data:`EMPTY_STAND_IN`) is fitted in
   its place: a chassis with its tanks, body and equipment is not the catalogue's, and with little
   or no payload nothing else sets the body's pitch mode; on a loaded truck it is held (the payload's height and the chassis' inertia trade against each other);
 * ``chassis_roll_inertia_kg_m2``, on a described truck only, beside the body's pitch (from the XML's
   2600 kg m^2, searched 0.75-2 times it, the model's cab needing ~1700 kg m^2 of it,
-  :data:`~scenarios.records.model.calibrate.DESCRIBED_ROLL`): a spec sheet gives no roll inertia,
+  :data:`~rigsim.scenarios.records.model.calibrate.DESCRIBED_ROLL`): a spec sheet gives no roll inertia,
   and on soft air springs or worn dampers the body's roll mode sits low (0.3-0.7 Hz), lightly
   damped, where the road's cross-slope excites it;
 * ``tire_stiffness_front/rear_N_per_m``, ``tire_damping_front/rear_Ns_per_m``: per axle (left and
@@ -33,29 +33,29 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   catalogue guess, since a worn or dry multi-leaf spring sticks far harder than a new one;
 * ``axle_mass_front/rear_kg``: the unsprung masses, which set the wheel-hop frequencies with the
   tire stiffness (the two are told apart by the hop mode's force through the tire against the
-  pan's motion); the first guess is the truck's specification (:mod:`~scenarios.records.model.first_guess`),
-  searched 0.6-1.8 times it within :data:`mjcf.variant.BOUNDS` (a heavy drive axle with dual
+  pan's motion); the first guess is the truck's specification (:mod:`~rigsim.scenarios.records.model.first_guess`),
+  searched 0.6-1.8 times it within :data:`rigsim.mjcf.variant.BOUNDS` (a heavy drive axle with dual
   wheels and drum brakes weighs far more than a light steer axle);
 * ``tire_progressive_ratio``, ``tire_progressive_onset_m`` (front tires) and
   ``tire_progressive_ratio_rear``, ``tire_progressive_onset_rear_m``: each axle's tire stiffening, a
   bilinear tire (``TruckVariant.tire_progressive_ratio``: stiffness kt up to the onset deflection,
   (1 + ratio) kt beyond it); a pneumatic tire stiffens over its working deflection, and a model
   whose tire is linear cannot follow it (docs/model_correction.md). The ratio from a catalogue
-  guess of +20 % (:mod:`~scenarios.records.model.first_guess`), searched additively
+  guess of +20 % (:mod:`~rigsim.scenarios.records.model.first_guess`), searched additively
   (:data:`ADDITIVE`: 0-0.7); the onset as the wheel load where the tire stiffens, within the loads
   the windows measure on its axle, from the axle's static load
-  (:mod:`~scenarios.records.model.onset_load`, which says why: an onset beyond every
+  (:mod:`~rigsim.scenarios.records.model.onset_load`, which says why: an onset beyond every
   measured load has no gradient, nor has its ratio); a linear-tire truck fits the ratio to ~0,
   where the onset is not identifiable and does not matter;
 * ``tire_stiffness_factor_fl``, ``tire_stiffness_factor_rl``, ``tire_damping_factor_fl``,
   ``tire_damping_factor_rl``, ``spring_rate_factor_fl``, ``spring_rate_factor_rl``,
   ``spring_friction_factor_fl``, ``spring_friction_factor_rl`` (:data:`STATION_FITTED`): each axle's
   left tire (its stiffness and its damping), leaf spring and interleaf friction over its right one
-  (:mod:`mjcf.stations`), from 1; a real truck's left and right differ (a tire at another pressure,
+  (:mod:`rigsim.mjcf.stations`), from 1; a real truck's left and right differ (a tire at another pressure,
   of another make or warmer, a spring with a broken leaf, leaves that rust and rub harder), and a
   model whose axles are symmetric puts the difference into both wheels' errors, in opposite
   directions. Rates are searched at 0.7-1.3, the tire damping at 0.5-2 (the plant's range,
-  :data:`mjcf.stations.STATION_FACTORS`), the friction at 0.4-2.5: two springs of one truck whose
+  :data:`rigsim.mjcf.stations.STATION_FACTORS`), the friction at 0.4-2.5: two springs of one truck whose
   leaves rub 0.7 and 1.4 times the catalogue's differ by a factor of 2. The tire damping sets the
   wheel-hop peak (~10 Hz), which on a rough road carries most of the rear wheels' dynamic force; the
   mismatch suite's plants (``benchmarks/mismatch_suite.py``) draw each tire's damping 0.8-1.25 times
@@ -73,30 +73,30 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   the model's.
 
 The truck is the one the scenario's ``[vehicle]`` describes (its wheelbase, tracks, rear tires,
-suspensions, spring rates and dampers: :data:`~scenarios.records.model.first_guess.SPEC_FIELDS`),
+suspensions, spring rates and dampers: :data:`~rigsim.scenarios.records.model.first_guess.SPEC_FIELDS`),
 held at the given values: a spec sheet states its geometry. Its springs' rates and dampers per axle
-(:data:`AIR_FITTED`, :func:`~scenarios.records.model.first_guess.spring_fields`) are fitted beside
+(:data:`AIR_FITTED`, :func:`~rigsim.scenarios.records.model.first_guess.spring_fields`) are fitted beside
 the axle's interleaf friction, searched 0.5-2 and 0.3-3 times the catalogue guess: a spec sheet
 quotes an air spring's rate at one load and pressure and a leaf spring's to 5-10 %, and dampers wear
 to a third of their force. An **air axle** has no interleaf friction, but its bushings and its
 dampers' seals rub: its friction is fitted from a small guess
-(:data:`~scenarios.records.model.first_guess.AIR_FRICTION_GUESS_N`), one value for the axle.
+(:data:`~rigsim.scenarios.records.model.first_guess.AIR_FRICTION_GUESS_N`), one value for the axle.
 
 Not fitted: the chassis (5.2 t, its CoM and inertia; the payload's height stands in for a
 sprung mass whose pitch inertia is not the XML's, and on an empty truck the pitch inertia itself
 is fitted, :data:`EMPTY_STAND_IN`), the cab's mass (the
-model's :data:`mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate (but for the left/right factors)
+model's :data:`rigsim.mjcf.cab.CAB_MASS_KG`) and the leaf springs' rate (but for the left/right factors)
 and viscous damping are held at their catalogue (XML) values; the tire free radius only moves
 the static ride height, and the pan mass does not enter a tire force whose pans follow a given
 motion, so neither can be identified from x_a and F_rig. How well each fitted field is pinned
-shows in its 1-sigma (:class:`~scenarios.records.model.result.Calibration`); the onset of a tire
+shows in its 1-sigma (:class:`~rigsim.scenarios.records.model.result.Calibration`); the onset of a tire
 that does not stiffen (ratio fitted to ~0) changes nothing, and its sigma says so. A tire whose
 wheels never leave the stiff branch (the heavy truck's front tires) trades its stiffness against
 its ratio; that is why each axle has its own ratio and onset: one ratio shared by both axles
 settles at a compromise that bends both axles' tire stiffnesses and leaves one axle's wheels far
 from the plant's forces.
 
-The fit itself: :mod:`scenarios.records.model.calibrate`.
+The fit itself: :mod:`rigsim.scenarios.records.model.calibrate`.
 """
 
 from __future__ import annotations
@@ -109,7 +109,7 @@ STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "tire_
                   "tire_damping_factor_rl", "spring_rate_factor_fl", "spring_rate_factor_rl",
                   "spring_friction_factor_fl", "spring_friction_factor_rl")
 #: Each axle's spring rate (an air spring's at the empty truck's load) and damper: fitted on a described
-#: truck (:func:`~scenarios.records.model.first_guess.spring_fields`), where the names fit the axle's friction.
+#: truck (:func:`~rigsim.scenarios.records.model.first_guess.spring_fields`), where the names fit the axle's friction.
 AIR_FITTED = ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spring_rate_rear_N_per_m",
               "spring_damping_rear_Ns_per_m")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
@@ -140,7 +140,7 @@ DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pi
 #: the chassis' pitch inertia (the module's description).
 EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
 #: Search range of each fitted field about its first guess: (low, high) factors, or for the fields
-#: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`mjcf.variant.BOUNDS`.
+#: of :data:`ADDITIVE` the span either side in the field's unit. Clipped to :data:`rigsim.mjcf.variant.BOUNDS`.
 #: The onsets have none: their range is the loads measured on their axle (onset_load).
 RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "chassis_pitch_inertia_kg_m2": (0.5, 2.0),
           # down to 0.75 of the XML's: the model's cab taken off the chassis (cab_mount_hz) needs ~1700 kg m^2 of it
@@ -159,9 +159,9 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "cha
           "spring_damping_front_Ns_per_m": (0.3, 3.0), "spring_damping_rear_Ns_per_m": (0.3, 3.0)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
-#: :data:`mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
+#: :data:`rigsim.mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
 #: ratio, whose linear tire is ratio 0; the onsets are searched as loads, N, their range and span
-#: the loads measured on their axle (:mod:`~scenarios.records.model.onset_load`).
+#: the loads measured on their axle (:mod:`~rigsim.scenarios.records.model.onset_load`).
 ADDITIVE = ("payload_x_m", "payload_z_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
             "tire_progressive_onset_rear_m")
 #: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab

@@ -11,7 +11,7 @@ The payload's guess is the only one taken from the record; every other field sta
 
 The truck is the one the scenario's ``[vehicle]`` describes (:func:`description`: its wheelbase,
 tracks, rear tires, suspensions, spring rates and dampers, from its spec sheet;
-:mod:`mjcf.description`), the catalogue truck of ``truck_rig.xml`` where it gives none: the
+:mod:`rigsim.mjcf.description`), the catalogue truck of ``truck_rig.xml`` where it gives none: the
 nominal values are read from that truck compiled, and the catalogue guess is centred on them.
 """
 
@@ -21,16 +21,16 @@ import functools
 
 import numpy as np
 
-from hydraulics.params import GRAVITY_M_S2
-from mjcf import names as mjnames
-from mjcf.build import build_model, nominal_values
-from mjcf.physics import EquilibriumError
-from mjcf.description import AIR_DAMPING_NS_PER_M, AIR_RATE_N_PER_M, DESCRIPTION_FIELDS, described, suspension_of
-from mjcf.variant import BOUNDS, TruckVariant
-from mjcf.names import CORNERS, FRONT
-from mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
-from scenarios.core.config import Scenario, ScenarioError
-from scenarios.records.model.model_runs import static_axle_loads
+from rigsim.hydraulics.params import GRAVITY_M_S2
+from rigsim.mjcf import names as mjnames
+from rigsim.mjcf.build import build_model, nominal_values
+from rigsim.mjcf.physics import EquilibriumError
+from rigsim.mjcf.description import AIR_DAMPING_NS_PER_M, AIR_RATE_N_PER_M, DESCRIPTION_FIELDS, described, suspension_of
+from rigsim.mjcf.variant import BOUNDS, TruckVariant
+from rigsim.mjcf.names import CORNERS, FRONT
+from rigsim.mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
+from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
 __all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
@@ -43,8 +43,8 @@ CATALOGUE_FACTORS = {"tire_stiffness_front_N_per_m": 0.85, "tire_stiffness_rear_
                      # the axles' masses taken as the truck's specification gives them (the XML's)
                      "axle_mass_front_kg": 1.0, "axle_mass_rear_kg": 1.0}
 #: Hz: the catalogue guess of the cab's mount frequency (the XML has a rigid cab, so there is no
-#: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (mjcf.variant.BOUNDS);
-#: its search range (:data:`~scenarios.records.model.family.RANGES`) is 1-30 Hz.
+#: nominal value to take a factor of): a suspended cab bounces at 1.5-3 Hz (rigsim.mjcf.variant.BOUNDS);
+#: its search range (:data:`~rigsim.scenarios.records.model.family.RANGES`) is 1-30 Hz.
 CATALOGUE_CAB_MOUNT_HZ = 2.5
 #: 1: the catalogue guess of the progressive tire's extra stiffness beyond its onset
 #: (``TruckVariant.tire_progressive_ratio``; the XML's tire is linear, ratio 0): radial truck tires
@@ -53,7 +53,7 @@ CATALOGUE_TIRE_RATIO = 0.2
 
 
 #: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
-#: their given values: the geometry and suspension (:data:`mjcf.description.DESCRIPTION_FIELDS`); the
+#: their given values: the geometry and suspension (:data:`rigsim.mjcf.description.DESCRIPTION_FIELDS`); the
 #: spring rates and dampers are fitted from them (:func:`spring_fields`). The masses and
 #: inertias are not among them: the model's are the catalogue's and the fit's (a plant's are its own,
 #: and a scenario that carries a plant must not hand them to its model).
@@ -67,7 +67,7 @@ SPRING_CATALOGUE_FACTORS = {"spring_rate_front_N_per_m": 1.15, "spring_rate_rear
 #: N: the guess of an air axle's friction per spring (its bushings and its dampers' seals; an air
 #: spring has no leaves to rub). **Estimate**: an air suspension's Coulomb friction is small beside
 #: a multi-leaf spring's 1-5 kN (Cebon 1999, ch. 2), a hundred newtons or so; searched 0.05-8 times
-#: the catalogue guess (:data:`~scenarios.records.model.family.RANGES`), 6-900 N.
+#: the catalogue guess (:data:`~rigsim.scenarios.records.model.family.RANGES`), 6-900 N.
 AIR_FRICTION_GUESS_N = 100.0
 
 
@@ -174,7 +174,7 @@ LIGHTER_FRACTION = 0.1
 #: An estimated payload below this fraction of the empty truck's weight (1) is light: its height
 #: barely moves the sprung mass's pitch inertia, and the chassis' own (its tanks, body and
 #: equipment, not the catalogue's) sets the body's pitch mode; :func:`calibrate` fits the chassis'
-#: pitch inertia in the payload height's place (:data:`~scenarios.records.model.family.EMPTY_STAND_IN`).
+#: pitch inertia in the payload height's place (:data:`~rigsim.scenarios.records.model.family.EMPTY_STAND_IN`).
 #: An empty truck whose chassis and axles are off the catalogue reads as a light one (the mismatch
 #: suite's empty gen21: 360 kg, 5 %; the height fitted, its front wheels stay at 0.54 and 0.48 of
 #: the linear floor, the pitch inertia fitted 0.36 and 0.34). At 1400-1540 kg (gen10, gen22: 20-22 %)

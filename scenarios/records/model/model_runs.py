@@ -1,12 +1,12 @@
 """Truck-model runs driven by measured pan motion: the model half of the model correction.
 
-:func:`model_forces` is the road test of a truck variant (:class:`mjcf.variant.TruckVariant`) whose
+:func:`model_forces` is the road test of a truck variant (:class:`rigsim.mjcf.variant.TruckVariant`) whose
 wheelpans follow a given motion sampled at the output rate (a rig's drive x_ref or its LVDTs'
 x_a, 1 kHz): the motion is interpolated onto the road test's steps by a cubic spline
 (positions, velocities and the mid-step values each step holds, all from the one spline), the truck starts from static rest on the
 pans at the first sample's positions and is held there for a settling lead-in
 (:data:`SETTLE_S`, so the leaf springs' dry friction and the soft constraints settle), then the
-pans follow the motion. It uses the one rig (:class:`scenarios.core.rig.Rig`, ``hydraulic=False``)
+pans follow the motion. It uses the one rig (:class:`rigsim.scenarios.core.rig.Rig`, ``hydraulic=False``)
 and nothing of a road: only measured signals enter.
 
 :func:`static_axle_loads` gives the static tire loads of a variant at rest (the catalogue
@@ -20,11 +20,11 @@ import dataclasses
 
 import numpy as np
 
-from mjcf.variant import TruckVariant
-from mjcf.physics import EquilibriumError, tire_forces
-from scenarios.core.config import Scenario, ScenarioError
-from scenarios.core.drive import Drive
-from scenarios.core.rig import Rig
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.mjcf.physics import EquilibriumError, tire_forces
+from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.core.drive import Drive
+from rigsim.scenarios.core.rig import Rig
 
 __all__ = ["SETTLE_S", "NoRestError", "model_forces", "pan_motion_drive", "static_axle_loads", "window_job",
            "fit_window_job", "check_record", "portable"]

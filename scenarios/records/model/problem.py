@@ -1,8 +1,8 @@
 """The calibration's least-squares problem: scaled parameters, the weighted residual, its Jacobian.
 
-:func:`scenarios.records.model.calibrate.calibrate` sets it up and hands it to
+:func:`rigsim.scenarios.records.model.calibrate.calibrate` sets it up and hands it to
 ``scipy.optimize.least_squares``; the load cells' mass is solved for inside the residual
-(:mod:`scenarios.records.model.cell_mass`).
+(:mod:`rigsim.scenarios.records.model.cell_mass`).
 """
 
 from __future__ import annotations
@@ -11,12 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mjcf.variant import BOUNDS, TruckVariant
-from scenarios.core.pool import run_jobs
-from scenarios.records.model.cell_mass import band_limited, mass_of, mass_sigma
-from scenarios.records.model.family import ADDITIVE, COMPLIANCE, RANGES
-from scenarios.records.model.model_runs import SETTLE_S, fit_window_job, portable
-from scenarios.records.model.onset_load import ONSET_STIFFNESS
+from rigsim.mjcf.variant import BOUNDS, TruckVariant
+from rigsim.scenarios.core.pool import run_jobs
+from rigsim.scenarios.records.model.cell_mass import band_limited, mass_of, mass_sigma
+from rigsim.scenarios.records.model.family import ADDITIVE, COMPLIANCE, RANGES
+from rigsim.scenarios.records.model.model_runs import SETTLE_S, fit_window_job, portable
+from rigsim.scenarios.records.model.onset_load import ONSET_STIFFNESS
 
 __all__ = ["FitProblem", "FitState", "FD_STEP", "REUSE_MAX", "REUSE_RATIO"]
 
@@ -36,7 +36,7 @@ REUSE_MAX, REUSE_RATIO = 4, 0.5
 @dataclass(frozen=True)
 class FitState:
     """A finished fit as its least-squares problem left it: for a question about the optimum that
-    needs model runs through the same residual (:func:`~scenarios.records.model.cab_choice.cab_scan`).
+    needs model runs through the same residual (:func:`~rigsim.scenarios.records.model.cab_choice.cab_scan`).
 
     Attributes
     ----------
@@ -151,7 +151,7 @@ class FitProblem:
         return self.runs([self.variant(th) for th in thetas])
 
     def runs(self, variants) -> list[list[np.ndarray]]:
-        """The force of each truck variant (:class:`~mjcf.variant.TruckVariant`) on each window
+        """The force of each truck variant (:class:`~rigsim.mjcf.variant.TruckVariant`) on each window
         (lead-in included), N: one worker job per window and variant, all at once."""
         jobs = [(fit_window_job, (v, self.t[a:e], self.x_a[a:e], self.base, SETTLE_S))
                 for v in variants for a, _, e in self.windows]
@@ -182,7 +182,7 @@ class FitProblem:
 
     def cell_mass(self, model_N, block: int) -> tuple[float, float]:
         """The load cells' uncompensated mass that best explains the weighted residual and its
-        block-robust 1-sigma over blocks of ``block`` rows, kg (:mod:`~scenarios.records.model.cell_mass`);
+        block-robust 1-sigma over blocks of ``block`` rows, kg (:mod:`~rigsim.scenarios.records.model.cell_mass`);
         (0, 0) without the pans' acceleration."""
         if self.acc is None:
             return 0.0, 0.0

@@ -12,11 +12,11 @@ plant's and its friction at twice it. Started with both springs sliding
 (:data:`SLIDING_START` times the first guess) the same record fits to the load cells' noise. Only a
 fit the correction would refuse is searched again (its model error above the correction's limit),
 so a record that fits costs nothing more; the better of the two fits is kept (mean square fit NRMSE
-over the wheels, :func:`~scenarios.records.model.cab_choice.mean_square`), and says so
-(:attr:`Calibration.second_start <scenarios.records.model.result.Calibration.second_start>`).
+over the wheels, :func:`~rigsim.scenarios.records.model.cab_choice.mean_square`), and says so
+(:attr:`Calibration.second_start <rigsim.scenarios.records.model.result.Calibration.second_start>`).
 
 Where the kept fit is still refused, the truck is fitted once more with each axle's left and right
-wheel stations held alike (:data:`~scenarios.records.model.family.STATION_FITTED` not fitted, the
+wheel stations held alike (:data:`~rigsim.scenarios.records.model.family.STATION_FITTED` not fitted, the
 symmetric family): eight values fewer to wander along. The same suite's gen15 case on its plant
 outside the family (tires stiffening +50 % over 2 cm, symmetric) fits to a model error of 0.38 on
 its rear wheels from both starts with the stations free (an axle's left spring 26 % stiffer than
@@ -30,11 +30,11 @@ import dataclasses
 
 import numpy as np
 
-from scenarios.core.config import ScenarioError
-from scenarios.core.watch import SimulationError
-from scenarios.records.model.cab_choice import mean_square
-from scenarios.records.model.family import STATION_FITTED
-from scenarios.records.model.result import Calibration
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.watch import SimulationError
+from rigsim.scenarios.records.model.cab_choice import mean_square
+from rigsim.scenarios.records.model.family import STATION_FITTED
+from rigsim.scenarios.records.model.result import Calibration
 
 __all__ = ["SLIDING_START", "FRICTION", "ORDINALS", "sliding_start", "calibrate_again"]
 
@@ -64,9 +64,9 @@ def calibrate_again(cal: Calibration, run, excess_limit: float) -> Calibration:
         The first fit.
     run : callable
         ``run(start=..., symmetric=...)`` -> Calibration: the same calibration of the same record
-        from ``start`` (SI values by field, :func:`~scenarios.records.model.calibrate.calibrate`'s
+        from ``start`` (SI values by field, :func:`~rigsim.scenarios.records.model.calibrate.calibrate`'s
         ``start``; None: the first guess), with ``symmetric`` each axle's left and right stations
-        held alike (:func:`~scenarios.records.model.cab_choice.calibrate_cab`'s ``symmetric``). A
+        held alike (:func:`~rigsim.scenarios.records.model.cab_choice.calibrate_cab`'s ``symmetric``). A
         search it refuses (ScenarioError) or whose model run fails (SimulationError) is skipped.
     excess_limit : float, 1
         The correction's limit on the model error (:attr:`Calibration.excess_nrmse`).

@@ -1,7 +1,7 @@
 """Result objects of the model correction: a calibration and a correction (or its fallback).
 
 Both are frozen dataclasses whose fields are plain numbers, strings, tuples, mappings and numpy
-arrays, so :func:`scenarios.core.files.to_json` / ``write_json`` write them as they are
+arrays, so :func:`rigsim.scenarios.core.files.to_json` / ``write_json`` write them as they are
 (:meth:`ModelCorrection.to_dict` leaves the time series out of the JSON).
 """
 
@@ -12,12 +12,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from mjcf.variant import TruckVariant
+from rigsim.mjcf.names import CORNERS
+from rigsim.mjcf.variant import TruckVariant
 
 __all__ = ["Calibration", "ModelCorrection", "MODEL", "LINEAR", "model_error", "fitted_text"]
 
-#: The two answers of :func:`scenarios.records.model.differential.correct_with_model`.
+#: The two answers of :func:`rigsim.scenarios.records.model.differential.correct_with_model`.
 MODEL, LINEAR = "model", "linear"
 
 
@@ -29,18 +29,18 @@ def model_error(fit_nrmse, noise_nrmse) -> tuple:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The truck model fitted to a rig record (:func:`scenarios.records.model.calibrate.calibrate`).
+    """The truck model fitted to a rig record (:func:`rigsim.scenarios.records.model.calibrate.calibrate`).
 
     Attributes
     ----------
     names : tuple of str
-        The fitted :class:`mjcf.variant.TruckVariant` fields.
+        The fitted :class:`rigsim.mjcf.variant.TruckVariant` fields.
     units : tuple of str
         Their SI units ("kg", "m", "N/m", "N s/m", "N", "Hz").
     initial : tuple of float
         The first guess, SI (payload and its position from the measured static loads, a tire's
-        onset at its axle's static load (:mod:`scenarios.records.model.onset_load`), the
-        rest catalogue values: :func:`scenarios.records.model.first_guess.catalogue`).
+        onset at its axle's static load (:mod:`rigsim.scenarios.records.model.onset_load`), the
+        rest catalogue values: :func:`rigsim.scenarios.records.model.first_guess.catalogue`).
     fitted : tuple of float
         The fitted values, SI.
     sigma : tuple of float
@@ -50,14 +50,14 @@ class Calibration:
         treats the residual as white: a lower bound where a model mismatch leaves a coloured one.
     sigma_robust : tuple of float
         1-sigma from the block-robust sandwich estimate (blocks of
-        :data:`~scenarios.records.model.calibrate.BLOCK_S`), which allows a residual
+        :data:`~rigsim.scenarios.records.model.calibrate.BLOCK_S`), which allows a residual
         correlated in time; neither includes the bias a structural model error leaves.
     fixed : Mapping[str, float or None]
         Fields held at catalogue values (not identifiable from the record, or not asked for), SI;
         None: the XML's (``cab_mount_hz`` None: the rigid cab; ``tire_progressive_ratio`` None:
         the linear tire).
     fit_nrmse : tuple of float
-        Per wheel (fl, fr, rl, rr): NRMSE (1, :func:`correction.metrics.dlc.nrmse`) of the fitted model's
+        Per wheel (fl, fr, rl, rr): NRMSE (1, :func:`rigsim.correction.metrics.dlc.nrmse`) of the fitted model's
         force, pans following the measured x_a, against the measured rig force, on the windows'
         scored samples (the load cells' noise included).
     initial_nrmse : tuple of float
@@ -67,7 +67,7 @@ class Calibration:
         before it).
     weighted : bool
         The residual was weighted towards where the correction uses the model
-        (:mod:`scenarios.records.model.weighting`); :attr:`fit_nrmse` is unweighted.
+        (:mod:`rigsim.scenarios.records.model.weighting`); :attr:`fit_nrmse` is unweighted.
     evaluations : int
         Truck variants run (each on every window), the Jacobians' perturbed ones included, by every
         calibration behind this one (with the cab's choice both families'; with a wheel left out,
@@ -76,20 +76,20 @@ class Calibration:
         The least squares met a tolerance (not its evaluation limit).
     message : str
         The optimizer's word on how it stopped, and any stiffening ratio set to 0 because its
-        onset lies beyond every measured load (:data:`~scenarios.records.model.onset_load.TOP`).
+        onset lies beyond every measured load (:data:`~rigsim.scenarios.records.model.onset_load.TOP`).
     wall_time_s : float, s
     bounds : tuple of (float, float)
         Each fitted field's search range, SI (its first guess times
-        :data:`~scenarios.records.model.family.RANGES`, clipped to
-        :data:`mjcf.variant.BOUNDS`; a tire's onset: the loads measured on its axle over the fitted
+        :data:`~rigsim.scenarios.records.model.family.RANGES`, clipped to
+        :data:`rigsim.mjcf.variant.BOUNDS`; a tire's onset: the loads measured on its axle over the fitted
         kt): a value at its edge was stopped there, not fitted.
     noise_nrmse : tuple of float
-        Per wheel: the measured force's white noise (:func:`correction.identification.noise.noise_rms`, read above
+        Per wheel: the measured force's white noise (:func:`rigsim.correction.identification.noise.noise_rms`, read above
         the truck's band) over the same std as :attr:`fit_nrmse`, 1: the part of the fit NRMSE no
         model can remove; () when not estimated.
     band_nrmse : tuple of float
         Per wheel: the fit's dynamic residual inside the correction's band, over the band-limited
-        measured force's std (:func:`scenarios.records.model.band_error.band_errors`), 1; () when not
+        measured force's std (:func:`rigsim.scenarios.records.model.band_error.band_errors`), 1; () when not
         measured.
     band_noise_nrmse : tuple of float
         Per wheel: the white noise's share of :attr:`band_nrmse`, 1.
@@ -97,18 +97,18 @@ class Calibration:
         The corners whose measured forces were fitted (all four unless one was left out).
     cell_mass_kg : float, kg
         The mass the load cells weigh with their pans' acceleration beyond the lab's compensation,
-        fitted with the truck (:mod:`scenarios.records.model.cell_mass`; negative: the lab
+        fitted with the truck (:mod:`rigsim.scenarios.records.model.cell_mass`; negative: the lab
         compensates too much); 0 where not fitted.
     cell_mass_sigma_kg : float, kg
         Its block-robust 1-sigma given the truck's fitted values.
     cab_choice : str
         Where the calibration chose whether to fit the cab's mount
-        (:func:`scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
+        (:func:`rigsim.scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
         and why; "" otherwise.
     second_start : str
         Where the first fit was refused for its model error and searched again, from the leaf
         springs sliding and with each axle's stations held alike
-        (:func:`scenarios.records.model.restart.calibrate_again`): one sentence on the fits and
+        (:func:`rigsim.scenarios.records.model.restart.calibrate_again`): one sentence on the fits and
         which is kept; "" otherwise.
 
     Examples
@@ -116,7 +116,7 @@ class Calibration:
     What ``CorrectionResult.calibration`` holds after a correction by the truck model; one built
     by hand here, two fields fitted on two windows:
 
-    >>> from scenarios.records.model.result import Calibration
+    >>> from rigsim.scenarios.records.model.result import Calibration
     >>> cal = Calibration(names=("payload_kg", "payload_x_m"), units=("kg", "m"),
     ...                   initial=(6000.0, -1.0), fitted=(6352.4, -1.32), sigma=(8.1, 0.004),
     ...                   sigma_robust=(21.0, 0.011), fixed={"cab_mount_hz": None},
@@ -165,7 +165,7 @@ class Calibration:
         return out
 
     def variant(self) -> TruckVariant:
-        """The fitted truck as a :class:`mjcf.variant.TruckVariant`."""
+        """The fitted truck as a :class:`rigsim.mjcf.variant.TruckVariant`."""
         return TruckVariant(**self.values())
 
     def at_edge(self, name: str, fraction: float = 0.02) -> bool:
@@ -267,7 +267,7 @@ class ModelCorrection:
     corrected_N : numpy.ndarray or None, N, (n, 4)
         The corrected wheel forces on the record's time axis (unfiltered; method "model" only).
     settled : numpy.ndarray of bool or None, (n,)
-        Samples after the model runs' start-up transient (:data:`~scenarios.records.model.differential.START_S`).
+        Samples after the model runs' start-up transient (:data:`~rigsim.scenarios.records.model.differential.START_S`).
     wall_time_s : float, s
         Calibration plus correction.
     timings : Mapping[str, float]
@@ -285,7 +285,7 @@ class ModelCorrection:
         residual (its rms over the whole band), None for a wheel whose residual was not white above
         the truck's band (W passed it); None without W (the differential form, or method "linear").
     outlook : HybridOutlook or None
-        The derived fallback's figures per wheel (:mod:`~scenarios.records.model.fallback`), where
+        The derived fallback's figures per wheel (:mod:`~rigsim.scenarios.records.model.fallback`), where
         the hybrid was weighed against the linear correction; None otherwise.
     """
 

@@ -1,10 +1,10 @@
 """Judging a corrected wheel force against the road force, as the project's scoring does.
 
-NRMSE (:func:`correction.metrics.dlc.nrmse`) of the corrected force against the road force, both through
+NRMSE (:func:`rigsim.correction.metrics.dlc.nrmse`) of the corrected force against the road force, both through
 the project's band limit (``band_limit(., fs, "regularized", "zerophase")``: the 30 Hz
 6th-order Butterworth, zero-phase, of the ``best`` method, as ``benchmarks/nrmse_decomposition.py``
 does), on the samples where that band limit has settled (at
-:data:`scenarios.studies.scoring.SETTLING_TOLERANCE`) and the caller's rows; DLC of the unfiltered
+:data:`rigsim.scenarios.studies.scoring.SETTLING_TOLERANCE`) and the caller's rows; DLC of the unfiltered
 corrected force against the unfiltered road force's on the same samples (the model correction
 needs no low-pass, so it is judged on the whole force).
 """
@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from correction.output.apply import band_limit
-from correction.metrics.dlc import dlc, nrmse
-from correction.output.filters import reference_filter
-from correction.output.pipeline import SETTLING_TOLERANCE
-from scenarios.records.methods import BEST
+from rigsim.correction.output.apply import band_limit
+from rigsim.correction.metrics.dlc import dlc, nrmse
+from rigsim.correction.output.filters import reference_filter
+from rigsim.correction.output.pipeline import SETTLING_TOLERANCE
+from rigsim.scenarios.records.methods import BEST
 
 __all__ = ["LOWPASS", "MODE", "band_rows", "score_correction"]
 
@@ -38,7 +38,7 @@ def score_correction(corrected_N, road_N, fs: float, rows=None) -> dict[str, np.
     corrected_N, road_N : array_like, N, (n, 4)
     fs : float, Hz
     rows : array_like of bool, (n,), optional
-        Samples to score (e.g. :func:`~scenarios.records.model.differential.settled_mask`),
+        Samples to score (e.g. :func:`~rigsim.scenarios.records.model.differential.settled_mask`),
         further limited to the band limit's settled samples.
     """
     x, r = np.asarray(corrected_N, dtype=float), np.asarray(road_N, dtype=float)

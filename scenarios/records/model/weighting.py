@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from correction.output.lowpass import as_lowpass
-from scenarios.records.methods import BEST
+from rigsim.correction.output.lowpass import as_lowpass
+from rigsim.scenarios.records.methods import BEST
 
 __all__ = ["KERNEL_S", "differential_weight", "differential_kernel"]
 

@@ -3,7 +3,7 @@
 On the simulated rig (``rigsim identify SCENARIO.toml --out DIR``) or from a recorded file of
 drive and LVDT channels of a real rig (``rigsim identify --from-file REC --pairs
 fl=DRIVE:LVDT,... [--time-col NAME] --out DIR``; REC in any format that
-:func:`correction.io.measured.read_channels` reads, lengths converted to m). Writes
+:func:`rigsim.correction.io.measured.read_channels` reads, lengths converted to m). Writes
 ``DIR/actuators.toml`` (one T_a per corner, the file ``rigsim correct --actuators`` reads),
 ``DIR/identification.json`` (fit diagnostics) and ``DIR/bode.png`` (data against fit).
 """
@@ -14,16 +14,16 @@ import math
 import pathlib
 import sys
 
-from scenarios.core.flags import (add_channel_timing, add_command, add_duration, add_force, add_number_format,
-                                  add_out, add_pairs, add_quiet, add_time_col)
+from rigsim.scenarios.core.flags import (add_channel_timing, add_command, add_duration, add_force, add_number_format,
+                                         add_out, add_pairs, add_quiet, add_time_col)
 
 __all__ = ["channel_timing", "add_parser", "cmd_identify"]
 
 
 def channel_timing(args, what: str):
-    """The :class:`~correction.io.acquisition.ChannelFilter` of ``--{what}-filter`` and ``--{what}-delay``
+    """The :class:`~rigsim.correction.io.acquisition.ChannelFilter` of ``--{what}-filter`` and ``--{what}-delay``
     (None when neither is given); one ScenarioError sentence naming the option otherwise."""
-    from scenarios.records.timing import channel_filter
+    from rigsim.scenarios.records.timing import channel_filter
 
     return channel_filter(getattr(args, f"{what}_filter", None), getattr(args, f"{what}_delay", None),
                           option=f"--{what}-filter", delay_option=f"--{what}-delay")
@@ -51,7 +51,7 @@ def add_parser(subparsers) -> None:
 
 
 def _check(args):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     if (getattr(args, "decimal", None) or getattr(args, "thousands", None)) and args.from_file is None:
         raise ScenarioError("--decimal and --thousands go with --from-file; a simulated identification reads no "
@@ -75,13 +75,13 @@ def _check(args):
 
 
 def cmd_identify(args) -> int:
-    from correction.io.actuator_file import write_actuators_file
-    from scenarios.core.config import ScenarioError, load_scenario
-    from scenarios.core.drive import IDENT_SEED
-    from scenarios.core.files import atomic_write_bytes, to_json
-    from scenarios.core.outputs import staged_output
-    from scenarios.records.naming import Naming
-    from scenarios.studies.identify.report import bode_png
+    from rigsim.correction.io.actuator_file import write_actuators_file
+    from rigsim.scenarios.core.config import ScenarioError, load_scenario
+    from rigsim.scenarios.core.drive import IDENT_SEED
+    from rigsim.scenarios.core.files import atomic_write_bytes, to_json
+    from rigsim.scenarios.core.outputs import staged_output
+    from rigsim.scenarios.records.naming import Naming
+    from rigsim.scenarios.studies.identify.report import bode_png
 
     _check(args)
     seed = IDENT_SEED if args.seed is None else int(args.seed)
@@ -89,14 +89,14 @@ def cmd_identify(args) -> int:
     naming = Naming({"pairs": "--pairs", "lvdt_filter": "--lvdt-filter"})
     lvdt_filter = None
     if args.from_file is not None:
-        from scenarios.records.recorded import parse_pairs
+        from rigsim.scenarios.records.recorded import parse_pairs
 
         parse_pairs(args.pairs, naming)  # the syntax of --pairs before anything is written
         lvdt_filter = channel_timing(args, "lvdt")
     inputs = (args.from_file, *(scenario.input_files if scenario is not None else ()))
     with staged_output(args.out, force=getattr(args, "force", False), inputs=inputs) as stage:
         if args.from_file is not None:
-            from scenarios.records import recorded
+            from rigsim.scenarios.records import recorded
 
             ident = recorded.identify_recorded(args.from_file, args.pairs, time_col=args.time_col,
                                                decimal=getattr(args, "decimal", None),
@@ -104,8 +104,8 @@ def cmd_identify(args) -> int:
                                                lvdt_filter=lvdt_filter)
             title = pathlib.Path(args.from_file).name
         else:
-            from correction.identification.actuator_fit import ActuatorFitError
-            from scenarios.studies.identify.compute import identify_rig
+            from rigsim.correction.identification.actuator_fit import ActuatorFitError
+            from rigsim.scenarios.studies.identify.compute import identify_rig
 
             if not args.quiet:
                 print(f"identifying {scenario.name}: independent random drives on the four posts", file=sys.stderr,

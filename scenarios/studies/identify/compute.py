@@ -3,7 +3,7 @@
 With the truck on the pans, the four actuators are driven by independent band-limited random
 drives at the test drive's rms in the band the correction uses (:func:`matched_drive`). The multi-input H1 estimate separates each post's own path from what the other posts
 do (the test drive cannot: front and rear are the same profile delayed, coherence ~0.997), and
-each corner's diagonal path is fitted by :func:`correction.identification.actuator_fit.fit_frequency_response`
+each corner's diagonal path is fitted by :func:`rigsim.correction.identification.actuator_fit.fit_frequency_response`
 (the one fitting policy of the project: stable, minimum phase, T_a(0) = 1, orders by held-out
 error). ``rigsim identify`` writes the result as an actuators file that ``rigsim correct`` reads;
 the studies (paper, sweep, iterate) correct with it.
@@ -16,14 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.identification.actuator_fit import fit_frequency_response
-from correction.identification.identify import h1_estimate
-from correction.output.lowpass import BAND_HZ
-from mjcf.names import CORNERS
-from scenarios.core.drive import IDENT_SEED, Drive, identification_drive
-from correction.io.acquisition import undo_timing
-from scenarios.core.lab import LabChain, measure_lvdt
-from scenarios.core.rig import Rig
+from rigsim.correction.identification.actuator_fit import fit_frequency_response
+from rigsim.correction.identification.identify import h1_estimate
+from rigsim.correction.output.lowpass import BAND_HZ
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.drive import IDENT_SEED, Drive, identification_drive
+from rigsim.correction.io.acquisition import undo_timing
+from rigsim.scenarios.core.lab import LabChain, measure_lvdt
+from rigsim.scenarios.core.rig import Rig
 
 __all__ = ["IDENT_MIN_S", "IDENT_SKIP_S", "MATCH_BAND_HZ", "FIT_BAND_HZ", "RigIdentification", "band_rms",
            "matched_drive", "identify_rig"]
@@ -59,7 +59,7 @@ def matched_drive(test_drive: Drive, duration_s: float, *, seed: int = IDENT_SEE
                   band_hz: tuple[float, float] = MATCH_BAND_HZ) -> tuple[Drive, float]:
     """The identification drive whose rms in ``band_hz`` equals the test drive's mean rms there.
 
-    Four independent road-like random drives (:func:`scenarios.core.drive.identification_drive`:
+    Four independent road-like random drives (:func:`rigsim.scenarios.core.drive.identification_drive`:
     displacement PSD flat to 1 Hz, 1/f^2 above, 0.05-60 Hz, the drive ``rigsim validate``
     identifies with), scaled so that each one's rms in ``band_hz`` equals the test drive's mean
     rms over its four posts there: a servo-hydraulic actuator is nonlinear (its valve's flow
@@ -95,7 +95,7 @@ class RigIdentification:
     ----------
     scenario_name : str
     fits : Mapping[str, ActuatorFit]
-        Per corner (:data:`mjcf.names.CORNERS`).
+        Per corner (:data:`rigsim.mjcf.names.CORNERS`).
     drive_rms_m : float, m
         rms of each identification drive in :data:`MATCH_BAND_HZ` (the test drive's there).
     record_s : float, s
@@ -113,7 +113,7 @@ class RigIdentification:
     events: Mapping
 
     def actuators(self) -> tuple:
-        """T_a = (num, den) per corner, in :data:`mjcf.names.CORNERS` order."""
+        """T_a = (num, den) per corner, in :data:`rigsim.mjcf.names.CORNERS` order."""
         return tuple(self.fits[c].as_tf() for c in CORNERS)
 
     def meta(self) -> dict:
@@ -145,17 +145,17 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
     seed : int
     rig : Rig, optional
         The scenario's hydraulic rig, if already built.
-    lab : scenarios.core.lab.LabChain, optional
-        The lab's measurement of the LVDTs (:func:`scenarios.core.lab.measure_lvdt`, noise from
+    lab : rigsim.scenarios.core.lab.LabChain, optional
+        The lab's measurement of the LVDTs (:func:`rigsim.scenarios.core.lab.measure_lvdt`, noise from
         ``seed``); default: the scenario's (``[lab]``).
-    align : bool or scenarios.core.lab.LabChain
+    align : bool or rigsim.scenarios.core.lab.LabChain
         Take the LVDT channel's known filter phase and delay out before the fit
-        (:func:`scenarios.core.lab.aligned`), as ``rigsim identify --from-file --lvdt-filter`` does:
+        (:func:`rigsim.scenarios.core.lab.aligned`), as ``rigsim identify --from-file --lvdt-filter`` does:
         True, the measuring chain's own; a LabChain, its settings (a lab's nominal ones).
 
     Raises
     ------
-    correction.identification.actuator_fit.ActuatorFitError
+    rigsim.correction.identification.actuator_fit.ActuatorFitError
         If the record cannot support a fit (one sentence naming the band).
     SimulationError
         A MuJoCo warning during the run.

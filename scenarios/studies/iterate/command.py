@@ -5,12 +5,12 @@
     rigsim iterate SCENARIO.toml --target displacement|force --out DIR [--gain G]
                    [--max-iterations K] [--tolerance TOL] [--band-hz LO HI] [--duration-s S]
 
-The computation is :func:`scenarios.studies.iterate.compute.iterate_scenario`, the files
+The computation is :func:`rigsim.scenarios.studies.iterate.compute.iterate_scenario`, the files
 (``DIR/drive.csv``, the same drive as the RPC III drive file ``DIR/drive.drv`` a lab can play on
 a real rig, ``DIR/iteration.json``, ``DIR/iteration.png``, appearing together:
-:func:`scenarios.core.outputs.staged_output`) and the table :mod:`scenarios.studies.iterate.report`.
+:func:`rigsim.scenarios.core.outputs.staged_output`) and the table :mod:`rigsim.scenarios.studies.iterate.report`.
 Bad options, a bad scenario and an ``--out`` holding a previous result (without ``--force``) raise
-:class:`scenarios.core.config.ScenarioError` before any run.
+:class:`rigsim.scenarios.core.config.ScenarioError` before any run.
 """
 
 from __future__ import annotations
@@ -19,17 +19,17 @@ import argparse
 import dataclasses
 import sys
 
-from scenarios.core.flags import add_command, add_duration, add_force, add_noise, add_out, add_quiet
+from rigsim.scenarios.core.flags import add_command, add_duration, add_force, add_noise, add_out, add_quiet
 
 __all__ = ["add_parser", "cmd_iterate"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``iterate`` on an ``argparse`` sub-parsers object; sets ``func=cmd_iterate``."""
-    # The targets are scenarios.studies.iterate.compute.TARGETS and the noise default
-    # scenarios.studies.scoring.NOISE_N: importing those here would load the whole simulator for
+    # The targets are rigsim.scenarios.studies.iterate.compute.TARGETS and the noise default
+    # rigsim.scenarios.studies.scoring.NOISE_N: importing those here would load the whole simulator for
     # ``rigsim --help`` (tests/scenarios/cli/test_startup.py pins both). The band limit's module is light.
-    from correction.output.lowpass import BAND_HZ
+    from rigsim.correction.output.lowpass import BAND_HZ
 
     c = add_command(subparsers, "iterate",
                     "iterate the rig's drive file until the pans (or tire forces) match the road test",
@@ -65,10 +65,10 @@ def _options(args) -> dict:
 
 def cmd_iterate(args) -> int:
     """Run ``rigsim iterate``: check everything, run, write the files, print the comparison."""
-    from scenarios.core.config import load_scenario
-    from scenarios.core.outputs import staged_output
-    from scenarios.studies.iterate.compute import check_options, iterate_scenario
-    from scenarios.studies.iterate.report import comparison_table, write_files
+    from rigsim.scenarios.core.config import load_scenario
+    from rigsim.scenarios.core.outputs import staged_output
+    from rigsim.scenarios.studies.iterate.compute import check_options, iterate_scenario
+    from rigsim.scenarios.studies.iterate.report import comparison_table, write_files
 
     check_options(args.target, duration_s=args.duration_s, **_options(args))
     scenario = load_scenario(args.scenario)

@@ -1,21 +1,21 @@
 """Input correction (drive-file iteration) on the simulated nonlinear rig, set against the output correction.
 
-Sequence of :func:`iterate_scenario` (every rig run is :meth:`scenarios.core.rig.Rig.run` of one
+Sequence of :func:`iterate_scenario` (every rig run is :meth:`rigsim.scenarios.core.rig.Rig.run` of one
 ``Rig(scenario)``, which accepts any drive; nothing here steps MuJoCo itself):
 
 1. road run and rig run with the original drive (the road profile), both
-   :func:`scenarios.core.run.run`: the road run is the target of the force iteration and the
+   :func:`rigsim.scenarios.core.run.run`: the road run is the target of the force iteration and the
    reference of every comparison; the rig run is the iteration's step 0 and the output
    correction's only rig run;
 2. identification run: four independent broadband drives
-   (:func:`scenarios.core.drive.identification_drive`, from t = 0), the first
+   (:func:`rigsim.scenarios.core.drive.identification_drive`, from t = 0), the first
    :data:`IDENT_SKIP_S` left out, the H1 FRF matrix drive -> pan displacement (``displacement``)
-   or drive -> tire force (``force``), :func:`correction.input.frf.identify_frf`;
-3. the iteration :func:`correction.input.iterate.iterate_drive` on the analysed record (t >= 0, the
+   or drive -> tire force (``force``), :func:`rigsim.correction.input.frf.identify_frf`;
+3. the iteration :func:`rigsim.correction.input.iterate.iterate_drive` on the analysed record (t >= 0, the
    output rate; the lead-in's fade-in stays as it is, the update is tapered to zero at both
    ends), starting from the road profile: Moran's target (pan = profile) or the RPC-style target
    (tire force = the road run's tire force); the drive may not leave the actuator's half stroke;
-4. the scoring :func:`scenarios.studies.scoring.score_pair` of the original rig run (the output
+4. the scoring :func:`rigsim.scenarios.studies.scoring.score_pair` of the original rig run (the output
    correction, both methods), and the comparison table.
 
 Compared samples: every row of the comparison (road, rig with the original drive, rig with the
@@ -23,9 +23,9 @@ iterated drive, output-corrected) is scored on the same samples: outside the ite
 tapers at both ends (where the iterated drive fades back to the original one) and where the
 ``best`` method's correction filters and its band-limit filter have settled on the original rig
 run (``score.methods["best"].settled``). DLC
-(std / mean, :func:`correction.metrics.dlc.dlc`) and NRMSE against the unfiltered road force
-(:func:`correction.metrics.dlc.nrmse`) are per wheel, then averaged over the four wheels. Rig forces are
-the measured ones (:func:`scenarios.studies.scoring.measured_force`: plus the load-cell noise of
+(std / mean, :func:`rigsim.correction.metrics.dlc.dlc`) and NRMSE against the unfiltered road force
+(:func:`rigsim.correction.metrics.dlc.nrmse`) are per wheel, then averaged over the four wheels. Rig forces are
+the measured ones (:func:`rigsim.scenarios.studies.scoring.measured_force`: plus the load-cell noise of
 the scenario's seed; the same noise realisation for the original and the iterated run). If the
 output correction cannot be made, the table has no ``output_corrected`` row and the samples
 compared are those 1 s inside both ends (the tapers plus 0.5 s).
@@ -40,19 +40,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.input.convergence import IterationStabilityError
-from correction.metrics.dlc import dlc, nrmse
-from correction.input.frf import FRF, identify_frf
-from correction.input.iterate import IterationResult, iterate_drive
-from correction.output.lowpass import BAND_HZ
-from scenarios.core.config import Scenario, ScenarioError
-from scenarios.core.drive import Drive, identification_drive
-from scenarios.core.results import RunResult
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.core.watch import SayFn
-from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, measured_force, score_pair
+from rigsim.correction.input.convergence import IterationStabilityError
+from rigsim.correction.metrics.dlc import dlc, nrmse
+from rigsim.correction.input.frf import FRF, identify_frf
+from rigsim.correction.input.iterate import IterationResult, iterate_drive
+from rigsim.correction.output.lowpass import BAND_HZ
+from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.core.drive import Drive, identification_drive
+from rigsim.scenarios.core.results import RunResult
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.core.watch import SayFn
+from rigsim.scenarios.studies.identify.compute import identify_rig
+from rigsim.scenarios.studies.scoring import METHODS, NOISE_N, PairScore, measured_force, score_pair
 
 __all__ = ["TARGETS", "IDENT_SKIP_S", "IDENT_MIN_S", "IDENT_NPERSEG", "ComparisonRow", "IterateResult",
            "check_options", "splice_drive", "identify_frf_matrix", "iterate_scenario"]
@@ -104,13 +104,13 @@ class IterateResult:
     ----------
     scenario_name : str
     target : {"displacement", "force"}
-    iteration : correction.input.iterate.IterationResult
+    iteration : rigsim.correction.input.iterate.IterationResult
         Error per step; ``drive`` (m, (n, 4), at the output rate, t >= 0) is the best drive.
-    frf : correction.input.frf.FRF
+    frf : rigsim.correction.input.frf.FRF
         Identified drive -> pan (m/m) or drive -> tire force (N/m) matrix.
     band_hz : (float, float), Hz
         Band of the drive update.
-    road, rig, rig_iterated : scenarios.core.results.RunResult
+    road, rig, rig_iterated : rigsim.scenarios.core.results.RunResult
         Road run, rig run with the original drive, rig run with the best iterated drive
         (``profile_m`` of the latter is the iterated drive).
     score : PairScore or None
@@ -173,7 +173,7 @@ class IterateResult:
                      "correction's filters have settled on the original rig run); rig forces include the "
                      "load-cell noise; nrmse_vs_road: against the unfiltered road force; rig_runs of the "
                      "iteration count the original run, the identification run and the updates; 'scoring': the "
-                     "output correction of the original rig run (scenarios.studies.scoring)"),
+                     "output correction of the original rig run (rigsim.scenarios.studies.scoring)"),
         }
 
 
@@ -282,7 +282,7 @@ def iterate_scenario(scenario: Scenario, target: str, *, gain: float = 0.8, max_
     coherence_min : float, 1
         No update where the identification's coherence is below this.
     noise_N : float, N, optional
-        rms load-cell noise added to the rig forces (default :data:`scenarios.studies.scoring.NOISE_N`).
+        rms load-cell noise added to the rig forces (default :data:`rigsim.scenarios.studies.scoring.NOISE_N`).
     run_anyway : bool
         Run even if the identified model predicts the gain unstable (divergence still stops it).
     say : callable, optional

@@ -3,8 +3,8 @@
 ``DIR/drive.csv``: the best iterated drive (m) per corner at the output rate, t >= 0 (s);
 ``DIR/drive.drv``: the same drive as an MTS RPC III drive file (TIME_TYPE DRIVE, int16, channels
 ``drive_<corner>`` in m; header keys ``scenario``, ``target``, ``iterations``...), written by
-:func:`correction.io.measured.write_channels`, for a lab to play on a real rig;
-``DIR/iteration.json``: :meth:`scenarios.studies.iterate.compute.IterateResult.to_dict`;
+:func:`rigsim.correction.io.measured.write_channels`, for a lab to play on a real rig;
+``DIR/iteration.json``: :meth:`rigsim.scenarios.studies.iterate.compute.IterateResult.to_dict`;
 ``DIR/iteration.png``: the NRMSE against the target per iteration. Each file is written
 atomically, after all of them are made in memory (the RPC III file is written first, so a
 refusal of its writer leaves the folder as it was).
@@ -18,9 +18,9 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from correction.io.measured import write_channels
-from mjcf.names import CORNERS
-from scenarios.core.files import atomic_write_bytes, to_json
+from rigsim.correction.io.measured import write_channels
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.files import atomic_write_bytes, to_json
 
 __all__ = ["drive_csv_bytes", "drive_channels", "drive_metadata", "plot_png", "comparison_table", "write_files",
            "FILES"]
@@ -38,7 +38,7 @@ def drive_csv_bytes(result) -> bytes:
 
 
 def drive_channels(result) -> SimpleNamespace:
-    """The iterated drive for :func:`correction.io.measured.write_channels`: ``time_s`` (s) and
+    """The iterated drive for :func:`rigsim.correction.io.measured.write_channels`: ``time_s`` (s) and
     ``drive_<corner>`` (m) per corner."""
     drive = np.asarray(result.iteration.drive, dtype=float)
     names = [f"drive_{c}" for c in CORNERS]

@@ -3,19 +3,19 @@
 Truck ``i`` of a draw (``seed``) is drawn from ``scenarios/data/suites/fleet.toml``:
 
 * its **spec sheet** (:attr:`FleetTruck.spec`): the geometry and suspension a lab writes into
-  TRUCK.toml's ``[vehicle]`` (:data:`mjcf.description.DESCRIPTION_FIELDS`): wheelbase, tracks, dual
+  TRUCK.toml's ``[vehicle]`` (:data:`rigsim.mjcf.description.DESCRIPTION_FIELDS`): wheelbase, tracks, dual
   or single rear tires, leaf or air on each axle, their rates and dampers;
 * its **plant** (:attr:`FleetTruck.plant`): the spec sheet, the load (empty or 1.5-9 t at its place
   and height), the leaves' friction, then the mismatch suite's differences drawn on the described
-  truck's own values (:func:`scenarios.studies.model_suite.mismatch.draw_plant`) and the structure
-  no model of the family has: a frame that twists and bends (:mod:`mjcf.frame`), an engine on
-  rubber mounts (:mod:`mjcf.engine`), dampers digressive (:mod:`mjcf.dampers`) or worn, and on an
+  truck's own values (:func:`rigsim.scenarios.studies.model_suite.mismatch.draw_plant`) and the structure
+  no model of the family has: a frame that twists and bends (:mod:`rigsim.mjcf.frame`), an engine on
+  rubber mounts (:mod:`rigsim.mjcf.engine`), dampers digressive (:mod:`rigsim.mjcf.dampers`) or worn, and on an
   air axle its bushings' friction;
 * its **road** (ISO class B-D, 30-90 km/h) and the lab chain that measured it: the typical lab
-  (:data:`scenarios.core.lab.TYPICAL_LAB`) with each filter corner off by up to +-5 % and the
+  (:data:`rigsim.scenarios.core.lab.TYPICAL_LAB`) with each filter corner off by up to +-5 % and the
   force channel's delay by up to +-10 %; the alignment uses the nominal chain.
 
-A truck that cannot stand (:func:`mjcf.standing.check_stands`) is drawn again from the next of
+A truck that cannot stand (:func:`rigsim.mjcf.standing.check_stands`) is drawn again from the next of
 its seeds, so one seed gives one fleet.
 """
 
@@ -28,16 +28,16 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from mjcf.build import build_model, nominal_values
-from mjcf.description import CHOICES, suspension_of
-from mjcf.names import CORNERS
-from mjcf.standing import check_stands
-from mjcf.variant import TruckVariant
-from scenarios.core.lab import TYPICAL_LAB, LabChain
-from scenarios.core.run import run
-from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.model_suite.mismatch import draw_plant
-from scenarios.studies.suites import case_scenario, suite_file
+from rigsim.mjcf.build import build_model, nominal_values
+from rigsim.mjcf.description import CHOICES, suspension_of
+from rigsim.mjcf.names import CORNERS
+from rigsim.mjcf.standing import check_stands
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.lab import TYPICAL_LAB, LabChain
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.identify.compute import identify_rig
+from rigsim.scenarios.studies.model_suite.mismatch import draw_plant
+from rigsim.scenarios.studies.suites import case_scenario, suite_file
 
 __all__ = ["FLEET_FILE", "FleetTruck", "fleet_ranges", "draw_spec", "draw_truck", "fleet_trucks", "fleet_job",
            "lacks"]
@@ -71,13 +71,13 @@ class FleetTruck:
     name : str
         ``fleet<i>-<class>-<speed>kmh-<payload>kg``.
     spec : Mapping[str, float or str]
-        The spec sheet: :class:`~mjcf.variant.TruckVariant` fields a lab writes into ``[vehicle]``.
+        The spec sheet: :class:`~rigsim.mjcf.variant.TruckVariant` fields a lab writes into ``[vehicle]``.
     plant : Mapping[str, float or str]
         The truck on the rig: every TruckVariant field it sets.
     document : Mapping
         The scenario document of its road (name, speed, duration, seed, road).
     lab : LabChain
-        The chain that measured its record (the alignment uses :data:`scenarios.core.lab.TYPICAL_LAB`).
+        The chain that measured its record (the alignment uses :data:`rigsim.scenarios.core.lab.TYPICAL_LAB`).
     """
 
     name: str

@@ -2,11 +2,11 @@
 
 Each plant draws every feature of ``scenarios/data/suites/mismatch_plants.toml`` (seeded,
 uniform within its range): factors on the case's payload and the XML's catalogue values, offsets
-of the payload's position, each wheel station's own tire and leaf spring (:mod:`mjcf.stations`),
+of the payload's position, each wheel station's own tire and leaf spring (:mod:`rigsim.mjcf.stations`),
 the dampers' rebound ratio, and with a probability a suspended cab and tires that stiffen. The
 model correction calibrates from the rig's records alone and never sees these values. Plant ``i``
 runs on the generalization suite's case ``i`` (roads, speeds, payloads), measured as a lab
-measures (:data:`scenarios.core.lab.TYPICAL_LAB`).
+measures (:data:`rigsim.scenarios.core.lab.TYPICAL_LAB`).
 """
 
 from __future__ import annotations
@@ -19,14 +19,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from mjcf.build import nominal_values
-from mjcf.names import CORNERS
-from mjcf.stations import STATION_FACTORS, station_factor_field
-from mjcf.variant import TruckVariant
-from scenarios.core.config import Scenario
-from scenarios.core.run import run
-from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.suites import case_payload_kg, case_scenario, suite_file
+from rigsim.mjcf.build import nominal_values
+from rigsim.mjcf.names import CORNERS
+from rigsim.mjcf.stations import STATION_FACTORS, station_factor_field
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.config import Scenario
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.identify.compute import identify_rig
+from rigsim.scenarios.studies.suites import case_payload_kg, case_scenario, suite_file
 
 __all__ = ["MISMATCH_FILE", "PlantRanges", "plant_ranges", "draw_plant", "mismatch_plants", "mismatch_scenario",
            "mismatch_job", "describe"]
@@ -48,7 +48,7 @@ class PlantRanges:
     offsets : Mapping[str, tuple[float, float]]
         TruckVariant field -> offset range (m) on the XML's value.
     stations : Mapping[str, tuple[float, float]]
-        Quantity of :data:`mjcf.stations.STATION_FACTORS` -> factor range, one draw per corner.
+        Quantity of :data:`rigsim.mjcf.stations.STATION_FACTORS` -> factor range, one draw per corner.
     values : Mapping[str, tuple[float, float]]
         TruckVariant field -> its range.
     sometimes : Mapping[str, tuple[float, Mapping[str, tuple[float, float]]]]
@@ -76,7 +76,7 @@ def plant_ranges() -> PlantRanges:
     Raises
     ------
     ValueError
-        A table or key the reader does not know, a field :class:`~mjcf.variant.TruckVariant` does
+        A table or key the reader does not know, a field :class:`~rigsim.mjcf.variant.TruckVariant` does
         not have, or a range that is not ``[low, high]``.
     """
     doc = tomllib.loads(suite_file(MISMATCH_FILE).read_text(encoding="utf-8"))
@@ -107,7 +107,7 @@ def plant_ranges() -> PlantRanges:
 
 def draw_plant(case_payload_kg: float, rng: np.random.Generator,
                nominal: Mapping[str, float] | None = None) -> dict[str, float]:
-    """One plant truck's :class:`~mjcf.variant.TruckVariant` fields, drawn from :func:`plant_ranges`.
+    """One plant truck's :class:`~rigsim.mjcf.variant.TruckVariant` fields, drawn from :func:`plant_ranges`.
 
     Parameters
     ----------
@@ -116,7 +116,7 @@ def draw_plant(case_payload_kg: float, rng: np.random.Generator,
     rng : numpy.random.Generator
         Draws, in a fixed order (the file's), so one seed gives one plant.
     nominal : Mapping[str, float], optional
-        The values the factors and offsets apply to (SI; :func:`mjcf.build.nominal_values` of a
+        The values the factors and offsets apply to (SI; :func:`rigsim.mjcf.build.nominal_values` of a
         described truck); default the XML's.
     """
     ranges, nominal = plant_ranges(), nominal_values() if nominal is None else nominal
@@ -157,8 +157,8 @@ def mismatch_scenario(case, plant: Mapping[str, float], duration_s: float) -> Sc
 
 def mismatch_job(case, plant: Mapping[str, float], duration_s: float, kind: str, lab=None, align: bool = False):
     """Worker job: one MuJoCo run of the case's plant: "road", "rig" or "identify"
-    (:func:`scenarios.studies.identify.compute.identify_rig`, its LVDTs measured through ``lab``,
-    a :class:`scenarios.core.lab.LabChain`, their timing undone where ``align``)."""
+    (:func:`rigsim.scenarios.studies.identify.compute.identify_rig`, its LVDTs measured through ``lab``,
+    a :class:`rigsim.scenarios.core.lab.LabChain`, their timing undone where ``align``)."""
     sc = mismatch_scenario(case, plant, duration_s)
     return identify_rig(sc, lab=lab, align=align) if kind == "identify" else run(sc, kind)
 

@@ -1,8 +1,8 @@
 """One plant of the mismatch suite corrected as a user would, and judged against its road test.
 
-The rig test is measured through the lab's chain (:func:`scenarios.core.lab.measure`) and, with
+The rig test is measured through the lab's chain (:func:`rigsim.scenarios.core.lab.measure`) and, with
 ``align``, its force and LVDT channels aligned as a lab that knows its anti-alias filters and
-converter skew aligns them (:func:`scenarios.core.lab.aligned`, ``rigsim correct --force-filter
+converter skew aligns them (:func:`rigsim.scenarios.core.lab.aligned`, ``rigsim correct --force-filter
 ... --lvdt-filter ...``); the rig's T_a is identified on the same rig before the test, its LVDTs
 measured (and aligned) the same way (``rigsim identify``); the measured forces are corrected linearly by it (``rigsim correct
 --actuators``) and by the truck model calibrated on the record (``rigsim correct --model``: the
@@ -20,15 +20,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from correction.output.apply import band_limit
-from correction.output.denoise import DRIFT_HZ
-from correction.output.floor import linear_floor
-from scenarios.core.lab import LabChain, aligned, measure
-from scenarios.records.model.cell_mass import without_cell_mass
-from scenarios.records.model.differential import (correct_with_model, hybrid_correction, model_force_pair,
+from rigsim.correction.output.apply import band_limit
+from rigsim.correction.output.denoise import DRIFT_HZ
+from rigsim.correction.output.floor import linear_floor
+from rigsim.scenarios.core.lab import LabChain, aligned, measure
+from rigsim.scenarios.records.model.cell_mass import without_cell_mass
+from rigsim.scenarios.records.model.differential import (correct_with_model, hybrid_correction, model_force_pair,
                                                    settled_mask)
-from scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
-from scenarios.studies.scoring import linear_correction
+from rigsim.scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
+from rigsim.scenarios.studies.scoring import linear_correction
 
 __all__ = ["FLOOR_TAPS", "PlantScore", "score_plant"]
 
@@ -53,7 +53,7 @@ class PlantScore:
     nrmse, dlc_error : Mapping[str, numpy.ndarray]
         Per correction (``linear``, ``delivered``, and where a calibration exists ``forced``, the
         differential model correction F_rig + F_model(x_ref) - F_model(x_a) whatever the fallback
-        said, and ``hybrid``, :data:`~scenarios.records.model.differential.HYBRID_FORMULA` with L the linear correction:
+        said, and ``hybrid``, :data:`~rigsim.scenarios.records.model.differential.HYBRID_FORMULA` with L the linear correction:
         the model's residual corrected for the actuators too), per wheel:
         NRMSE against the band-limited road force (1) and DLC error against the road's (1).
     floor : numpy.ndarray, (4,)
@@ -65,7 +65,7 @@ class PlantScore:
     fit_nrmse : numpy.ndarray or None, (4,)
         The calibrated model's fit against the measured force (1), None without a calibration.
     model_error : numpy.ndarray or None, (4,)
-        What the fallback reads (:attr:`~scenarios.records.model.result.Calibration.excess_nrmse`:
+        What the fallback reads (:attr:`~rigsim.scenarios.records.model.result.Calibration.excess_nrmse`:
         the dynamic residual in the correction's band beyond the noise there, 1), None without a
         calibration.
     """
@@ -126,9 +126,9 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     plant : Mapping[str, float]
     base_scenario : Scenario
         The case with the plant (its rig and rate; the model never reads its truck).
-    road, rig : scenarios.core.results.RunResult
+    road, rig : rigsim.scenarios.core.results.RunResult
         The road test (the reference) and the rig test.
-    identification : scenarios.studies.identify.compute.RigIdentification
+    identification : rigsim.scenarios.studies.identify.compute.RigIdentification
         T_a per corner identified before the test.
     lab : LabChain
         How the lab measures the rig test.
@@ -142,11 +142,11 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
         The model's cab mode.
     align : bool or LabChain
         Take the lab's known anti-alias filters' phase and delays out of the force and LVDT
-        channels before correcting (:func:`scenarios.core.lab.aligned`; the identification given
+        channels before correcting (:func:`rigsim.scenarios.core.lab.aligned`; the identification given
         should be aligned alike): True, with ``lab``'s own settings; a LabChain, with its settings
         (the lab's nominal ones, where ``lab`` is the chain as it was). The linear floor is fitted on the channels as measured.
     drift_hz : float or None, Hz
-        The model correction's drift cut (:func:`~scenarios.records.model.differential.hybrid_correction`);
+        The model correction's drift cut (:func:`~rigsim.scenarios.records.model.differential.hybrid_correction`);
         None: none.
     """
     fs = float(rig.rate_hz)

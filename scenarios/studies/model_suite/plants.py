@@ -1,7 +1,7 @@
 """The plant trucks of the model-correction study: each case's truck on the rig, its scenario and runs.
 
 The truck on the rig (the "plant") differs from the XML's nominal truck as a real truck differs
-from its catalogue: the catalogue offsets of :func:`scenarios.studies.suites.model_plants`
+from its catalogue: the catalogue offsets of :func:`rigsim.scenarios.studies.suites.model_plants`
 (payload -5 % of the case's own and 0.1 m further forward, tire stiffness +10 % front / -10 %
 rear, tire damping +20 % / -20 %, leaf friction +30 % / -30 %) on every plant, and each plant's
 own cab and tire: ``rigid`` (the XML's rigid cab and linear tires), ``cab`` (the cab on 2 Hz
@@ -11,18 +11,18 @@ alone and never sees these values; a plant lies inside or outside the calibrated
 depending on the model's cab mode (:func:`mismatch`).
 
 A case is a paper scenario's path or a scenario document of a suite
-(:func:`scenarios.studies.suites.pick_cases`).
+(:func:`rigsim.scenarios.studies.suites.pick_cases`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 
-from mjcf.variant import TruckVariant
-from scenarios.core.config import Scenario
-from scenarios.core.run import run
-from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.suites import case_payload_kg, case_scenario, model_plants
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.config import Scenario
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.identify.compute import identify_rig
+from rigsim.scenarios.studies.suites import case_payload_kg, case_scenario, model_plants
 
 __all__ = ["TIRE_PLANT", "plant_keys", "plant_truck", "plant_variant", "plant_name", "mismatch", "plant_scenario",
            "plant_job"]
@@ -37,7 +37,7 @@ def plant_keys() -> tuple[str, ...]:
 
 
 def plant_truck(plant: str, tire_ratio: float | None = None) -> dict:
-    """The :class:`mjcf.variant.TruckVariant` fields plant ``plant`` sets beyond the catalogue offsets.
+    """The :class:`rigsim.mjcf.variant.TruckVariant` fields plant ``plant`` sets beyond the catalogue offsets.
 
     Parameters
     ----------
@@ -75,14 +75,14 @@ def plant_variant(case_payload_kg: float, plant: str = "rigid", tire_ratio: floa
 
     Returns
     -------
-    mjcf.variant.TruckVariant
+    rigsim.mjcf.variant.TruckVariant
 
     Raises
     ------
     ValueError
-        An unknown plant, or a field value :class:`~mjcf.variant.TruckVariant` refuses.
+        An unknown plant, or a field value :class:`~rigsim.mjcf.variant.TruckVariant` refuses.
     """
-    from scenarios.records.model.first_guess import xml_nominal  # the model correction's imports: only here
+    from rigsim.scenarios.records.model.first_guess import xml_nominal  # the model correction's imports: only here
 
     truck = plant_truck(plant, tire_ratio)
     suite, nominal = model_plants(), xml_nominal()
@@ -107,7 +107,7 @@ def plant_name(plant: str, tire_ratio: float | None = None) -> str:
 
 def mismatch(plant: str, cab: str) -> str:
     """ "on" where plant ``plant`` lies outside the model family calibrated with cab mode ``cab``
-    (:data:`scenarios.records.model.cab_choice.CAB_CHOICES`), "off" inside: the gradually
+    (:data:`rigsim.scenarios.records.model.cab_choice.CAB_CHOICES`), "off" inside: the gradually
     stiffening tire always, the cab on its mounts only with the cab held rigid (the bilinear
     progressive tire is in the family: each axle's ratio and onset are fitted)."""
     plants = model_plants().plants
@@ -142,11 +142,11 @@ def plant_job(case, duration_s: float, plant: str, kind: str, tire_ratio: float 
     ----------
     kind : str
         "road" (the reference), "rig" (the rig test) or "identify" (the rig characterized before
-        the test, :func:`scenarios.studies.identify.compute.identify_rig`).
+        the test, :func:`rigsim.scenarios.studies.identify.compute.identify_rig`).
 
     Returns
     -------
-    scenarios.core.results.RunResult or scenarios.studies.identify.compute.RigIdentification
+    rigsim.scenarios.core.results.RunResult or rigsim.scenarios.studies.identify.compute.RigIdentification
     """
     sc = plant_scenario(case, duration_s, plant, tire_ratio)
     return identify_rig(sc) if kind == "identify" else run(sc, kind)

@@ -1,10 +1,10 @@
 """The model-correction study's tables and goals, from its rows (one per case and plant).
 
 A row (``benchmarks/model_correction.py``'s ``analyse``) holds ``case``, ``plant`` (a readable
-name, :func:`scenarios.studies.model_suite.plants.plant_name`), ``plant_key`` (rigid / cab / tire
+name, :func:`rigsim.scenarios.studies.model_suite.plants.plant_name`), ``plant_key`` (rigid / cab / tire
 / smooth), ``mismatch`` ("off": the plant inside the calibrated model family, "on": outside),
 ``method`` and ``reason`` (the model correction or the fallback to the linear one, and why),
-``calibration`` (:class:`scenarios.records.model.result.Calibration` or None), ``truth`` (the
+``calibration`` (:class:`rigsim.scenarios.records.model.result.Calibration` or None), ``truth`` (the
 plant's values of the fitted fields, SI), per-wheel figures under ``wheels`` (``floor``,
 ``linear``, ``linear_dlc_error``, ``rig``, and ``model``, ``model_dlc_error`` unless it fell back;
 NRMSE and DLC errors, 1), their ``mean``, ``scored_s`` (s), ``cpu_s`` and ``wall_s`` (s,
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mjcf.names import CORNERS
+from rigsim.mjcf.names import CORNERS
 
 __all__ = ["GOAL_S", "FLOOR_GOALS", "wheels", "delivered", "plants_of", "cab_cell", "table", "summary", "goals",
            "suite_cells", "plants_line", "suite_table"]

@@ -7,16 +7,16 @@ import math
 import pathlib
 import sys
 
-from scenarios.core.flags import (add_command, add_duration, add_force, add_jobs, add_noise, add_out, add_quiet,
-                                  add_recording, add_rig)
+from rigsim.scenarios.core.flags import (add_command, add_duration, add_force, add_jobs, add_noise, add_out, add_quiet,
+                                         add_recording, add_rig)
 
 __all__ = ["add_parser", "cmd_paper", "RIG", "SERIES_FORMATS"]
 
 #: The configuration ``rigsim paper`` runs unless ``--rig`` names another: the simulated DYNTRAC,
 #: where the paper's method gives the paper's Table 2 (a key of
-#: :data:`scenarios.core.config.PAPER_CONFIGURATIONS`).
+#: :data:`rigsim.scenarios.core.config.PAPER_CONFIGURATIONS`).
 RIG = "dyntrac"
-#: ``--series`` formats: the keys of :data:`scenarios.core.results.TIMESERIES_FORMATS`, listed here
+#: ``--series`` formats: the keys of :data:`rigsim.scenarios.core.results.TIMESERIES_FORMATS`, listed here
 #: because importing that module for ``rigsim --help`` would load numpy (the tests pin them equal).
 SERIES_FORMATS = ("csv", "mf4", "rsp", "tdms")
 
@@ -35,7 +35,7 @@ def add_parser(subparsers) -> None:
                     help="also write each road and rig run's time series, timeseries.<ext> beside its result.json: "
                          "csv (about 30 MB per case of 60 s), mf4 (ASAM MDF4), rsp (MTS RPC III, int16) or tdms "
                          "(NI); mf4 and tdms need pip install -e \".[lab]\" (default: none)")
-    add_noise(pp)  # None: scenarios.studies.scoring.NOISE_N, applied in cmd_paper
+    add_noise(pp)  # None: rigsim.scenarios.studies.scoring.NOISE_N, applied in cmd_paper
     add_recording(pp, "each case")
     pp.add_argument("--model", action="store_true",
                     help="add a third method: each rig record corrected by a truck model calibrated on its own "
@@ -49,13 +49,13 @@ def add_parser(subparsers) -> None:
 
 
 def _check(args) -> None:
-    from scenarios.core.config import ScenarioError
-    from scenarios.core.pool import worker_count
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.pool import worker_count
 
     d = args.duration_s
     if d is not None and not (math.isfinite(d) and 0 < d <= 3600):
         raise ScenarioError(f"--duration-s must be in (0, 3600] s, got {d:g}")
-    from scenarios.studies.scoring import MIN_DURATION_S
+    from rigsim.scenarios.studies.scoring import MIN_DURATION_S
 
     if d is not None and d < MIN_DURATION_S:
         raise ScenarioError(f"--duration-s {d:g} s is too short: the correction's start-up transient alone "
@@ -67,13 +67,13 @@ def _check(args) -> None:
     if args.noise_N is not None and not (math.isfinite(args.noise_N) and args.noise_N >= 0):
         raise ScenarioError(f"--noise-N must be >= 0 N, got {args.noise_N:g}")
     if args.series is not None:
-        from scenarios.core.results import check_timeseries_format
+        from rigsim.scenarios.core.results import check_timeseries_format
 
         check_timeseries_format(args.series, "--series")
     if getattr(args, "view", False) and getattr(args, "rrd", None) is None:
         raise ScenarioError("--view opens the recording that --rrd FILE.rrd writes; give --rrd too")
     if getattr(args, "rrd", None) is not None:
-        from scenarios.core.outputs import check_output_file
+        from rigsim.scenarios.core.outputs import check_output_file
 
         check_output_file(args.rrd, "--rrd", force=getattr(args, "force", False), folder=args.out)
 
@@ -85,7 +85,7 @@ def _truck(path) -> dict | None:
         return None
     import dataclasses
 
-    from scenarios.core.config import load_scenario
+    from rigsim.scenarios.core.config import load_scenario
 
     vehicle = load_scenario(path).vehicle
     fields = {f.name: getattr(vehicle, f.name) for f in dataclasses.fields(vehicle)}
@@ -108,12 +108,12 @@ def cmd_paper(args) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot  # noqa: F401
 
-        from scenarios.core.config import load_scenario, paper_scenarios
-        from scenarios.core.files import to_json
-        from scenarios.core.outputs import staged_output
-        from scenarios.studies.paper.compute import case_scenario, run_paper
-        from scenarios.studies.paper.report import case_figure_jobs, render_report, write_case_run, write_files
-        from scenarios.studies.scoring import NOISE_N
+        from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+        from rigsim.scenarios.core.files import to_json
+        from rigsim.scenarios.core.outputs import staged_output
+        from rigsim.scenarios.studies.paper.compute import case_scenario, run_paper
+        from rigsim.scenarios.studies.paper.report import case_figure_jobs, render_report, write_case_run, write_files
+        from rigsim.scenarios.studies.scoring import NOISE_N
     finally:
         gc.freeze()
         gc.enable()
@@ -125,7 +125,7 @@ def cmd_paper(args) -> int:
     _check(args)
     pose_rate = None
     if args.rrd:
-        from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
+        from rigsim.scenarios.core.poses import DEFAULT_POSE_RATE_HZ
 
         pose_rate = DEFAULT_POSE_RATE_HZ
     n_jobs, done = 2 * len(paths), [0]
@@ -158,7 +158,7 @@ def cmd_paper(args) -> int:
         if model:
             import dataclasses
 
-            from scenarios.studies.paper.model import model_scores
+            from rigsim.scenarios.studies.paper.model import model_scores
 
             say = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
             result = dataclasses.replace(result, models=model_scores(result, workers=args.jobs, progress=say))
@@ -170,7 +170,7 @@ def cmd_paper(args) -> int:
         write_files(stage.path, files)
         n_fig = sum(1 for f in stage.path.glob("*.png"))
         if args.rrd:
-            from scenarios.review.recording import write_recording
+            from rigsim.scenarios.review.recording import write_recording
 
             runs = [r for c in result.cases for r in (c.road, c.rig)]
             write_recording(stage.place(args.rrd), runs,
@@ -180,7 +180,7 @@ def cmd_paper(args) -> int:
     if args.rrd:
         print(f"wrote recording {args.rrd} (one recording per case)" + (" and opened the viewer" if args.view else ""))
         if args.view:
-            from scenarios.review.recording import open_viewer
+            from rigsim.scenarios.review.recording import open_viewer
 
             open_viewer(args.rrd)
     print(table)

@@ -1,8 +1,8 @@
 """The paper's cases: each run on the road and on the rig, the rig force corrected and scored.
 
 The main job of the project. The three shipped scenarios (``scenarios/data/paper/*.toml``) run
-in road and rig mode on all cores (:mod:`scenarios.core.pool`); each pair is scored by
-:func:`scenarios.studies.scoring.score_pair` with the paper's method and this project's; the
+in road and rig mode on all cores (:mod:`rigsim.scenarios.core.pool`); each pair is scored by
+:func:`rigsim.scenarios.studies.scoring.score_pair` with the paper's method and this project's; the
 result (:class:`PaperResult`) holds everything ``paper.json``, the terminal table, the report
 and the recording need.
 """
@@ -17,14 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenarios.core.config import Scenario, load_scenario
-from scenarios.core.pool import local_executor, worker_count
-from scenarios.core.results import RunResult
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.studies.identify.compute import RigIdentification, identify_rig
-from scenarios.studies.paper.table import PAPER_TABLE2
-from scenarios.studies.scoring import METHODS, NOISE_N, PairScore, score_pair
+from rigsim.scenarios.core.config import Scenario, load_scenario
+from rigsim.scenarios.core.pool import local_executor, worker_count
+from rigsim.scenarios.core.results import RunResult
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.identify.compute import RigIdentification, identify_rig
+from rigsim.scenarios.studies.paper.table import PAPER_TABLE2
+from rigsim.scenarios.studies.scoring import METHODS, NOISE_N, PairScore, score_pair
 
 __all__ = ["PaperCase", "PaperResult", "run_paper", "ROW_KEYS", "case_scenario", "run_job", "identify_job", "case_job"]
 
@@ -77,7 +77,7 @@ class PaperCase:
         """Spatial repeatability for pavements (Cole & Cebon): the correlation coefficient of the
         road's spatial load profile (force on a ``dx_m`` grid along the road, the speed known) with
         the measured rig's and the corrected one's, per wheel, on the best method's settled samples."""
-        from correction.metrics.damage import spatial_correlation, spatial_profile
+        from rigsim.correction.metrics.damage import spatial_correlation, spatial_profile
 
         best = self.score.methods["best"]
         s = best.settled
@@ -118,10 +118,10 @@ class PaperResult:
         In the paper's order (medium 72 km/h, high 48 km/h, high 72 km/h).
     noise_N : float, N
         rms of the measurement noise added to the rig forces.
-    models : tuple of scenarios.studies.paper.model.ModelScore, optional
+    models : tuple of rigsim.scenarios.studies.paper.model.ModelScore, optional
         With ``rigsim paper --model``: the third method, one per case in the same order.
     configuration : str
-        The cases' configuration (:data:`scenarios.core.config.PAPER_CONFIGURATIONS`):
+        The cases' configuration (:data:`rigsim.scenarios.core.config.PAPER_CONFIGURATIONS`):
         ``"design"`` or ``"dyntrac"`` (``rigsim paper --rig``).
     """
 
@@ -141,7 +141,7 @@ class PaperResult:
         """The third method's table (``--model``), or None."""
         if self.models is None:
             return None
-        from scenarios.studies.paper.model import model_table
+        from rigsim.scenarios.studies.paper.model import model_table
 
         return model_table(self.models)
 
@@ -208,7 +208,7 @@ class PaperResult:
 
 def case_scenario(path, duration_s: float | None, truck: Mapping | None = None):
     """The scenario at ``path``, with ``duration_s`` (s) in place of its own if given, and ``truck``'s
-    :class:`~mjcf.variant.TruckVariant` fields over its ``[vehicle]`` (a lab's own truck on the case's
+    :class:`~rigsim.mjcf.variant.TruckVariant` fields over its ``[vehicle]`` (a lab's own truck on the case's
     road and payload; None: the case's truck)."""
     scenario = load_scenario(path)
     if truck:
@@ -309,7 +309,7 @@ def run_paper(paths: Sequence, *, workers: int | None = None, duration_s: float 
         The configuration ``paths`` belong to, recorded in the result
         (:attr:`PaperResult.configuration`).
     truck : Mapping, optional
-        :class:`~mjcf.variant.TruckVariant` fields over every case's ``[vehicle]`` (a lab's own truck
+        :class:`~rigsim.mjcf.variant.TruckVariant` fields over every case's ``[vehicle]`` (a lab's own truck
         on the paper's roads and payloads; ``rigsim paper --truck``).
     """
     scenarios = [case_scenario(p, duration_s, truck) for p in paths]

@@ -4,9 +4,9 @@ For each case, after its road and rig runs and the project's linear correction: 
 calibrated on the rig record's own signals (drive x_ref, LVDT x_a and the measured force F_rig
 with its load-cell noise; never the road run, never the plant's parameters) and the record is
 corrected by it, F_model(x_ref) + L(W(F_rig - F_model(x_a))) with W the residual's white noise taken
-out (:mod:`correction.output.denoise`), and its slow part where the case's load cells drift
+out (:mod:`rigsim.correction.output.denoise`), and its slow part where the case's load cells drift
 (:func:`drift_corner`), and L the project's linear correction
-by the identified T_a (:func:`scenarios.records.model.differential.correct_with_model`). Where the
+by the identified T_a (:func:`rigsim.scenarios.records.model.differential.correct_with_model`). Where the
 model cannot be trusted on a wheel that wheel keeps the linear correction, and one sentence says why. Scored like the other
 methods against the road force: DLC on the unfiltered force, NRMSE against the band-limited one,
 on the samples where both the model's start-up and the linear method's filters have settled.
@@ -22,12 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction.output.denoise import DRIFT_HZ
-from scenarios.core.lab import LabChain, measure_lvdt
-from scenarios.records.model.differential import HYBRID_LIMIT, HYBRID_FORMULA, correct_with_model
-from scenarios.records.model.result import ModelCorrection
-from scenarios.records.model.score import score_correction
-from scenarios.studies.scoring import linear_correction
+from rigsim.correction.output.denoise import DRIFT_HZ
+from rigsim.scenarios.core.lab import LabChain, measure_lvdt
+from rigsim.scenarios.records.model.differential import HYBRID_LIMIT, HYBRID_FORMULA, correct_with_model
+from rigsim.scenarios.records.model.result import ModelCorrection
+from rigsim.scenarios.records.model.score import score_correction
+from rigsim.scenarios.studies.scoring import linear_correction
 
 __all__ = ["ModelScore", "drift_corner", "model_scores", "model_table"]
 
@@ -35,7 +35,7 @@ __all__ = ["ModelScore", "drift_corner", "model_scores", "model_table"]
 def drift_corner(lab: LabChain) -> float | None:
     """The model correction's drift cut for a case measured by ``lab`` (Hz, or None: no cut).
 
-    :data:`~correction.output.denoise.DRIFT_HZ` where the lab's load cells drift
+    :data:`~rigsim.correction.output.denoise.DRIFT_HZ` where the lab's load cells drift
     (``lab.drift_noise_N`` > 0), None where they do not, as a lab that knows its cells passes
     ``rigsim correct --model --drift-cut-hz 0``: on a drift-free record the cut only takes out the
     slow part of the model's own error (the leaf springs' friction state, which the model's run
@@ -107,7 +107,7 @@ def model_scores(result, *, workers: int | None = None,
 
     Parameters
     ----------
-    result : scenarios.studies.paper.compute.PaperResult
+    result : rigsim.scenarios.studies.paper.compute.PaperResult
     workers : int, optional
         Worker processes for each calibration (default: all cores).
     progress : callable, optional

@@ -7,7 +7,7 @@ import pathlib
 
 import numpy as np
 
-from scenarios.core.files import atomic_write_bytes
+from rigsim.scenarios.core.files import atomic_write_bytes
 
 __all__ = ["render_report", "case_figures", "case_figure_data", "case_figure_jobs", "render_figure", "write_case",
            "write_case_run", "write_figure", "write_files"]
@@ -102,12 +102,12 @@ def _bars(rows) -> bytes:
 def _damage_data(case) -> dict:
     """What the damage figure draws, per wheel: the exceedance curves of F / F_static (road, rig,
     corrected) and the rainflow range histograms, from the cycles the scoring counted for the DELs
-    (:attr:`scenarios.studies.scoring.MethodScore.cycles`; counted here for a score without them)."""
+    (:attr:`rigsim.scenarios.studies.scoring.MethodScore.cycles`; counted here for a score without them)."""
     best = case.score.methods["best"]
     s = best.settled
     forces = {"road": case.score.road_N[s], "rig, measured": case.score.rig_N[s], "corrected": best.corrected_N[s]}
     if best.cycles is None:
-        from correction.metrics.damage import rainflow_cycles
+        from rigsim.correction.metrics.damage import rainflow_cycles
 
         cycles = {label: rainflow_cycles(f) for label, f in forces.items()}
     else:
@@ -279,12 +279,12 @@ def write_case_run(result, out, series: str | None = None) -> list[pathlib.Path]
 
     Parameters
     ----------
-    result : scenarios.core.results.RunResult
+    result : rigsim.scenarios.core.results.RunResult
         The run.
     out : path
         The paper's output folder.
     series : str, optional
-        A key of :data:`scenarios.core.results.TIMESERIES_FORMATS` (``rigsim paper --series``):
+        A key of :data:`rigsim.scenarios.core.results.TIMESERIES_FORMATS` (``rigsim paper --series``):
         also the run's time series in that format. None: ``result.json`` and ``timings.json`` only.
 
     Returns
@@ -292,7 +292,7 @@ def write_case_run(result, out, series: str | None = None) -> list[pathlib.Path]
     list of pathlib.Path
         The files written.
     """
-    from scenarios.core.results import write_run
+    from rigsim.scenarios.core.results import write_run
 
     folder = pathlib.Path(out) / result.scenario_name / result.mode
     return list(write_run(result, folder, fmt=series).values())
@@ -300,7 +300,7 @@ def write_case_run(result, out, series: str | None = None) -> list[pathlib.Path]
 
 def render_report(result, *, case_files: bool = True, tables: tuple | None = None) -> dict[str, bytes]:
     """The Table 2 bars, ``report.md`` and (``case_files``) every case's figures of a
-    :class:`scenarios.studies.paper.compute.PaperResult`, rendered in memory: ``{file name: bytes}``
+    :class:`rigsim.scenarios.studies.paper.compute.PaperResult`, rendered in memory: ``{file name: bytes}``
     (``case_files=False`` when :func:`write_case` wrote them already). ``tables``: the result's
     ``(table(), damage_table(), model_table())`` if the caller has them already."""
     rows = result.rows()

@@ -16,8 +16,8 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from correction.io.tomlfile import check_keys
-from scenarios.core.config import RoadConfig, Scenario, ScenarioError
+from rigsim.correction.io.tomlfile import check_keys
+from rigsim.scenarios.core.config import RoadConfig, Scenario, ScenarioError
 
 __all__ = ["MAX_CASES", "axis_keys", "check_key", "flatten", "format_value", "read_axes"]
 
@@ -29,8 +29,8 @@ MAX_CASES = 10_000
 
 def axis_keys() -> dict[str, tuple[str, ...]]:
     """The keys a grid may sweep: ``{"": top-level, "road": ..., "vehicle": ..., "actuator": ...}``."""
-    from hydraulics.params import ActuatorParams
-    from mjcf.variant import TruckVariant
+    from rigsim.hydraulics.params import ActuatorParams
+    from rigsim.mjcf.variant import TruckVariant
 
     top = tuple(f.name for f in dataclasses.fields(Scenario) if f.name not in
                 ("name", "source", "road", "vehicle", "actuator"))
@@ -62,7 +62,7 @@ def format_value(value: Any) -> str:
 
 
 class _UnknownKey(Exception):
-    """A key :func:`correction.io.tomlfile.check_keys` refused (its close-match hint is reused)."""
+    """A key :func:`rigsim.correction.io.tomlfile.check_keys` refused (its close-match hint is reused)."""
 
 
 def check_key(key: str, where: str) -> None:

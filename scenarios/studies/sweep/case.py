@@ -1,8 +1,8 @@
 """One case of a sweep: road run, rig run, and their score by the one scoring of the project.
 
 :func:`evaluate_case` runs a scenario on the road and on the rig and scores the pair with
-:func:`scenarios.studies.scoring.score_pair` (the scoring of ``rigsim paper`` too), by the one
-method the sweep's :class:`~scenarios.studies.sweep.settings.EvalSettings` name, with their
+:func:`rigsim.scenarios.studies.scoring.score_pair` (the scoring of ``rigsim paper`` too), by the one
+method the sweep's :class:`~rigsim.scenarios.studies.sweep.settings.EvalSettings` name, with their
 measurement noise (seeded by the scenario's seed). :func:`evaluate_payload` is what a worker
 process runs: plain, picklable arguments in, a JSON-ready record out, errors caught and recorded.
 """
@@ -18,15 +18,15 @@ from typing import Any
 
 import numpy as np
 
-from scenarios.core.pool import keep_heap_memory
-from scenarios.studies.sweep.settings import EvalSettings
+from rigsim.scenarios.core.pool import keep_heap_memory
+from rigsim.scenarios.studies.sweep.settings import EvalSettings
 
 __all__ = ["CaseResult", "evaluate_case", "evaluate_payload", "METRIC_COLUMNS", "EVENT_NAMES"]
 
 #: Hydraulic events counted per case (output samples, summed over the four wheels).
 EVENT_NAMES = ("spool_saturation", "cavitation", "overpressure")
 
-#: The figures of one method (:attr:`scenarios.studies.scoring.MethodScore.figures`), by name.
+#: The figures of one method (:attr:`rigsim.scenarios.studies.scoring.MethodScore.figures`), by name.
 _FIGURES = ("dlc_corrected", "dlc_road_band", "dlc_rig_band", "nrmse_rig", "nrmse_corrected",
             "stress_factor_road", "stress_factor_rig", "stress_factor_corrected", "del_road_N", "del_rig_N",
             "del_corrected_N")
@@ -58,7 +58,7 @@ class CaseResult:
         band-limited road force, on the settled samples.
     stress_factor_road, stress_factor_rig, stress_factor_corrected : float, 1
         Dynamic load stress factor E[(F/F_static)^4] of the road, measured rig and corrected
-        forces on the settled samples (pavement damage, fourth-power law; correction.metrics.damage).
+        forces on the settled samples (pavement damage, fourth-power law; rigsim.correction.metrics.damage).
     del_road_N, del_rig_N, del_corrected_N : float, N
         Damage-equivalent load range (Woehler exponent 5, one cycle per second) of the same.
     scored_s : float, s
@@ -104,7 +104,7 @@ class CaseResult:
 
     @classmethod
     def from_score(cls, pair, events: Mapping) -> CaseResult:
-        """The result from a one-method :class:`~scenarios.studies.scoring.PairScore` and the
+        """The result from a one-method :class:`~rigsim.scenarios.studies.scoring.PairScore` and the
         rig run's ``events``."""
         (ms,) = pair.methods.values()
         per = {"dlc_road": pair.dlc_road, "dlc_rig": pair.dlc_rig, **{k: ms.figures[k] for k in _FIGURES}}
@@ -147,16 +147,16 @@ def evaluate_case(scenario, settings: EvalSettings = EvalSettings()) -> CaseResu
     ValueError
         The correction filter cannot be designed for this actuator (one sentence).
     """
-    from scenarios.core.rig import Rig
-    from scenarios.core.run import run
-    from scenarios.studies.scoring import score_pair
+    from rigsim.scenarios.core.rig import Rig
+    from rigsim.scenarios.core.run import run
+    from rigsim.scenarios.studies.scoring import score_pair
 
     road = run(scenario, "road")
     rig = run(scenario, "rig")
     model = Rig(scenario, hydraulic=True)
     identified = None
     if settings.method.actuator == "identified":  # characterize the rig as a lab does before the test
-        from scenarios.studies.identify.compute import identify_rig
+        from rigsim.scenarios.studies.identify.compute import identify_rig
 
         identified = identify_rig(scenario, rig=model).actuators()
     pair = score_pair(road, rig, model, methods=(settings.method,), identified=identified,
@@ -215,9 +215,9 @@ def evaluate_payload(case_id: str, doc: dict, source: str | None, settings: dict
         BaseException other than KeyboardInterrupt and SystemExit), so a resumed sweep runs it
         again. ``wall_time_s`` is the worker's wall time; it is kept out of the case file.
     """
-    keep_heap_memory()  # a Dask worker's MALLOC_TRIM_THRESHOLD_ would cost ~20 % (scenarios.core.pool)
-    from scenarios.core.config import ScenarioError, parse_scenario
-    from scenarios.core.watch import SimulationError
+    keep_heap_memory()  # a Dask worker's MALLOC_TRIM_THRESHOLD_ would cost ~20 % (rigsim.scenarios.core.pool)
+    from rigsim.scenarios.core.config import ScenarioError, parse_scenario
+    from rigsim.scenarios.core.watch import SimulationError
 
     wall0 = time.perf_counter()
     record: dict[str, Any] = {"case_id": case_id, "status": "ok", "error": None, "retry": False, "result": None}

@@ -5,14 +5,14 @@ cores or on a Dask cluster, with nothing lost.
 
     rigsim sweep GRID.toml --out DIR [--scheduler tcp://HOST:PORT] [--jobs N] [--no-resume]
 
-The package: :mod:`~scenarios.studies.sweep.grid` (the grid file), :mod:`~scenarios.studies.sweep.axes`
-(its axes and the cap on cases) and :mod:`~scenarios.studies.sweep.settings` (its evaluation keys),
-:mod:`~scenarios.studies.sweep.case` (one case: road and rig runs scored by
-:func:`scenarios.studies.scoring.score_pair`, by default with the paper study's ``best`` method
-and noise), :mod:`~scenarios.studies.sweep.executors` (local process pool or Dask) and
-:mod:`~scenarios.studies.sweep.scheduler` (``--scheduler`` checked and reached within deadlines),
-:mod:`~scenarios.studies.sweep.store` (case files, ``results.csv``, ``sweep.json``),
-:mod:`~scenarios.studies.sweep.run` (running and resuming), :mod:`~scenarios.studies.sweep.plot`
+The package: :mod:`~rigsim.scenarios.studies.sweep.grid` (the grid file), :mod:`~rigsim.scenarios.studies.sweep.axes`
+(its axes and the cap on cases) and :mod:`~rigsim.scenarios.studies.sweep.settings` (its evaluation keys),
+:mod:`~rigsim.scenarios.studies.sweep.case` (one case: road and rig runs scored by
+:func:`rigsim.scenarios.studies.scoring.score_pair`, by default with the paper study's ``best`` method
+and noise), :mod:`~rigsim.scenarios.studies.sweep.executors` (local process pool or Dask) and
+:mod:`~rigsim.scenarios.studies.sweep.scheduler` (``--scheduler`` checked and reached within deadlines),
+:mod:`~rigsim.scenarios.studies.sweep.store` (case files, ``results.csv``, ``sweep.json``),
+:mod:`~rigsim.scenarios.studies.sweep.run` (running and resuming), :mod:`~rigsim.scenarios.studies.sweep.plot`
 (``summary.png``). This module is the argparse adapter.
 
 Outputs in ``DIR``: ``cases/<case_id>.json`` (one per finished case, written as it finishes),
@@ -27,20 +27,20 @@ import argparse
 import pathlib
 import sys
 
-from scenarios.core.flags import add_command, add_jobs, add_out, add_quiet
+from rigsim.scenarios.core.flags import add_command, add_jobs, add_out, add_quiet
 
 __all__ = ["add_parser", "cmd_sweep"]
 
 
 def cmd_sweep(args) -> int:
     """``rigsim sweep``: validate the options and the grid, run it, print where the results are."""
-    from scenarios.core.config import ScenarioError
-    from scenarios.core.pool import local_executor, worker_count
-    from scenarios.studies.sweep.executors import dask_executor
-    from scenarios.studies.sweep.grid import load_grid
-    from scenarios.studies.sweep.run import SUMMARY_FILE, SweepOutcome, run_sweep
-    from scenarios.studies.sweep.scheduler import check_address
-    from scenarios.studies.sweep.store import CASES_DIR
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.pool import local_executor, worker_count
+    from rigsim.scenarios.studies.sweep.executors import dask_executor
+    from rigsim.scenarios.studies.sweep.grid import load_grid
+    from rigsim.scenarios.studies.sweep.run import SUMMARY_FILE, SweepOutcome, run_sweep
+    from rigsim.scenarios.studies.sweep.scheduler import check_address
+    from rigsim.scenarios.studies.sweep.store import CASES_DIR
 
     if args.scheduler is not None and args.workers is not None:
         raise ScenarioError("--jobs sets the local process pool; a Dask cluster's size is set where its "
@@ -50,7 +50,7 @@ def cmd_sweep(args) -> int:
     except ValueError:
         raise ScenarioError(f"--jobs must be a whole number >= 1, got {args.workers}") from None
     scheduler = None if args.scheduler is None else check_address(args.scheduler)  # before the grid is read
-    from scenarios.core.outputs import claim_output_folder
+    from rigsim.scenarios.core.outputs import claim_output_folder
 
     # a new, empty or earlier sweep's folder is resumed into; anything else is refused now
     claim_output_folder(args.out, written_by="rigsim sweep", inputs=(args.grid,))

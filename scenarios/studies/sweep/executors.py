@@ -1,7 +1,7 @@
 """Where the cases of a sweep run: the local process pool or a Dask cluster.
 
-Both are ``concurrent.futures`` executors, so :func:`scenarios.studies.sweep.run.run_sweep` has
-one code path. The local pool is :func:`scenarios.core.pool.local_executor` (one run per process
+Both are ``concurrent.futures`` executors, so :func:`rigsim.scenarios.studies.sweep.run.run_sweep` has
+one code path. The local pool is :func:`rigsim.scenarios.core.pool.local_executor` (one run per process
 at a time: MuJoCo's callbacks are process-global). :func:`dask_executor` is the executor of a
 ``distributed.Client`` connected to an existing Dask cluster (``client.get_executor()``), whose
 workers must run one task at a time (``--nthreads 1``) and import this package.
@@ -13,8 +13,8 @@ import concurrent.futures as cf
 import contextlib
 from collections.abc import Iterator
 
-from scenarios.core.pool import local_executor
-from scenarios.studies.sweep.scheduler import connect
+from rigsim.scenarios.core.pool import local_executor
+from rigsim.scenarios.studies.sweep.scheduler import connect
 
 __all__ = ["dask_executor", "local_executor"]
 
@@ -23,7 +23,7 @@ __all__ = ["dask_executor", "local_executor"]
 def dask_executor(address: str) -> Iterator[cf.Executor]:
     """The ``concurrent.futures`` executor of a Dask distributed cluster at ``address``.
 
-    The connection is :func:`scenarios.studies.sweep.scheduler.connect`'s: the address checked,
+    The connection is :func:`rigsim.scenarios.studies.sweep.scheduler.connect`'s: the address checked,
     the scheduler and its workers questioned, each step within a deadline. On an exception
     (Ctrl-C included) the cases not finished are cancelled on the cluster before it propagates.
 

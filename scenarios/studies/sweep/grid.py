@@ -7,7 +7,7 @@ A grid file is TOML::
     base = "../paper/high_72kmh_3640kg.toml"   # the base scenario file (relative to this file)
     actuator = "identified"          # how each case is corrected and scored (all optional; the
     lowpass = "regularized"          # defaults are the paper study's "best" method and noise):
-    correction_mode = "zerophase"    # see scenarios.studies.sweep.settings
+    correction_mode = "zerophase"    # see rigsim.scenarios.studies.sweep.settings
     noise_N = 100.0
 
     [base]                           # ... or the base scenario inline (exactly one of the two)
@@ -32,11 +32,11 @@ axis of the product (every explicit case is combined with every point of the axe
 alone is the list. A key may not be both an axis and a key of an explicit case. Setting one of
 ``road.roughness``, ``road.gd_n0_m3``, ``road.profile_csv`` replaces the base's choice among them.
 
-The axes and explicit cases are read by :func:`scenarios.studies.sweep.axes.read_axes`, which
+The axes and explicit cases are read by :func:`rigsim.scenarios.studies.sweep.axes.read_axes`, which
 refuses a grid of more than :data:`MAX_CASES` cases from the lengths of its lists, before any
-value is looked at. Every case is then validated with :func:`scenarios.core.config.parse_scenario`
+value is looked at. Every case is then validated with :func:`rigsim.scenarios.core.config.parse_scenario`
 before anything runs; an unknown axis name or an invalid value is a
-:class:`~scenarios.core.config.ScenarioError` naming it.
+:class:`~rigsim.scenarios.core.config.ScenarioError` naming it.
 Each case gets a stable id from its own values (keys sorted, so the order of the axes in the file
 does not matter), e.g. ``road.roughness=high__speed_kmh=72__vehicle.payload_kg=3640``.
 """
@@ -54,11 +54,11 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from correction.io.tomlfile import check_keys, read_toml
-from scenarios.core.config import Scenario, ScenarioError, parse_scenario
-from scenarios.studies.sweep.axes import MAX_CASES, axis_keys, format_value, read_axes
-from scenarios.studies.sweep.settings import SETTING_KEYS, EvalSettings, parse_settings
-from scenarios.studies.scoring import MIN_SCORED_S, shortest_scorable_s
+from rigsim.correction.io.tomlfile import check_keys, read_toml
+from rigsim.scenarios.core.config import Scenario, ScenarioError, parse_scenario
+from rigsim.scenarios.studies.sweep.axes import MAX_CASES, axis_keys, format_value, read_axes
+from rigsim.scenarios.studies.sweep.settings import SETTING_KEYS, EvalSettings, parse_settings
+from rigsim.scenarios.studies.scoring import MIN_SCORED_S, shortest_scorable_s
 
 __all__ = ["Case", "SweepGrid", "EvalSettings", "axis_keys", "load_grid", "parse_grid", "format_value",
            "GRID_FORMAT", "MAX_CASES"]
@@ -132,7 +132,7 @@ class SweepGrid:
 
 
 def _refuse(where: str):
-    """The ``error`` of :mod:`correction.io.tomlfile` checks: a ScenarioError prefixed by ``where``."""
+    """The ``error`` of :mod:`rigsim.correction.io.tomlfile` checks: a ScenarioError prefixed by ``where``."""
     return lambda message: ScenarioError(f"{where}{message}")
 
 

@@ -55,7 +55,7 @@ def plot_summary(grid, records: Mapping[str, dict], path) -> pathlib.Path:
     ----------
     grid : SweepGrid
     records : Mapping[str, dict]
-        Case files by case id (:func:`scenarios.studies.sweep.store.read_case_files`).
+        Case files by case id (:func:`rigsim.scenarios.studies.sweep.store.read_case_files`).
     path : path
         The PNG to write (atomically).
 
@@ -67,7 +67,7 @@ def plot_summary(grid, records: Mapping[str, dict], path) -> pathlib.Path:
 
     from matplotlib.figure import Figure  # no pyplot: the Agg canvas, no global figure state
 
-    from scenarios.core.files import atomic_write_bytes
+    from rigsim.scenarios.core.files import atomic_write_bytes
 
     cases = {c.case_id: c for c in grid.cases}
     ok = [(cases[cid], rec["result"]) for cid, rec in sorted(records.items())

@@ -18,10 +18,10 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from scenarios.studies.sweep.case import evaluate_payload
-from scenarios.studies.sweep.grid import Case, SweepGrid
-from scenarios.studies.sweep.store import (CASES_DIR, collect_results, read_case_files, write_case, write_meta,
-                                           write_timings)
+from rigsim.scenarios.studies.sweep.case import evaluate_payload
+from rigsim.scenarios.studies.sweep.grid import Case, SweepGrid
+from rigsim.scenarios.studies.sweep.store import (CASES_DIR, collect_results, read_case_files, write_case, write_meta,
+                                                  write_timings)
 
 __all__ = ["SweepOutcome", "run_sweep", "SUMMARY_FILE", "format_eta"]
 
@@ -138,8 +138,8 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
     out_dir : path
         Output folder (created).
     executor : concurrent.futures.Executor
-        Where the cases run (:func:`scenarios.core.pool.local_executor`,
-        :func:`scenarios.studies.sweep.executors.dask_executor` or any executor whose workers run
+        Where the cases run (:func:`rigsim.scenarios.core.pool.local_executor`,
+        :func:`rigsim.scenarios.studies.sweep.executors.dask_executor` or any executor whose workers run
         one case per process at a time). After Ctrl-C its cases not started are left to its
         owner to cancel (those two do it as the interrupt leaves their ``with`` block).
     resume : bool
@@ -211,7 +211,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
         records = write_meta(grid, out, ran=n_ok + n_failed, wall_time_s=wall, interrupted=interrupted,
                              executor_label=executor_label)
         if plot and records:
-            from scenarios.studies.sweep.plot import plot_summary
+            from rigsim.scenarios.studies.sweep.plot import plot_summary
 
             plot_summary(grid, records, out / SUMMARY_FILE)
     outcome = SweepOutcome(total=len(grid.cases), skipped=len(grid.cases) - len(todo), ok=n_ok,

@@ -31,7 +31,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.config import ScenarioError
 
 __all__ = ["CONNECT_TIMEOUT_S", "WORKERS_TIMEOUT_S", "check_address", "survey", "connect"]
 

@@ -9,8 +9,8 @@
     noise_N = 100.0                  # rms of the load cell's noise, N (default: the paper study's)
     settling_tolerance = 0.001       # samples inside the filters' transients are not scored
 
-The defaults are :data:`scenarios.studies.scoring.BEST` with
-:data:`scenarios.studies.scoring.NOISE_N` and :data:`scenarios.studies.scoring.SETTLING_TOLERANCE`,
+The defaults are :data:`rigsim.scenarios.studies.scoring.BEST` with
+:data:`rigsim.scenarios.studies.scoring.NOISE_N` and :data:`rigsim.scenarios.studies.scoring.SETTLING_TOLERANCE`,
 the method, noise and scored samples of ``rigsim paper``: a case of a sweep and the same
 scenario in the paper study give the same corrected DLC. The identified T_a is fitted to each
 rig run's own record: short records (seen: some seeds at 4-6 s) can give a fit whose inverse
@@ -24,9 +24,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from correction.io.tomlfile import number
-from scenarios.core.config import ScenarioError
-from scenarios.studies.scoring import NOISE_N, SETTLING_TOLERANCE, Method, method_named
+from rigsim.correction.io.tomlfile import number
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.studies.scoring import NOISE_N, SETTLING_TOLERANCE, Method, method_named
 
 __all__ = ["EvalSettings", "SETTING_KEYS", "parse_settings"]
 
@@ -42,7 +42,7 @@ SETTING_KEYS = (*_CHOICES, "noise_N", "settling_tolerance")
 
 @dataclass(frozen=True)
 class EvalSettings:
-    """How each case is corrected and scored (:func:`scenarios.studies.scoring.score_pair`).
+    """How each case is corrected and scored (:func:`rigsim.scenarios.studies.scoring.score_pair`).
 
     Parameters
     ----------
@@ -68,7 +68,7 @@ class EvalSettings:
 
     @property
     def method(self) -> Method:
-        """The :class:`~scenarios.studies.scoring.Method` of these settings (``best`` by default)."""
+        """The :class:`~rigsim.scenarios.studies.scoring.Method` of these settings (``best`` by default)."""
         return method_named(self.actuator, self.lowpass, self.correction_mode)
 
     def as_dict(self) -> dict:

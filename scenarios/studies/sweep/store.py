@@ -1,8 +1,8 @@
 """The files of a sweep folder: one JSON file per finished case, ``results.csv`` and ``sweep.json``.
 
 * ``cases/<case_id>.json``: one file per finished case, written atomically as soon as it
-  finishes: its values, scenario, scores (:meth:`scenarios.studies.sweep.case.CaseResult.to_dict`)
-  or error, fingerprint and :data:`~scenarios.studies.sweep.grid.GRID_FORMAT`. A case file is
+  finishes: its values, scenario, scores (:meth:`rigsim.scenarios.studies.sweep.case.CaseResult.to_dict`)
+  or error, fingerprint and :data:`~rigsim.scenarios.studies.sweep.grid.GRID_FORMAT`. A case file is
   part of a grid only if its format and fingerprint match (same scenario, same settings).
 * ``results.csv``: one row per case of the grid that has a case file, sorted by case id,
   collected from the case files (so an interrupted and resumed sweep gives the same file as an
@@ -21,9 +21,9 @@ import pathlib
 from collections.abc import Mapping
 from typing import Any
 
-from scenarios.core.files import atomic_write_text, write_json
-from scenarios.studies.sweep.case import METRIC_COLUMNS
-from scenarios.studies.sweep.grid import GRID_FORMAT, Case, SweepGrid, format_value
+from rigsim.scenarios.core.files import atomic_write_text, write_json
+from rigsim.scenarios.studies.sweep.case import METRIC_COLUMNS
+from rigsim.scenarios.studies.sweep.grid import GRID_FORMAT, Case, SweepGrid, format_value
 
 __all__ = ["CASES_DIR", "RESULTS_FILE", "META_FILE", "TIMINGS_FILE", "case_path", "read_case_files",
            "results_columns", "collect_results", "write_case", "write_meta", "write_timings"]

@@ -3,8 +3,8 @@
 Arguments are checked before any work (a bad duration, ``--jobs`` below 1, an ``--out`` that
 is a file or holds a previous result without ``--force``, an ``--rrd`` that cannot be written: one
 sentence, nothing written); then the validation runs, the folder is built beside ``--out`` and
-renamed onto it (:func:`scenarios.core.outputs.staged_output`;
-:func:`scenarios.studies.validate.report.write_report` writes its files) and the key numbers are
+renamed onto it (:func:`rigsim.scenarios.core.outputs.staged_output`;
+:func:`rigsim.scenarios.studies.validate.report.write_report` writes its files) and the key numbers are
 printed.
 """
 
@@ -13,8 +13,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from scenarios.core.flags import (add_command, add_duration, add_force, add_jobs, add_out, add_quiet, add_recording,
-                                  add_rig)
+from rigsim.scenarios.core.flags import (add_command, add_duration, add_force, add_jobs, add_out, add_quiet, add_recording,
+                                         add_rig)
 
 __all__ = ["add_parser", "cmd_validate", "MIN_DURATION_S", "MIN_IDENT_DURATION_S"]
 
@@ -31,7 +31,7 @@ def __getattr__(name: str):
     # The computation is imported when first used, not with the parser (``rigsim --help`` stays
     # light); ``command.validate`` and ``command.check_arguments`` still name it (tests wrap it).
     if name in ("check_arguments", "validate"):
-        from scenarios.studies.validate import compute
+        from rigsim.scenarios.studies.validate import compute
 
         return getattr(compute, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -63,9 +63,9 @@ def cmd_validate(args) -> int:
     ScenarioError
         Bad arguments, before any work.
     """
-    from scenarios.core.config import ScenarioError
-    from scenarios.core.outputs import check_output_file, staged_output
-    from scenarios.studies.validate.report import summary_lines, write_report
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.outputs import check_output_file, staged_output
+    from rigsim.scenarios.studies.validate.report import summary_lines, write_report
 
     this = sys.modules[__name__]  # check_arguments and validate through __getattr__ (or a test's wrapper)
     duration_s = getattr(args, "duration_s", None)
@@ -86,7 +86,7 @@ def cmd_validate(args) -> int:
     progress = None if quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     pose_rate = None
     if rrd is not None:
-        from scenarios.core.poses import DEFAULT_POSE_RATE_HZ
+        from rigsim.scenarios.core.poses import DEFAULT_POSE_RATE_HZ
 
         pose_rate = DEFAULT_POSE_RATE_HZ
     with staged_output(args.out, force=force) as stage:
@@ -95,14 +95,14 @@ def cmd_validate(args) -> int:
         paths = {k: stage.final(p) for k, p in write_report(result, stage.path).items()}
         lines = summary_lines(result)
         if rrd is not None:
-            from scenarios.review.recording import write_recording
+            from rigsim.scenarios.review.recording import write_recording
 
             runs = [result.runs[k] for k in ("road", "rig") if k in result.runs]
             write_recording(stage.place(rrd), runs, dlc_table="\n".join(lines))
     if rrd is not None:
         print(f"wrote recording {rrd} (Table 1 road and rig runs)" + (" and opened the viewer" if view else ""))
         if view:
-            from scenarios.review.recording import open_viewer
+            from rigsim.scenarios.review.recording import open_viewer
 
             open_viewer(rrd)
     for line in lines:

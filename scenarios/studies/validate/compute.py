@@ -3,22 +3,22 @@
 Three routes to the actuator transfer function ``T_a = X_a / X_p`` (drive signal x_ref of
 ``hyd_<c>`` to pan displacement, qpos of ``pan_<c>_z``) of the truck on the DYNTRAC rig:
 
-1. **analytic**: the paper's eq. 4 (:func:`correction.output.transfer.eq4_transfer_function`) with
-   Merritt's Kq, Kc from :func:`hydraulics.linearization` at each wheel station's static load
+1. **analytic**: the paper's eq. 4 (:func:`rigsim.correction.output.transfer.eq4_transfer_function`) with
+   Merritt's Kq, Kc from :func:`rigsim.hydraulics.linearization` at each wheel station's static load
    and that station's tire stiffness;
 2. **numerical**: the whole closed-loop MuJoCo plant (truck, pans, four hydraulic actuators,
-   all states) linearized at static rest (:meth:`scenarios.core.rig.Rig.linearize`, leaf-spring
+   all states) linearized at static rest (:meth:`rigsim.scenarios.core.rig.Rig.linearize`, leaf-spring
    dry friction off), ``H(f) = C (exp(j 2 pi f dt) I - A)^-1 B``, all 4 x 4 paths;
 3. **identified**: the nonlinear rig driven by independent road-like random drives on all four
-   wheels, the MIMO H1 estimate with its coherence (:mod:`correction.identification.identify`) and a fitted
+   wheels, the MIMO H1 estimate with its coherence (:mod:`rigsim.correction.identification.identify`) and a fitted
    stable rational transfer function per wheel.
 
 Then the paper's Figure 7 (step responses, nonlinear against linear) and Table 1 (DLC of the
 road test, the rig test and the truck driven by the linearized actuator model) for the
 high-roughness, 72 km/h, 3640 kg case. :func:`validate` schedules the runs
-(:mod:`scenarios.studies.validate.runs`) on the worker pool and assembles a
-:class:`~scenarios.studies.validate.result.ValidateResult`;
-:func:`scenarios.studies.validate.report.write_report` writes ``validate.json``, the PNGs and
+(:mod:`rigsim.scenarios.studies.validate.runs`) on the worker pool and assembles a
+:class:`~rigsim.scenarios.studies.validate.result.ValidateResult`;
+:func:`rigsim.scenarios.studies.validate.report.write_report` writes ``validate.json``, the PNGs and
 ``report.md``.
 """
 
@@ -29,17 +29,17 @@ import time
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.core.config import ScenarioError
-from scenarios.core.pool import run_jobs, worker_count
-from scenarios.core.rig import RIG_INTEGRATOR_NAME, Rig
-from scenarios.core.watch import SayFn
-from scenarios.studies.validate import runs, sections
-from scenarios.studies.validate.result import ValidateCurves, ValidateResult
-from scenarios.studies.validate.routes import route1_models, route3
-from scenarios.studies.validate.settings import (BODE_RANGE_HZ, COMPARE_MAX_HZ, MAX_WORKERS, MIN_IDENT_S,
-                                                 STEP_LARGE_M, STEP_SMALL_M, table1_scenario_path,
-                                                 validation_scenario)
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.pool import run_jobs, worker_count
+from rigsim.scenarios.core.rig import RIG_INTEGRATOR_NAME, Rig
+from rigsim.scenarios.core.watch import SayFn
+from rigsim.scenarios.studies.validate import runs, sections
+from rigsim.scenarios.studies.validate.result import ValidateCurves, ValidateResult
+from rigsim.scenarios.studies.validate.routes import route1_models, route3
+from rigsim.scenarios.studies.validate.settings import (BODE_RANGE_HZ, COMPARE_MAX_HZ, MAX_WORKERS, MIN_IDENT_S,
+                                                        STEP_LARGE_M, STEP_SMALL_M, table1_scenario_path,
+                                                        validation_scenario)
 
 __all__ = ["MAX_DURATION_S", "check_arguments", "validate"]
 
@@ -94,7 +94,7 @@ def validate(*, duration_s: float | None = None, ident_duration_s: float | None 
     pose_rate_hz : float, Hz, optional
         Keep the Table 1 road and rig runs with body poses at this rate (for a recording).
     rig : str
-        The paper cases' configuration (:data:`scenarios.core.config.PAPER_CONFIGURATIONS`):
+        The paper cases' configuration (:data:`rigsim.scenarios.core.config.PAPER_CONFIGURATIONS`):
         ``"design"`` or ``"dyntrac"``.
 
     Raises

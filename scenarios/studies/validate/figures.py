@@ -2,7 +2,7 @@
 
 Bode overlays of the three routes per wheel, coherence and cross-coupling, the Figure 7 step
 responses, and where eq. 4 departs from the plant; all from a
-:class:`~scenarios.studies.validate.result.ValidateResult`.
+:class:`~rigsim.scenarios.studies.validate.result.ValidateResult`.
 """
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ import io
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.studies.validate.result import ValidateResult
-from scenarios.studies.validate.routes import err_db_deg, freqresp
-from scenarios.studies.validate.settings import BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.studies.validate.result import ValidateResult
+from rigsim.scenarios.studies.validate.routes import err_db_deg, freqresp
+from rigsim.scenarios.studies.validate.settings import BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ
 
 __all__ = ["phase_deg", "render_figures"]
 

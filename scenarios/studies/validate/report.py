@@ -1,9 +1,9 @@
 """``report.md`` of ``rigsim validate``, the lines the command prints, and writing the folder.
 
-:func:`write_report` renders the figures (:mod:`scenarios.studies.validate.figures`) and
-``report.md`` in memory from a :class:`~scenarios.studies.validate.result.ValidateResult`,
+:func:`write_report` renders the figures (:mod:`rigsim.scenarios.studies.validate.figures`) and
+``report.md`` in memory from a :class:`~rigsim.scenarios.studies.validate.result.ValidateResult`,
 then writes every file atomically, ``validate.json`` (through
-:func:`scenarios.core.files.write_json`) last.
+:func:`rigsim.scenarios.core.files.write_json`) last.
 """
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ from __future__ import annotations
 import math
 import pathlib
 
-from mjcf.names import CORNERS
-from scenarios.core.files import atomic_write_bytes, write_json
-from scenarios.studies.validate.figures import render_figures
-from scenarios.studies.validate.result import ValidateResult
-from scenarios.studies.validate.settings import GOAL_FRF_DB, GOAL_FRF_DEG, GOAL_TABLE1_PCT
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.files import atomic_write_bytes, write_json
+from rigsim.scenarios.studies.validate.figures import render_figures
+from rigsim.scenarios.studies.validate.result import ValidateResult
+from rigsim.scenarios.studies.validate.settings import GOAL_FRF_DB, GOAL_FRF_DEG, GOAL_TABLE1_PCT
 
 __all__ = ["events_text", "summary_lines", "write_report"]
 

@@ -1,6 +1,6 @@
 """The result of ``rigsim validate``: what ``validate.json`` holds, plus the curves for the figures.
 
-:class:`ValidateResult` is written by :func:`scenarios.core.files.write_json` through its
+:class:`ValidateResult` is written by :func:`rigsim.scenarios.core.files.write_json` through its
 :meth:`ValidateResult.to_dict` (the document's one builder); :class:`ValidateCurves` and the
 kept runs stay out of the JSON.
 """
@@ -12,10 +12,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mjcf.names import CORNERS
-from scenarios.studies.validate.routes import nanmax
-from scenarios.studies.validate.settings import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, GOAL_FRF_DB,
-                                                 GOAL_FRF_DEG, GOAL_TABLE1_PCT)
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.studies.validate.routes import nanmax
+from rigsim.scenarios.studies.validate.settings import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, GOAL_FRF_DB,
+                                                        GOAL_FRF_DEG, GOAL_TABLE1_PCT)
 
 __all__ = ["ValidateCurves", "ValidateResult"]
 
@@ -90,7 +90,7 @@ class ValidateResult:
     linear_timestep_s : float, s
         The linearization's time step (explicit Euler).
     route1, route2, route3 : Mapping
-        The routes (:mod:`scenarios.studies.validate.sections`): bandwidths in Hz, errors
+        The routes (:mod:`rigsim.scenarios.studies.validate.sections`): bandwidths in Hz, errors
         against route 2 in dB and deg up to :data:`COMPARE_MAX_HZ`, poles and zeros in rad/s.
     departure_budget : Mapping
         Each step from eq. 4 to route 2 against route 2, dB and deg.
@@ -104,7 +104,7 @@ class ValidateResult:
         Wall time of the whole validation.
     curves : ValidateCurves
         For the figures; not in the JSON.
-    runs : Mapping[str, scenarios.core.results.RunResult]
+    runs : Mapping[str, rigsim.scenarios.core.results.RunResult]
         The Table 1 "road" and "rig" runs kept for a recording (empty unless asked); not in the JSON.
     """
 
@@ -159,7 +159,7 @@ class ValidateResult:
         }
 
     def to_dict(self) -> dict:
-        """The ``validate.json`` document (NaN stays NaN here; :func:`scenarios.core.files.to_json`
+        """The ``validate.json`` document (NaN stays NaN here; :func:`rigsim.scenarios.core.files.to_json`
         writes it as null)."""
         steps = self.steps
         return {

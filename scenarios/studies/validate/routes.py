@@ -3,8 +3,8 @@
 * Route 1, analytic: the paper's eq. 4 per wheel station (:func:`route1_models`, several ways
   of taking Merritt's Kq, :data:`ROUTE1_VARIANTS`), and the ladder from eq. 4 to the plant
   (:func:`budget_models`);
-* route 2, numerical: :meth:`scenarios.core.rig.Rig.linearize` (evaluated elsewhere through
-  :class:`scenarios.core.plant.PlantLinearization`);
+* route 2, numerical: :meth:`rigsim.scenarios.core.rig.Rig.linearize` (evaluated elsewhere through
+  :class:`rigsim.scenarios.core.plant.PlantLinearization`);
 * route 3, identified: the MIMO H1 estimate of a rig record (:func:`identify`), a stable
   rational fit per wheel and its comparison with route 2 (:func:`route3`).
 
@@ -22,20 +22,20 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from correction.identification.identify import fit_rational, h1_estimate
-from correction.output.transfer import (apply_transfer_function, bandwidth_hz, describe_roots, eq4_transfer_function,
+from rigsim.correction.identification.identify import fit_rational, h1_estimate
+from rigsim.correction.output.transfer import (apply_transfer_function, bandwidth_hz, describe_roots, eq4_transfer_function,
                                  frequency_response_hz, state_space_frequency_response, transfer_bandwidth_hz)
-from hydraulics.linearization import linearization
-from hydraulics.loop import loop_matrices
-from hydraulics.model import land_coefficient, orifice_root
-from hydraulics.packing import pack
-from hydraulics.params import ActuatorParams
-from mjcf.names import CORNERS
-from scenarios.core.drive import step_drive
-from scenarios.core.plant import PlantLinearization
-from scenarios.core.rig import RigRecord
-from scenarios.studies.validate.settings import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, FIT_ORDERS,
-                                                 IDENT_SKIP_S, STEP_AT_S)
+from rigsim.hydraulics.linearization import linearization
+from rigsim.hydraulics.loop import loop_matrices
+from rigsim.hydraulics.model import land_coefficient, orifice_root
+from rigsim.hydraulics.packing import pack
+from rigsim.hydraulics.params import ActuatorParams
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.drive import step_drive
+from rigsim.scenarios.core.plant import PlantLinearization
+from rigsim.scenarios.core.rig import RigRecord
+from rigsim.scenarios.studies.validate.settings import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, FIT_ORDERS,
+                                                        IDENT_SKIP_S, STEP_AT_S)
 
 __all__ = ["ROUTE1_VARIANTS", "H1Estimate", "Route3", "err_db_deg", "freqresp", "nanmax", "roots_json", "tf_json",
            "flow_gains", "route1_models", "budget_models", "identify", "route3", "linear_steps"]
@@ -61,7 +61,7 @@ def nanmax(values) -> float:
 
 
 def roots_json(r) -> list[dict]:
-    """Roots (rad/s) as :func:`correction.output.transfer.describe_roots` dicts rounded to 6 digits."""
+    """Roots (rad/s) as :func:`rigsim.correction.output.transfer.describe_roots` dicts rounded to 6 digits."""
     return [{k: round(v, 6) for k, v in d.items()} for d in describe_roots(r)]
 
 
@@ -92,7 +92,7 @@ def flow_gains(params: ActuatorParams, load_N: float) -> dict[str, float]:
 #: Route 1 variants: how Kq and Kc are taken (the first is the one reported as route 1).
 ROUTE1_VARIANTS = {
     "static_mean": "Kq, Kc = exact slopes of the valve at the static loaded point, Kq the mean of both "
-                   "chambers' flow paths (hydraulics.linearization; at rest the spool sits in the smoothed "
+                   "chambers' flow paths (rigsim.hydraulics.linearization; at rest the spool sits in the smoothed "
                    "null region, so all four metering lands contribute)",
     "null": "Kq, Kc at the unloaded valve null (load 0, P1 = P2): Merritt's textbook point",
     "extending": "Kq of the extending direction (supply to the loaded chamber 1 across Ps - P1, chamber 2 to return)",

@@ -1,15 +1,15 @@
 """The runs of ``rigsim validate``: one worker job each, every one through the one Rig.
 
-Each function is a picklable job for :func:`scenarios.core.pool.run_jobs` (one run per
+Each function is a picklable job for :func:`rigsim.scenarios.core.pool.run_jobs` (one run per
 process: MuJoCo's actuator callbacks are process-global). None steps MuJoCo itself:
 
 * :func:`identification_run`: the nonlinear rig under four independent random drives
-  (:func:`scenarios.core.drive.identification_drive`) for route 3, through :meth:`Rig.run`;
-* :func:`step_run`: all four pans stepped together (:func:`scenarios.core.drive.step_drive`),
+  (:func:`rigsim.scenarios.core.drive.identification_drive`) for route 3, through :meth:`Rig.run`;
+* :func:`step_run`: all four pans stepped together (:func:`rigsim.scenarios.core.drive.step_drive`),
   the Figure 7 analogue, through :meth:`Rig.run`;
-* :func:`scenario_run`: the Table 1 scenario in road or rig mode (:func:`scenarios.core.run.run`);
+* :func:`scenario_run`: the Table 1 scenario in road or rig mode (:func:`rigsim.scenarios.core.run.run`);
 * :func:`linear_model_run`: a road run whose pans follow the profile through a linear actuator
-  model (route 2 by modes, :func:`scenarios.core.plant.simulate`, or eq. 4).
+  model (route 2 by modes, :func:`rigsim.scenarios.core.plant.simulate`, or eq. 4).
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from scenarios.core.drive import Drive, identification_drive, step_drive
-from scenarios.core.plant import fine_factor
-from scenarios.core.rig import Rig, RigRecord
-from scenarios.core.run import run
-from scenarios.studies.validate.settings import IDENT_RATE_HZ, IDENT_SKIP_S, STEP_AT_S, STEP_RUN_S, validation_scenario
+from rigsim.scenarios.core.drive import Drive, identification_drive, step_drive
+from rigsim.scenarios.core.plant import fine_factor
+from rigsim.scenarios.core.rig import Rig, RigRecord
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.validate.settings import IDENT_RATE_HZ, IDENT_SKIP_S, STEP_AT_S, STEP_RUN_S, validation_scenario
 
 __all__ = ["IdentificationRun", "ScenarioRun", "LINEAR_KINDS", "identification_run", "step_run", "scenario_run",
            "linear_model_run"]
@@ -39,7 +39,7 @@ class IdentificationRun:
 
     Attributes
     ----------
-    record : scenarios.core.rig.RigRecord
+    record : rigsim.scenarios.core.rig.RigRecord
         Drive x_ref (m) and pan displacement x_a (m) at :data:`IDENT_RATE_HZ` from t = 0,
         hydraulic states and events.
     drive_rms_m : float, m
@@ -69,7 +69,7 @@ class ScenarioRun:
         Hydraulic events ``{event: {corner: {"samples": int, "first_time_s": float (s)}}}``.
     wall_time_s : float, s
         Wall time of the run.
-    result : scenarios.core.results.RunResult or None
+    result : rigsim.scenarios.core.results.RunResult or None
         The whole run, kept when body poses were recorded (for a rerun recording).
     """
 
@@ -129,7 +129,7 @@ def linear_model_run(path: str, duration_s: float | None, kind: str, model) -> S
         "route2_mimo": the whole linear plant with all four profiles (cross-coupling included);
         "eq4": eq. 4 per wheel.
     model : PlantLinearization or tuple
-        Route 2: the :class:`scenarios.core.plant.PlantLinearization`; eq. 4: ``(tfs, dt_s)``,
+        Route 2: the :class:`rigsim.scenarios.core.plant.PlantLinearization`; eq. 4: ``(tfs, dt_s)``,
         per corner ``(num, den)`` in s (rad/s) and the step (s) to discretize them at (the
         plant's; the run's drive is refined onto it and taken back, as route 2's is).
     """

@@ -2,7 +2,7 @@
 
 Every function returns a plain nested dict (SI units in the key names: ``_hz``, ``_db``,
 ``_deg``, ``_m``, ``_mm``, ``_pct``, ``_N``) for one field of
-:class:`scenarios.studies.validate.result.ValidateResult`, plus, where the figures need them,
+:class:`rigsim.scenarios.studies.validate.result.ValidateResult`, plus, where the figures need them,
 the curves it was made from.
 """
 
@@ -12,16 +12,16 @@ import math
 
 import numpy as np
 
-from correction.output.transfer import bandwidth_hz, transfer_bandwidth_hz
-from hydraulics.params import ActuatorParams
-from mjcf.names import CORNERS
-from scenarios.core.drive import IDENT_SEED
-from scenarios.core.plant import PlantLinearization
-from scenarios.studies.paper.table import PAPER_TABLE1  # the paper's Table 1, one home for its numbers
-from scenarios.studies.validate.routes import (ROUTE1_VARIANTS, Route3, budget_models, err_db_deg, freqresp,
-                                               linear_steps, nanmax, roots_json, tf_json)
-from scenarios.studies.validate.runs import IdentificationRun
-from scenarios.studies.validate.settings import FIT_ORDERS, STEP_AT_S, STEP_LARGE_M, STEP_SMALL_M
+from rigsim.correction.output.transfer import bandwidth_hz, transfer_bandwidth_hz
+from rigsim.hydraulics.params import ActuatorParams
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.core.drive import IDENT_SEED
+from rigsim.scenarios.core.plant import PlantLinearization
+from rigsim.scenarios.studies.paper.table import PAPER_TABLE1  # the paper's Table 1, one home for its numbers
+from rigsim.scenarios.studies.validate.routes import (ROUTE1_VARIANTS, Route3, budget_models, err_db_deg, freqresp,
+                                                      linear_steps, nanmax, roots_json, tf_json)
+from rigsim.scenarios.studies.validate.runs import IdentificationRun
+from rigsim.scenarios.studies.validate.settings import FIT_ORDERS, STEP_AT_S, STEP_LARGE_M, STEP_SMALL_M
 
 __all__ = ["STEP_SIZES", "route2_section", "route1_section", "budget_section", "route3_section", "steps_section",
            "friction_off_section", "table1_section"]

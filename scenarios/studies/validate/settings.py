@@ -1,9 +1,9 @@
 """Settings of ``rigsim validate``: frequency ranges, goals, step sizes, identification record.
 
-One home for the numbers every module of :mod:`scenarios.studies.validate` shares, and for the
+One home for the numbers every module of :mod:`rigsim.scenarios.studies.validate` shares, and for the
 scenario the validation runs (the paper's Table 1 case). The identification drive itself
 (RMS, spectrum, band, seed, fade-in) lives with the other drives in
-:mod:`scenarios.core.drive`.
+:mod:`rigsim.scenarios.core.drive`.
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from __future__ import annotations
 import dataclasses
 import pathlib
 
-from correction.output.lowpass import BAND_HZ
-from scenarios.core.config import PAPER_CONFIGURATIONS, Scenario, load_scenario, paper_scenarios
+from rigsim.correction.output.lowpass import BAND_HZ
+from rigsim.scenarios.core.config import PAPER_CONFIGURATIONS, Scenario, load_scenario, paper_scenarios
 
 __all__ = [
     "BODE_RANGE_HZ", "COMPARE_MAX_HZ", "COHERENCE_MIN", "GOAL_FRF_DB", "GOAL_FRF_DEG", "GOAL_TABLE1_PCT",
@@ -51,7 +51,7 @@ TABLE1_SCENARIO = "high_72kmh_3640kg.toml"
 
 def table1_scenario_path(configuration: str = "design") -> pathlib.Path:
     """The shipped scenario of the paper's Table 1 (high roughness, 72 km/h, 3640 kg) in a
-    configuration of :data:`scenarios.core.config.PAPER_CONFIGURATIONS` (``"design"`` or ``"dyntrac"``)."""
+    configuration of :data:`rigsim.scenarios.core.config.PAPER_CONFIGURATIONS` (``"design"`` or ``"dyntrac"``)."""
     for p in paper_scenarios(configuration):
         if p.name == TABLE1_SCENARIO:
             return p

@@ -1,4 +1,4 @@
-"""correction.identification.identify: H1 estimation and rational fitting on known linear systems.
+"""rigsim.correction.identification.identify: H1 estimation and rational fitting on known linear systems.
 
 The systems are simulated with scipy (exact ZOH discretization, lfilter) and the estimates are
 compared with their exact discrete-time frequency responses (scipy.signal.freqz); the fit is
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.identification.identify import fit_rational, h1_estimate
-from correction.output.transfer import frequency_response_hz
+from rigsim.correction.identification.identify import fit_rational, h1_estimate
+from rigsim.correction.output.transfer import frequency_response_hz
 
 FS = 1000.0
 
@@ -128,7 +128,7 @@ def test_fit_rational_checks_orders_and_data():
         fit_rational(f, np.ones(3), 2, 6)
 
 
-# ---------------------------------------------------------------- correction.identification.actuator_fit: the one T_a fit
+# ---------------------------------------------------------------- rigsim.correction.identification.actuator_fit: the one T_a fit
 
 EQ4_VALUES = dict(ksv=1.0, kq_m3_s=0.0109, kc_m3_s_Pa=1.26e-11, kp_per_m=50.0, kdp_per_Pa=2.0e-8,
                   piston_area_m2=7.43e-3, fluid_volume_m3=2.13e-3, bulk_modulus_Pa=1.0e9, mass_kg=500.0,
@@ -136,7 +136,7 @@ EQ4_VALUES = dict(ksv=1.0, kq_m3_s=0.0109, kc_m3_s_Pa=1.26e-11, kp_per_m=50.0, k
 
 
 def _eq4():
-    from correction.output.eq4 import eq4_coefficients_from
+    from rigsim.correction.output.eq4 import eq4_coefficients_from
 
     return eq4_coefficients_from(**EQ4_VALUES)
 
@@ -171,7 +171,7 @@ def _usable(fit):
 
 
 def test_fit_actuator_matches_eq4_with_a_150_hz_spool_within_0p3_db_and_3_deg():
-    from correction.identification.actuator_fit import fit_actuator
+    from rigsim.correction.identification.actuator_fit import fit_actuator
 
     num, den = _eq4_with_spool()
     fit = fit_actuator(*_rig_record(num, den), FS)
@@ -199,7 +199,7 @@ def test_fit_of_a_non_minimum_phase_actuator_is_its_minimum_phase_counterpart():
     # eq. 4 times the all-pass (1 - s/a)/(1 + s/a), a = 2 pi 20 rad/s: same magnitude, 60 deg more lag
     # at 20 Hz, a zero in the right half-plane. The fit reflects it: minimum phase, the same magnitude,
     # i.e. eq. 4 itself (the minimum-phase system with that magnitude).
-    from correction.identification.actuator_fit import fit_actuator
+    from rigsim.correction.identification.actuator_fit import fit_actuator
 
     a = 2 * math.pi * 20.0
     n4, d4 = _eq4()
@@ -212,13 +212,13 @@ def test_fit_of_a_non_minimum_phase_actuator_is_its_minimum_phase_counterpart():
     assert np.max(np.abs(np.degrees(np.angle(ratio)))) < 3.0
     assert fit.non_minimum_phase and fit.held_out_error > 0.5  # reported: the data lag more than T_a
     # and the correction accepts it (a fit that kept the data's right-half-plane zero would be refused)
-    from correction.output.filters import design_correction
+    from rigsim.correction.output.filters import design_correction
 
     design_correction(fit.as_tf(), FS, "regularized")
 
 
 def test_low_coherence_is_refused_in_one_sentence_naming_the_band_and_the_fix():
-    from correction.identification.actuator_fit import ActuatorFitError, fit_actuator
+    from rigsim.correction.identification.actuator_fit import ActuatorFitError, fit_actuator
 
     u, y = _rig_record(*_eq4(), seconds=60.0, noise=3.0)  # noise 3x the pan motion: coherence ~0.1
     with pytest.raises(ActuatorFitError) as exc:
@@ -229,8 +229,8 @@ def test_low_coherence_is_refused_in_one_sentence_naming_the_band_and_the_fix():
 
 
 def test_orders_lowest_total_within_5_percent_forced_orders_and_poor_fits_reported():
-    from correction.identification.actuator_fit import fit_frequency_response
-    from correction.identification.actuator_fit_rules import ORDER_TOLERANCE
+    from rigsim.correction.identification.actuator_fit import fit_frequency_response
+    from rigsim.correction.identification.actuator_fit_rules import ORDER_TOLERANCE
 
     # eq. 4 alone measured with 1 % noise: (1, 4), its own shape, is within 5 % of the best.
     rng = np.random.default_rng(4)
@@ -255,7 +255,7 @@ def test_orders_lowest_total_within_5_percent_forced_orders_and_poor_fits_report
 
 
 def test_order_rule_prefers_a_lower_total_order_within_5_percent():
-    from correction.identification.actuator_fit_rules import choose_orders
+    from rigsim.correction.identification.actuator_fit_rules import choose_orders
 
     def c(*pairs):
         return {o: {"held_out_error": e, "model_error": m, "magnitude_error": e} for o, e, m in pairs}
@@ -275,7 +275,7 @@ def test_order_rule_prefers_a_lower_total_order_within_5_percent():
 
 
 def test_usable_actuator_reflects_and_cancels_only_near_pairs():
-    from correction.identification.actuator_fit_rules import usable_actuator
+    from rigsim.correction.identification.actuator_fit_rules import usable_actuator
 
     # zero at +5 (reflected to -5), slow pair -0.29 / -0.288 (0.7 % apart: cancelled), poles -20, -50
     num = 3.0 * np.poly([5.0, -0.29])
@@ -303,7 +303,7 @@ def test_usable_actuator_reflects_and_cancels_only_near_pairs():
 
 
 def test_fit_checks_its_inputs():
-    from correction.identification.actuator_fit import fit_actuator, fit_frequency_response
+    from rigsim.correction.identification.actuator_fit import fit_actuator, fit_frequency_response
 
     with pytest.raises(ValueError, match="same length"):
         fit_actuator(np.zeros(1000), np.zeros(999), FS)

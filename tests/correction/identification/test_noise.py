@@ -1,4 +1,4 @@
-"""correction.identification.noise.noise_rms: the white noise of a record from the band above its signal.
+"""rigsim.correction.identification.noise.noise_rms: the white noise of a record from the band above its signal.
 
 Reference: white Gaussian noise of known rms sigma has the one-sided PSD sigma^2 / (fs / 2) at
 every frequency (Parseval), so the estimate must return sigma whatever band it reads, within the
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.signal import butter, sosfiltfilt
 
-from correction.identification.noise import noise_rms
+from rigsim.correction.identification.noise import noise_rms
 
 FS = 1000.0
 

@@ -1,7 +1,7 @@
-"""correction.identification.plausibility: a drive/LVDT pair wired wrongly is refused by
+"""rigsim.correction.identification.plausibility: a drive/LVDT pair wired wrongly is refused by
 ``fit_actuator`` naming its likely cause; a drive and its own LVDT pass.
 
-Reference: eq. 4 (correction.output.eq4) and second-order position loops, simulated by scipy
+Reference: eq. 4 (rigsim.correction.output.eq4) and second-order position loops, simulated by scipy
 (first-order hold) from random drives, stand in for a rig's actuators: the pan's response to its
 own drive is known, so each miswiring is made from it exactly (the LVDT given as the drive, the
 LVDT inverted or in mm, another post's LVDT with an independent or a delayed drive). The limits'
@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.identification.actuator_fit import (ActuatorFitError, default_nperseg, fit_actuator,
-                                                    fit_frequency_response)
-from correction.identification.identify import h1_estimate
-from correction.identification.plausibility import (HELD_OUT_LIMIT, LEAD_LIMIT_DEG, PHASE_RESULTANT_MIN,
-                                                    WiringError, check_signals, plausibility)
-from correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.identification.actuator_fit import (ActuatorFitError, default_nperseg, fit_actuator,
+                                                           fit_frequency_response)
+from rigsim.correction.identification.identify import h1_estimate
+from rigsim.correction.identification.plausibility import (HELD_OUT_LIMIT, LEAD_LIMIT_DEG, PHASE_RESULTANT_MIN,
+                                                           WiringError, check_signals, plausibility)
+from rigsim.correction.output.eq4 import eq4_coefficients_from
 
 FS = 1000.0
 EQ4 = dict(ksv=1.0, kq_m3_s=0.0111, kc_m3_s_Pa=2.0e-12, kp_per_m=50.0, kdp_per_Pa=2.0e-8, piston_area_m2=7.43e-3,

@@ -1,7 +1,7 @@
-"""correction.input.iterate: iterative drive-file correction (RPC-style / Moran) on a linear simulated rig.
+"""rigsim.correction.input.iterate: iterative drive-file correction (RPC-style / Moran) on a linear simulated rig.
 
 The "rig" here is linear and known exactly: per wheel the paper's eq. 4 (coefficients from the
-independent implementation hydraulics.linearization.eq4_coefficients at DYNTRAC's default
+independent implementation rigsim.hydraulics.linearization.eq4_coefficients at DYNTRAC's default
 parameters, 1.8 MN/m tire, 30 kN load), discretized by scipy (bilinear) and simulated with
 lfilter, plus a known cross-coupling between wheels (10 % of each neighbour's drive through a
 10 Hz, zeta 0.3 resonance: the truck's axle hop seen by the other pans). Expected values come
@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.input.convergence import IterationStabilityError, error_map_spectral_radius, nrmse
-from correction.input.frf import FRF, identify_frf, inverse_frf
-from correction.input.iterate import iterate_drive
-from correction.output.eq4 import eq4_coefficients_from
-from hydraulics import ActuatorParams, eq4_parameters
+from rigsim.correction.input.convergence import IterationStabilityError, error_map_spectral_radius, nrmse
+from rigsim.correction.input.frf import FRF, identify_frf, inverse_frf
+from rigsim.correction.input.iterate import iterate_drive
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.hydraulics import ActuatorParams, eq4_parameters
 
 FS = 500.0  # Hz: eq. 4's poles are at 0.15, 13.5 and 69 Hz; a 30 Hz band needs little more
 
@@ -173,12 +173,12 @@ def test_drive_limit_stops_the_iteration(frf):
     assert res.status == "drive_limit" and res.runs == 1
 
 
-# --- the scenarios side (scenarios.studies.iterate): bad input is refused before any run ----------------------
+# --- the scenarios side (rigsim.scenarios.studies.iterate): bad input is refused before any run ----------------------
 
 def _parse(argv):
     import argparse
 
-    from scenarios.studies.iterate import command as iterate_cmd
+    from rigsim.scenarios.studies.iterate import command as iterate_cmd
 
     p = argparse.ArgumentParser()
     sub = p.add_subparsers(dest="command", required=True)
@@ -198,7 +198,7 @@ def _parse(argv):
     (["--max-iterations", "51"], "--max-iterations"),
 ])
 def test_iterate_command_refuses_bad_options(tmp_path, extra, match):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     args = _parse(["iterate", "scenarios/data/paper/high_72kmh_3640kg.toml", "--target", "force",
                    "--out", str(tmp_path / "o"), *extra])
@@ -208,7 +208,7 @@ def test_iterate_command_refuses_bad_options(tmp_path, extra, match):
 
 
 def test_iterate_command_refuses_a_missing_scenario(tmp_path):
-    from scenarios.core.config import ScenarioError
+    from rigsim.scenarios.core.config import ScenarioError
 
     args = _parse(["iterate", str(tmp_path / "nope.toml"), "--target", "displacement", "--out", str(tmp_path / "o")])
     with pytest.raises(ScenarioError):
@@ -223,8 +223,8 @@ def test_iterate_command_refuses_a_missing_scenario(tmp_path):
 ])
 def test_iterate_scenario_refuses_bad_options_before_building_the_rig(monkeypatch, target, kw, match):
     # Expected: the ScenarioError comes before the rig is built or anything runs.
-    from scenarios.core.config import ScenarioError, load_scenario
-    from scenarios.studies.iterate import compute
+    from rigsim.scenarios.core.config import ScenarioError, load_scenario
+    from rigsim.scenarios.studies.iterate import compute
 
     def no_work(*a, **k):
         raise AssertionError("a rig was built or run before the options were checked")
@@ -238,8 +238,8 @@ def test_iterate_scenario_refuses_bad_options_before_building_the_rig(monkeypatc
 def test_splice_drive_keeps_the_lead_in_and_interpolates_the_new_drive():
     # A 1 s lead-in and 2 s record at 10 kHz; the new drive at 1 kHz is a ramp per corner, which
     # linear interpolation reproduces exactly; the lead-in must be the base drive's, bit for bit.
-    from scenarios.core.drive import Drive
-    from scenarios.studies.iterate.compute import splice_drive
+    from rigsim.scenarios.core.drive import Drive
+    from rigsim.scenarios.studies.iterate.compute import splice_drive
 
     dt = 1e-4
     t = np.arange(-10000, 20001) * dt
@@ -259,7 +259,7 @@ def test_rigsim_iterate_end_to_end_on_the_simulated_rig(tmp_path, capsys):
     exist. References: the road run's own DLC and the rig run with the original drive."""
     import json
 
-    from scenarios.cli.main import main
+    from rigsim.scenarios.cli.main import main
 
     scenario = tmp_path / "s.toml"
     scenario.write_text('name = "it"\nspeed_kmh = 72.0\nduration_s = 12.0\nseed = 5\n[road]\nroughness = "C"\n')
@@ -286,7 +286,7 @@ def test_rigsim_iterate_end_to_end_on_the_simulated_rig(tmp_path, capsys):
     assert np.abs(drive[:, 1:]).max() <= 0.076  # within DYNTRAC's half stroke
     # the same drive as an RPC III drive file: int16, so within half a step (max|x| / 32752 / 2) of
     # the CSV's numbers (themselves written to 10 significant digits)
-    from correction.io.measured import read_channels
+    from rigsim.correction.io.measured import read_channels
 
     drv = read_channels(out / "drive.drv")
     assert drv.names == ("drive_fl", "drive_fr", "drive_rl", "drive_rr") and set(drv.units.values()) == {"m"}

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.io.acquisition import ChannelFilter, parse_channel_filter, undo_timing
+from rigsim.correction.io.acquisition import ChannelFilter, parse_channel_filter, undo_timing
 
 FS = 1000.0
 

@@ -18,10 +18,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from correction.io.measured import MeasuredDataError, read_channels, write_channels
-from correction.io.measured_csv import MAX_COLUMNS
-from correction.io.measured_time import MAX_RATE_HZ
-from correction.io.rpc3 import write_rpc3
+from rigsim.correction.io.measured import MeasuredDataError, read_channels, write_channels
+from rigsim.correction.io.measured_csv import MAX_COLUMNS
+from rigsim.correction.io.measured_time import MAX_RATE_HZ
+from rigsim.correction.io.rpc3 import write_rpc3
 
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
@@ -33,7 +33,7 @@ QUICK_S, PEAK_BYTES = 10.0, 1 << 30
 _CHILD = textwrap.dedent("""
     import json, resource, sys, time
     resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
-    from correction.io.measured import MeasuredDataError, read_channels
+    from rigsim.correction.io.measured import MeasuredDataError, read_channels
     t0 = time.perf_counter()
     try:
         mc = read_channels(sys.argv[1])
@@ -179,7 +179,7 @@ def _set(path, key: str, value: str) -> None:
 
 
 def _data_offset(path) -> int:
-    from correction.io.rpc3 import read_rpc3
+    from rigsim.correction.io.rpc3 import read_rpc3
 
     return int(read_rpc3(path).header["NUM_HEADER_BLOCKS"]) * 512
 

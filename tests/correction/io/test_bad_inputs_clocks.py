@@ -15,9 +15,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from correction.io.measured import MeasuredDataError, read_channels, write_channels
-from correction.io.measured_core import TIME_START_KEY, MeasuredChannels, make_channels
-from correction.io.measured_time import MAX_RATE_HZ
+from rigsim.correction.io.measured import MeasuredDataError, read_channels, write_channels
+from rigsim.correction.io.measured_core import TIME_START_KEY, MeasuredChannels, make_channels
+from rigsim.correction.io.measured_time import MAX_RATE_HZ
 
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
@@ -55,9 +55,9 @@ def test_a_clock_that_does_not_start_at_zero_reads_and_runs_the_model_like_one_t
     """The truck model runs on the record's rate: a 1 kHz record at 86 400 s read as 1000.0000000038 Hz
     was refused by the simulation ("output_rate_hz = 1000 Hz must divide the simulation rate"), one at
     1.7e9 s as not uniform (float64 rounds its steps by 2.4e-7 s)."""
-    from mjcf.variant import TruckVariant
-    from scenarios.core.config import load_scenario, paper_scenarios
-    from scenarios.records.model.model_runs import model_forces
+    from rigsim.mjcf.variant import TruckVariant
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    from rigsim.scenarios.records.model.model_runs import model_forces
 
     zero, shifted = read_channels(_pan_csv(tmp_path, 0.0)), read_channels(_pan_csv(tmp_path, start))
     _same(zero, shifted)

@@ -28,11 +28,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from correction.io import atomic
+from rigsim.correction.io import atomic
 
-from correction.io import measured_core
-from correction.io.measured import MeasuredDataError, read_channels, write_channels
-from correction.io.tomlfile import read_toml
+from rigsim.correction.io import measured_core
+from rigsim.correction.io.measured import MeasuredDataError, read_channels, write_channels
+from rigsim.correction.io.tomlfile import read_toml
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
@@ -53,8 +53,8 @@ GOOD_ACTUATOR = "[transfer_function]\nnum = [1.0]\nden = [2.5e-4, 0.02, 1.0]\n"
 #: before the exit, so that anything a half-made object prints when collected shows.
 READ = textwrap.dedent("""
     import gc, sys, time
-    from correction.io.measured import MeasuredDataError, read_channels
-    from correction.io.tomlfile import read_toml
+    from rigsim.correction.io.measured import MeasuredDataError, read_channels
+    from rigsim.correction.io.tomlfile import read_toml
     t0 = time.perf_counter()
     try:
         if sys.argv[1] == "toml":
@@ -161,7 +161,7 @@ def test_a_pipe_put_in_place_after_the_check_cannot_block(tmp_path):
         import os, stat, sys
         real = os.stat
         os.stat = lambda p, *a, **k: os.stat_result((stat.S_IFREG | 0o644,) + tuple(real(p, *a, **k))[1:])
-        from correction.io.tomlfile import read_toml
+        from rigsim.correction.io.tomlfile import read_toml
         try:
             read_toml({str(fifo)!r}, "scenario file")
         except ValueError as exc:
@@ -194,7 +194,7 @@ def test_the_cli_refuses_pipes_and_devices_in_one_line(tmp_path, case):
                                   "character device"),
     }[case]
     before = sorted(p.name for p in tmp_path.iterdir())
-    line = _one_line(_run([sys.executable, "-m", "scenarios.cli.main", *argv], tmp_path))
+    line = _one_line(_run([sys.executable, "-m", "rigsim.scenarios.cli.main", *argv], tmp_path))
     assert repr(named) in line and f"is a {kind}" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
 
@@ -287,7 +287,7 @@ def test_damaged_lab_files_are_one_line_each_and_leave_nothing(tmp_path, lab_fil
         (tmp_path / f"{name}{ext}").write_bytes(data)
     code = textwrap.dedent("""
         import gc, sys
-        from correction.io.measured import MeasuredDataError, read_channels
+        from rigsim.correction.io.measured import MeasuredDataError, read_channels
         for path in sys.argv[1:]:
             print(f"=== {path}", file=sys.stderr, flush=True)
             try:
@@ -322,7 +322,7 @@ def test_the_cli_prints_one_line_for_a_damaged_lab_file(tmp_path, lab_files, ext
     bad = tmp_path / f"cut{ext}"
     bad.write_bytes(good[: len(good) // 2])
     (tmp_path / "act.toml").write_text(GOOD_ACTUATOR)
-    line = _one_line(_run([sys.executable, "-m", "scenarios.cli.main", "correct", bad.name, "--actuator", "act.toml",
+    line = _one_line(_run([sys.executable, "-m", "rigsim.scenarios.cli.main", "correct", bad.name, "--actuator", "act.toml",
                            "-o", "o.csv"], tmp_path))
     assert repr(bad.name) in line and "cut short" in line
 
@@ -387,14 +387,14 @@ def test_a_killed_correct_leaves_a_temp_file_the_next_write_removes(tmp_path):
         import sys, time
         import numpy as np
         from types import SimpleNamespace
-        import correction.io.measured_csv as csv
+        import rigsim.correction.io.measured_csv as csv
         real = csv.write_csv
         def slow(path, *a, **k):
             real(path, *a, **k)
             print("writing", flush=True)
             time.sleep(600)
         csv.write_csv = slow
-        from correction.io.measured import write_channels
+        from rigsim.correction.io.measured import write_channels
         t = np.arange(1000) / 1000.0
         write_channels({str(target)!r}, SimpleNamespace(time_s=t, data={{"fl_N": t}}, units={{"fl_N": "N"}}))
     """)

@@ -21,8 +21,8 @@ import time
 import numpy as np
 import pytest
 
-from correction.io.measured import MeasuredDataError, read_channels
-from correction.io.rpc3 import MAX_DELTA_T_S, MIN_DELTA_T_S, read_rpc3, write_rpc3
+from rigsim.correction.io.measured import MeasuredDataError, read_channels
+from rigsim.correction.io.rpc3 import MAX_DELTA_T_S, MIN_DELTA_T_S, read_rpc3, write_rpc3
 
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings
@@ -95,7 +95,7 @@ def refused(path, *fragments, reader=read_channels) -> str:
 _CHILD = textwrap.dedent("""
     import json, resource, sys, time, tracemalloc
     resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))  # a regression fails, not the machine
-    from correction.io.measured import MeasuredDataError, read_channels
+    from rigsim.correction.io.measured import MeasuredDataError, read_channels
     tracemalloc.start()
     t0 = time.perf_counter()
     try:
@@ -280,7 +280,7 @@ def test_the_writer_writes_no_file_its_reader_refuses(tmp_path):
 _COMMAND = textwrap.dedent("""
     import json, resource, sys
     resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))  # a regression fails, not the machine
-    from scenarios.cli.main import main
+    from rigsim.scenarios.cli.main import main
     code = main(sys.argv[1:])
     # this process's own peak (VmHWM starts anew at exec; ru_maxrss keeps the parent's peak)
     hwm = next(line for line in open("/proc/self/status") if line.startswith("VmHWM:"))

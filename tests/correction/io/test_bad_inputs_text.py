@@ -16,11 +16,11 @@ import tracemalloc
 import numpy as np
 import pytest
 
-import correction.io.measured_csv as measured_csv
-import correction.io.measured_stream as measured_stream
-from correction.io.measured import MeasuredDataError, read_channels
-from correction.io.measured_numbers import DECIMALS, THOUSANDS
-from scenarios.cli.main import main
+import rigsim.correction.io.measured_csv as measured_csv
+import rigsim.correction.io.measured_stream as measured_stream
+from rigsim.correction.io.measured import MeasuredDataError, read_channels
+from rigsim.correction.io.measured_numbers import DECIMALS, THOUSANDS
+from rigsim.scenarios.cli.main import main
 
 NBSP, NNBSP = "\u00a0", "\u202f"
 GOOD_ACTUATOR = "[transfer_function]\nnum = [1.0]\nden = [2.5e-4, 0.02, 1.0]\n"
@@ -119,7 +119,7 @@ def test_given_separators_that_the_file_does_not_use_are_refused(tmp_path, text,
 def test_separators_are_refused_for_binary_formats(tmp_path):
     from types import SimpleNamespace
 
-    from correction.io.measured import write_channels
+    from rigsim.correction.io.measured import write_channels
 
     p = write_channels(tmp_path / "r.rsp", SimpleNamespace(time_s=[0.0, 0.001], data={"F": [1.0, 2.0]}, units={}))
     with pytest.raises(MeasuredDataError, match=r"is a rpc3 file, which stores numbers, not text; leave the decimal"):
@@ -129,7 +129,7 @@ def test_separators_are_refused_for_binary_formats(tmp_path):
 def test_the_cli_choices_are_the_readers():
     import argparse
 
-    from scenarios.studies.identify.command import add_number_format
+    from rigsim.scenarios.studies.identify.command import add_number_format
 
     parser = argparse.ArgumentParser()
     add_number_format(parser)

@@ -1,4 +1,4 @@
-"""correction.io.measured on delimited text: layouts written by hand the way DAQ software writes them,
+"""rigsim.correction.io.measured on delimited text: layouts written by hand the way DAQ software writes them,
 read back to hand-computed SI numbers; every refusal one sentence naming what is wrong."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from correction.io.measured import MeasuredDataError, read_channels, write_channels
+from rigsim.correction.io.measured import MeasuredDataError, read_channels, write_channels
 
 T = [0.0, 0.001, 0.002, 0.003]
 FZ_N = [12500.0, 12750.0, 13000.0, 12250.0]  # 12.5, 12.75, 13.0, 12.25 kN

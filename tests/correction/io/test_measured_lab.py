@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from correction.io.measured import MeasuredDataError, read_channels, write_channels
+from rigsim.correction.io.measured import MeasuredDataError, read_channels, write_channels
 
 T = np.arange(2000) / 1000.0
 FZ_KN = 40.0 + 2.0 * np.sin(2 * np.pi * 5 * T)
@@ -126,7 +126,7 @@ def test_a_missing_lab_extra_is_named(tmp_path, monkeypatch, ext, verb, call):
             raise ImportError(f"No module named {name!r}")
         return real(name, *args)
 
-    import correction.io.measured_lab as lab
+    import rigsim.correction.io.measured_lab as lab
 
     monkeypatch.setattr(lab.importlib, "import_module", without_lab)
     p = tmp_path / f"f{ext}"

@@ -12,10 +12,10 @@ from hypothesis import HealthCheck, assume, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 from hypothesis.extra import numpy as hnp  # noqa: E402
 
-from correction.io.measured import read_channels, write_channels  # noqa: E402
-from correction.io.measured_core import is_time_name  # noqa: E402
-from correction.io.measured_units import suffix_unit  # noqa: E402
-from correction.io.rpc3 import INT_FULL_SCALE  # noqa: E402
+from rigsim.correction.io.measured import read_channels, write_channels  # noqa: E402
+from rigsim.correction.io.measured_core import is_time_name  # noqa: E402
+from rigsim.correction.io.measured_units import suffix_unit  # noqa: E402
+from rigsim.correction.io.rpc3 import INT_FULL_SCALE  # noqa: E402
 
 NAME = st.from_regex(r"[A-Za-z][A-Za-z0-9_]{0,11}", fullmatch=True).filter(
     lambda n: not is_time_name(n) and not suffix_unit(n))

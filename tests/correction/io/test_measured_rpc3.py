@@ -11,8 +11,8 @@ import warnings
 import numpy as np
 import pytest
 
-from correction.io.measured import MeasuredDataError, read_channels, write_channels
-from correction.io.rpc3 import INT_FULL_SCALE, read_rpc3, write_rpc3
+from rigsim.correction.io.measured import MeasuredDataError, read_channels, write_channels
+from rigsim.correction.io.rpc3 import INT_FULL_SCALE, read_rpc3, write_rpc3
 
 
 def _rpc_bytes(params: list[tuple[str, str]], ints: np.ndarray) -> bytes:

@@ -1,4 +1,4 @@
-"""correction.io.tomlfile: strict reading of TOML files, one-line errors raised as the caller's class.
+"""rigsim.correction.io.tomlfile: strict reading of TOML files, one-line errors raised as the caller's class.
 
 Expected messages are the ones the project's readers (scenario files, sweep grids, actuator
 files) give, written out here. The property test feeds a few hundred random byte strings
@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from correction.io.tomlfile import check_keys, number, read_toml
+from rigsim.correction.io.tomlfile import check_keys, number, read_toml
 
 
 class FileProblem(Exception):

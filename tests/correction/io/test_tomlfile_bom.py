@@ -16,7 +16,7 @@ import pathlib
 
 import pytest
 
-from correction.io.tomlfile import path_text, read_toml
+from rigsim.correction.io.tomlfile import path_text, read_toml
 
 TEXT = '[transfer_function]\nnum = [1.0]\nden = [0.001, 1.0]\nname = "Zylinder \u00e4"\n'
 

@@ -1,4 +1,4 @@
-"""correction.metrics.damage (with correction.metrics.rainflow_damage and correction.metrics.spatial_load): pavement-damage
+"""rigsim.correction.metrics.damage (with rigsim.correction.metrics.rainflow_damage and rigsim.correction.metrics.spatial_load): pavement-damage
 and fatigue measures of wheel forces, each pinned to a value worked by hand or published.
 
 Hand-worked references used below:
@@ -22,7 +22,7 @@ import math
 import numpy as np
 import pytest
 
-from correction.metrics.damage import (
+from rigsim.correction.metrics.damage import (
     WOHLER_PRESETS,
     DamageMetrics,
     compare,
@@ -315,7 +315,7 @@ def test_cycles_counted_on_the_turning_points_are_the_librarys_on_every_sample()
     on 3000 short histories with plateaus, constant and monotone runs, and on a long noisy one."""
     rainflow = pytest.importorskip("rainflow")  # the test extra's reference
 
-    from correction.metrics.rainflow_damage import rainflow_cycles
+    from rigsim.correction.metrics.rainflow_damage import rainflow_cycles
 
     def library(f):
         rows = [(r, m, c) for r, m, c, _i, _j in rainflow.extract_cycles(f) if r > 0]
@@ -344,7 +344,7 @@ def test_cycles_counted_on_the_turning_points_are_the_librarys_on_every_sample()
 def test_turning_points_are_the_first_sample_the_reversals_and_the_last():
     # Worked by hand from the definition (turning_points docstring): plateaus count once, a
     # monotone sample is no reversal, however small its slope; a constant record is one value.
-    from correction.metrics.rainflow_damage import turning_points
+    from rigsim.correction.metrics.rainflow_damage import turning_points
 
     f = np.array([0.0, 0.1, 0.2, 0.1, 0.1, 0.15, 0.3, -2.0, -2.5])
     assert turning_points(f).tolist() == [0.0, 0.2, 0.1, 0.3, -2.5]
@@ -353,7 +353,7 @@ def test_turning_points_are_the_first_sample_the_reversals_and_the_last():
 
 
 def test_force_records_are_checked_with_one_sentence_naming_the_fault():
-    from correction.metrics.rainflow_damage import force_columns
+    from rigsim.correction.metrics.rainflow_damage import force_columns
 
     with pytest.raises(ValueError, match=r"needs at least two samples along axis 0, got 1$"):
         pseudo_damage(np.array([F0]), 5)
@@ -408,7 +408,7 @@ def test_level_crossings_per_column_and_level_checks():
 def test_a_two_sample_record_is_one_half_cycle_of_its_range():
     """ASTM E1049-85 5.4.4: the first and last points count as reversals, so [0, 3] is a half
     cycle of range 3 (the rainflow library alone drops the last point of a 2-point series)."""
-    from correction.metrics.rainflow_damage import rainflow_cycles
+    from rigsim.correction.metrics.rainflow_damage import rainflow_cycles
 
     ranges, means, counts = rainflow_cycles(np.array([0.0, 3.0]))
     assert ranges.tolist() == [3.0] and means.tolist() == [1.5] and counts.tolist() == [0.5]

@@ -1,4 +1,4 @@
-"""correction.metrics.dlc: the NRMSE against a reference force, on hand-worked examples.
+"""rigsim.correction.metrics.dlc: the NRMSE against a reference force, on hand-worked examples.
 
 Over a whole number of periods a sampled unit sine has mean 0 and mean square exactly 1/2, so
 its population standard deviation is 1/sqrt(2). A copy shifted by a constant c has an error of
@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from correction.metrics.dlc import dlc, force_statistics, nrmse
+from rigsim.correction.metrics.dlc import dlc, force_statistics, nrmse
 
 N = 400  # samples over exactly 4 periods
 

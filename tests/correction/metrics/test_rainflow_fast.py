@@ -1,4 +1,4 @@
-"""correction.metrics.rainflow_damage counts rainflow cycles with numpy (four-point passes, the standard's
+"""rigsim.correction.metrics.rainflow_damage counts rainflow cycles with numpy (four-point passes, the standard's
 stack on what is left, the library's order from each cycle's closing point): the result must be
 exactly ``rainflow.extract_cycles``' (rainflow 3.2.0, the reference chosen in the module
 docstring) on the raw history: the same cycles, bit-for-bit equal ranges and means, the same
@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from correction.metrics.rainflow_damage import damage_equivalent_load, pseudo_damage, rainflow_cycles
+from rigsim.correction.metrics.rainflow_damage import damage_equivalent_load, pseudo_damage, rainflow_cycles
 
 rainflow = pytest.importorskip("rainflow")
 hypothesis = pytest.importorskip("hypothesis")

@@ -4,7 +4,7 @@ Expected values come from outside the code under test: the actuator and the low-
 simulated with scipy (``scipy.signal.lsim`` on polynomials written out here from the paper's
 eq. 5), frequency-domain references are FFTs with the continuous magnitude computed here, and
 eq. 4 is checked against the paper's printed formulas and, fed with the parameters
-``hydraulics.eq4_parameters`` derives from an ``ActuatorParams``, against its known properties.
+``rigsim.hydraulics.eq4_parameters`` derives from an ``ActuatorParams``, against its known properties.
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.io.actuator_file import ActuatorFileError, parse_actuator, read_actuator_file
-from correction.output.apply import StreamingCorrector, band_limit, correct, correct_causal, correct_zero_phase
-from correction.output.eq4 import eq4_coefficients_from
-from correction.output.filters import actuator_coefficients, design_correction
-from correction.output.lowpass import paper_lowpass, regularized_lowpass
+from rigsim.correction.io.actuator_file import ActuatorFileError, parse_actuator, read_actuator_file
+from rigsim.correction.output.apply import StreamingCorrector, band_limit, correct, correct_causal, correct_zero_phase
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.filters import actuator_coefficients, design_correction
+from rigsim.correction.output.lowpass import paper_lowpass, regularized_lowpass
 
 STATIC_N = 30.0e3  # a truck wheel's static load, N
 
@@ -106,8 +106,8 @@ def test_eq4_coefficients_follow_the_printed_formulas():
 
 @pytest.mark.parametrize("kt, load", [(1.2e6, 0.0), (1.8e6, 34.5e3)])
 def test_eq4_properties_with_the_hydraulics_parameters(kt, load):
-    """eq. 4 fed by hydraulics.eq4_parameters: T_a(0) = 1, b1 = Ksv Kq Kp / Ap, a4 = Vf mp / (4 beta Ap^2)."""
-    from hydraulics import ActuatorParams, eq4_parameters
+    """eq. 4 fed by rigsim.hydraulics.eq4_parameters: T_a(0) = 1, b1 = Ksv Kq Kp / Ap, a4 = Vf mp / (4 beta Ap^2)."""
+    from rigsim.hydraulics import ActuatorParams, eq4_parameters
 
     v = eq4_parameters(ActuatorParams(), kt, load)
     num, den = eq4_coefficients_from(**v)

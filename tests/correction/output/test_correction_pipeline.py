@@ -1,7 +1,7 @@
-"""correction.output.pipeline.correct_forces (the one correction) and per-corner actuator files.
+"""rigsim.correction.output.pipeline.correct_forces (the one correction) and per-corner actuator files.
 
 References: the correction of each column is re-derived from the filter design and application
-called directly (correction.output.filters.design_correction, correction.output.apply.correct, themselves
+called directly (rigsim.correction.output.filters.design_correction, rigsim.correction.output.apply.correct, themselves
 checked against scipy in test_correction.py); the settled mask from each filter's own transient
 mask and the band-limit reference filter's; the files are read back with tomllib.
 """
@@ -16,13 +16,13 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.io.actuator_file import (ActuatorFileError, parse_actuators, read_actuators_file,
+from rigsim.correction.io.actuator_file import (ActuatorFileError, parse_actuators, read_actuators_file,
                                       write_actuators_file)
-from correction.identification.actuator_fit import fit_frequency_response
-from correction.output.apply import correct
-from correction.output.eq4 import eq4_coefficients_from
-from correction.output.filters import design_correction, reference_filter
-from correction.output.pipeline import CorrectedForces, CorrectionError, correct_forces
+from rigsim.correction.identification.actuator_fit import fit_frequency_response
+from rigsim.correction.output.apply import correct
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.filters import design_correction, reference_filter
+from rigsim.correction.output.pipeline import CorrectedForces, CorrectionError, correct_forces
 
 FS = 1000.0
 EQ4 = dict(ksv=1.0, kq_m3_s=0.0109, kc_m3_s_Pa=1.26e-11, kp_per_m=50.0, kdp_per_Pa=2.0e-8,
@@ -157,7 +157,7 @@ def test_actuators_file_ignores_fit_and_meta_and_refuses_reserved_names(tmp_path
 
 
 def test_toml_text_reads_back_with_tomllib(tmp_path):
-    from correction.io.tomlfile import toml_text, write_toml
+    from rigsim.correction.io.tomlfile import toml_text, write_toml
 
     doc = {"top": 1, "a": {"x": math.nan, "y": -math.inf, "flag": True, "name": 'q"\\\x7f\t',
                            "list": [1.5, 2, 1e-300], "rows": [{"re": 1.0, "im": -2.0}],

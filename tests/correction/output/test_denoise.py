@@ -1,12 +1,12 @@
-"""Spectral subtraction of a record's white noise (correction.output.denoise) and the padded spectral
-application it shares with the channels' timing (correction.output.spectral)."""
+"""Spectral subtraction of a record's white noise (rigsim.correction.output.denoise) and the padded spectral
+application it shares with the channels' timing (rigsim.correction.output.spectral)."""
 
 import numpy as np
 import pytest
 from scipy import signal
 
-from correction.output.denoise import FLAT_RATIO, design_noise_gain
-from correction.output.spectral import through_gain
+from rigsim.correction.output.denoise import FLAT_RATIO, design_noise_gain
+from rigsim.correction.output.spectral import through_gain
 
 FS = 1000.0
 N = 30_000  # 30 s, the mismatch suite's records
@@ -118,7 +118,7 @@ def test_the_drift_cut_is_a_forward_backward_butterworth_high_pass():
     # Reference: scipy's second-order Butterworth high-pass at the corner, its magnitude squared
     # (run forward and backward, a zero-phase filter has |H|^2); scipy's is the digital design, whose
     # bilinear transform bends the analog response by ~1e-5 at 1 kHz.
-    from correction.output.denoise import DRIFT_HZ, drift_cut
+    from rigsim.correction.output.denoise import DRIFT_HZ, drift_cut
 
     f = np.linspace(0.0, 20.0, 401)
     sos = signal.butter(2, DRIFT_HZ, btype="highpass", fs=FS, output="sos")
@@ -156,7 +156,7 @@ def test_a_slow_part_far_above_the_drift_level_is_kept_and_one_at_it_cut():
     # 1 - 50^2 / 212^2 = 0.944 of its power; one of 60 N (42 N rms, under the drift's level) is cut
     # whole; the 9 Hz part passes either way. The analytic share is that of the sine alone: the white
     # noise below 0.7 Hz adds (100 N)^2 x 0.7 / 500 = 14 N^2 to the 45 000 N^2, nothing at 1e-3.
-    from correction.output.denoise import drift_keep
+    from rigsim.correction.output.denoise import drift_keep
 
     t = np.arange(N) / FS
     slow = np.column_stack([300.0 * np.sin(2 * np.pi * 0.37 * t), 60.0 * np.sin(2 * np.pi * 0.37 * t)])

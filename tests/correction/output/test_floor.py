@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.output.floor import fir_filter, fir_fit, linear_floor
+from rigsim.correction.output.floor import fir_filter, fir_fit, linear_floor
 
 
 def _through(x, taps, lead):

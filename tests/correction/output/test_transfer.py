@@ -1,7 +1,7 @@
-"""correction.output.transfer: the paper's eq. 4 and the frequency-response helpers.
+"""rigsim.correction.output.transfer: the paper's eq. 4 and the frequency-response helpers.
 
 Expected values come from eq. 4 as printed (b0 = b1 = a0: static gain 1, zero at -1 rad/s),
-from correction.output.eq4.eq4_coefficients_from (which eq4_transfer_function wraps), from
+from rigsim.correction.output.eq4.eq4_coefficients_from (which eq4_transfer_function wraps), from
 closed-form first/second-order systems, or from python-control's own evaluation and ZOH
 discretization -- never from a previous run of this module.
 """
@@ -12,11 +12,11 @@ import control
 import numpy as np
 import pytest
 
-from correction.output.transfer import (apply_transfer_function, bandwidth_hz, describe_roots,
+from rigsim.correction.output.transfer import (apply_transfer_function, bandwidth_hz, describe_roots,
                                  eq4_transfer_function, frequency_response_hz,
                                  state_space_frequency_response, transfer_bandwidth_hz)
-from correction.output.eq4 import eq4_coefficients_from
-from hydraulics import ActuatorParams, eq4_parameters
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.hydraulics import ActuatorParams, eq4_parameters
 
 DEFAULT = ActuatorParams()
 

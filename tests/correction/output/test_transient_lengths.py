@@ -15,8 +15,8 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from correction.output import correction_filter
-from correction.output.filters import design_correction
+from rigsim.correction.output import correction_filter
+from rigsim.correction.output.filters import design_correction
 
 W8 = 2 * np.pi * 8.0
 #: T_a = (10 s + 1) / ((9 s + 1) (s^2 / w^2 + 2 0.7 s / w + 1)): DC gain 1, a slow zero at -0.1 1/s.

@@ -5,7 +5,7 @@ zero, NaN, infinite, huge, not a number), bad paths (empty, a folder for a file,
 folder, under a file, a previous result without --force, the input as output), missing and
 malformed files (scenario, grid, actuator, measured files, written into tmp_path), bad choices,
 options that do not go together, bad channel names for ``rigsim correct`` and ``--pairs`` for
-``rigsim identify``. Each case must: return 2 from :func:`scenarios.cli.main.main` (argparse's own
+``rigsim identify``. Each case must: return 2 from :func:`rigsim.scenarios.cli.main.main` (argparse's own
 ``SystemExit(2)`` counts), print exactly one line on stderr (argparse: its usage lines and one
 ``error:`` line), no traceback, and leave the folder of inputs and outputs exactly as it was.
 
@@ -24,7 +24,7 @@ import pathlib
 import numpy as np
 import pytest
 
-from scenarios.cli.main import main
+from rigsim.scenarios.cli.main import main
 
 # --------------------------------------------------------------------------------- input files
 GOOD = 'name = "m"\nspeed_kmh = 72.0\nduration_s = 12.0\nseed = 5\n[road]\nroughness = "high"\n'
@@ -413,12 +413,12 @@ def _listing(root: pathlib.Path) -> dict[str, str]:
 
 def _import_everything() -> None:
     """Import every module of the project before anything is patched: a module imported for the
-    first time while a function is replaced (``from correction.identification.actuator_fit import fit_actuator``)
+    first time while a function is replaced (``from rigsim.correction.identification.actuator_fit import fit_actuator``)
     would keep the replacement after the test."""
     import importlib
     import pkgutil
 
-    for package in ("correction", "hydraulics", "mjcf", "scenarios"):
+    for package in ("rigsim.correction", "rigsim.hydraulics", "rigsim.mjcf", "rigsim.scenarios"):
         pkg = importlib.import_module(package)
         for info in pkgutil.walk_packages(pkg.__path__, f"{package}."):
             try:
@@ -438,12 +438,12 @@ def workdir(tmp_path_factory):
 @pytest.fixture(autouse=True)
 def no_work(workdir, monkeypatch):
     """Everything that would be work fails the test if it is reached."""
-    import correction.identification.actuator_fit
-    import scenarios.core.pool
-    import scenarios.studies.paper.compute
-    import scenarios.studies.sweep.run
-    import scenarios.studies.validate.compute
-    from scenarios.core.rig import Rig
+    import rigsim.correction.identification.actuator_fit
+    import rigsim.scenarios.core.pool
+    import rigsim.scenarios.studies.paper.compute
+    import rigsim.scenarios.studies.sweep.run
+    import rigsim.scenarios.studies.validate.compute
+    from rigsim.scenarios.core.rig import Rig
 
     def work(what):
         def fail(*a, **k):
@@ -451,11 +451,11 @@ def no_work(workdir, monkeypatch):
         return fail
 
     monkeypatch.setattr(Rig, "run", work("a simulation (Rig.run)"))
-    monkeypatch.setattr(scenarios.studies.paper.compute, "local_executor", work("the paper's job pool"))
-    monkeypatch.setattr(scenarios.studies.validate.compute, "validate", work("the validation"))
-    monkeypatch.setattr(scenarios.core.pool, "local_executor", work("a process pool"))
-    monkeypatch.setattr(scenarios.studies.sweep.run, "run_sweep", work("the sweep"))
-    monkeypatch.setattr(correction.identification.actuator_fit, "fit_actuator", work("the actuator fit"))
+    monkeypatch.setattr(rigsim.scenarios.studies.paper.compute, "local_executor", work("the paper's job pool"))
+    monkeypatch.setattr(rigsim.scenarios.studies.validate.compute, "validate", work("the validation"))
+    monkeypatch.setattr(rigsim.scenarios.core.pool, "local_executor", work("a process pool"))
+    monkeypatch.setattr(rigsim.scenarios.studies.sweep.run, "run_sweep", work("the sweep"))
+    monkeypatch.setattr(rigsim.correction.identification.actuator_fit, "fit_actuator", work("the actuator fit"))
 
 
 def _one_error(err: str, from_argparse: bool) -> None:

@@ -27,9 +27,9 @@ import time
 
 import pytest
 
-import correction.io.measured_csv
-from correction.io.claim import claim_file
-from scenarios.cli.main import main
+import rigsim.correction.io.measured_csv
+from rigsim.correction.io.claim import claim_file
+from rigsim.scenarios.cli.main import main
 from tests.scenarios.cli.test_bad_inputs import (GOOD, GOOD_ACTUATOR, _import_everything, _listing, _measured_csv,
                                                  _one_error)
 
@@ -51,8 +51,8 @@ def inputs(tmp_path_factory):
 @pytest.fixture
 def no_work(monkeypatch):
     """The actuator fit and the simulation fail the test if they are reached."""
-    import correction.identification.actuator_fit
-    from scenarios.core.rig import Rig
+    import rigsim.correction.identification.actuator_fit
+    from rigsim.scenarios.core.rig import Rig
 
     def work(what):
         def fail(*a, **k):
@@ -60,7 +60,7 @@ def no_work(monkeypatch):
         return fail
 
     monkeypatch.setattr(Rig, "run", work("a simulation (Rig.run)"))
-    monkeypatch.setattr(correction.identification.actuator_fit, "fit_actuator", work("the actuator fit"))
+    monkeypatch.setattr(rigsim.correction.identification.actuator_fit, "fit_actuator", work("the actuator fit"))
 
 
 def _correct(inputs, out, *extra) -> list[str]:
@@ -82,7 +82,7 @@ def _hold_write(monkeypatch, who: str, folder: pathlib.Path):
     file is free passed; the scratch file of its check before the work is let through) until the
     returned ``go`` is set; ``writing`` is set when it gets there."""
     writing, go = threading.Event(), threading.Event()
-    original = correction.io.measured_csv.write_csv
+    original = rigsim.correction.io.measured_csv.write_csv
 
     def write_csv(path, *args, **kwargs):
         if threading.current_thread().name == who and pathlib.Path(path).parent == folder:
@@ -90,7 +90,7 @@ def _hold_write(monkeypatch, who: str, folder: pathlib.Path):
             assert go.wait(WAIT_S)
         return original(path, *args, **kwargs)
 
-    monkeypatch.setattr(correction.io.measured_csv, "write_csv", write_csv)
+    monkeypatch.setattr(rigsim.correction.io.measured_csv, "write_csv", write_csv)
     return writing, go
 
 
@@ -147,7 +147,7 @@ def test_an_error_or_interrupt_leaves_nothing(inputs, tmp_path, capsys, monkeypa
         pathlib.Path(path).write_text("half")
         raise stop("stopped")
 
-    monkeypatch.setattr(correction.io.measured_csv, "write_csv", write_csv)
+    monkeypatch.setattr(rigsim.correction.io.measured_csv, "write_csv", write_csv)
     assert main(_correct(inputs, out)) == (130 if stop is KeyboardInterrupt else 2)
     capsys.readouterr()
     assert list(tmp_path.iterdir()) == []
@@ -155,7 +155,7 @@ def test_an_error_or_interrupt_leaves_nothing(inputs, tmp_path, capsys, monkeypa
 
 HOLDER = """
 import sys, time
-from correction.io.claim import claimed_output
+from rigsim.correction.io.claim import claimed_output
 with claimed_output(sys.argv[1]):
     print("held", flush=True)
     sys.stdin.readline()
@@ -201,14 +201,14 @@ HOOK = """
 import os
 if os.environ.pop("RIGSIM_WRITERS_TEST", None) == "1":
     import time
-    import correction.io.measured_csv
+    import rigsim.correction.io.measured_csv
 
     def write_csv(path, *args, **kwargs):
         open(path, "w").write("half")
         open(os.environ["RIGSIM_WRITING"], "w").close()
         time.sleep(60)
 
-    correction.io.measured_csv.write_csv = write_csv
+    rigsim.correction.io.measured_csv.write_csv = write_csv
 """
 
 
@@ -218,7 +218,7 @@ def test_sigterm_leaves_no_claim(inputs, tmp_path):
     (hook / "sitecustomize.py").write_text(textwrap.dedent(HOOK))
     env = {**ENV, "PYTHONPATH": os.pathsep.join([str(hook), ENV["PYTHONPATH"]]), "RIGSIM_WRITERS_TEST": "1",
            "RIGSIM_WRITING": str(writing)}
-    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli.main", *_correct(inputs, out)], env=env,
+    proc = subprocess.Popen([sys.executable, "-m", "rigsim.scenarios.cli.main", *_correct(inputs, out)], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         t0 = time.monotonic()

@@ -7,7 +7,7 @@ from importlib.metadata import version
 
 import pytest
 
-from scenarios.cli.main import EXAMPLES, build_parser, main
+from rigsim.scenarios.cli.main import EXAMPLES, build_parser, main
 
 
 def test_version(capsys):
@@ -58,7 +58,7 @@ def test_model_command_shows_a_suspended_cab(capsys):
     cab modes near the mount frequency (the cab's own bounce/pitch on the mount springs; see
     tests/mjcf/test_cab_mount.py for the modal reference), with the same static loads as the rigid cab
     (the cab's mass moves from the chassis to its own body); a bad value is refused with exit 2."""
-    from scenarios.cli.main import main
+    from rigsim.scenarios.cli.main import main
 
     assert main(["model", "--cab-mount-hz", "2"]) == 0
     cab = capsys.readouterr().out

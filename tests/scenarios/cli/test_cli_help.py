@@ -10,7 +10,7 @@ import re
 
 import pytest
 
-from scenarios.cli.main import EXAMPLES, build_parser, main
+from rigsim.scenarios.cli.main import EXAMPLES, build_parser, main
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 

@@ -9,7 +9,7 @@ against scipy in test_correction.py) and with the library called directly.
 Corrected columns are written as ``<name>_corrected`` (``fl_N_corrected``), so they cannot be
 mistaken for raw ones.
 
-One reader: the input is read by ``correction.io.measured.read_channels`` (any
+One reader: the input is read by ``rigsim.correction.io.measured.read_channels`` (any
 CSV dialect, RPC III, MDF4; units to SI) and the output written by ``write_channels`` in the
 format of its extension (CSV: a ``# key: value`` preamble, ``time [s]``, ``name [N]`` headers);
 ``read_csv`` below parses that CSV by hand, independently of the reader.
@@ -27,11 +27,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.output.apply import band_limit, correct
-from correction.output.eq4 import eq4_coefficients_from
-from correction.output.filters import design_correction
-from scenarios.core.config import ScenarioError
-from scenarios.cli.correct import add_parser, cmd_correct
+from rigsim.correction.output.apply import band_limit, correct
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.filters import design_correction
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.cli.correct import add_parser, cmd_correct
 
 EQ4_VALUES = dict(ksv=1.0, kq_m3_s=0.0109, kc_m3_s_Pa=1.26e-11, kp_per_m=50.0, kdp_per_Pa=2.0e-8,
                   piston_area_m2=7.43e-3, fluid_volume_m3=2.13e-3, bulk_modulus_Pa=1.0e9, mass_kg=500.0,
@@ -283,7 +283,7 @@ def four_wheels():
 
 
 def _four_files(tmp, d, corners=("fl", "fr", "rl", "rr")):
-    from correction.io.actuator_file import write_actuators_file
+    from rigsim.correction.io.actuator_file import write_actuators_file
 
     csv = tmp / "rig4.csv"
     write_csv(csv, list(FOUR), [d["t"]] + [d["rig"][:, i] for i in range(4)])
@@ -301,7 +301,7 @@ def test_actuators_file_corrects_each_corner_with_its_own_t_a_and_prints_the_dlc
     got = read_csv(out)
     n = d["t"].size
     filts = [design_correction(ta, FS, "regularized") for ta in d["tas"]]
-    from correction.output.filters import reference_filter
+    from rigsim.correction.output.filters import reference_filter
 
     mask = reference_filter(FS, "regularized").transient_mask(n, "zerophase")
     mask &= np.logical_and.reduce([f.transient_mask(n, "zerophase") for f in filts])
@@ -318,7 +318,7 @@ def test_actuators_file_corrects_each_corner_with_its_own_t_a_and_prints_the_dlc
         cor = got[f"{col}_corrected"]
         line = next(ln for ln in text.splitlines() if ln.startswith(col + " "))
         before, after, change, sf_before, sf_after = line.split()[1:6]
-        # stress factor E[(F/F_static)^4] with F_static the mean (correction.metrics.damage), worked here directly
+        # stress factor E[(F/F_static)^4] with F_static the mean (rigsim.correction.metrics.damage), worked here directly
         assert float(sf_before) == pytest.approx(np.mean((np.maximum(raw, 0) / raw.mean()) ** 4), abs=6e-5)
         assert float(sf_after) == pytest.approx(np.mean((np.maximum(cor, 0) / cor.mean()) ** 4), abs=6e-5)
         assert float(before) == pytest.approx(raw.std() / raw.mean(), abs=6e-5)
@@ -372,7 +372,7 @@ def test_mapping_errors_name_the_corner_and_the_fix(tmp_path, four_wheels, corne
 
 
 def test_a_refused_corner_is_named(tmp_path, four_wheels):
-    from correction.io.actuator_file import write_actuators_file
+    from rigsim.correction.io.actuator_file import write_actuators_file
 
     csv, acts = _four_files(tmp_path, four_wheels)
     tas = dict(zip(("fl", "fr", "rl", "rr"), four_wheels["tas"]))
@@ -460,8 +460,8 @@ def test_a_kn_file_and_an_n_file_give_the_same_corrected_forces_in_n(files, rig_
 
 
 def test_actuators_map_the_corners_of_a_daq_file_and_the_output_records_how_it_was_made(files, rig_data):
-    from correction.io.actuator_file import write_actuators_file
-    from correction.io.measured import read_channels
+    from rigsim.correction.io.actuator_file import write_actuators_file
+    from rigsim.correction.io.measured import read_channels
 
     csv, act, tmp = files
     daq = _daq_csv(tmp / "daq.csv", rig_data["t"], rig_data["rig"], rig_data["pan"])
@@ -490,7 +490,7 @@ def test_actuators_map_the_corners_of_a_daq_file_and_the_output_records_how_it_w
 
 def test_mdf4_output_reads_back_exactly(files):
     pytest.importorskip("asammdf")
-    from correction.io.measured import read_channels
+    from rigsim.correction.io.measured import read_channels
 
     csv, act, tmp = files
     assert run([csv, "--actuator", act, "-o", tmp / "o.csv", "--lowpass", "paper", "--transient", "mark"]) == 0
@@ -508,7 +508,7 @@ def test_an_rpc3_input_corrects_like_the_same_numbers_in_a_csv(files, rig_data):
     exactly as the same numbers (in N) from a CSV file."""
     from types import SimpleNamespace
 
-    from correction.io.measured import read_channels, write_channels
+    from rigsim.correction.io.measured import read_channels, write_channels
 
     csv, act, tmp = files
     rsp = tmp / "rig.rsp"
@@ -558,13 +558,13 @@ def test_an_output_the_writer_would_refuse_is_refused_before_the_correction(file
                                                                              message):
     from types import SimpleNamespace
 
-    import correction.output.pipeline
-    from correction.io.measured import write_channels
+    import rigsim.correction.output.pipeline
+    from rigsim.correction.io.measured import write_channels
 
     csv, act, tmp = files
     rsp = tmp / "odd.rsp"  # RPC III allows brackets in a channel name; a CSV header does not
     write_channels(rsp, SimpleNamespace(time_s=rig_data["t"], data={"Fz[1]": rig_data["rig"][:, 0]}, units={}))
-    monkeypatch.setattr(correction.output.pipeline, "correct_forces", lambda *a, **k: pytest.fail("corrected"))
+    monkeypatch.setattr(rigsim.correction.output.pipeline, "correct_forces", lambda *a, **k: pytest.fail("corrected"))
     assert run([rsp, "--actuator", act, "-o", tmp / out]) == 2
     assert re.search(message, run.last_error), run.last_error
     assert not (tmp / out).exists()

@@ -11,9 +11,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from correction.io.measured import READ_FORMATS, write_channels
-from correction.io.rpc3 import write_rpc3
-from scenarios.cli.main import main
+from rigsim.correction.io.measured import READ_FORMATS, write_channels
+from rigsim.correction.io.rpc3 import write_rpc3
+from rigsim.scenarios.cli.main import main
 
 #: The record written: 600 samples at 200 Hz, so 3 s; a force labelled kN, a length mm.
 RATE_HZ, N = 200.0, 600

@@ -1,7 +1,7 @@
 """SIGTERM ends a command with 143 even where Python would lose the interrupt (scenarios/cli/main.py).
 
 Two ways Python loses it, each reproduced here deterministically in a real ``python -m
-scenarios.cli.main run`` whose run (``scenarios.core.run.run``, patched through a
+rigsim.scenarios.cli.main run`` whose run (``rigsim.scenarios.core.run.run``, patched through a
 ``sitecustomize`` module on the child's path) does what the library does:
 
 * the handler runs inside a ctypes callback (numba loading its cached callbacks through llvmlite's
@@ -24,12 +24,12 @@ import time
 
 import pytest
 
-from scenarios.cli.main import INTERRUPTED, exit_main
+from rigsim.scenarios.cli.main import INTERRUPTED, exit_main
 from tests.scenarios.review.test_recording_process import ENV, TOML
 
 
 def _command(tmp_path, patch: str) -> tuple[subprocess.CompletedProcess, float]:
-    """``python -m scenarios.cli.main run`` with ``scenarios.core.run.run`` replaced by ``patch``'s ``run``."""
+    """``python -m rigsim.scenarios.cli.main run`` with ``rigsim.scenarios.core.run.run`` replaced by ``patch``'s ``run``."""
     (tmp_path / "s.toml").write_text(TOML)
     hook = tmp_path / "hook"
     hook.mkdir()
@@ -37,10 +37,10 @@ def _command(tmp_path, patch: str) -> tuple[subprocess.CompletedProcess, float]:
     # interpreters a library starts (numba probes its libraries with ``python -c``) inherit the path.
     (hook / "sitecustomize.py").write_text(
         "import os\nif os.environ.pop('RIGSIM_SIGTERM_TEST', None) == '1':\n"
-        + textwrap.indent(textwrap.dedent(patch) + "\nimport scenarios.core.run\nscenarios.core.run.run = run\n", "    "))
+        + textwrap.indent(textwrap.dedent(patch) + "\nimport rigsim.scenarios.core.run\nrigsim.scenarios.core.run.run = run\n", "    "))
     env = {**ENV, "PYTHONPATH": os.pathsep.join([str(hook), ENV["PYTHONPATH"]]), "RIGSIM_SIGTERM_TEST": "1", "MUJOCO_GL": "disable"}
     t0 = time.monotonic()
-    proc = subprocess.run([sys.executable, "-m", "scenarios.cli.main", "run", "s.toml", "--mode", "rig", "--out", "out",
+    proc = subprocess.run([sys.executable, "-m", "rigsim.scenarios.cli.main", "run", "s.toml", "--mode", "rig", "--out", "out",
                            "--quiet"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
     return proc, time.monotonic() - t0
 

@@ -25,33 +25,33 @@ def _loaded_after(code: str) -> str:
 
 
 def test_building_the_parser_imports_nothing_heavy():
-    assert _loaded_after("from scenarios.cli.main import build_parser; build_parser()") == "[]"
+    assert _loaded_after("from rigsim.scenarios.cli.main import build_parser; build_parser()") == "[]"
 
 
 @pytest.mark.parametrize("argv", [["--help"], ["correct", "--help"], ["run", "--help"], ["sweep", "--help"]])
 def test_help_imports_nothing_heavy(argv):
-    code = ("import contextlib, io\nfrom scenarios.cli.main import main\n"
+    code = ("import contextlib, io\nfrom rigsim.scenarios.cli.main import main\n"
             f"with contextlib.redirect_stdout(io.StringIO()):\n    try:\n        main({argv!r})\n"
             "    except SystemExit:\n        pass\n")
     assert _loaded_after(code) == "[]"
 
 
 def test_the_probe_sees_heavy_imports():  # the test above can fail
-    assert "'mujoco'" in _loaded_after("import scenarios.core.rig")
+    assert "'mujoco'" in _loaded_after("import rigsim.scenarios.core.rig")
 
 
 def _help(name: str) -> str:
-    from scenarios.cli.main import build_parser
+    from rigsim.scenarios.cli.main import build_parser
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
     return " ".join(sub.choices[name].format_help().split())
 
 
 def test_the_parser_literals_match_their_homes():
-    from correction.output.denoise import DRIFT_HZ
-    from scenarios.cli.main import build_parser
-    from scenarios.studies.iterate.compute import TARGETS
-    from scenarios.studies.scoring import NOISE_N
+    from rigsim.correction.output.denoise import DRIFT_HZ
+    from rigsim.scenarios.cli.main import build_parser
+    from rigsim.scenarios.studies.iterate.compute import TARGETS
+    from rigsim.scenarios.studies.scoring import NOISE_N
 
     for name in ("paper", "iterate"):
         assert f"(default {NOISE_N:g}; 0: off)" in _help(name), name
@@ -64,9 +64,9 @@ def test_the_parser_literals_match_their_homes():
 
 
 def test_paper_noise_default_is_the_studies(monkeypatch, tmp_path):
-    from scenarios.cli.main import build_parser
-    from scenarios.studies.paper import command, compute
-    from scenarios.studies.scoring import NOISE_N
+    from rigsim.scenarios.cli.main import build_parser
+    from rigsim.scenarios.studies.paper import command, compute
+    from rigsim.scenarios.studies.scoring import NOISE_N
 
     seen = {}
 
@@ -90,7 +90,7 @@ def test_commands_skip_mujocos_opengl_unless_asked(tmp_path, user_value):
     env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
     if user_value is not None:
         env["MUJOCO_GL"] = user_value
-    code = ("import sys\nfrom scenarios.cli.main import main\n"
+    code = ("import sys\nfrom rigsim.scenarios.cli.main import main\n"
             "scenario = 'scenarios/data/paper/high_72kmh_3640kg.toml'\n"
             f"assert main(['run', scenario, '--mode', 'road', '--duration-s', '0.05', '--quiet', '--out', {str(tmp_path / 'o')!r}]) == 0\n"
             "print('mujoco' in sys.modules, 'mujoco.glfw' in sys.modules)")

@@ -18,9 +18,9 @@ import pathlib
 
 import pytest
 
-from scenarios.cli.main import main
-from scenarios.core.config import ScenarioError
-from scenarios.core.outputs import MARKER, claim_output_folder, staged_output
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.outputs import MARKER, claim_output_folder, staged_output
 
 SCENARIO = 'name = "o"\nspeed_kmh = 72.0\nduration_s = 1.0\nseed = 5\nlead_in_s = 0.5\n[road]\nroughness = "high"\n'
 CSV = "time_s,drive_fl,lvdt_fl\n" + "".join(f"{i / 1000},{i % 7},{i % 5}\n" for i in range(20))
@@ -36,8 +36,8 @@ def _tree(folder: pathlib.Path) -> dict[str, str]:
 @pytest.fixture()
 def no_work(monkeypatch):
     """The simulation and the recorded identification fail the test if they start."""
-    from scenarios.core import run as run_module
-    from scenarios.records import recorded
+    from rigsim.scenarios.core import run as run_module
+    from rigsim.scenarios.records import recorded
 
     monkeypatch.setattr(run_module, "run", lambda *a, **k: pytest.fail("the run started"))
     monkeypatch.setattr(recorded, "identify_recorded", lambda *a, **k: pytest.fail("the identification started"))
@@ -178,7 +178,7 @@ def test_a_long_run_states_its_cost_and_one_too_large_for_the_disk_is_refused(on
                                                                               monkeypatch):
     import shutil
 
-    from scenarios.core.cost import run_cost
+    from rigsim.scenarios.core.cost import run_cost
 
     long = SCENARIO.replace("duration_s = 1.0", "duration_s = 3600.0")
     (tmp_path / "s.toml").write_text(long)
@@ -196,9 +196,9 @@ def test_a_long_run_states_its_cost_and_one_too_large_for_the_disk_is_refused(on
 
 def test_the_cost_estimate_counts_the_columns_a_run_writes(tmp_path):
     """The estimate's column count against the header a real (short) run writes, in both modes."""
-    from scenarios.core.config import load_scenario
-    from scenarios.core.cost import run_cost
-    from scenarios.core.run import run
+    from rigsim.scenarios.core.config import load_scenario
+    from rigsim.scenarios.core.cost import run_cost
+    from rigsim.scenarios.core.run import run
 
     (tmp_path / "s.toml").write_text(SCENARIO.replace("duration_s = 1.0", "duration_s = 0.05"))
     scenario = load_scenario(tmp_path / "s.toml")

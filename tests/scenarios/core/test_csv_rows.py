@@ -1,4 +1,4 @@
-"""``timeseries.csv`` is formatted with numpy (scenarios.core.results._csv_rows): its bytes must be
+"""``timeseries.csv`` is formatted with numpy (rigsim.scenarios.core.results._csv_rows): its bytes must be
 exactly ``numpy.savetxt(..., delimiter=",", fmt="%.10g")``'s, i.e. Python's own ``"%.10g" % x``
 for every number (the reference: CPython's correctly rounded float formatting, round half to
 even on exact ties), over every magnitude, the numbers whose ten-digit rounding is a tie or
@@ -12,8 +12,8 @@ import io
 import numpy as np
 import pytest
 
-from scenarios.core import results
-from scenarios.core.results import CSV_BLOCK_ROWS, RunResult, csv_parts
+from rigsim.scenarios.core import results
+from rigsim.scenarios.core.results import CSV_BLOCK_ROWS, RunResult, csv_parts
 
 
 def _savetxt(block: np.ndarray) -> bytes:

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from scenarios.core.config import ScenarioError, parse_scenario
-from scenarios.core.drive import Drive, identification_drive, step_drive
-from scenarios.core.rig import RIG_TIMESTEP_S, Rig, rk4_amplification
-from scenarios.core.watch import SimulationError
+from rigsim.scenarios.core.config import ScenarioError, parse_scenario
+from rigsim.scenarios.core.drive import Drive, identification_drive, step_drive
+from rigsim.scenarios.core.rig import RIG_TIMESTEP_S, Rig, rk4_amplification
+from rigsim.scenarios.core.watch import SimulationError
 
 SHORT = {"name": "step-short", "speed_kmh": 72.0, "duration_s": 1.0, "lead_in_s": 1.0, "seed": 3,
          "road": {"roughness": "C"}}

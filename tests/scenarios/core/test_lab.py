@@ -1,4 +1,4 @@
-"""The lab's measurement chain (scenarios.core.lab) against what each of its parts must do.
+"""The lab's measurement chain (rigsim.scenarios.core.lab) against what each of its parts must do.
 
 References: the second derivative of a sine (the pan's inertia), the Butterworth definition (-3 dB
 at the corner, 0 dB at DC), a ramp's exact shift under a delay, the rms of seeded noise over a
@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from scenarios.core.lab import LAB_BOUNDS, TYPICAL_LAB, LabChain, measure, pan_acceleration
+from rigsim.scenarios.core.lab import LAB_BOUNDS, TYPICAL_LAB, LabChain, measure, pan_acceleration
 
 FS = 1000.0
 
@@ -120,7 +120,7 @@ def test_a_filter_corner_above_nyquist_is_refused_before_any_work():
 
 
 def test_a_scenarios_lab_table_is_read_and_checked():
-    from scenarios.core.config import ScenarioError, parse_scenario
+    from rigsim.scenarios.core.config import ScenarioError, parse_scenario
 
     base = {"name": "x", "speed_kmh": 60, "duration_s": 10, "road": {"roughness": "medium"}}
     assert parse_scenario(base).lab == LabChain()
@@ -135,7 +135,7 @@ def test_a_scenarios_lab_table_is_read_and_checked():
 def test_aligned_channels_are_the_chain_without_its_filters_and_skew():
     """A lab that knows its filters and skew (``aligned``) gets back, within the filters' magnitude
     in the band, what the same chain without filters and skew measures: an 8 Hz force and pan."""
-    from scenarios.core.lab import aligned
+    from rigsim.scenarios.core.lab import aligned
 
     run = _run(force=30_000.0 + _sine(8.0, 3_000.0), pan=_sine(8.0, 0.005))
     lab = dataclasses.replace(TYPICAL_LAB, accelerometer_noise_m_s2=0.0, lvdt_noise_m=0.0, drift_noise_N=0.0)

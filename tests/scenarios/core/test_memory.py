@@ -1,7 +1,7 @@
 """Memory of a run: bounded by its records, not by its steps (the drive is made chunk by chunk).
 
-The references are measured peaks (``tracemalloc``) of :func:`scenarios.core.run.run`, against
-the estimate :func:`scenarios.core.memory.check_memory` refuses runs with.
+The references are measured peaks (``tracemalloc``) of :func:`rigsim.scenarios.core.run.run`, against
+the estimate :func:`rigsim.scenarios.core.memory.check_memory` refuses runs with.
 """
 
 from __future__ import annotations
@@ -10,11 +10,11 @@ import tracemalloc
 
 import numpy as np
 
-from scenarios.core import memory
-from scenarios.core.config import parse_scenario
-from scenarios.core.road_drive import RoadDrive
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
+from rigsim.scenarios.core import memory
+from rigsim.scenarios.core.config import parse_scenario
+from rigsim.scenarios.core.road_drive import RoadDrive
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
 
 DOC = {"name": "m", "speed_kmh": 120.0, "duration_s": 3.0, "seed": 5, "lead_in_s": 0.5,
        "road": {"roughness": "high"}, "vehicle": {"payload_kg": 3640.0}}

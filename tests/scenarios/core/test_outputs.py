@@ -1,4 +1,4 @@
-"""Outputs whole or absent: :mod:`scenarios.core.outputs` and every command that writes
+"""Outputs whole or absent: :mod:`rigsim.scenarios.core.outputs` and every command that writes
 a folder.
 
 The context manager: refusals before any work (empty path, a file in the folder's place, a previous
@@ -22,14 +22,14 @@ import pytest
 
 # Imported before any test replaces a function they import by name (identify_rig, run): a module
 # imported for the first time while a stand-in is in place would keep the stand-in.
-import scenarios.studies.iterate.compute  # noqa: F401
-import scenarios.studies.paper.compute  # noqa: F401
-import scenarios.studies.validate.compute  # noqa: F401
-import scenarios.studies.validate.runs  # noqa: F401
-from correction.io.atomic import host_tag
-from scenarios.cli.main import main
-from scenarios.core.config import ScenarioError
-from scenarios.core.outputs import MARKER, check_output_file, remove_stale_staging, staged_output
+import rigsim.scenarios.studies.iterate.compute  # noqa: F401
+import rigsim.scenarios.studies.paper.compute  # noqa: F401
+import rigsim.scenarios.studies.validate.compute  # noqa: F401
+import rigsim.scenarios.studies.validate.runs  # noqa: F401
+from rigsim.correction.io.atomic import host_tag
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.outputs import MARKER, check_output_file, remove_stale_staging, staged_output
 
 SCENARIO = 'name = "o"\nspeed_kmh = 72.0\nduration_s = 1.0\nseed = 5\nlead_in_s = 0.5\n[road]\nroughness = "high"\n'
 
@@ -289,7 +289,7 @@ def test_a_second_run_into_the_same_folder_is_refused_and_force_replaces(one_lin
     first = _listing(out)
     assert set(first) == {"result.json", "timeseries.csv", "timings.json"}
 
-    from scenarios.core import run as run_module
+    from rigsim.scenarios.core import run as run_module
 
     monkeypatch.setattr(run_module, "run", lambda *a, **k: pytest.fail("the run started"))
     assert main(["run", str(scenario), "--out", str(out), "--quiet"]) == 2
@@ -324,7 +324,7 @@ def test_run_refuses_an_empty_out(one_line, tmp_path, scenario, capsys, monkeypa
 
 
 def test_run_refuses_an_rrd_it_cannot_write_before_the_run(one_line, tmp_path, scenario, capsys, monkeypatch):
-    from scenarios.core import run as run_module
+    from rigsim.scenarios.core import run as run_module
 
     monkeypatch.setattr(run_module, "run", lambda *a, **k: pytest.fail("the run started"))
     (tmp_path / "file").write_text("")
@@ -344,7 +344,7 @@ def test_run_refuses_an_rrd_into_a_read_only_folder(one_line, tmp_path, scenario
 
 
 class _RecordingStandIn:
-    """Stands in for :class:`scenarios.review.recording_process.RecordingProcess` (the real child
+    """Stands in for :class:`rigsim.scenarios.review.recording_process.RecordingProcess` (the real child
     process is tested in test_recording_process.py): writes b"rrd" where it is told, or fails."""
 
     seen: list = []
@@ -368,7 +368,7 @@ class _RecordingStandIn:
 
 
 def _stand_in_recording(monkeypatch, failure=None):
-    from scenarios.review import recording_process
+    from rigsim.scenarios.review import recording_process
 
     stand_in = type("StandIn", (_RecordingStandIn,), {"seen": [], "failure": failure})
     monkeypatch.setattr(recording_process, "RecordingProcess", stand_in)
@@ -410,7 +410,7 @@ class _FakePaper:
 
 
 def _fake_paper(monkeypatch, fail):
-    from scenarios.studies.paper import compute, report
+    from rigsim.scenarios.studies.paper import compute, report
 
     def run_paper(paths, **kwargs):
         if fail:
@@ -423,7 +423,7 @@ def _fake_paper(monkeypatch, fail):
 
 
 def _fake_validate(monkeypatch, fail):
-    from scenarios.studies.validate import command, report
+    from rigsim.scenarios.studies.validate import command, report
 
     def validate(**kwargs):
         if fail:
@@ -444,7 +444,7 @@ def _fake_validate(monkeypatch, fail):
 
 
 def _fake_iterate(monkeypatch, fail, scenario):
-    from scenarios.studies.iterate import compute, report
+    from rigsim.scenarios.studies.iterate import compute, report
 
     def iterate_scenario(*a, **k):
         if fail:
@@ -473,8 +473,8 @@ class _FakeIdent:
 
 
 def _fake_identify(monkeypatch, fail, scenario):
-    from correction.io import actuator_file
-    from scenarios.studies.identify import compute, report
+    from rigsim.correction.io import actuator_file
+    from rigsim.scenarios.studies.identify import compute, report
 
     def identify_rig(*a, **k):
         if fail:
@@ -560,7 +560,7 @@ def test_paper_rrd_into_a_read_only_folder_is_refused_before_any_work(one_line, 
 def test_every_command_that_writes_a_folder_has_force():
     import argparse
 
-    from scenarios.cli.main import build_parser
+    from rigsim.scenarios.cli.main import build_parser
 
     subs = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
     for name in ("run", "paper", "validate", "identify", "iterate"):

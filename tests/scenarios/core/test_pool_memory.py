@@ -1,4 +1,4 @@
-"""The workers' C heap keeps large blocks for reuse (scenarios.core.pool.keep_heap_memory).
+"""The workers' C heap keeps large blocks for reuse (rigsim.scenarios.core.pool.keep_heap_memory).
 
 Dask's nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``; glibc then serves every
 block above 128 KiB with fresh mmap'ed pages, and each chunk of a run pays page faults on every
@@ -27,7 +27,7 @@ import ctypes, json, resource, sys
 # effect; the test counts 4 KiB pages.
 ctypes.CDLL(None).prctl(41, 1, 0, 0, 0)
 import numpy as np
-from scenarios.core.pool import keep_heap_memory
+from rigsim.scenarios.core.pool import keep_heap_memory
 
 def faults(n=40):
     a = np.ones(512 * 1024)  # warm the allocator

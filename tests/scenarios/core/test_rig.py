@@ -14,15 +14,15 @@ import mujoco
 import numpy as np
 import pytest
 
-from hydraulics.bridge import hydraulic_callbacks
-from hydraulics.params import STATE_NAMES
-from mjcf.names import CORNERS
-from mjcf.physics import RigIndex
-from scenarios.cli.main import main
-from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.core.watch import SimulationError
+from rigsim.hydraulics.bridge import hydraulic_callbacks
+from rigsim.hydraulics.params import STATE_NAMES
+from rigsim.mjcf.names import CORNERS
+from rigsim.mjcf.physics import RigIndex
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.core.watch import SimulationError
 
 SHORT = {
     "name": "rig-short",
@@ -160,7 +160,7 @@ def test_mujoco_warning_during_a_run_is_an_error_with_its_time(monkeypatch, tmp_
     bad value (warnings are checked every 10 ms); no callbacks remain. The rig test holds x_ref
     at mid-step of the step from 1.5 s; the road test moves the pan at its mean velocity over a
     step, (z_k+1 - z_k) / dt, so the step ending at 1.5 s already carries it."""
-    from scenarios.core.drive import Drive
+    from rigsim.scenarios.core.drive import Drive
 
     real = Rig.road_source
 
@@ -202,9 +202,9 @@ def test_pose_track_follows_the_run(mode):
 def test_hydraulic_events_counted_chunk_by_chunk_are_those_of_the_whole_record():
     """A rig whose valve is cut to 40 l/min saturates its spool on the high-roughness road at
     72 km/h. The run counts the events chunk by chunk (0.1 s rollouts) and keeps only spool and
-    pressures; the reference is hydraulics.events.events applied once to the whole recorded
+    pressures; the reference is rigsim.hydraulics.events.events applied once to the whole recorded
     spool and pressure record (the other states are zero: the events do not read them)."""
-    from hydraulics.events import events
+    from rigsim.hydraulics.events import events
 
     doc = {**SHORT, "duration_s": 3.0, "road": {"roughness": "high"}, "actuator": {"rated_flow_m3_s": 40e-3 / 60}}
     sc = parse_scenario(doc)
@@ -230,7 +230,7 @@ def test_a_step_on_one_corners_drive_moves_that_pan_and_no_other(corner):
     loop settles within ~0.2 s, validate's Figure 7), the others stay put but for what the truck
     passes between them (under 10 % of the step). A drive wired to the wrong post fails here by
     name; the rms bounds of the road tests barely notice a swap of fl and fr."""
-    from scenarios.core.drive import Drive, step_drive
+    from rigsim.scenarios.core.drive import Drive, step_drive
 
     sc = parse_scenario({**SHORT, "duration_s": 0.6})
     rig = Rig(sc)

@@ -2,7 +2,7 @@
 
 The choice is measured by ``benchmarks/road_integrator_study.py`` (docs/road_integrator_study.md);
 these tests pin the pieces it rests on: the tire force the record reports is MuJoCo's own force
-law (:func:`mjcf.physics.tire_law` against ``actuator_force``, a progressive tire's two elements
+law (:func:`rigsim.mjcf.physics.tire_law` against ``actuator_force``, a progressive tire's two elements
 summed), the pan velocity reaches the tire's
 damping through ``ctrl``, and a run agrees with a fine explicit-Euler reference (the XML's
 integrator at a quarter of its 1e-4 s step), the reference being independent of the mid-step
@@ -15,12 +15,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf import names
-from mjcf.build import build_spec
-from mjcf.variant import TruckVariant
-from mjcf.physics import RigIndex, static_equilibrium, tire_law
-from scenarios.core.config import parse_scenario
-from scenarios.core.rig import Rig
+from rigsim.mjcf import names
+from rigsim.mjcf.build import build_spec
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.mjcf.physics import RigIndex, static_equilibrium, tire_law
+from rigsim.scenarios.core.config import parse_scenario
+from rigsim.scenarios.core.rig import Rig
 
 SHORT = {"name": "road-short", "speed_kmh": 72.0, "duration_s": 2.0, "lead_in_s": 1.0, "seed": 5,
          "road": {"roughness": "C"}}
@@ -112,7 +112,7 @@ def test_road_poses_show_the_pans_where_the_drive_puts_them():
 def test_refined_and_every_are_exact_for_a_cubic():
     """``Drive.refined`` is the cubic Hermite interpolant (exact for a cubic polynomial, value
     and derivative), ``Drive.every`` takes the coarse steps back with their exact mid-step values."""
-    from scenarios.core.drive import Drive
+    from rigsim.scenarios.core.drive import Drive
 
     t = -3e-3 + np.arange(11) * 1e-3
     coef = np.array([0.3, -2.0, 0.5, 1e-3])

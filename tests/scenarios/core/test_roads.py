@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from scenarios.core.drive import Drive
-from scenarios.core.road_drive import sample_wheels
-from scenarios.core.profiles import Profile, ProfileError, highpass, read_profile_csv, write_profile_csv
-from scenarios.core.roads import ISO_CLASSES, ROUGHNESS_WORDS, RoadSpec, generate_profile, iso8608_psd, welch_psd_spatial
+from rigsim.scenarios.core.drive import Drive
+from rigsim.scenarios.core.road_drive import sample_wheels
+from rigsim.scenarios.core.profiles import Profile, ProfileError, highpass, read_profile_csv, write_profile_csv
+from rigsim.scenarios.core.roads import ISO_CLASSES, ROUGHNESS_WORDS, RoadSpec, generate_profile, iso8608_psd, welch_psd_spatial
 
 
 def _octave_bands(lo=0.05, hi=5.0):
@@ -241,7 +241,7 @@ def test_envelope_is_a_moving_average_with_sinc_response():
     """Reference: a moving average of length L passes a sine of wavelength lambda with gain
     sin(pi L / lambda) / (pi L / lambda) (the Fourier transform of a box); L = 0.25 m is the
     IRI's tire model (Sayers 1995)."""
-    from scenarios.core.profiles import envelope
+    from rigsim.scenarios.core.profiles import envelope
 
     dx = 0.01
     x = np.arange(0, 200.0, dx)
@@ -265,9 +265,9 @@ def test_road_drive_reads_only_the_profile_points_it_needs_and_gets_the_same_bit
     are bit for bit those of numpy.gradient and numpy.interp on the whole profile."""
     import numpy as np
 
-    from scenarios.core import road_drive as rd
-    from scenarios.core.config import parse_scenario
-    from scenarios.core.rig import Rig
+    from rigsim.scenarios.core import road_drive as rd
+    from rigsim.scenarios.core.config import parse_scenario
+    from rigsim.scenarios.core.rig import Rig
 
     rng = np.random.default_rng(5)
     track = rng.normal(size=200)

@@ -23,13 +23,13 @@ import time
 import numpy as np
 import pytest
 
-from mjcf.build import build_model
-from mjcf.variant import BOUNDS, TruckVariant
-from scenarios.cli.main import main
-from correction.io import atomic
-from scenarios.core import memory
-from scenarios.core.config import ScenarioError, parse_scenario
-from scenarios.core.files import atomic_write_bytes, remove_stale_temp_files
+from rigsim.mjcf.build import build_model
+from rigsim.mjcf.variant import BOUNDS, TruckVariant
+from rigsim.scenarios.cli.main import main
+from rigsim.correction.io import atomic
+from rigsim.scenarios.core import memory
+from rigsim.scenarios.core.config import ScenarioError, parse_scenario
+from rigsim.scenarios.core.files import atomic_write_bytes, remove_stale_temp_files
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
@@ -63,8 +63,8 @@ def _one_sentence(text: str) -> None:
 
 # --------------------------------------------------------------------------- memory before a run
 def test_a_run_too_big_for_memory_is_refused_before_the_drive_is_made(monkeypatch):
-    from scenarios.core.rig import Rig
-    from scenarios.core.run import run
+    from rigsim.scenarios.core.rig import Rig
+    from rigsim.scenarios.core.run import run
 
     def no_drive(self):
         raise AssertionError("the drive was made before the memory check")
@@ -97,8 +97,8 @@ def test_the_memory_limit_is_half_the_available_memory(monkeypatch):
 
 
 def test_rig_run_checks_the_records_of_any_drive(monkeypatch):
-    from scenarios.core.drive import identification_drive
-    from scenarios.core.rig import Rig
+    from rigsim.scenarios.core.drive import identification_drive
+    from rigsim.scenarios.core.rig import Rig
 
     rig = Rig(_scenario(), hydraulic=False)
     drive = identification_drive(1.0, rig.dt_s)
@@ -138,7 +138,7 @@ def test_physical_bounds_of_the_truck(field, bad, good):
 def test_no_rest_on_the_tires_is_one_sentence_not_singular_matrix():
     import mujoco
 
-    from mjcf.physics import EquilibriumError, static_equilibrium
+    from rigsim.mjcf.physics import EquilibriumError, static_equilibrium
 
     # 40 t on the rear overhang lifts the front tires off their pans: no rest position.
     model = build_model(TruckVariant(payload_kg=40_000.0, payload_x_m=-3.5))
@@ -174,8 +174,8 @@ def test_cli_run_refuses_absurd_vehicles_and_writes_nothing(tmp_path, capsys, ve
 
 
 def test_road_mode_refuses_a_truck_without_rest_before_the_drive(monkeypatch):
-    from scenarios.core.rig import Rig
-    from scenarios.core.run import run
+    from rigsim.scenarios.core.rig import Rig
+    from rigsim.scenarios.core.run import run
 
     monkeypatch.setattr(Rig, "road_drive", lambda self: pytest.fail("the drive was made"))
     with pytest.raises(ValueError, match="^the truck finds no rest on its tires"):
@@ -184,7 +184,7 @@ def test_road_mode_refuses_a_truck_without_rest_before_the_drive(monkeypatch):
 
 # ------------------------------------------------------------------ iterate and paper durations
 def test_iterate_refuses_a_short_scenario_before_any_run(monkeypatch):
-    from scenarios.studies.iterate import compute
+    from rigsim.scenarios.studies.iterate import compute
 
     monkeypatch.setattr(compute, "run", lambda *a, **k: pytest.fail("a run started"))
     monkeypatch.setattr(compute, "Rig", lambda *a, **k: pytest.fail("a rig was built"))
@@ -202,13 +202,13 @@ def test_paper_minimum_duration_leaves_the_paper_method_time_to_score(capsys):
     for each paper case, and 9.9 s is refused before any work."""
     import argparse
 
-    from correction.output.eq4 import eq4_coefficients_from
-    from correction.output.pipeline import correct_forces
-    from hydraulics.linearization import eq4_parameters
-    from scenarios.core.config import load_scenario, paper_scenarios
-    from scenarios.core.rig import Rig
-    from scenarios.studies.paper.command import _check
-    from scenarios.studies.scoring import MIN_SCORED_S, PAPER
+    from rigsim.correction.output.eq4 import eq4_coefficients_from
+    from rigsim.correction.output.pipeline import correct_forces
+    from rigsim.hydraulics.linearization import eq4_parameters
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    from rigsim.scenarios.core.rig import Rig
+    from rigsim.scenarios.studies.paper.command import _check
+    from rigsim.scenarios.studies.scoring import MIN_SCORED_S, PAPER
 
     n = 10 * 1000 + 1  # 10 s at the output rate, 1 kHz
     for path in paper_scenarios():
@@ -227,7 +227,7 @@ def test_paper_minimum_duration_leaves_the_paper_method_time_to_score(capsys):
 
 # ---------------------------------------------------------------------------- sweep grid and ETA
 def test_a_huge_grid_is_refused_before_its_cases_are_built(monkeypatch):
-    from scenarios.studies.sweep import grid
+    from rigsim.scenarios.studies.sweep import grid
 
     monkeypatch.setattr(grid, "_validate", lambda *a, **k: pytest.fail("a case was built"))
     doc = {"base": {k: v for k, v in DOC.items() if k != "vehicle"},
@@ -242,7 +242,7 @@ def test_a_huge_grid_is_refused_before_its_cases_are_built(monkeypatch):
 
 
 def test_eta_shows_days():
-    from scenarios.studies.sweep.run import format_eta
+    from rigsim.scenarios.studies.sweep.run import format_eta
 
     assert format_eta(59.6) == "00:01:00"
     assert format_eta(86399) == "23:59:59"
@@ -255,7 +255,7 @@ def test_a_killed_writers_temp_file_is_removed_by_the_next_write(tmp_path):
     target = tmp_path / "result.json"
     code = textwrap.dedent(f"""
         import os, sys, time
-        from scenarios.core import files
+        from rigsim.scenarios.core import files
         os.fsync = lambda fd: (print("writing", flush=True), time.sleep(600))
         files.atomic_write_bytes({str(target)!r}, b"half")
     """)
@@ -332,7 +332,7 @@ def _workers(pid: int) -> list[int]:
 def test_pool_workers_die_when_their_parent_is_killed():
     code = textwrap.dedent("""
         import time
-        from scenarios.core.pool import local_executor
+        from rigsim.scenarios.core.pool import local_executor
         with local_executor(2) as pool:
             futures = [pool.submit(time.sleep, 600) for _ in range(2)]
             time.sleep(0.5)
@@ -369,7 +369,7 @@ def test_sigterm_stops_a_sweep_like_ctrl_c(tmp_path):
         [axes]
         seed = [1, 2]
     """))
-    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli.main", "sweep", str(grid), "--out",
+    proc = subprocess.Popen([sys.executable, "-m", "rigsim.scenarios.cli.main", "sweep", str(grid), "--out",
                              str(tmp_path / "out"), "--jobs", "1", "--quiet"], env=ENV, cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -410,14 +410,14 @@ class _Odd(BaseException):
 
 
 def _settings() -> dict:
-    from scenarios.studies.sweep.settings import EvalSettings
+    from rigsim.scenarios.studies.sweep.settings import EvalSettings
 
     return EvalSettings().as_dict()
 
 
 @pytest.mark.parametrize("exc", [_Unpicklable("boom"), _Odd("odd")])
 def test_a_case_error_comes_back_as_plain_picklable_text(monkeypatch, exc):
-    from scenarios.studies.sweep import case
+    from rigsim.scenarios.studies.sweep import case
 
     def fail(*a, **k):
         raise exc
@@ -433,7 +433,7 @@ def test_a_case_error_comes_back_as_plain_picklable_text(monkeypatch, exc):
             pickle.dumps(exc)  # the check can fail: the exception itself would not travel
 
     # through a real worker process the client gets the record, not a hang or a pickling error
-    from scenarios.core.pool import local_executor
+    from rigsim.scenarios.core.pool import local_executor
 
     with local_executor(1) as pool:
         got = pool.submit(case.evaluate_payload, "c", dict(DOC), None, _settings()).result(timeout=120)
@@ -441,7 +441,7 @@ def test_a_case_error_comes_back_as_plain_picklable_text(monkeypatch, exc):
 
 
 def test_interrupts_are_not_swallowed(monkeypatch):
-    from scenarios.studies.sweep import case
+    from rigsim.scenarios.studies.sweep import case
 
     for kind in (KeyboardInterrupt, SystemExit):
         def stop(*a, kind=kind, **k):
@@ -453,7 +453,7 @@ def test_interrupts_are_not_swallowed(monkeypatch):
 
 
 def test_an_ok_record_holds_plain_types_only(monkeypatch):
-    from scenarios.studies.sweep import case
+    from rigsim.scenarios.studies.sweep import case
 
     class Fake:
         def to_dict(self):
@@ -495,9 +495,9 @@ def test_two_runs_write_byte_identical_files(tmp_path, mode):
 
 
 def test_two_sweeps_write_byte_identical_results_and_case_files(tmp_path):
-    from scenarios.studies.sweep.grid import parse_grid
-    from scenarios.studies.sweep.run import run_sweep
-    from scenarios.studies.sweep.store import TIMINGS_FILE
+    from rigsim.scenarios.studies.sweep.grid import parse_grid
+    from rigsim.scenarios.studies.sweep.run import run_sweep
+    from rigsim.scenarios.studies.sweep.store import TIMINGS_FILE
 
     base = {k: v for k, v in DOC.items() if k != "vehicle"}
     g = parse_grid({"sweep": {"name": "det"}, "base": {**base, "duration_s": 5.0},

@@ -19,9 +19,9 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from correction.metrics.damage import stress_factor
-from correction.metrics.dlc import BLOCK_ROWS, column_sum, dlc, force_statistics
-from scenarios.core.memory import MMAP_THRESHOLD_BYTES
+from rigsim.correction.metrics.damage import stress_factor
+from rigsim.correction.metrics.dlc import BLOCK_ROWS, column_sum, dlc, force_statistics
+from rigsim.scenarios.core.memory import MMAP_THRESHOLD_BYTES
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 SCENARIO = "scenarios/data/paper/high_72kmh_3640kg.toml"
@@ -127,14 +127,14 @@ def test_without_the_setting_a_freed_array_stays_resident():
 @glibc
 def test_return_freed_arrays_gives_a_freed_array_back():
     assert MMAP_THRESHOLD_BYTES < 10 * 2**20
-    assert _given_back_mib("from scenarios.core.memory import return_freed_arrays\n"
+    assert _given_back_mib("from rigsim.scenarios.core.memory import return_freed_arrays\n"
                            "assert return_freed_arrays()\n") > 8.0
 
 
 @glibc
 def test_rigsim_run_gives_freed_arrays_back(tmp_path):
     """The run command sets it for its process (before its record and statistics)."""
-    setup = ("import contextlib, io\nfrom scenarios.cli.main import main\n"
+    setup = ("import contextlib, io\nfrom rigsim.scenarios.cli.main import main\n"
              "with contextlib.redirect_stdout(io.StringIO()):\n"
              f"    assert main(['run', {SCENARIO!r}, '--mode', 'rig', '--duration-s', '0.5', "
              f"'--out', {str(tmp_path / 'run')!r}, '--quiet']) == 0\n")

@@ -8,12 +8,12 @@ import pathlib
 import numpy as np
 import pytest
 
-import mjcf
-import scenarios
-from mjcf.build import resource_path
-from scenarios.cli.main import main
-from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
-from scenarios.core.run import run
+import rigsim.mjcf
+import rigsim.scenarios
+from rigsim.mjcf.build import resource_path
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import ScenarioError, load_scenario, paper_scenarios, parse_scenario
+from rigsim.scenarios.core.run import run
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
 
@@ -44,8 +44,8 @@ def _write(tmp_path, text, name="s.toml"):
 
 def test_packages_and_resources_belong_to_this_project():
     """A PyPI package named `scenarios` exists: make sure we import ours."""
-    assert pathlib.Path(scenarios.__file__).resolve().parent == REPO / "scenarios"
-    assert pathlib.Path(mjcf.__file__).resolve().parent == REPO / "mjcf"
+    assert pathlib.Path(rigsim.scenarios.__file__).resolve().parent == REPO / "scenarios"
+    assert pathlib.Path(rigsim.mjcf.__file__).resolve().parent == REPO / "mjcf"
     for name in ("truck_rig.xml", "scene.xml"):
         assert resource_path(name).resolve() == REPO / "mjcf" / name
     for p in paper_scenarios():

@@ -1,7 +1,7 @@
 """A run's time series in the formats test labs read: CSV, ASAM MDF4, NI TDMS, MTS RPC III.
 
 Each file ``rigsim run --format`` writes is read back by the toolkit's reader of measured data
-(:func:`correction.io.measured.read_channels`) and compared with the run's own arrays: MDF4 and TDMS
+(:func:`rigsim.correction.io.measured.read_channels`) and compared with the run's own arrays: MDF4 and TDMS
 carry float64 exactly, CSV to its 10 significant digits, RPC III to its int16 quantization (half
 a step of the channel's full scale / 32767, the format's definition: MTS RPC III file format; its SCALE
 header is text, so the step is known to ~1e-5).
@@ -14,10 +14,10 @@ import json
 import numpy as np
 import pytest
 
-from correction.io.measured import read_channels
-from scenarios.core.config import ScenarioError, parse_scenario
-from scenarios.core.results import TIMESERIES_FORMATS, check_timeseries_format, write_run
-from scenarios.core.run import run
+from rigsim.correction.io.measured import read_channels
+from rigsim.scenarios.core.config import ScenarioError, parse_scenario
+from rigsim.scenarios.core.results import TIMESERIES_FORMATS, check_timeseries_format, write_run
+from rigsim.scenarios.core.run import run
 
 DOC = {"name": "f", "speed_kmh": 72.0, "duration_s": 0.5, "seed": 3, "lead_in_s": 0.5,
        "road": {"roughness": "high"}, "vehicle": {"payload_kg": 3640.0}}

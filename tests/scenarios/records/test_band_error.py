@@ -1,4 +1,4 @@
-"""The calibrated model's error in the correction's band (scenarios.records.model.band_error), against
+"""The calibrated model's error in the correction's band (rigsim.scenarios.records.model.band_error), against
 analytic references: white noise through the band limit keeps the share of its power the low-pass's
 noise bandwidth gives; a model off by a gain is off by that gain in every band; a static bias (which the
 model correction cancels) is no error; noise above the band is none either."""
@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from correction.output.lowpass import BAND_HZ, BAND_ORDER
-from scenarios.records.model.band_error import band_errors, noise_bandwidth_hz
+from rigsim.correction.output.lowpass import BAND_HZ, BAND_ORDER
+from rigsim.scenarios.records.model.band_error import band_errors, noise_bandwidth_hz
 
 FS = 1000.0
 RNG = np.random.default_rng(11)

@@ -12,18 +12,18 @@ import dataclasses
 import numpy as np
 import pytest
 
-from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
-from scenarios.core.watch import SimulationError
-from scenarios.core.run import run
-from scenarios.studies import scoring
-from scenarios.records.model.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
+from rigsim.scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
+from rigsim.scenarios.core.watch import SimulationError
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies import scoring
+from rigsim.scenarios.records.model.cab_choice import (AUTO, FITTED_CAB, HELD, MIN_GAIN, calibrate_cab,
                                                            SCAN_HZ, SCAN_TRUSTED, cab_scan, check_cab, choose,
                                                            scan_error)
-from scenarios.records.model.family import DEFAULT_NAMES, FITTED
-from scenarios.records.model.first_guess import catalogue, xml_nominal
-from scenarios.records.model.problem import FitState
-from scenarios.records.model.result import Calibration
-from mjcf.variant import TruckVariant
+from rigsim.scenarios.records.model.family import DEFAULT_NAMES, FITTED
+from rigsim.scenarios.records.model.first_guess import catalogue, xml_nominal
+from rigsim.scenarios.records.model.problem import FitState
+from rigsim.scenarios.records.model.result import Calibration
+from rigsim.mjcf.variant import TruckVariant
 
 
 def _cal(names, fitted, fit_nrmse, *, converged=True, bounds=None) -> Calibration:
@@ -133,7 +133,7 @@ def test_the_second_calibration_runs_only_where_a_cab_could_win(monkeypatch, gai
     measured) exceeds SCAN_TRUSTED (0.13 > 0.125: no scan, whatever it would say); the result counts
     every run. Each fit's uncertainties (a Jacobian at its optimum) are computed only for the
     calibration kept, and for the held one where the scan projects out its Jacobian."""
-    import scenarios.records.model.cab_choice as cab_choice
+    import rigsim.scenarios.records.model.cab_choice as cab_choice
 
     held = _cal(("payload_kg",), (3100.0,), (front, front, 0.05, 0.05))
     assert scan_error(held) == front
@@ -207,7 +207,7 @@ def test_the_scan_is_judged_by_the_second_worst_fitted_wheel():
     """A cab loads both wheels of an axle: one wheel far off (the walk-through's rr channel of pure
     noise: model error 9.4 against 0.035-0.039) leaves the scan trusted, two do not; a wheel the
     calibration left out does not count."""
-    from scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
 
     assert SCAN_TRUSTED == HYBRID_LIMIT / 2  # the threshold's stated source
     cal = _cal(("payload_kg",), (1.0,), (0.035, 0.039, 0.038, 9.4))
@@ -221,7 +221,7 @@ def test_a_deferred_choice_returns_the_held_fit_alone(monkeypatch):
     """``defer`` (the model correction's: one wheel far off every other, to be left out first) with a
     reason: the cab-held calibration is returned as it is, neither scan nor second fit run; without
     one the choice goes on."""
-    import scenarios.records.model.cab_choice as cab_choice
+    import rigsim.scenarios.records.model.cab_choice as cab_choice
 
     held = _cal(("payload_kg",), (3100.0,), (0.2, 0.19, 0.76, 4.7))
     calls, seen = [], []

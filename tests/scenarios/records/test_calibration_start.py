@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.records.model.problem import FitProblem
+from rigsim.scenarios.records.model.problem import FitProblem
 
 
 def _problem() -> FitProblem:

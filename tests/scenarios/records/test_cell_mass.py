@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scenarios.core.lab import pan_acceleration
-from scenarios.records.model.calibrate import calibrate
-from scenarios.records.model.cell_mass import mass_of, mass_sigma
+from rigsim.scenarios.core.lab import pan_acceleration
+from rigsim.scenarios.records.model.calibrate import calibrate
+from rigsim.scenarios.records.model.cell_mass import mass_of, mass_sigma
 
 from tests.scenarios.records.test_model_correction import _road_record
 
@@ -48,7 +48,7 @@ def test_the_mass_sigma_matches_the_spread_of_the_estimate():
 def test_the_calibration_recovers_a_labs_mass_compensation_error():
     """The road test of the medium case's plant (pans following the road exactly), its load cells
     reading 7.5 kg of pan mass too little (3 % of a 250 kg pan plate over-compensated,
-    scenarios.core.lab.TYPICAL_LAB) plus 100 N of noise; the payload fitted on one 3 s window, the
+    rigsim.scenarios.core.lab.TYPICAL_LAB) plus 100 N of noise; the payload fitted on one 3 s window, the
     rest held at the plant's: the cells' mass is recovered within 5 % and its sigma covers the error;
     without the pan's term the fitted mass is within 3 sigma of 0."""
     sc, road, force = _road_record()
@@ -72,7 +72,7 @@ def test_the_calibration_recovers_a_labs_mass_compensation_error():
 
 def test_without_cell_mass_takes_the_mass_times_the_band_limited_acceleration_out():
     """The correction's and the suite's one way to take the fitted mass out of the force."""
-    from scenarios.records.model.cell_mass import band_acceleration, without_cell_mass
+    from rigsim.scenarios.records.model.cell_mass import band_acceleration, without_cell_mass
 
     fs = 1000.0
     t = np.arange(4000) / fs

@@ -3,7 +3,7 @@ correct --force-filter ... --lvdt-filter ...``, ``rigsim identify --from-file --
 
 Reference: the same record without the lab's filters and delay (the exact channels). A record
 whose force passed a 200 Hz and whose LVDT a 150 Hz 4th-order Butterworth (digital, as
-:data:`scenarios.core.lab.TYPICAL_LAB`'s) with the force 0.2 ms late, corrected with that timing
+:data:`rigsim.scenarios.core.lab.TYPICAL_LAB`'s) with the force 0.2 ms late, corrected with that timing
 given, must land on the exact record's correction within a small part of what the timing costs
 when it is not given.
 """
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.io.acquisition import ChannelFilter
-from correction.output.eq4 import eq4_coefficients_from
-from scenarios.cli.main import main
-from scenarios.core.config import ScenarioError
-from scenarios.records import correct_record, identify_record, read_record
+from rigsim.correction.io.acquisition import ChannelFilter
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim import LinearOptions, correct_record, identify_record, read_record
 
 FS = 1000.0
 EQ4 = dict(ksv=1.0, kq_m3_s=0.0109, kc_m3_s_Pa=1.26e-11, kp_per_m=50.0, kdp_per_Pa=2.0e-8, piston_area_m2=7.43e-3,
@@ -54,7 +54,7 @@ def records(tmp_path_factory):
 
 def _error(result, road) -> float:
     """NRMSE of the settled corrected force against the road force through the same 30 Hz band."""
-    from correction.output.apply import band_limit
+    from rigsim.correction.output.apply import band_limit
 
     ref = band_limit(road[:, None], FS, "regularized", "zerophase")[:, 0]
     keep = result.settled
@@ -64,9 +64,10 @@ def _error(result, road) -> float:
 
 def test_given_timing_lands_on_the_exact_records_correction(records):
     d, road = records
-    exact = _error(correct_record(d / "exact.csv", identify="drive_m,pan_m"), road)
-    raw = _error(correct_record(d / "lab.csv", identify="drive_m,pan_m"), road)
-    aligned_result = correct_record(d / "lab.csv", identify="drive_m,pan_m", force_filter=FORCE, lvdt_filter=LVDT)
+    exact = _error(correct_record(d / "exact.csv", LinearOptions(identify="drive_m,pan_m")), road)
+    raw = _error(correct_record(d / "lab.csv", LinearOptions(identify="drive_m,pan_m")), road)
+    aligned_result = correct_record(d / "lab.csv", LinearOptions(identify="drive_m,pan_m"), force_filter=FORCE,
+                                    lvdt_filter=LVDT)
     aligned = _error(aligned_result, road)
     assert raw - exact > 0.02  # not given, the timing costs a visible error
     assert aligned - exact < 0.1 * (raw - exact)
@@ -118,4 +119,4 @@ def test_identify_command_takes_the_lvdt_filter(records, tmp_path):
 def test_api_refuses_an_lvdt_filter_nothing_reads(records):
     d, _ = records
     with pytest.raises(ScenarioError, match="lvdt_filter"):
-        correct_record(d / "lab.csv", actuator=(np.array([1.0]), np.array([1.0])), lvdt_filter="150")
+        correct_record(d / "lab.csv", LinearOptions(actuator=(np.array([1.0]), np.array([1.0]))), lvdt_filter="150")

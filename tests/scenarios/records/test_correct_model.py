@@ -30,15 +30,15 @@ from importlib.metadata import version
 import numpy as np
 import pytest
 
-from correction.metrics.dlc import dlc
-from correction.io.measured import read_channels
-from scenarios.records.model_record import cal_key
-from scenarios.cli.main import build_parser, main
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.core.run import run
-from scenarios.records.model.calibrate import MAX_NFEV, WINDOW_LEAD_S, WINDOW_S, WINDOWS
-from scenarios.records.model.first_guess import xml_nominal
-from scenarios.records.model.differential import START_S
+from rigsim.correction.metrics.dlc import dlc
+from rigsim.correction.io.measured import read_channels
+from rigsim.scenarios.records.model_record import cal_key
+from rigsim.scenarios.cli.main import build_parser, main
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.records.model.calibrate import MAX_NFEV, WINDOW_LEAD_S, WINDOW_S, WINDOWS
+from rigsim.scenarios.records.model.first_guess import xml_nominal
+from rigsim.scenarios.records.model.differential import START_S
 
 CORNERS = ("fl", "fr", "rl", "rr")
 PAIRS = ",".join(f"{c}=Soll_{c.upper()}:Weg_{c.upper()}" for c in CORNERS)
@@ -273,8 +273,8 @@ def test_the_help_literals_match_their_homes():
     assert f"(default {MAX_NFEV})" in text and f"(default {WINDOWS})" in text
     assert f"each {WINDOW_LEAD_S:g} s lead-in + {WINDOW_S:g} s" in text
     assert f"at least {WINDOW_LEAD_S + WINDOW_S:g} s of record" in text
-    from correction.output.denoise import DRIFT_HZ
-    from scenarios.records.settings import DRIFT_CUT_MAX_HZ
+    from rigsim.correction.output.denoise import DRIFT_HZ
+    from rigsim.scenarios.records.settings import DRIFT_CUT_MAX_HZ
 
     assert f"(default {DRIFT_HZ:g}, at most {DRIFT_CUT_MAX_HZ:g})" in text
 
@@ -295,22 +295,22 @@ def test_a_drift_cut_out_of_range_is_refused_before_any_work(record, tmp_path, c
 
 def test_the_drift_cut_option_gives_the_corner_the_correction_uses():
     """correction_settings: no option is the library's DRIFT_HZ, 0 is no cut (None, as
-    hybrid_correction takes it), 1.2 stays 1.2; with the linear correction it is refused."""
-    from correction.output.denoise import DRIFT_HZ
-    from scenarios.core.config import ScenarioError
-    from scenarios.records.settings import DRIFT_CUT_MAX_HZ, correction_settings
+    hybrid_correction takes it), 1.2 stays 1.2; the linear correction's options have no drift cut."""
+    from rigsim import LinearOptions, ModelOptions
+    from rigsim.correction.output.denoise import DRIFT_HZ
+    from rigsim.scenarios.records.settings import DRIFT_CUT_MAX_HZ, correction_settings
 
-    kw = dict(model=paper_scenarios()[2], pairs=PAIRS)
-    assert correction_settings(**kw).drift_hz == DRIFT_HZ < DRIFT_CUT_MAX_HZ
-    assert correction_settings(**kw, drift_cut_hz=0).drift_hz is None
-    assert correction_settings(**kw, drift_cut_hz=1.2).drift_hz == 1.2
-    with pytest.raises(ScenarioError, match=r"^drift_cut_hz goes with model='TRUCK.toml'"):
-        correction_settings(actuator=([1.0], [1.0]), drift_cut_hz=0.5)
+    model = ModelOptions(paper_scenarios()[2], pairs=PAIRS)
+    assert correction_settings(model).drift_hz == DRIFT_HZ < DRIFT_CUT_MAX_HZ
+    assert correction_settings(dataclasses.replace(model, drift_cut_hz=0)).drift_hz is None
+    assert correction_settings(dataclasses.replace(model, drift_cut_hz=1.2)).drift_hz == 1.2
+    with pytest.raises(TypeError, match="drift_cut_hz"):
+        LinearOptions(actuator=([1.0], [1.0]), drift_cut_hz=0.5)
 
 
 def test_cab_is_refused_without_model(tmp_path, capsys):
     """--cab belongs to --model: alone it is refused before any work, naming the option."""
-    from scenarios.cli.main import main
+    from rigsim.scenarios.cli.main import main
 
     src = tmp_path / "in.csv"
     src.write_text("time_s,Fz_FL [N]\n0,1\n0.001,2\n")
@@ -322,8 +322,8 @@ def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
     """The metadata keys of every fitted field (``cal_key``) are written to an RPC III file and read
     back: the format's header records hold a key of at most 32 bytes (correction/io/rpc3.py, as MTS's
     RPC III layout), which ``cal_tire_progressive_onset_rear_m`` (33) would exceed; keys stay distinct."""
-    from correction.io.rpc3 import read_rpc3, write_rpc3
-    from scenarios.records.model.family import FITTED, UNITS
+    from rigsim.correction.io.rpc3 import read_rpc3, write_rpc3
+    from rigsim.scenarios.records.model.family import FITTED, UNITS
 
     meta = {cal_key(n): f"0 {UNITS[n]}" for n in FITTED}
     assert len(meta) == len(FITTED) and cal_key("tire_progressive_onset_rear_m") == "cal_tire_prog_onset_rear_m"
@@ -335,8 +335,8 @@ def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
 def test_an_all_wheel_stiffening_in_truck_toml_is_the_rear_guess_too(tmp_path):
     """TRUCK.toml's [vehicle] tire_progressive_ratio / _onset_m (all wheels) start both axles' fits;
     a rear value given starts the rear's."""
-    from scenarios.records.model_record import first_guess as _first_guess
-    from scenarios.core.config import parse_scenario
+    from rigsim.scenarios.records.model_record import first_guess as _first_guess
+    from rigsim.scenarios.core.config import parse_scenario
 
     base = {"name": "truck", "speed_kmh": 72.0, "duration_s": 10.0, "road": {"roughness": "C"}}
     every = parse_scenario({**base, "vehicle": {"tire_progressive_ratio": 0.3, "tire_progressive_onset_m": 0.025}})
@@ -350,8 +350,8 @@ def test_an_all_wheel_stiffening_in_truck_toml_is_the_rear_guess_too(tmp_path):
 def test_a_payload_height_in_truck_toml_is_the_first_guess_and_its_mass_is_not():
     """TRUCK.toml's [vehicle] payload_z_m (a lab that measured its stack) starts the height's fit;
     payload_kg and payload_x_m come from the record's static loads, so the file's are reported unused."""
-    from scenarios.records.model_record import first_guess as _first_guess
-    from scenarios.core.config import parse_scenario
+    from rigsim.scenarios.records.model_record import first_guess as _first_guess
+    from rigsim.scenarios.core.config import parse_scenario
 
     sc = parse_scenario({"name": "truck", "speed_kmh": 72.0, "duration_s": 10.0, "road": {"roughness": "C"},
                          "vehicle": {"payload_kg": 3000.0, "payload_x_m": -1.0, "payload_z_m": 0.9}})

@@ -1,4 +1,4 @@
-"""The derived fallback (scenarios.records.model.fallback): the hybrid weighed against the linear
+"""The derived fallback (rigsim.scenarios.records.model.fallback): the hybrid weighed against the linear
 correction on the model's own runs, checked on signals whose figures are known in closed form.
 
 L is a pure gain g here (a linear correction of the actuators' amplitude loss alone) and every signal
@@ -8,7 +8,7 @@ F_model(x_ref) and (L - B) r = (g - 1) r exactly."""
 import numpy as np
 import pytest
 
-from scenarios.records.model.fallback import DLC_GOAL, HybridOutlook, hybrid_outlook
+from rigsim.scenarios.records.model.fallback import DLC_GOAL, HybridOutlook, hybrid_outlook
 
 FS = 1000.0
 T = np.arange(20_000) / FS
@@ -104,7 +104,7 @@ def test_the_linear_part_of_a_filtered_pan_motion_is_found_to_the_noise():
     # in the 30 Hz band what is left is the noise's band-limited share (11 N) within 30 %.
     from scipy import signal
 
-    from scenarios.records.model.fallback import linear_part
+    from rigsim.scenarios.records.model.fallback import linear_part
 
     rng = np.random.default_rng(0)
     x = signal.sosfilt(signal.butter(2, 20.0, fs=FS, output="sos"), rng.normal(size=(30_000, 4)), axis=0)

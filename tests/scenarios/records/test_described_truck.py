@@ -16,13 +16,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from mjcf.variant import TruckVariant
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.core.run import run
-from scenarios.records.model.calibrate import calibrate
-from scenarios.records.model.family import DEFAULT_NAMES
-from scenarios.records.model.first_guess import catalogue, description, spring_fields
-from scenarios.studies import scoring
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.records.model.calibrate import calibrate
+from rigsim.scenarios.records.model.family import DEFAULT_NAMES
+from rigsim.scenarios.records.model.first_guess import catalogue, description, spring_fields
+from rigsim.scenarios.studies import scoring
 
 TRUCKS = pathlib.Path(__file__).resolve().parents[3] / "scenarios" / "data" / "trucks"
 
@@ -88,7 +88,7 @@ def initial_friction(cal) -> float:
 
 
 def test_default_names_on_a_described_truck_fit_its_springs_an_air_axle_its_friction_and_the_roll_inertia():
-    from scenarios.records.model.calibrate import _spring_names
+    from rigsim.scenarios.records.model.calibrate import _spring_names
 
     tractor = description(load_scenario(TRUCKS / "tractor_air.toml"))
     names = _spring_names(DEFAULT_NAMES, tractor)
@@ -108,8 +108,8 @@ def test_a_wrong_description_shows_in_the_model_error_and_is_said(tractor_record
     long wheelbase, on one 5 s window; the leaves' rate, damper and friction are
     fitted, so a leaf model can take an air spring's part but for its rate's rise with load); a model
     error past the fallback's limit gets the note naming the description's fields, one within it none."""
-    from scenarios.records.model.differential import HYBRID_LIMIT
-    from scenarios.records.model_record import description_note
+    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.scenarios.records.model_record import description_note
 
     spec, plant, rig, force = tractor_record
     names = ("payload_kg", "tire_stiffness_rear_N_per_m", "spring_friction_rear_N")
@@ -138,8 +138,8 @@ def test_a_trial_truck_with_no_rest_is_the_worst_fit_not_the_end_of_the_calibrat
     it as a truck that predicts no force (zeros), so the residual is the whole measured force."""
     import numpy as np
 
-    import scenarios.records.model.problem as problem
-    from scenarios.records.model.model_runs import NoRestError, fit_window_job, window_job
+    import rigsim.scenarios.records.model.problem as problem
+    from rigsim.scenarios.records.model.model_runs import NoRestError, fit_window_job, window_job
 
     spec, plant, rig, force = tractor_record
     t, x = rig.t_s[:500], rig.signals["pan_m"][:500]

@@ -1,10 +1,10 @@
 """The hybrid model correction F_model(x_ref) + L(W(F_rig - F_model(x_a))) takes the load cells' white
-noise out of the model's residual (scenarios.records.model.differential.hybrid_correction)."""
+noise out of the model's residual (rigsim.scenarios.records.model.differential.hybrid_correction)."""
 
 import numpy as np
 from scipy import signal
 
-from scenarios.records.model.differential import HYBRID_FORMULA, hybrid_correction
+from rigsim.scenarios.records.model.differential import HYBRID_FORMULA, hybrid_correction
 
 FS = 1000.0
 N = 30_000
@@ -48,7 +48,7 @@ def test_a_model_error_is_kept():
 
 
 def test_the_noise_taken_out_is_said_per_model_wheel():
-    from scenarios.records.model_record import residual_noise_text
+    from rigsim.scenarios.records.model_record import residual_noise_text
 
     text = residual_noise_text({"fl": 99.27, "fr": None})
     assert "fl 99.27 N" in text and "fr none" in text and "rl" not in text
@@ -62,7 +62,7 @@ def test_the_model_start_up_does_not_shift_the_settled_record():
     # keeps the whole record's mean, the transient's share included, while its zero gain at the
     # lowest frequencies takes out the step between start-up and the rest: the settled samples
     # shift by tens of newtons (a truck model measured here: -24 ... -90 N, +0.4 % of the DLC).
-    from scenarios.records.model.differential import settled_mask
+    from rigsim.scenarios.records.model.differential import settled_mask
 
     t = np.arange(N) / FS
     f_a = _truck_force(1)
@@ -86,7 +86,7 @@ def test_the_load_cells_drift_is_taken_out():
     # the drift out of the residual (7-15 N of its 50 N left below 2 Hz): the model's road force
     # carries the slow force alone. Judged below 2 Hz (the white noise's few percent left are spread
     # over the whole band). The contrast: the white-noise gain alone leaves 42-55 N of it.
-    from correction.output.denoise import design_noise_gain
+    from rigsim.correction.output.denoise import design_noise_gain
 
     f_a, f_ref = _truck_force(1), _truck_force(2)
     sos = signal.butter(1, 0.1, fs=FS, output="sos")

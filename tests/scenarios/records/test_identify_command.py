@@ -1,6 +1,6 @@
 """``rigsim identify --from-file``: T_a per corner from a recorded file of a real rig, and refusals.
 
-Reference: eq. 4 (correction.output.eq4) with a known parameter set simulated by scipy from independent
+Reference: eq. 4 (rigsim.correction.output.eq4) with a known parameter set simulated by scipy from independent
 random drives stands in for the recorded rig; the command's actuators file must hold T_a whose
 frequency response matches eq. 4's (the fit's own tests pin the fit more tightly).
 """
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.output.eq4 import eq4_coefficients_from
-from scenarios.cli.main import main
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.scenarios.cli.main import main
 
 EQ4 = dict(ksv=1.0, kq_m3_s=0.0111, kc_m3_s_Pa=2.0e-12, kp_per_m=50.0, kdp_per_Pa=2.0e-8, piston_area_m2=7.43e-3,
            fluid_volume_m3=2.13e-3, bulk_modulus_Pa=1.0e9, mass_kg=500.0, damping_N_s_m=5.0e3,

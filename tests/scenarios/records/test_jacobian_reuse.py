@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scenarios.records.model.problem import REUSE_MAX, REUSE_RATIO, FitProblem
+from rigsim.scenarios.records.model.problem import REUSE_MAX, REUSE_RATIO, FitProblem
 
 
 class _Ran(Exception):

@@ -11,21 +11,21 @@ import dataclasses
 import numpy as np
 import pytest
 
-from mjcf.physics import tire_forces
-from mjcf.variant import TruckVariant
-from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
-from scenarios.core.pool import local_executor, run_jobs
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.studies import scoring
-from scenarios.records.model.calibrate import calibrate, with_sigma
-from scenarios.records.model.family import AIR_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, STATION_FITTED
-from scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
-                                                 empty_truck_kg, is_light, xml_nominal)
-from scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, correct_with_model,
+from rigsim.mjcf.physics import tire_forces
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
+from rigsim.scenarios.core.pool import local_executor, run_jobs
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies import scoring
+from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
+from rigsim.scenarios.records.model.family import AIR_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, STATION_FITTED
+from rigsim.scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
+                                                        empty_truck_kg, is_light, xml_nominal)
+from rigsim.scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, correct_with_model,
                                                              differential_correction, settled_mask)
-from scenarios.records.model.model_runs import model_scenario, pan_motion_drive
-from scenarios.records.model.score import score_correction
+from rigsim.scenarios.records.model.model_runs import model_scenario, pan_motion_drive
+from rigsim.scenarios.records.model.score import score_correction
 
 DURATION_S = 8.0
 
@@ -165,9 +165,9 @@ def test_a_malformed_record_is_refused_before_any_run(record):
 
 @pytest.mark.parametrize("drift_hz", [0.0, -0.5, float("nan"), 500.0])
 def test_a_drift_corner_outside_the_band_is_refused_before_any_run(drift_hz, monkeypatch):
-    """The hybrid's drift cut (correction.output.denoise.check_drift_hz, the noise gain's own check)
+    """The hybrid's drift cut (rigsim.correction.output.denoise.check_drift_hz, the noise gain's own check)
     refused at the call, not after minutes of calibration: the calibration is never reached."""
-    from scenarios.records.model import differential
+    from rigsim.scenarios.records.model import differential
 
     def never(*_a, **_k):
         raise AssertionError("the calibration ran")
@@ -220,7 +220,7 @@ def test_calibration_recovers_a_progressive_tire():
     """As for the cab: the road test of the medium case's plant with tires that stiffen by 40 % beyond 3 cm
     of deflection (``TruckVariant.tire_progressive_ratio``, ``tire_progressive_onset_m``), 100 N of noise;
     the ratio and onset fitted from the catalogue's +20 % at the front wheels' static load (the onset's
-    first guess, :mod:`scenarios.records.model.onset_load`: 2.66 cm), the other fields held at
+    first guess, :mod:`rigsim.scenarios.records.model.onset_load`: 2.66 cm), the other fields held at
     the plant's: both recovered within 3 % from one 3 s window (measured 0.3954 and 3.000 cm; stopped at
     4 residual evaluations the ratio is still at 0.25, at 6 at 0.38), and the fit NRMSE falls by more
     than half (0.34-0.44 to 0.05-0.06, the noise's share)."""
@@ -304,7 +304,7 @@ def test_a_payload_is_light_below_a_tenth_of_the_empty_truck():
 ], ids=["tire-and-spring-rate", "leaf-friction", "tire-damping"])
 def test_calibration_recovers_a_left_right_difference(plant, rtol, fall):
     """The per-station family (family.STATION_FITTED, fitted by default): the road test of the medium
-    case's plant whose left stations differ from their right neighbours (mjcf.stations: each factor
+    case's plant whose left stations differ from their right neighbours (rigsim.mjcf.stations: each factor
     scales the left station's value), 100 N of noise; the two left factors fitted from 1 (a symmetric
     truck), the axles' and every other value held at the plant's: both recovered, and the worst
     wheel's fit NRMSE falls to ``fall`` of where it started or below (the noise's share is left).
@@ -406,8 +406,8 @@ def test_an_empty_truck_is_held_empty_not_refused():
     calibration holds it; so is a truck up to LIGHTER_FRACTION lighter than the catalogue's (another
     body or axles); a real payload (500 kg, the loads of the catalogue truck carrying it) is still
     estimated, to within 1 %, and loads further below the empty truck's are still refused."""
-    from scenarios.records.model.first_guess import EMPTY_FRACTION, LIGHTER_FRACTION, static_guess
-    from scenarios.records.model.model_runs import static_axle_loads
+    from rigsim.scenarios.records.model.first_guess import EMPTY_FRACTION, LIGHTER_FRACTION, static_guess
+    from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
     sc = load_scenario(_paper("high_48"))
     empty = static_axle_loads(TruckVariant(payload_kg=0.0, **catalogue()), sc)
@@ -431,8 +431,8 @@ def test_the_payloads_lateral_offset_comes_from_the_left_right_moment():
     with a payload 0.2 m left or 0.4 m right give it back on the catalogue truck to within 5 mm; a
     centred payload, or one within LATERAL_FLOOR_M, is on the centreline; a moment no payload on
     the bed explains (left and right channels swapped on one axle) is refused in one sentence."""
-    from scenarios.records.model.first_guess import LATERAL_FLOOR_M, static_guess, static_lateral
-    from scenarios.records.model.model_runs import static_axle_loads
+    from rigsim.scenarios.records.model.first_guess import LATERAL_FLOOR_M, static_guess, static_lateral
+    from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
     sc = load_scenario(_paper("high_48"))
     for y in (0.2, -0.4, 0.0, 0.5 * LATERAL_FLOOR_M):
@@ -449,13 +449,13 @@ def test_the_payloads_lateral_offset_comes_from_the_left_right_moment():
 def test_a_twisted_first_pose_rests_and_runs():
     """A record whose first pan pose is twisted 45 mm on the diagonal (generalization case gen11's
     third window starts so): Newton from the mid-stroke pose finds no rest there, the continuation
-    from mid-stroke does (mjcf.physics.static_equilibrium), with every tire loaded and the loads
+    from mid-stroke does (rigsim.mjcf.physics.static_equilibrium), with every tire loaded and the loads
     carrying the truck (their sum the same as on level pans); the twist moves load onto one diagonal.
     A pose that even the continuation cannot rest on starts on its planar part, twisted in over the
     settling lead-in (a half-cosine, at rest at both ends): that drive checked on this pose. The run's
     forces are finite and every wheel stays loaded."""
-    from scenarios.core.rig import Rig
-    from scenarios.records.model.model_runs import model_forces, pan_motion_drive, planar_part
+    from rigsim.scenarios.core.rig import Rig
+    from rigsim.scenarios.records.model.model_runs import model_forces, pan_motion_drive, planar_part
 
     sc = load_scenario(_paper("high_48"))
     rig = Rig(sc, hydraulic=False)
@@ -485,7 +485,7 @@ def test_formal_uncertainties_are_the_least_squares_standard_errors():
     sqrt(s^2 (X^T X)^-1) with s^2 = RSS / (m - p) (e.g. Montgomery & Peck, Introduction to Linear
     Regression Analysis, eq. 2.14); with a white residual the block-robust one agrees to sampling
     error, and a residual correlated over a block makes the robust one larger."""
-    from scenarios.records.model.uncertainty import uncertainties
+    from rigsim.scenarios.records.model.uncertainty import uncertainties
 
     rng = np.random.default_rng(7)
     x = np.linspace(0.0, 1.0, 4000)

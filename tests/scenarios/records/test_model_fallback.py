@@ -13,9 +13,9 @@ import math
 
 import pytest
 
-from scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, HYBRID_LIMIT, OUTLIER_RATIO, fallback_reason,
-                                                  outlier_wheel, wheels_reason)
-from scenarios.records.model.result import Calibration, fitted_text
+from rigsim.scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, HYBRID_LIMIT, OUTLIER_RATIO, fallback_reason,
+                                                         outlier_wheel, wheels_reason)
+from rigsim.scenarios.records.model.result import Calibration, fitted_text
 
 
 def _cal(fit, noise=(), converged=True, band=(), band_noise=()) -> Calibration:
@@ -102,8 +102,8 @@ def test_the_fit_table_writes_each_value_to_the_digits_its_sigma_supports():
 
 @pytest.mark.parametrize("wheels", [(), ("fl", "fl"), ("fl", "xx")])
 def test_the_wheels_to_fit_are_checked_before_any_run(wheels):
-    from scenarios.core.config import ScenarioError
-    from scenarios.records.model.calibrate import calibrate
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.records.model.calibrate import calibrate
 
     with pytest.raises(ScenarioError, match="wheels must be distinct corners of fl, fr, rl, rr"):
         calibrate([0.0, 0.001], [[0.0] * 4] * 2, [[1e4] * 4] * 2, base_scenario=None, wheels=wheels)
@@ -116,9 +116,9 @@ def test_the_cab_is_chosen_on_the_calibration_without_the_outlier_wheel(monkeypa
     error is still 9.4 but no longer fitted, does not (it chooses the cab)."""
     import numpy as np
 
-    from mjcf.names import CORNERS
-    from scenarios.core.config import load_scenario, paper_scenarios
-    import scenarios.records.model.differential as differential
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    import rigsim.scenarios.records.model.differential as differential
 
     said = []
 

@@ -1,4 +1,4 @@
-"""The progressive tire's onset searched as a wheel load (scenarios.records.model.onset_load).
+"""The progressive tire's onset searched as a wheel load (rigsim.scenarios.records.model.onset_load).
 
 Pinned by hand: loads built so that their smallest, largest and median values are known, and the
 field mapping's derivatives against central differences of the fields themselves."""
@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.records.model.problem import FitProblem
-from scenarios.records.model.onset_load import ONSET_STIFFNESS, load_guess, load_range
-from scenarios.records.model.uncertainty import uncertainties
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.records.model.problem import FitProblem
+from rigsim.scenarios.records.model.onset_load import ONSET_STIFFNESS, load_guess, load_range
+from rigsim.scenarios.records.model.uncertainty import uncertainties
 
 FRONT, REAR = "tire_progressive_onset_m", "tire_progressive_onset_rear_m"
 
@@ -88,8 +88,8 @@ def test_the_sigmas_go_through_the_mapping():
 
 def test_an_onset_stays_within_its_bounds_at_a_soft_kt():
     """A large load over a kt at the bottom of its search range would put the onset past
-    mjcf.variant.BOUNDS (0.1 m), which TruckVariant refuses: the fields stop it there."""
-    from mjcf.variant import BOUNDS
+    rigsim.mjcf.variant.BOUNDS (0.1 m), which TruckVariant refuses: the fields stop it there."""
+    from rigsim.mjcf.variant import BOUNDS
 
     names = ("tire_stiffness_front_N_per_m", FRONT)
     prob = problem(names, {"tire_stiffness_front_N_per_m": 7.65e5, FRONT: 0.03}, {FRONT: (40e3, 10e3)})

@@ -1,6 +1,6 @@
 """The records API (scenarios/records/api.py): a lab's script corrects a record in three lines.
 
-    record = read_record(path); result = correct_record(record, ...); result.write(out)
+    record = read_record(path); result = correct_record(record, LinearOptions(...)); result.write(out)
 
 Expected values:
 
@@ -16,6 +16,7 @@ Expected values:
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import re
@@ -24,11 +25,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from correction.output.eq4 import eq4_coefficients_from
-from correction.output.lowpass import BAND_HZ
-from scenarios.cli.main import main
-from scenarios.core.config import ScenarioError
-from scenarios.records import correct_record, identify_record, read_record
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.lowpass import BAND_HZ
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim import LinearOptions, ModelOptions, correct_record, identify_record, read_record
 
 EQ4_VALUES = dict(ksv=1.0, kq_m3_s=0.0109, kc_m3_s_Pa=1.26e-11, kp_per_m=50.0, kdp_per_Pa=2.0e-8,
                   piston_area_m2=7.43e-3, fluid_volume_m3=2.13e-3, bulk_modulus_Pa=1.0e9, mass_kg=500.0,
@@ -47,7 +48,7 @@ def _write_csv(path, names, columns) -> None:
 def rig(tmp_path_factory):
     """Four wheels, each rig force the road force through its own eq. 4 (scipy), a random drive and
     the pan through the first T_a; the per-corner and the one-T_a actuator files."""
-    from correction.io.actuator_file import write_actuators_file
+    from rigsim.correction.io.actuator_file import write_actuators_file
 
     d = tmp_path_factory.mktemp("rig")
     rng = np.random.default_rng(42)
@@ -67,17 +68,17 @@ def rig(tmp_path_factory):
     return d
 
 
-CASES = {  # CLI flags -> the same options as keywords
-    "per_corner": (["--actuators", "{d}/acts.toml"], dict(actuators="{d}/acts.toml")),
+CASES = {  # CLI flags -> the same as LinearOptions' fields and correct_record's keywords
+    "per_corner": (["--actuators", "{d}/acts.toml"], dict(actuators="{d}/acts.toml"), {}),
     "one_ta_paper_causal_mark": (["--actuator", "{d}/act.toml", "--columns", "Fz_FR,rl-load", "--lowpass", "paper",
                                   "--mode", "causal", "--transient", "mark"],
-                                 dict(actuator="{d}/act.toml", columns=["Fz_FR", "rl-load"], lowpass="paper",
-                                      mode="causal", transient="mark")),
+                                 dict(actuator="{d}/act.toml", lowpass="paper", mode="causal"),
+                                 dict(columns=["Fz_FR", "rl-load"], transient="mark")),
     "identified_keep_25hz": (["--identify", "drive_m,PAN_M", "--columns", "Fz_FR", "--transient", "keep",
                               "--lowpass-hz", "25"],
-                             dict(identify=("drive_m", "PAN_M"), columns="Fz_FR", transient="keep", lowpass_hz=25.0)),
+                             dict(identify=("drive_m", "PAN_M"), lowpass_hz=25.0), dict(columns="Fz_FR", transient="keep")),
     "map": (["--actuators", "{d}/acts.toml", "--map", "fl=Fz_FR,rr=RL-LOAD"],
-            dict(actuators="{d}/acts.toml", corner_map={"fl": "Fz_FR", "rr": "RL-LOAD"})),
+            dict(actuators="{d}/acts.toml"), dict(corner_map={"fl": "Fz_FR", "rr": "RL-LOAD"})),
 }
 
 
@@ -87,27 +88,29 @@ def _fill(value, d):
 
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_the_three_lines_write_the_file_rigsim_correct_writes(rig, case, tmp_path, capsys):
-    flags, keywords = CASES[case]
+    flags, fields, keywords = CASES[case]
     src = str(rig / "rig.csv")
     assert main(["correct", src, *[_fill(f, rig) for f in flags], "-o", str(tmp_path / "cli.csv")]) == 0
     printed = capsys.readouterr().out
 
     record = read_record(src)
-    result = correct_record(record, **{k: _fill(v, rig) for k, v in keywords.items()})
+    options = LinearOptions(**{k: _fill(v, rig) for k, v in fields.items()})
+    result = correct_record(record, options, **{k: _fill(v, rig) for k, v in keywords.items()})
     result.write(tmp_path / "api.csv")
 
     assert (tmp_path / "api.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()
     assert result.table() in printed and result.description in printed
     assert result.method == "linear" and result.reason == "" and result.corrected_N.shape == (12000, len(result.channels))
     # the comparison can fail: another corner gives another file
-    change = {"lowpass_hz": 24.0} if keywords.get("lowpass", "regularized") == "regularized" else {"mode": "zerophase"}
-    other = correct_record(record, **{**{k: _fill(v, rig) for k, v in keywords.items()}, **change})
+    change = {"lowpass_hz": 24.0} if options.lowpass == "regularized" else {"mode": "zerophase"}
+    other = correct_record(record, dataclasses.replace(options, **change),
+                           **{k: _fill(v, rig) for k, v in keywords.items()})
     other.write(tmp_path / "other.csv")
     assert (tmp_path / "other.csv").read_bytes() != (tmp_path / "cli.csv").read_bytes()
 
 
 def test_the_result_holds_the_loads_as_data_and_refuses_to_overwrite(rig, tmp_path):
-    result = correct_record(read_record(rig / "rig.csv"), actuators=str(rig / "acts.toml"))
+    result = correct_record(read_record(rig / "rig.csv"), LinearOptions(actuators=str(rig / "acts.toml")))
     assert result.channels == ("tire_force_fl_N", "Fz_FR", "rl-load", "force_RR_N")
     assert result.corners == ("fl", "fr", "rl", "rr") and result.fs_hz == FS
     s = result.settled
@@ -127,13 +130,17 @@ def test_the_result_holds_the_loads_as_data_and_refuses_to_overwrite(rig, tmp_pa
 def test_messages_name_the_keywords(rig):
     record = read_record(rig / "rig.csv")
     with pytest.raises(ScenarioError, match=r"^give exactly one of actuator='ACT.toml', actuators='ACTS.toml' and "):
-        correct_record(record)
+        correct_record(record, LinearOptions())
     with pytest.raises(ScenarioError, match=r"^corner_map maps corners of a per-corner file: use it with actuators="):
-        correct_record(record, actuator=str(rig / "act.toml"), corner_map={"fl": "Fz_FR"})
+        correct_record(record, LinearOptions(actuator=str(rig / "act.toml")), corner_map={"fl": "Fz_FR"})
     with pytest.raises(ScenarioError, match=r"^lowpass_hz must be a finite number of Hz > 0, got nan$"):
-        correct_record(record, actuator=str(rig / "act.toml"), lowpass_hz=math.nan)
+        correct_record(record, LinearOptions(actuator=str(rig / "act.toml"), lowpass_hz=math.nan))
     with pytest.raises(ScenarioError, match=r"fix: corner_map='xx=COLUMN'"):
-        correct_record(record, actuators={"fl": ([1.0], [1.0]), "xx": ([1.0], [1.0])})
+        correct_record(record, LinearOptions(actuators={"fl": ([1.0], [1.0]), "xx": ([1.0], [1.0])}))
+    with pytest.raises(ScenarioError, match=r"^options must be rigsim.LinearOptions\(actuators=...\) .*got 'acts.toml'"):
+        correct_record(record, "acts.toml")
+    with pytest.raises(ScenarioError, match=r"^linear must be a rigsim.LinearOptions .*got 'acts.toml'"):
+        correct_record(record, ModelOptions("truck.toml", pairs="fl=a:b", linear="acts.toml"))
 
 
 @pytest.fixture(scope="module")
@@ -159,7 +166,7 @@ def _corner_of(result, ta) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("corner_hz", [None, 18.0, 40.0])
 def test_lowpass_hz_is_the_butterworth_corner_of_the_correction(white, corner_hz):
     record, ta = white
-    result = correct_record(record, actuator=ta, lowpass_hz=corner_hz, transient="keep")
+    result = correct_record(record, LinearOptions(actuator=ta, lowpass_hz=corner_hz), transient="keep")
     f, got = _corner_of(result, ta)
     fc = BAND_HZ if corner_hz is None else corner_hz
     _, butter = signal.freqs(*signal.butter(6, 2 * np.pi * fc, analog=True), worN=2 * np.pi * f)
@@ -208,7 +215,7 @@ def test_quiet_is_accepted_by_the_linear_correction(rig, tmp_path, capsys):
 
 
 def test_identify_record_gives_the_actuators_file_of_rigsim_identify(rig, tmp_path):
-    from correction.io.actuator_file import write_actuators_file
+    from rigsim.correction.io.actuator_file import write_actuators_file
 
     src = str(rig / "rig.csv")
     assert main(["identify", "--from-file", src, "--pairs", "fl=drive_m:pan_m", "--out", str(tmp_path / "id"),
@@ -231,8 +238,8 @@ def truck_record(tmp_path_factory):
 
     from test_correct_model import _write_csv as write_lab_csv
 
-    from scenarios.core.config import load_scenario, paper_scenarios
-    from scenarios.core.run import run
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    from rigsim.scenarios.core.run import run
 
     sc = dataclasses.replace(load_scenario(paper_scenarios()[2]), duration_s=10.5)
     res = run(sc, "rig")
@@ -249,7 +256,7 @@ def truck_record(tmp_path_factory):
 
 
 def test_the_model_correction_gives_the_values_of_rigsim_correct_model(truck_record, tmp_path, capsys, monkeypatch):
-    from scenarios.records.model import differential
+    from rigsim.scenarios.records.model import differential
 
     calls, real = [], differential.calibrate_cab
 
@@ -273,8 +280,8 @@ def test_the_model_correction_gives_the_values_of_rigsim_correct_model(truck_rec
                  "--transient", "mark"]) == 0
     printed, progress = capsys.readouterr()
     lines = []
-    result = correct_record(read_record(src), model=truck, pairs=pairs, calibration_windows=1, cab="held",
-                            workers=2, transient="mark", progress=lines.append)
+    options = ModelOptions(truck, pairs=pairs, calibration_windows=1, cab="held", workers=2)
+    result = correct_record(read_record(src), options, transient="mark", progress=lines.append)
     result.write(tmp_path / "api.csv")
     assert len(calls) == 1 and result.method == "model" and result.reason == ""
     assert (tmp_path / "api.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()

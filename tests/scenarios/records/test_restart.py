@@ -1,5 +1,5 @@
 """A calibration refused for its model error is searched again, the leaf springs sliding and then each
-axle's stations held alike (scenarios.records.model.restart), and the correction uses the best fit.
+axle's stations held alike (rigsim.scenarios.records.model.restart), and the correction uses the best fit.
 
 Hand-made calibrations; the record behind the rule (an empty truck on a class D road at 100 km/h,
 in the model family, fitted to a model error of 0.45 from the catalogue's start and to the load
@@ -14,11 +14,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
-from scenarios.records.model import differential
-from scenarios.records.model.differential import HYBRID_LIMIT
-from scenarios.records.model.restart import SLIDING_START, calibrate_again, sliding_start
-from scenarios.records.model.result import Calibration
+from rigsim.scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
+from rigsim.scenarios.records.model import differential
+from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+from rigsim.scenarios.records.model.restart import SLIDING_START, calibrate_again, sliding_start
+from rigsim.scenarios.records.model.result import Calibration
 
 NAMES = ("tire_stiffness_rear_N_per_m", "spring_friction_front_N", "spring_friction_rear_N")
 FIRST = (2.07e6, 850.0, 2300.0)
@@ -65,7 +65,7 @@ def test_the_better_fit_is_kept_and_both_are_counted():
 def _refuse_every_wheel(monkeypatch):
     """The hybrid's weighing (fallback.hybrid_outlook) refusing every wheel, as it does where the model's
     residual undoes the linear correction's own error: these tests are about the search before it."""
-    from scenarios.records.model.fallback import HybridOutlook
+    from rigsim.scenarios.records.model.fallback import HybridOutlook
 
     four = np.full(4, 0.1)
     monkeypatch.setattr(differential, "hybrid_outlook",
@@ -154,8 +154,8 @@ def test_a_fit_still_refused_is_searched_with_the_stations_alike():
 
 def test_the_symmetric_calibration_fits_no_station(monkeypatch):
     """calibrate_cab(symmetric=True): every calibration it runs leaves family.STATION_FITTED out."""
-    from scenarios.records.model import cab_choice
-    from scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
+    from rigsim.scenarios.records.model import cab_choice
+    from rigsim.scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
 
     seen = []
 

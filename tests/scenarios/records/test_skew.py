@@ -1,11 +1,11 @@
-"""A channel skew read as tire damping (scenarios.records.model.skew)."""
+"""A channel skew read as tire damping (rigsim.scenarios.records.model.skew)."""
 
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from scenarios.records.model.skew import TIRE_TIME_CONSTANT_S, skew_note, tire_time_constants
+from rigsim.scenarios.records.model.skew import TIRE_TIME_CONSTANT_S, skew_note, tire_time_constants
 
 
 def test_a_force_late_by_tau_fits_as_tire_damping_smaller_by_kt_tau():

@@ -5,7 +5,7 @@ Reference: the project's simulated rig (the paper's high-roughness 72 km/h case,
 hydraulic rig, independent left and right tracks) written as a lab's CSV (drives ``Soll_XX`` and
 LVDTs ``Weg_XX`` in mm, forces ``Fz_XX`` in kN): its own pairs identify T_a with held-out errors of
 0.03-0.05 (docs/results/walkthrough_identify.md), the same pairs swapped give 1.35-1.39 and a phase
-that leads the drive (:mod:`correction.identification.plausibility`).
+that leads the drive (:mod:`rigsim.correction.identification.plausibility`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from scenarios.cli.main import main
+from rigsim.scenarios.cli.main import main
 
 CORNERS = ("fl", "fr", "rl", "rr")
 
@@ -30,8 +30,8 @@ def _pairs(**override) -> str:
 def lab(tmp_path_factory):
     from test_correct_model import _write_csv
 
-    from scenarios.core.config import load_scenario, paper_scenarios
-    from scenarios.core.run import run
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    from rigsim.scenarios.core.run import run
 
     scenario = paper_scenarios()[2]
     res = run(dataclasses.replace(load_scenario(scenario), duration_s=20.0), "rig")
@@ -61,8 +61,8 @@ def test_swapped_pairs_are_refused_naming_the_corner_and_nothing_is_written(lab,
 
 def _no_fit(monkeypatch):
     """Make any T_a fit or model calibration fail the test: a refusal must come before them."""
-    from scenarios.records import recorded
-    from scenarios.records.model import differential
+    from rigsim.scenarios.records import recorded
+    from rigsim.scenarios.records.model import differential
 
     def never(*args, **kw):
         raise AssertionError("reached the identification or the calibration")
@@ -94,7 +94,7 @@ def test_the_same_channel_twice_is_refused_by_the_corrections_at_once(lab, tmp_p
 
 def test_swapped_pairs_are_refused_by_the_corrections_before_any_calibration(lab, tmp_path, capsys, one_line,
                                                                              monkeypatch):
-    from scenarios.records.model import differential
+    from rigsim.scenarios.records.model import differential
 
     monkeypatch.setattr(differential, "correct_with_model", lambda *a, **k: pytest.fail("calibrated"))
     out = tmp_path / "out.csv"

@@ -12,13 +12,13 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjcf.build import build_model
-from mjcf.names import CORNERS
-from mjcf.physics import RigIndex, static_equilibrium
-from scenarios.core.config import parse_scenario
-from scenarios.core.poses import PoseRecorder
-from scenarios.review.recording import warm_up, write_recording
-from scenarios.core.run import run
+from rigsim.mjcf.build import build_model
+from rigsim.mjcf.names import CORNERS
+from rigsim.mjcf.physics import RigIndex, static_equilibrium
+from rigsim.scenarios.core.config import parse_scenario
+from rigsim.scenarios.core.poses import PoseRecorder
+from rigsim.scenarios.review.recording import warm_up, write_recording
+from rigsim.scenarios.core.run import run
 
 rr = pytest.importorskip("rerun")
 pa = pytest.importorskip("pyarrow")
@@ -284,8 +284,8 @@ def test_a_run_without_recording_imports_no_rerun(tmp_path):
                     '[road]\nroughness = "C"\n')
     code = (
         "import sys\n"
-        "from scenarios.cli.main import main\n"
-        "import scenarios.review.recording\n"
+        "from rigsim.scenarios.cli.main import main\n"
+        "import rigsim.scenarios.review.recording\n"
         f"rc = main(['run', {str(toml)!r}, '--mode', 'road', '--out', {str(tmp_path / 'out')!r}, '--quiet'])\n"
         "assert rc == 0, rc\n"
         "loaded = sorted(m for m in sys.modules if m.split('.')[0] in ('rerun', 'rerun_bindings'))\n"
@@ -298,7 +298,7 @@ def test_a_run_without_recording_imports_no_rerun(tmp_path):
 
 
 def test_viewer_opened_only_when_asked(runs, tmp_path, monkeypatch):
-    import scenarios.review.recording as recording
+    import rigsim.scenarios.review.recording as recording
 
     opened = []
     monkeypatch.setattr(recording, "open_viewer", lambda path: opened.append(pathlib.Path(path)))

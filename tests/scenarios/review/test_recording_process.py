@@ -1,4 +1,4 @@
-"""The recording process of ``rigsim run --rrd`` (:mod:`scenarios.review.recording_process`): it
+"""The recording process of ``rigsim run --rrd`` (:mod:`rigsim.scenarios.review.recording_process`): it
 writes what one process writes, reports its errors as one sentence, leaves nothing when it fails,
 keeps rerun out of the command's own process, and does not outlive the command."""
 
@@ -19,10 +19,10 @@ import shutil
 
 import pytest
 
-from scenarios.core.config import parse_scenario
-from scenarios.core.run import run
-from scenarios.review.recording import write_recording
-from scenarios.review.recording_process import RecordingError, RecordingProcess
+from rigsim.scenarios.core.config import parse_scenario
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.review.recording import write_recording
+from rigsim.scenarios.review.recording_process import RecordingError, RecordingProcess
 from tests.scenarios.review.test_recording import ROOT, SCENARIO, read_rrd, sine_poses
 
 rr = pytest.importorskip("rerun")
@@ -151,7 +151,7 @@ def test_a_recording_run_imports_no_rerun_in_its_own_process(tmp_path):
     out = tmp_path / "out"
     code = (
         "import sys\n"
-        "from scenarios.cli.main import main\n"
+        "from rigsim.scenarios.cli.main import main\n"
         "rc = main(['run', 's.toml', '--mode', 'rig', '--out', 'out', '--rrd', 'out/run.rrd', '--quiet'])\n"
         "assert rc == 0, rc\n"
         "loaded = sorted(m for m in sys.modules if m.split('.')[0] in ('rerun', 'rerun_bindings', 'pandas'))\n"
@@ -178,8 +178,8 @@ def _fake_run(result, before=lambda: None):
 
 def test_a_failing_recording_process_leaves_nothing(runs, tmp_path, monkeypatch, capsys):
     """An error in the child: one sentence, exit 1, neither --out nor --rrd nor a temporary file."""
-    from scenarios.cli.main import main
-    from scenarios.core import run as run_module
+    from rigsim.scenarios.cli.main import main
+    from rigsim.scenarios.core import run as run_module
 
     (tmp_path / "s.toml").write_text(TOML)
     broken = dataclasses.replace(runs[1], poses="not a pose track")  # the child's log_case fails on it
@@ -195,8 +195,8 @@ def test_a_failing_recording_process_leaves_nothing(runs, tmp_path, monkeypatch,
 def test_a_recording_that_cannot_be_written_is_exit_2_and_leaves_nothing(runs, tmp_path, monkeypatch, capsys):
     """The child's OSError (its folder became a file during the run) reaches the command as the
     parent's own would: exit 2, one sentence, nothing written."""
-    from scenarios.cli.main import main
-    from scenarios.core import run as run_module
+    from rigsim.scenarios.cli.main import main
+    from rigsim.scenarios.core import run as run_module
 
     (tmp_path / "s.toml").write_text(TOML)
     sub = tmp_path / "sub"
@@ -215,8 +215,8 @@ def test_a_recording_that_cannot_be_written_is_exit_2_and_leaves_nothing(runs, t
 
 
 def test_an_rrd_naming_the_scenario_is_refused_even_with_force(tmp_path, monkeypatch, capsys):
-    from scenarios.cli.main import main
-    from scenarios.core import run as run_module
+    from rigsim.scenarios.cli.main import main
+    from rigsim.scenarios.core import run as run_module
 
     monkeypatch.setattr(run_module, "run", lambda *a, **k: pytest.fail("the run started"))
     toml = tmp_path / "s.toml"
@@ -233,7 +233,7 @@ def test_no_recording_process_outlives_its_command(tmp_path, sig):
     (no cleanup possible): the recording process still ends by itself (its pipe to the parent
     closes)."""
     (tmp_path / "s.toml").write_text(TOML)
-    argv = [sys.executable, "-m", "scenarios.cli.main", "run", "s.toml", "--mode", "rig", "--duration-s", "600",
+    argv = [sys.executable, "-m", "rigsim.scenarios.cli.main", "run", "s.toml", "--mode", "rig", "--duration-s", "600",
             "--out", "out", "--rrd", "out/run.rrd", "--quiet"]
     parent = subprocess.Popen(argv, cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -255,13 +255,13 @@ def test_no_recording_process_outlives_its_command(tmp_path, sig):
 
 
 def test_the_recording_process_loads_no_simulator():
-    """What the child imports to write a recording (``scenarios.review.recording`` and rerun's
+    """What the child imports to write a recording (``rigsim.scenarios.review.recording`` and rerun's
     warm-up) loads neither MuJoCo nor numba nor scipy: it unpickles poses the run took and steps
     nothing, and what it imports runs on the core beside the run (mujoco's import alone is ~0.2 s of CPU)."""
     code = ("import sys\n"
-            "from scenarios.review.recording_process import _NoPandas\n"
+            "from rigsim.scenarios.review.recording_process import _NoPandas\n"
             "sys.meta_path.insert(0, _NoPandas)\n"
-            "from scenarios.review import recording\n"
+            "from rigsim.scenarios.review import recording\n"
             "recording.warm_up()\n"
             "print(sorted(m for m in ('mujoco', 'numba', 'scipy', 'pandas') if m in sys.modules))\n")
     proc = subprocess.run([sys.executable, "-c", code], env=ENV, capture_output=True, text=True)

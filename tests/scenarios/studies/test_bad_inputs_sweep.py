@@ -31,9 +31,9 @@ import tomllib
 
 import pytest
 
-from scenarios.cli.main import main
-from scenarios.studies.sweep.grid import MAX_CASES
-from scenarios.studies.sweep.scheduler import CONNECT_TIMEOUT_S
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.studies.sweep.grid import MAX_CASES
+from rigsim.scenarios.studies.sweep.scheduler import CONNECT_TIMEOUT_S
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 LOOPBACK = "127.0.0.1"
@@ -65,10 +65,10 @@ def _env(**extra: str) -> dict[str, str]:
 
 
 def _rigsim(args: list[str], cwd: pathlib.Path, timeout_s: float) -> tuple[subprocess.CompletedProcess, float]:
-    """``python -m scenarios.cli.main ARGS``, killed after ``timeout_s`` (the test then fails)."""
+    """``python -m rigsim.scenarios.cli.main ARGS``, killed after ``timeout_s`` (the test then fails)."""
     t0 = time.monotonic()
     try:
-        proc = subprocess.run([sys.executable, "-m", "scenarios.cli.main", *args], check=False, cwd=cwd,
+        proc = subprocess.run([sys.executable, "-m", "rigsim.scenarios.cli.main", *args], check=False, cwd=cwd,
                               env=_env(DASK_CONFIG=str(cwd / "no-dask-config")), capture_output=True, text=True,
                               timeout=timeout_s)
     except subprocess.TimeoutExpired as exc:
@@ -105,8 +105,8 @@ def test_the_cap_is_checked_from_the_lengths_before_any_value(tmp_path):
     """In memory (no TOML parse): every refusal within a second, whatever the size of the lists."""
     code = textwrap.dedent("""
         import json, time
-        from scenarios.core.config import ScenarioError
-        from scenarios.studies.sweep.grid import parse_grid
+        from rigsim.scenarios.core.config import ScenarioError
+        from rigsim.scenarios.studies.sweep.grid import parse_grid
 
         base = {"sweep": {"name": "t"}, "base": {"name": "t", "speed_kmh": 72.0, "duration_s": 5.0,
                                                  "road": {"roughness": "high"}}}
@@ -290,9 +290,9 @@ def slow_payload(case_id, doc, source, settings):
 
 
 if os.environ.pop("RIGSIM_SWEEP_SIGTERM_TEST", None) == "1":
-    import scenarios.studies.sweep.run
+    import rigsim.scenarios.studies.sweep.run
 
-    scenarios.studies.sweep.run.evaluate_payload = slow_payload
+    rigsim.scenarios.studies.sweep.run.evaluate_payload = slow_payload
 """
 
 
@@ -307,7 +307,7 @@ def _terminated_sweep(tmp_path: pathlib.Path, name: str) -> tuple[int, str]:
     out = tmp_path / name
     env = _env(RIGSIM_SWEEP_SIGTERM_TEST="1", MUJOCO_GL="disable")
     env["PYTHONPATH"] = os.pathsep.join([str(hook), env["PYTHONPATH"]])
-    script = "import sys\nfrom scenarios.cli.main import main\nsys.exit(main())\n"
+    script = "import sys\nfrom rigsim.scenarios.cli.main import main\nsys.exit(main())\n"
     proc = subprocess.Popen([sys.executable, "-c", script, "sweep", str(grid), "--out", str(out), "--jobs", "2"],
                             cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -331,8 +331,8 @@ def test_an_interrupted_sweep_leaves_the_cases_not_started_to_the_executors_owne
     and one cancelled from the main thread makes it raise InvalidStateError (a traceback after
     "rigsim: terminated", whenever the threads interleave so). The owner (``local_executor``,
     ``dask_executor``) cancels them."""
-    from scenarios.studies.sweep import run as sweep_run
-    from scenarios.studies.sweep.grid import parse_grid
+    from rigsim.scenarios.studies.sweep import run as sweep_run
+    from rigsim.scenarios.studies.sweep.grid import parse_grid
 
     release = threading.Event()
 

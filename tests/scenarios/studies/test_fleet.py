@@ -1,7 +1,7 @@
 """The fleet suite's trucks (scenarios/studies/model_suite/fleet.py, scenarios/data/suites/fleet.toml).
 
 References: the data file's own ranges (every drawn value inside them), the spec sheet's fields
-(:data:`mjcf.description.DESCRIPTION_FIELDS`, nothing else a lab would not know), the plant's
+(:data:`rigsim.mjcf.description.DESCRIPTION_FIELDS`, nothing else a lab would not know), the plant's
 structure (every plant carries what the model family lacks), the determinism of a seed.
 """
 
@@ -11,12 +11,12 @@ import dataclasses
 
 import pytest
 
-from mjcf.description import DESCRIPTION_FIELDS
-from mjcf.standing import check_stands
-from mjcf.variant import TruckVariant
-from scenarios.core.lab import TYPICAL_LAB
-from scenarios.records.model.first_guess import description
-from scenarios.studies.model_suite.fleet import fleet_ranges, fleet_trucks
+from rigsim.mjcf.description import DESCRIPTION_FIELDS
+from rigsim.mjcf.standing import check_stands
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.lab import TYPICAL_LAB
+from rigsim.scenarios.records.model.first_guess import description
+from rigsim.scenarios.studies.model_suite.fleet import fleet_ranges, fleet_trucks
 
 N = 8
 
@@ -84,8 +84,8 @@ def test_the_lab_chain_is_off_its_nominal_settings_within_tolerance(fleet):
 def test_a_sweep_runs_over_the_spec_sheets_words_and_refuses_a_wrong_one():
     """Sweep axes over the description's word fields: each case's truck has its word; a word the field
     does not take is refused naming the case and the field, before anything runs."""
-    from scenarios.core.config import ScenarioError
-    from scenarios.studies.sweep.grid import parse_grid
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.studies.sweep.grid import parse_grid
 
     doc = {"sweep": {"name": "kinds"},
            "base": {"name": "kinds", "speed_kmh": 60.0, "duration_s": 10.0, "road": {"roughness": "C"},

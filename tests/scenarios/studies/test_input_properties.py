@@ -16,11 +16,11 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from correction.io.actuator_file import (ActuatorFileError, parse_actuator, read_actuators_file,  # noqa: E402
+from rigsim.correction.io.actuator_file import (ActuatorFileError, parse_actuator, read_actuators_file,  # noqa: E402
                                       write_actuators_file)
-from mjcf.names import CORNERS  # noqa: E402
-from scenarios.core.config import ScenarioError, parse_scenario  # noqa: E402
-from scenarios.studies.sweep.grid import parse_grid  # noqa: E402
+from rigsim.mjcf.names import CORNERS  # noqa: E402
+from rigsim.scenarios.core.config import ScenarioError, parse_scenario  # noqa: E402
+from rigsim.scenarios.studies.sweep.grid import parse_grid  # noqa: E402
 
 SETTINGS = settings(max_examples=1000, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 

@@ -1,7 +1,7 @@
 """The mismatch suite's plant trucks: seeded, inside their data file's ranges, always valid trucks.
 
 Reference: the data file itself, read here with tomllib (not through the module), and the bounds
-mjcf.variant.TruckVariant and mjcf.stations accept.
+rigsim.mjcf.variant.TruckVariant and rigsim.mjcf.stations accept.
 """
 
 from __future__ import annotations
@@ -12,17 +12,17 @@ import tomllib
 import numpy as np
 import pytest
 
-from mjcf.build import nominal_values
-from mjcf.names import CORNERS
-from mjcf.stations import STATION_FACTORS, station_factor_field
-from mjcf.variant import BOUNDS, TruckVariant
-from scenarios.studies.model_suite.mismatch import _range, draw_plant, mismatch_plants
-from scenarios.studies.suites import pick_cases
+from rigsim.mjcf.build import nominal_values
+from rigsim.mjcf.names import CORNERS
+from rigsim.mjcf.stations import STATION_FACTORS, station_factor_field
+from rigsim.mjcf.variant import BOUNDS, TruckVariant
+from rigsim.scenarios.studies.model_suite.mismatch import _range, draw_plant, mismatch_plants
+from rigsim.scenarios.studies.suites import pick_cases
 
 
 @pytest.fixture(scope="module")
 def doc():
-    path = importlib.resources.files("scenarios").joinpath("data", "suites", "mismatch_plants.toml")
+    path = importlib.resources.files("rigsim.scenarios").joinpath("data", "suites", "mismatch_plants.toml")
     return tomllib.loads(path.read_text(encoding="utf-8"))
 
 

@@ -16,14 +16,14 @@ import tomllib
 import numpy as np
 import pytest
 
-from mjcf.names import CORNERS
-from scenarios.cli.main import main
-from scenarios.core.config import load_scenario
-from scenarios.core.results import write_run
-from scenarios.core.rig import Rig
-from scenarios.core.run import run
-from scenarios.studies.identify.compute import identify_rig
-from scenarios.studies.scoring import BEST, score_pair
+from rigsim.mjcf.names import CORNERS
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import load_scenario
+from rigsim.scenarios.core.results import write_run
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.identify.compute import identify_rig
+from rigsim.scenarios.studies.scoring import BEST, score_pair
 
 SCENARIO = """
 name = "one-correction"
@@ -87,8 +87,8 @@ def test_identify_then_correct_gives_the_studys_corrected_forces(case, capsys):
 def test_paper_method_through_the_command_matches_the_study(case, tmp_path):
     """eq. 4 with the paper's low-pass, causal: the study's T_a written as an actuators file and
     applied by ``rigsim correct`` give the study's corrected forces."""
-    from correction.io.actuator_file import write_actuators_file
-    from scenarios.studies.scoring import PAPER
+    from rigsim.correction.io.actuator_file import write_actuators_file
+    from rigsim.scenarios.studies.scoring import PAPER
 
     d, _, s, road, rig = case
     study = score_pair(road, rig, Rig(s), methods=(PAPER,), noise_N=0.0, seed=s.seed)

@@ -7,9 +7,9 @@ import json
 
 import numpy as np
 
-from scenarios.core.files import to_json
-from scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
-from scenarios.studies.paper.model import ModelScore, model_table
+from rigsim.scenarios.core.files import to_json
+from rigsim.scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
+from rigsim.scenarios.studies.paper.model import ModelScore, model_table
 
 
 def _calibration(fit):
@@ -60,7 +60,7 @@ def test_paper_json_entry_holds_means_wheels_and_the_calibration():
 def test_paper_offers_the_model_flag():
     import argparse
 
-    from scenarios.studies.paper import command
+    from rigsim.scenarios.studies.paper import command
 
     p = argparse.ArgumentParser()
     command.add_parser(p.add_subparsers())
@@ -75,10 +75,10 @@ def test_the_drift_cut_follows_the_cases_lab():
     whose cells drift (TYPICAL_LAB: 50 N below 1 Hz) gets the default corner."""
     import dataclasses
 
-    from correction.output.denoise import DRIFT_HZ
-    from scenarios.core.config import load_scenario, paper_scenarios
-    from scenarios.core.lab import TYPICAL_LAB, LabChain
-    from scenarios.studies.paper.model import drift_corner
+    from rigsim.correction.output.denoise import DRIFT_HZ
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    from rigsim.scenarios.core.lab import TYPICAL_LAB, LabChain
+    from rigsim.scenarios.studies.paper.model import drift_corner
 
     assert drift_corner(load_scenario(paper_scenarios()[0]).lab) is None
     assert drift_corner(LabChain()) is None

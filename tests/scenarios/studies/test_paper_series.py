@@ -1,6 +1,6 @@
 """``rigsim paper`` writes the runs' time series only on request: a default run writes paper.json,
 report.md, the figures and each run's result.json and timings.json; ``--series FORMAT`` adds each
-run's ``timeseries.<ext>`` in that format (the writers of :func:`scenarios.core.results.write_run`).
+run's ``timeseries.<ext>`` in that format (the writers of :func:`rigsim.scenarios.core.results.write_run`).
 The physics is stood in by synthetic runs (tests/scenarios/studies/test_work_once.py's), so the
 whole command runs in seconds."""
 
@@ -11,10 +11,10 @@ from types import SimpleNamespace
 
 import pytest
 
-from scenarios.cli.main import main
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.core.results import TIMESERIES_FORMATS
-from scenarios.studies.paper import command, compute
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.core.results import TIMESERIES_FORMATS
+from rigsim.scenarios.studies.paper import command, compute
 from tests.scenarios.studies.test_work_once import _actuators, _runs
 
 
@@ -91,7 +91,7 @@ def test_an_unknown_series_format_is_refused_before_any_work(stand_ins, tmp_path
 
 def test_a_series_format_without_its_library_is_refused_in_one_sentence(stand_ins, monkeypatch, tmp_path, capsys,
                                                                          one_line):
-    from correction.io import measured_lab
+    from rigsim.correction.io import measured_lab
 
     def missing(*args, **kwargs):
         raise ValueError("writing .mf4 needs asammdf: pip install -e \".[lab]\"")

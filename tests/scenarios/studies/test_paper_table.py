@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from scenarios.core.config import PAPER_CONFIGURATIONS, ScenarioError, load_scenario, paper_scenarios
-from scenarios.studies.paper.compute import PaperResult
-from scenarios.studies.paper.table import PAPER_TABLE2
+from rigsim.scenarios.core.config import PAPER_CONFIGURATIONS, ScenarioError, load_scenario, paper_scenarios
+from rigsim.scenarios.studies.paper.compute import PaperResult
+from rigsim.scenarios.studies.paper.table import PAPER_TABLE2
 
 
 def _result(corrected_paper: dict[str, float], ceiling: float) -> PaperResult:
@@ -62,7 +62,7 @@ def test_an_unknown_configuration_is_refused_naming_the_choices():
 
 
 def test_the_cli_takes_the_configuration():
-    from scenarios.cli.main import build_parser
+    from rigsim.scenarios.cli.main import build_parser
 
     p = build_parser()
     assert p.parse_args(["paper", "--out", "x"]).rig == "dyntrac"  # the rig that gives the paper's Table 2
@@ -72,7 +72,7 @@ def test_the_cli_takes_the_configuration():
 def test_the_commands_offer_exactly_the_shipped_configurations():
     """The CLI lists the choices literally (importing the scenarios for ``rigsim --help`` would load the
     simulator): they must stay those of PAPER_CONFIGURATIONS."""
-    from scenarios.cli.main import build_parser
+    from rigsim.scenarios.cli.main import build_parser
 
     p = build_parser()
     sub = next(a for a in p._actions if a.dest == "command" or a.__class__.__name__ == "_SubParsersAction")

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import pathlib
 
-from scenarios.core.config import load_scenario, paper_scenarios
-from scenarios.core.rig import Rig
-from scenarios.studies.paper.command import _truck
-from scenarios.studies.paper.compute import case_scenario
+from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+from rigsim.scenarios.core.rig import Rig
+from rigsim.scenarios.studies.paper.command import _truck
+from rigsim.scenarios.studies.paper.compute import case_scenario
 
 TRACTOR = pathlib.Path(__file__).resolve().parents[3] / "scenarios" / "data" / "trucks" / "tractor_air.toml"
 

@@ -1,4 +1,4 @@
-"""scenarios.studies.results_page and benchmarks/docs_tables.py: a table of measured results as a
+"""rigsim.scenarios.studies.results_page and benchmarks/docs_tables.py: a table of measured results as a
 Markdown file the documentation includes.
 
 Expected values: the table and the configuration line the helper is given (the version, platform,
@@ -18,8 +18,8 @@ import sys
 
 import pytest
 
-from scenarios.studies.paper.table import PAPER_TABLE2
-from scenarios.studies.results_page import (
+from rigsim.scenarios.studies.paper.table import PAPER_TABLE2
+from rigsim.scenarios.studies.results_page import (
     configuration_line,
     markdown_table,
     script_command,
@@ -90,7 +90,7 @@ def test_a_row_of_the_wrong_width_is_refused():
 
 def test_the_helper_is_light():
     """Importing it loads no numerical or simulation package (it is no part of a hot path)."""
-    code = ("import sys, scenarios.studies.results_page; "
+    code = ("import sys, rigsim.scenarios.studies.results_page; "
             "print(sorted(m for m in ('numpy', 'scipy', 'mujoco', 'matplotlib') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"

@@ -20,25 +20,25 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from correction.metrics.dlc import dlc, nrmse
-from correction.output.apply import band_limit, correct
-from correction.output.filters import design_correction, reference_filter
-from correction.output.transfer import apply_transfer_function
-from mjcf.variant import TruckVariant
-from scenarios.core.config import parse_scenario
-from scenarios.core.rig import Rig, actuator_params
-from scenarios.studies.identify.compute import identify_rig
-from correction.metrics.damage import damage_equivalent_load, stress_factor
-from correction.output.eq4 import eq4_coefficients_from
-from correction.output.pipeline import correct_forces
-from hydraulics.linearization import eq4_parameters
-from hydraulics.params import ActuatorParams
-from scenarios.core.config import ScenarioError
-from scenarios.core.results import RunResult
-from scenarios.studies.scoring import (BEST, METHODS, MIN_DURATION_S, MIN_SCORED_S, PAPER, SETTLING_TOLERANCE, Method,
-                                       measured_force, method_named, score_pair, shortest_scorable_s)
-from scenarios.core.drive import Drive
-from scenarios.core.run import run
+from rigsim.correction.metrics.dlc import dlc, nrmse
+from rigsim.correction.output.apply import band_limit, correct
+from rigsim.correction.output.filters import design_correction, reference_filter
+from rigsim.correction.output.transfer import apply_transfer_function
+from rigsim.mjcf.variant import TruckVariant
+from rigsim.scenarios.core.config import parse_scenario
+from rigsim.scenarios.core.rig import Rig, actuator_params
+from rigsim.scenarios.studies.identify.compute import identify_rig
+from rigsim.correction.metrics.damage import damage_equivalent_load, stress_factor
+from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.pipeline import correct_forces
+from rigsim.hydraulics.linearization import eq4_parameters
+from rigsim.hydraulics.params import ActuatorParams
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.results import RunResult
+from rigsim.scenarios.studies.scoring import (BEST, METHODS, MIN_DURATION_S, MIN_SCORED_S, PAPER, SETTLING_TOLERANCE, Method,
+                                              measured_force, method_named, score_pair, shortest_scorable_s)
+from rigsim.scenarios.core.drive import Drive
+from rigsim.scenarios.core.run import run
 
 DOC = {
     "name": "eval",
@@ -259,8 +259,8 @@ def test_eq4_rig_corrected_with_eq4_and_the_papers_filter_gives_the_road_force()
     doc = dict(DOC, road={"gd_n0_m3": 1e-6})
     scenario = parse_scenario(doc)
     params = actuator_params(scenario)
-    from correction.output.eq4 import eq4_coefficients_from
-    from hydraulics.linearization import eq4_parameters
+    from rigsim.correction.output.eq4 import eq4_coefficients_from
+    from rigsim.hydraulics.linearization import eq4_parameters
 
     num, den = eq4_coefficients_from(**eq4_parameters(params, 1.2e6, 25e3))
 
@@ -379,8 +379,8 @@ def test_each_method_is_scored_on_exactly_its_own_settled_samples(road_rig, iden
 def test_papers_method_uses_eq4_at_the_static_actuator_load(road_rig):
     """eq. 4 is linearized at each wheel's static actuator load: the mean measured tire force
     plus the pan's weight (the pan's free-body balance at rest), with the rig's pan mass."""
-    from correction.output.eq4 import eq4_coefficients_from
-    from hydraulics.linearization import eq4_parameters
+    from rigsim.correction.output.eq4 import eq4_coefficients_from
+    from rigsim.hydraulics.linearization import eq4_parameters
 
     s, road, rig = road_rig
     rig_model = Rig(s)
@@ -399,7 +399,7 @@ def test_a_negative_or_non_finite_noise_is_refused_by_the_measured_force_itself(
     """measured_force is public: it refuses what score_pair refuses, not only when scored."""
     from types import SimpleNamespace
 
-    from scenarios.studies.scoring import measured_force
+    from rigsim.scenarios.studies.scoring import measured_force
 
     rig = SimpleNamespace(signals={"tire_force_N": np.ones((10, 4))})
     with pytest.raises(ScenarioError, match="noise_N"):

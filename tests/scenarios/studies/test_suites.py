@@ -1,5 +1,5 @@
 """The shipped suites are data (``scenarios/data/suites/*.toml``), read by
-:mod:`scenarios.studies.suites`: the generalization suite is exactly the 24 cases its rule made
+:mod:`rigsim.scenarios.studies.suites`: the generalization suite is exactly the 24 cases its rule made
 (the rule is the reference, copied here), the plant trucks are the study's numbers, picking by
 name refuses what is not unique, and the files are installed with the package."""
 
@@ -13,9 +13,9 @@ import tomllib
 
 import pytest
 
-from scenarios.core.config import parse_scenario, paper_scenarios
-from scenarios.studies import suites
-from scenarios.studies.model_suite import plants
+from rigsim.scenarios.core.config import parse_scenario, paper_scenarios
+from rigsim.scenarios.studies import suites
+from rigsim.scenarios.studies.model_suite import plants
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 
@@ -138,12 +138,12 @@ def test_a_plant_file_with_an_unknown_field_is_refused(monkeypatch):
 
 def test_the_suite_files_are_installed_with_the_package():
     """Each file is a resource of the installed package, and pyproject.toml's package-data ships it."""
-    base = importlib.resources.files("scenarios").joinpath("data", "suites")
+    base = importlib.resources.files("rigsim.scenarios").joinpath("data", "suites")
     on_disk = sorted(p.name for p in (ROOT / "scenarios" / "data" / "suites").glob("*"))
     assert on_disk == sorted(suites.SUITE_FILES)
     for name in suites.SUITE_FILES:
         assert base.joinpath(name).is_file() and suites.suite_file(name).read_text(encoding="utf-8")
-    globs = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["scenarios"]
+    globs = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["rigsim.scenarios"]
     for name in suites.SUITE_FILES:
         assert any(fnmatch.fnmatch(f"data/suites/{name}", g) for g in globs), f"{name} not in package-data"
     with pytest.raises(ValueError, match="no suite file"):

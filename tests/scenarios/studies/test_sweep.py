@@ -23,16 +23,16 @@ import pytest
 
 import numpy as np
 
-from scenarios.core.config import ScenarioError
-from scenarios.core.pool import local_executor
-from scenarios.studies import scoring
-from scenarios.studies.sweep import command as sweep
-from scenarios.studies.sweep import run as sweep_run
-from scenarios.studies.sweep.case import METRIC_COLUMNS
-from scenarios.studies.sweep.executors import dask_executor
-from scenarios.studies.sweep.grid import GRID_FORMAT, load_grid, parse_grid
-from scenarios.studies.sweep.run import run_sweep
-from scenarios.studies.sweep.settings import EvalSettings
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.core.pool import local_executor
+from rigsim.scenarios.studies import scoring
+from rigsim.scenarios.studies.sweep import command as sweep
+from rigsim.scenarios.studies.sweep import run as sweep_run
+from rigsim.scenarios.studies.sweep.case import METRIC_COLUMNS
+from rigsim.scenarios.studies.sweep.executors import dask_executor
+from rigsim.scenarios.studies.sweep.grid import GRID_FORMAT, load_grid, parse_grid
+from rigsim.scenarios.studies.sweep.run import run_sweep
+from rigsim.scenarios.studies.sweep.settings import EvalSettings
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 
@@ -231,9 +231,9 @@ def test_interrupt_and_resume_with_an_instant_executor(tmp_path, monkeypatch):
 def test_a_sweep_case_scores_like_the_paper_study(tmp_path):
     """The sweep's case (default settings) and the paper study's scoring (scenarios/studies/paper/
     compute.py: identify_rig, then score_pair with both methods) agree on the same case and seed."""
-    from scenarios.core.rig import Rig
-    from scenarios.core.run import run
-    from scenarios.studies.identify.compute import identify_rig
+    from rigsim.scenarios.core.rig import Rig
+    from rigsim.scenarios.core.run import run
+    from rigsim.scenarios.studies.identify.compute import identify_rig
 
     g = load_grid(_grid_file(tmp_path, BASE))
     (case,) = g.cases
@@ -323,7 +323,7 @@ def test_killed_sweep_resumes_to_the_same_results(grid_path, reference, pool, tm
     # non-interactive shell (nohup, CI runners) inherits SIGINT ignored, and Python then never
     # raises KeyboardInterrupt.
     code = ("import argparse, signal, sys\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
-            "from scenarios.studies.sweep import command as sweep\np = argparse.ArgumentParser()\n"
+            "from rigsim.scenarios.studies.sweep import command as sweep\np = argparse.ArgumentParser()\n"
             "sweep.add_parser(p.add_subparsers())\na = p.parse_args(sys.argv[1:])\n"
             "try:\n    sys.exit(a.func(a))\nexcept KeyboardInterrupt:\n    sys.exit(130)\n")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}

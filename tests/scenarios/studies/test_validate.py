@@ -1,4 +1,4 @@
-"""scenarios.studies.validate: route 2 (the Rig's linearization), route 3's H1 estimate, the
+"""rigsim.scenarios.studies.validate: route 2 (the Rig's linearization), route 3's H1 estimate, the
 package's structure, and the ``rigsim validate`` command on a short run.
 
 Expected values come from the controller's structure (integral action: static gain 1), from
@@ -21,12 +21,12 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from scenarios.cli.main import main
-from scenarios.core.config import ScenarioError, load_scenario
-from scenarios.core.drive import IDENT_RMS_M, identification_drive
-from scenarios.core.files import to_json
-from scenarios.core.rig import Rig, RigRecord
-from scenarios.studies.validate import command, report, routes, settings
+from rigsim.scenarios.cli.main import main
+from rigsim.scenarios.core.config import ScenarioError, load_scenario
+from rigsim.scenarios.core.drive import IDENT_RMS_M, identification_drive
+from rigsim.scenarios.core.files import to_json
+from rigsim.scenarios.core.rig import Rig, RigRecord
+from rigsim.scenarios.studies.validate import command, report, routes, settings
 
 PACKAGE = pathlib.Path(settings.__file__).parent
 

@@ -18,18 +18,18 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from correction.metrics import rainflow_damage
-from correction.metrics.damage import (
+from rigsim.correction.metrics import rainflow_damage
+from rigsim.correction.metrics.damage import (
     damage_equivalent_load,
     damage_metrics,
     pseudo_damage,
     rainflow_cycles,
 )
-from hydraulics.params import ActuatorParams
-from scenarios.core.config import paper_scenarios
-from scenarios.core.results import RunResult
-from scenarios.studies.paper import compute, report
-from scenarios.studies.scoring import METHODS, score_pair
+from rigsim.hydraulics.params import ActuatorParams
+from rigsim.scenarios.core.config import paper_scenarios
+from rigsim.scenarios.core.results import RunResult
+from rigsim.scenarios.studies.paper import compute, report
+from rigsim.scenarios.studies.scoring import METHODS, score_pair
 
 FS = 1000.0  # Hz
 SECONDS = 12.0
