@@ -39,6 +39,7 @@ from rigsim.scenarios.records.settings import correction_settings
 
 if TYPE_CHECKING:
     from rigsim.scenarios.records.plan import CorrectionPlan
+    from rigsim.scenarios.records.recorded import RecordedIdentification
 
 __all__ = ["read_record", "correct_record", "plan_correction", "identify_record", "CorrectionResult", "ChannelLoads",
            "LinearOptions", "ModelOptions"]
@@ -146,7 +147,7 @@ def plan_correction(record, options, *, columns=None, corner_map=None, transient
     return settings.plan(record)
 
 
-def identify_record(record, *, pairs, lvdt_filter=None):
+def identify_record(record, *, pairs, lvdt_filter=None) -> RecordedIdentification:
     """Fit T_a per corner from a record's drive and LVDT channels, as ``rigsim identify --from-file``.
 
     Parameters
@@ -199,4 +200,4 @@ def identify_record(record, *, pairs, lvdt_filter=None):
     pairs = recorded.pairs_of(checked_pairs(pairs))
     if isinstance(record, (str, bytes, os.PathLike)):
         return recorded.identify_recorded(file_path(record, "record"), pairs, lvdt_filter=lvdt_filter)
-    return recorded.identify_record(checked_record(record), pairs=pairs, lvdt_filter=lvdt_filter)
+    return recorded.identify_pairs(checked_record(record), pairs=pairs, lvdt_filter=lvdt_filter)

@@ -245,10 +245,10 @@ def run_model(plan, progress=None) -> CorrectionResult:
     if s.ta is not None:
         tas, source = s.ta, ta_text(s.ta_source)
     else:
-        from rigsim.scenarios.records.recorded import identify_record
+        from rigsim.scenarios.records.recorded import identify_pairs
 
         say("identifying T_a per corner from the drive and LVDT channels for the linear correction L")
-        fits = identify_record(record, pairs=pairs, naming=s.naming).fits
+        fits = identify_pairs(record, pairs=pairs, naming=s.naming).fits
         tas, source = [fits[c] for c in pairs], "identified per corner from the drive and LVDT channels"
 
     def linear(f):

@@ -2,7 +2,7 @@
 
 No simulator: the file is read by :func:`rigsim.scenarios.records.channels.read_record` (any CSV dialect,
 RPC III, MDF4, TDMS; only the channels the pairs name: :func:`identify_recorded`), each channel in SI
-(an LVDT in mm is fitted in m), and each pair of the record (:func:`identify_record`) is fitted
+(an LVDT in mm is fitted in m), and each pair of the record (:func:`identify_pairs`) is fitted
 by :func:`rigsim.correction.identification.actuator_fit.fit_actuator` (single-input H1, the project's
 one fitting policy). For a clean identification the posts should
 be driven by independent random drives; a test drive (front and rear the same profile delayed)
@@ -30,7 +30,7 @@ from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.records.channels import read_record, resolver
 from rigsim.scenarios.records.naming import KEYWORDS, Naming
 
-__all__ = ["RecordedIdentification", "check_pair_channels", "parse_pairs", "pairs_of", "identify_record",
+__all__ = ["RecordedIdentification", "check_pair_channels", "parse_pairs", "pairs_of", "identify_pairs",
            "identify_recorded"]
 
 
@@ -143,8 +143,8 @@ def pairs_of(pairs, naming: Naming = KEYWORDS) -> dict[str, tuple[str, str]]:
     return out
 
 
-def identify_record(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
-                    lvdt_filter=None) -> RecordedIdentification:
+def identify_pairs(record, *, pairs, naming: Naming = KEYWORDS, as_read=None,
+                   lvdt_filter=None) -> RecordedIdentification:
     """Fit T_a for each corner's (drive, LVDT) pair of channels of a record.
 
     Parameters
@@ -248,7 +248,7 @@ def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str 
     naming : Naming
         How messages name ``pairs`` (a command passes its flag).
     lvdt_filter : rigsim.correction.io.acquisition.ChannelFilter or str, optional
-        As :func:`identify_record`'s.
+        As :func:`identify_pairs`'s.
 
     Raises
     ------
@@ -258,5 +258,5 @@ def identify_recorded(path, pairs, time_col: str | None = None, *, decimal: str 
     pairs = pairs_of(pairs, naming)
     wanted = list(dict.fromkeys(c for cols in pairs.values() for c in cols))
     mc = read_record(path, time_col=time_col, channels=wanted, decimal=decimal, thousands=thousands)
-    return identify_record(mc, pairs=pairs, naming=naming, as_read=dict(zip(wanted, mc.names)),
-                           lvdt_filter=lvdt_filter)
+    return identify_pairs(mc, pairs=pairs, naming=naming, as_read=dict(zip(wanted, mc.names)),
+                          lvdt_filter=lvdt_filter)
