@@ -1,0 +1,235 @@
+"""A calibration as a file: the truck model calibrated on one record, kept to correct the next.
+
+A programme on a road simulator is many records of one truck; its model is calibrated once and
+reused. :class:`SavedCalibration` is what the file holds: the :class:`~.result.Calibration` (the
+fitted values with their 1-sigma, the fixed ones, the fit figures per wheel), the model error
+per wheel it had on its record, the truck description the fit started from (the spec sheet's
+:data:`~rigsim.mjcf.description.DESCRIPTION_FIELDS`), the record and the windows it came from,
+and the rigsim version. :func:`write_calibration` writes it as JSON (atomically, never over an
+input), :func:`read_calibration` reads it back strictly: a file that is not a calibration, or one
+whose fields do not make a truck, is refused in one sentence naming the key. Imports nothing heavy
+at module level.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import MISSING, dataclass, fields
+
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.records.model.result import Calibration
+
+__all__ = ["FORMAT", "VERSION", "SavedCalibration", "write_calibration", "read_calibration", "truck_differs"]
+
+#: The file's ``format`` key: what a reader checks before anything else.
+FORMAT = "rigsim calibration"
+#: The layout's version (an integer raised when a key changes meaning).
+VERSION = 1
+
+
+@dataclass(frozen=True)
+class SavedCalibration:
+    """A truck model calibrated on a record, as a file keeps it.
+
+    Attributes
+    ----------
+    calibration : Calibration
+        The fit: fitted and fixed values (SI), their 1-sigma, the fit figures per wheel.
+    truck : Mapping[str, object]
+        The description the fit started from: the given
+        :data:`~rigsim.mjcf.description.DESCRIPTION_FIELDS` of TRUCK.toml's ``[vehicle]`` (SI;
+        empty: the catalogue truck).
+    truck_file : str
+        TRUCK.toml as given to the calibration.
+    record : str
+        The record it was calibrated on, as given.
+    record_s : float, s
+        That record's duration.
+    fs_hz : float, Hz
+        Its sampling rate.
+    rigsim_version : str
+        The rigsim that calibrated it.
+    """
+
+    calibration: Calibration
+    truck: Mapping
+    truck_file: str
+    record: str
+    record_s: float
+    fs_hz: float
+    rigsim_version: str
+
+    @property
+    def model_error(self) -> tuple:
+        """Per wheel fl, fr, rl, rr: the model error on its own record (1,
+        :attr:`Calibration.excess_nrmse`)."""
+        return self.calibration.excess_nrmse
+
+    def to_dict(self) -> dict:
+        """The file's content: ``format``, ``version``, then the fields (the model error per wheel
+        beside the calibration, for a reader of the file)."""
+        return {"format": FORMAT, "version": VERSION, "rigsim_version": self.rigsim_version,
+                "truck_file": self.truck_file, "truck": dict(self.truck),
+                "record": {"path": self.record, "duration_s": self.record_s, "fs_hz": self.fs_hz},
+                "model_error": list(self.model_error), "calibration": self.calibration}
+
+
+def write_calibration(path, saved: SavedCalibration, *, overwrite: bool = False, inputs=()):
+    """Write ``saved`` to ``path`` (JSON, atomically; the parent folder must exist).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (``.json``).
+    saved : SavedCalibration
+    overwrite : bool
+        Replace an existing file; refused otherwise.
+    inputs : sequence of paths
+        Files read for this output: writing onto one of them is refused.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    ScenarioError
+        ``path`` exists (without ``overwrite``) or is one of ``inputs`` (one sentence).
+    """
+    import pathlib
+
+    from rigsim.scenarios.core.files import write_json
+
+    path = pathlib.Path(os.fsdecode(path))
+    if any(pathlib.Path(os.fsdecode(i)).resolve() == path.resolve() for i in inputs if i):
+        raise ScenarioError(f"calibration file {str(path)!r} is an input of this run; name another file")
+    if path.exists() and not overwrite:
+        raise ScenarioError(f"calibration file {str(path)!r} exists; pass --force (overwrite=True) to replace it")
+    return write_json(path, saved)
+
+
+def _fail(path, message: str):
+    return ScenarioError(f"calibration file {str(path)!r}: {message}")
+
+
+def _numbers(path, key: str, value, n: int | None = None, *, none: bool = False) -> tuple:
+    if not isinstance(value, list) or (n is not None and len(value) != n):
+        raise _fail(path, f"{key} must be a list of {n if n is not None else 'some'} numbers, got {value!r}"[:300])
+    out = []
+    for v in value:
+        if v is None and none:
+            out.append(math.nan)
+        elif isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise _fail(path, f"{key} holds {v!r}, not a finite number")
+        else:
+            out.append(float(v))
+    return tuple(out)
+
+
+def _calibration(path, d) -> Calibration:
+    from rigsim.scenarios.records.model.family import FITTED, UNITS
+
+    if not isinstance(d, Mapping):
+        raise _fail(path, "calibration must be a table of the fit's fields")
+    known = {f.name for f in fields(Calibration)}
+    required = {f.name for f in fields(Calibration) if f.default is MISSING and f.default_factory is MISSING}
+    missing = sorted(required - set(d))
+    if missing:
+        raise _fail(path, f"calibration has no {missing[0]!r}; the file is not one rigsim correct --model wrote")
+    extra = sorted(set(d) - known)
+    if extra:
+        raise _fail(path, f"calibration has an unknown key {extra[0]!r}; write it again with this rigsim")
+    names = d["names"]
+    if not isinstance(names, list) or not names or any(n not in FITTED for n in names) or len(set(names)) != len(names):
+        raise _fail(path, f"calibration.names must be distinct fitted fields of the truck model ({', '.join(FITTED)})")
+    n = len(names)
+    fixed = d["fixed"]
+    if not isinstance(fixed, Mapping) or any(not isinstance(v, (int, float, str, type(None))) or isinstance(v, bool)
+                                             for v in fixed.values()):
+        raise _fail(path, "calibration.fixed must be a table of field = number (or null for the XML's)")
+    values = dict(d)
+    values["names"] = tuple(names)
+    values["units"] = tuple(UNITS[k] for k in names)
+    for key in ("initial", "fitted", "sigma", "sigma_robust"):
+        values[key] = _numbers(path, f"calibration.{key}", d[key], n, none=key.startswith("sigma"))
+    for key in ("fit_nrmse", "initial_nrmse", "noise_nrmse", "band_nrmse", "band_noise_nrmse"):
+        if key in d:
+            values[key] = _numbers(path, f"calibration.{key}", d[key], None if key != "fit_nrmse" else 4)
+    for key in ("windows_s", "bounds"):
+        if key in d:
+            rows = d[key]
+            if not isinstance(rows, list):
+                raise _fail(path, f"calibration.{key} must be a list of [start, end] pairs")
+            values[key] = tuple(_numbers(path, f"calibration.{key}", r, 2) for r in rows)
+    values["wheels"] = tuple(d.get("wheels", ()))
+    values["fixed"] = {k: (float(v) if isinstance(v, (int, float)) else v) for k, v in fixed.items()}
+    cal = Calibration(**values)
+    try:
+        cal.variant()
+    except (TypeError, ValueError) as exc:
+        raise _fail(path, f"its fitted and fixed values make no truck ({str(exc).rstrip('.')})") from None
+    return cal
+
+
+def read_calibration(path) -> SavedCalibration:
+    """Read a calibration file :func:`write_calibration` wrote.
+
+    Parameters
+    ----------
+    path : str, bytes or os.PathLike
+        The file.
+
+    Returns
+    -------
+    SavedCalibration
+
+    Raises
+    ------
+    ScenarioError
+        The file cannot be read, is not JSON, not a calibration, of a later layout, or its values
+        make no truck (one sentence naming the key).
+    """
+    import pathlib
+
+    path = pathlib.Path(os.fsdecode(path))
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise ScenarioError(f"calibration file {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise _fail(path, f"cannot be read ({exc})") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise _fail(path, f"is not JSON (line {exc.lineno}: {exc.msg})") from None
+    if not isinstance(doc, Mapping) or doc.get("format") != FORMAT:
+        raise _fail(path, f"is not a calibration (no format = {FORMAT!r}); rigsim correct --model writes one")
+    if doc.get("version") != VERSION:
+        raise _fail(path, f"has layout version {doc.get('version')!r}, this rigsim reads {VERSION}")
+    record = doc.get("record")
+    if not isinstance(record, Mapping):
+        raise _fail(path, "record must be a table of path, duration_s and fs_hz")
+    duration, fs = _numbers(path, "record", [record.get("duration_s"), record.get("fs_hz")], 2)
+    truck = doc.get("truck")
+    if not isinstance(truck, Mapping):
+        raise _fail(path, "truck must be a table of the description's fields")
+    return SavedCalibration(calibration=_calibration(path, doc.get("calibration")), truck=dict(truck),
+                            truck_file=str(doc.get("truck_file", "")), record=str(record.get("path", "")),
+                            record_s=duration, fs_hz=fs, rigsim_version=str(doc.get("rigsim_version", "")))
+
+
+def truck_differs(saved: SavedCalibration, truck: Mapping) -> str:
+    """One sentence naming the first description field where ``truck`` (the given ``[vehicle]``
+    fields, SI) differs from the one ``saved`` was calibrated from (numbers to 1e-9 relative), or ""."""
+    for key in sorted(set(saved.truck) | set(truck)):
+        a, b = saved.truck.get(key), truck.get(key)
+        same = (a == b if not (isinstance(a, (int, float)) and isinstance(b, (int, float)))
+                else math.isclose(a, b, rel_tol=1e-9, abs_tol=0.0))
+        if not same:
+            return (f"the calibration was made for a truck described with {key} = {a!r}, this one has {b!r}: "
+                    "calibrate this truck on its own record, or give its own description")
+    return ""

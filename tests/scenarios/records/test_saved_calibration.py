@@ -1,0 +1,125 @@
+"""A calibration as a file (scenarios/records/model/saved.py): written, read back, refused when odd.
+
+Expected values: a calibration read back equals the one written, field by field (tuples stay
+tuples, the XML's None stays None), and writing it again gives the same bytes; its truck is the
+same :class:`~rigsim.mjcf.variant.TruckVariant`. Every corruption a file can carry (not JSON,
+another format, a later layout, a key missing or unknown, a value that is no number, a field the
+model does not fit, values that make no truck) is one ScenarioError sentence naming the file and
+the key, never a Python error.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.records.model.result import Calibration
+from rigsim.scenarios.records.model.saved import (FORMAT, VERSION, SavedCalibration, read_calibration,
+                                                  truck_differs, write_calibration)
+
+CAL = Calibration(names=("payload_kg", "payload_x_m", "tire_stiffness_front_N_per_m"), units=("kg", "m", "N/m"),
+                  initial=(6000.0, -1.0, 9.0e5), fitted=(6352.4, -1.32, 8.7e5), sigma=(8.1, 0.004, 2.0e3),
+                  sigma_robust=(21.0, 0.011, math.nan), fixed={"cab_mount_hz": None, "wheelbase_m": 4.6},
+                  fit_nrmse=(0.041, 0.043, 0.052, 0.049), initial_nrmse=(0.31, 0.30, 0.42, 0.40),
+                  windows_s=((5.0, 10.0), (15.0, 20.0)), weighted=True, evaluations=42, converged=True,
+                  message="ftol reached", wall_time_s=95.0, bounds=((0.0, 2e4), (-3.5, 3.5), (4e5, 2e6)),
+                  noise_nrmse=(0.01, 0.01, 0.01, 0.01), band_nrmse=(0.03, 0.03, 0.04, 0.04),
+                  band_noise_nrmse=(0.005,) * 4, cell_mass_kg=12.0, cell_mass_sigma_kg=1.5)
+SAVED = SavedCalibration(CAL, {"wheelbase_m": 4.6, "suspension_rear": "air"}, "truck.toml", "rec.csv", 60.0, 1000.0,
+                         "0.1.0")
+
+
+def test_a_calibration_read_back_is_the_one_written(tmp_path):
+    path = write_calibration(tmp_path / "cal.json", SAVED)
+    back = read_calibration(path)
+    # NaN != NaN: the robust sigma written as null reads back as NaN
+    assert math.isnan(back.calibration.sigma_robust[2])
+    same = Calibration(**{**CAL.__dict__, "sigma_robust": back.calibration.sigma_robust})
+    assert back.calibration == same and back.truck == SAVED.truck and back.record == "rec.csv"
+    assert back.calibration.variant() == CAL.variant()
+    assert back.model_error == CAL.excess_nrmse
+    again = write_calibration(tmp_path / "again.json", back)
+    assert again.read_bytes() == path.read_bytes()
+    doc = json.loads(path.read_text())
+    assert doc["format"] == FORMAT and doc["version"] == VERSION and len(doc["model_error"]) == 4
+
+
+def test_an_existing_file_or_an_input_is_not_overwritten(tmp_path):
+    path = write_calibration(tmp_path / "cal.json", SAVED)
+    before = path.read_bytes()
+    with pytest.raises(ScenarioError, match="exists; pass --force"):
+        write_calibration(path, SAVED)
+    with pytest.raises(ScenarioError, match="is an input of this run"):
+        write_calibration(path, SAVED, overwrite=True, inputs=[str(path)])
+    assert path.read_bytes() == before
+
+
+def _doc():
+    return json.loads(json.dumps(json.loads(write_json_text())))
+
+
+def write_json_text() -> str:
+    from rigsim.scenarios.core.files import to_json
+
+    return to_json(SAVED)
+
+
+def _edit(doc, key, value):
+    *head, last = key.split(".")
+    d = doc
+    for k in head:
+        d = d[k]
+    if value is KeyError:
+        del d[last]
+    else:
+        d[last] = value
+    return doc
+
+
+@pytest.mark.parametrize("key, value, named", [
+    ("format", "something else", "is not a calibration"),
+    ("version", 2, "has layout version 2"),
+    ("record", "rec.csv", "record must be a table"),
+    ("record.fs_hz", "fast", "record holds 'fast'"),
+    ("truck", [1, 2], "truck must be a table"),
+    ("calibration", 3, "calibration must be a table"),
+    ("calibration.fitted", KeyError, "calibration has no 'fitted'"),
+    ("calibration.colour", "red", "unknown key 'colour'"),
+    ("calibration.names", ["payload_kg", "wheel_colour", "x"], "calibration.names must be distinct fitted fields"),
+    ("calibration.fitted", [1.0, 2.0], "calibration.fitted must be a list of 3 numbers"),
+    ("calibration.fitted", [1.0, "x", 3.0], "calibration.fitted holds 'x'"),
+    ("calibration.fitted", [1.0, None, 3.0], "calibration.fitted holds None"),
+    ("calibration.fit_nrmse", [0.1], "calibration.fit_nrmse must be a list of 4 numbers"),
+    ("calibration.windows_s", [[5.0]], "calibration.windows_s must be a list of 2 numbers"),
+    ("calibration.fixed", {"cab_mount_hz": [1]}, "calibration.fixed must be a table"),
+    ("calibration.fixed", {"wheelbase_m": "long"}, "make no truck"),
+])
+def test_a_corrupt_file_is_one_sentence_naming_the_key(tmp_path, key, value, named):
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps(_edit(_doc(), key, value)))
+    with pytest.raises(ScenarioError) as err:
+        read_calibration(path)
+    message = str(err.value)
+    assert "\n" not in message and message.startswith(f"calibration file {str(path)!r}") and named in message, message
+
+
+@pytest.mark.parametrize("text, named", [("", "is not JSON"), ("{", "is not JSON"), ("[]", "is not a calibration"),
+                                         ("\ufeff{\"format\": 1}", "is not a calibration")])
+def test_a_file_that_is_no_calibration_is_named(tmp_path, text, named):
+    path = tmp_path / "cal.json"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ScenarioError, match=named):
+        read_calibration(path)
+    with pytest.raises(ScenarioError, match="does not exist"):
+        read_calibration(tmp_path / "absent.json")
+
+
+def test_the_truck_description_is_compared_field_by_field():
+    assert truck_differs(SAVED, {"wheelbase_m": 4.6, "suspension_rear": "air"}) == ""
+    assert truck_differs(SAVED, {"wheelbase_m": 4.6 * (1 + 1e-12), "suspension_rear": "air"}) == ""
+    said = truck_differs(SAVED, {"wheelbase_m": 5.06, "suspension_rear": "air"})
+    assert said.startswith("the calibration was made for a truck described with wheelbase_m = 4.6, this one has 5.06")
+    assert "suspension_rear = 'air', this one has None" in truck_differs(SAVED, {"wheelbase_m": 4.6})
