@@ -67,12 +67,12 @@ from rigsim.correction.metrics.dlc import dlc  # noqa: E402
 from rigsim.hydraulics.bridge import hydraulic_callbacks  # noqa: E402
 from rigsim.mjcf.names import CORNERS  # noqa: E402
 from rigsim.scenarios.core.config import load_scenario, paper_scenarios, parse_scenario  # noqa: E402
-from rigsim.scenarios.core.drive import IDENT_SEED, Drive  # noqa: E402
+from rigsim.scenarios.core.drive import IDENT_MIN_S, IDENT_SEED, IDENT_SKIP_S, Drive  # noqa: E402
 from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
 from rigsim.scenarios.core.road_drive import road_drive  # noqa: E402
 from rigsim.scenarios.core.rig import Rig  # noqa: E402
 from rigsim.scenarios.core.watch import SimulationError  # noqa: E402
-from rigsim.scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S, SEGMENT_S, identify_rig, matched_drive  # noqa: E402
+from rigsim.scenarios.studies.identify.compute import SEGMENT_S, identify_rig, matched_drive  # noqa: E402
 from rigsim.scenarios.studies.results_page import script_command, write_results_page  # noqa: E402
 from rigsim.scenarios.studies.suites import generalization_cases  # noqa: E402
 

@@ -54,7 +54,7 @@ def paper_steps(duration_s: float | None) -> dict:
 
     from rigsim.scenarios.core.config import load_scenario, paper_scenarios
     from rigsim.scenarios.core.rig import Rig
-    from rigsim.scenarios.studies.identify.compute import IDENT_MIN_S, IDENT_SKIP_S
+    from rigsim.scenarios.core.drive import IDENT_MIN_S, IDENT_SKIP_S
     from rigsim.scenarios.studies.paper.command import RIG
 
     total = 0

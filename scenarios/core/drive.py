@@ -18,7 +18,7 @@ from rigsim.mjcf.names import CORNERS
 from rigsim.scenarios.core.profiles import check_positive, readonly_copy
 
 __all__ = ["Drive", "check_stroke", "identification_drive", "step_drive", "IDENT_RMS_M", "IDENT_CORNER_HZ",
-           "IDENT_BAND_HZ", "IDENT_SEED", "IDENT_FADE_S", "CHUNK_STEPS"]
+           "IDENT_BAND_HZ", "IDENT_SEED", "IDENT_FADE_S", "IDENT_SKIP_S", "IDENT_MIN_S", "CHUNK_STEPS"]
 
 #: Identification drive: RMS displacement (the high-roughness 72 km/h drive has 9.5 mm RMS),
 #: corner frequency above which the displacement PSD falls as 1/f^2 (a road's white
@@ -28,6 +28,12 @@ IDENT_CORNER_HZ = 1.0
 IDENT_BAND_HZ = (0.05, 60.0)
 IDENT_SEED = 20240604
 IDENT_FADE_S = 1.0
+#: The start of an identification record left out of its analysis, s: the fade-in
+#: (:data:`IDENT_FADE_S`) and the rig's loop settling after it.
+IDENT_SKIP_S = 3.0
+#: Shortest analysed identification record, s (14 half-overlapping Welch segments of 4 s, 0.25 Hz
+#: resolution).
+IDENT_MIN_S = 30.0
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,18 +20,14 @@ from rigsim.correction.identification.actuator_fit import fit_frequency_response
 from rigsim.correction.identification.identify import h1_estimate
 from rigsim.correction.output.lowpass import BAND_HZ
 from rigsim.mjcf.names import CORNERS
-from rigsim.scenarios.core.drive import IDENT_SEED, Drive, identification_drive
+from rigsim.scenarios.core.drive import IDENT_MIN_S, IDENT_SEED, IDENT_SKIP_S, Drive, identification_drive
 from rigsim.correction.io.acquisition import undo_timing
 from rigsim.scenarios.core.lab import LabChain, measure_lvdt
 from rigsim.scenarios.core.rig import Rig
 
-__all__ = ["IDENT_MIN_S", "IDENT_SKIP_S", "MATCH_BAND_HZ", "FIT_BAND_HZ", "RigIdentification", "band_rms",
+__all__ = ["MATCH_BAND_HZ", "FIT_BAND_HZ", "RigIdentification", "band_rms",
            "matched_drive", "identify_rig"]
 
-#: Shortest identification record, s (14 half-overlapping Welch segments of 4 s, 0.25 Hz resolution).
-IDENT_MIN_S = 30.0
-#: Start-up dropped before the analysis (fade-in and the loop settling), s.
-IDENT_SKIP_S = 3.0
 #: The band in which the identification drive's rms is matched to the test drive's, Hz: the
 #: correction's (its regularized low-pass is at 30 Hz; below 0.1 Hz the high-passed road has nothing).
 MATCH_BAND_HZ = (0.1, BAND_HZ)
@@ -99,7 +95,7 @@ class RigIdentification:
     drive_rms_m : float, m
         rms of each identification drive in :data:`MATCH_BAND_HZ` (the test drive's there).
     record_s : float, s
-        Analysed record (after :data:`IDENT_SKIP_S`).
+        Analysed record (after :data:`~rigsim.scenarios.core.drive.IDENT_SKIP_S`).
     seed : int
     events : Mapping
         Hydraulic events during the identification run (Rig format).
@@ -141,7 +137,7 @@ def identify_rig(scenario, *, test_drive: Drive | None = None, duration_s: float
         The drive whose band rms the identification matches (default: the scenario's road).
     duration_s : float, s, optional
         Analysed identification record (default: the scenario's duration, at least
-        :data:`IDENT_MIN_S`).
+        :data:`~rigsim.scenarios.core.drive.IDENT_MIN_S`).
     seed : int
     rig : Rig, optional
         The scenario's hydraulic rig, if already built.

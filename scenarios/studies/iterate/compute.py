@@ -9,8 +9,9 @@ Sequence of :func:`iterate_scenario` (every rig run is :meth:`rigsim.scenarios.c
    correction's only rig run;
 2. identification run: four independent broadband drives
    (:func:`rigsim.scenarios.core.drive.identification_drive`, from t = 0), the first
-   :data:`IDENT_SKIP_S` left out, the H1 FRF matrix drive -> pan displacement (``displacement``)
-   or drive -> tire force (``force``), :func:`rigsim.correction.input.frf.identify_frf`;
+   :data:`~rigsim.scenarios.core.drive.IDENT_SKIP_S` left out, the H1 FRF matrix drive -> pan
+   displacement (``displacement``) or drive -> tire force (``force``),
+   :func:`rigsim.correction.input.frf.identify_frf`;
 3. the iteration :func:`rigsim.correction.input.iterate.iterate_drive` on the analysed record (t >= 0, the
    output rate; the lead-in's fade-in stays as it is, the update is tapered to zero at both
    ends), starting from the road profile: Moran's target (pan = profile) or the RPC-style target
@@ -46,7 +47,7 @@ from rigsim.correction.input.frf import FRF, identify_frf
 from rigsim.correction.input.iterate import IterationResult, iterate_drive
 from rigsim.correction.output.lowpass import BAND_HZ
 from rigsim.scenarios.core.config import Scenario, ScenarioError
-from rigsim.scenarios.core.drive import Drive, identification_drive
+from rigsim.scenarios.core.drive import IDENT_MIN_S, IDENT_SKIP_S, Drive, identification_drive
 from rigsim.scenarios.core.results import RunResult
 from rigsim.scenarios.core.rig import Rig
 from rigsim.scenarios.core.run import run
@@ -54,13 +55,11 @@ from rigsim.scenarios.core.watch import SayFn
 from rigsim.scenarios.studies.identify.compute import identify_rig
 from rigsim.scenarios.studies.scoring import METHODS, NOISE_N, PairScore, measured_force, score_pair
 
-__all__ = ["TARGETS", "IDENT_SKIP_S", "IDENT_MIN_S", "IDENT_NPERSEG", "ComparisonRow", "IterateResult",
+__all__ = ["TARGETS", "IDENT_NPERSEG", "ComparisonRow", "IterateResult",
            "check_options", "splice_drive", "identify_frf_matrix", "iterate_scenario"]
 
 TARGETS = ("displacement", "force")
 IDENT_NPERSEG = 4096  # samples: at 1 kHz 0.24 Hz resolution, ~30 averages per 60 s
-IDENT_MIN_S = 30.0  # s: shortest analysed identification record
-IDENT_SKIP_S = 3.0  # s: start of the identification run left out (1 s fade-in and the rig's settling)
 TAPER_S = 0.5  # s: the iteration's cosine taper of error and update at both ends of the record
 
 
@@ -245,7 +244,7 @@ def splice_drive(base: Drive, t_out_s, drive_out_m) -> Drive:
 
 
 def identify_frf_matrix(rig: Rig, target: str, duration_s: float, rate_hz: float) -> FRF:
-    """Identification run of ``duration_s`` (s) analysed plus :data:`IDENT_SKIP_S` and its H1 FRF
+    """Identification run of ``duration_s`` (s) analysed plus :data:`~rigsim.scenarios.core.drive.IDENT_SKIP_S` and its H1 FRF
     matrix at ``rate_hz`` (Hz): drive -> pan displacement (m/m) or drive -> tire force (N/m)."""
     rec = rig.run(identification_drive(duration_s + IDENT_SKIP_S, rig.dt_s), rate_hz=rate_hz)
     y = rec.pan_m if target == "displacement" else rec.tire_force_N

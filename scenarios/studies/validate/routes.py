@@ -31,11 +31,11 @@ from rigsim.hydraulics.model import land_coefficient, orifice_root
 from rigsim.hydraulics.packing import pack
 from rigsim.hydraulics.params import ActuatorParams
 from rigsim.mjcf.names import CORNERS
-from rigsim.scenarios.core.drive import step_drive
+from rigsim.scenarios.core.drive import IDENT_SKIP_S, step_drive
 from rigsim.scenarios.core.plant import PlantLinearization
 from rigsim.scenarios.core.rig import RigRecord
 from rigsim.scenarios.studies.validate.settings import (BODE_RANGE_HZ, COHERENCE_MIN, COMPARE_MAX_HZ, FIT_ORDERS,
-                                                        IDENT_SKIP_S, STEP_AT_S)
+                                                        STEP_AT_S)
 
 __all__ = ["ROUTE1_VARIANTS", "H1Estimate", "Route3", "err_db_deg", "freqresp", "nanmax", "roots_json", "tf_json",
            "flow_gains", "route1_models", "budget_models", "identify", "route3", "linear_steps"]

@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from rigsim.scenarios.core.drive import Drive, identification_drive, step_drive
+from rigsim.scenarios.core.drive import IDENT_SKIP_S, Drive, identification_drive, step_drive
 from rigsim.scenarios.core.plant import fine_factor
 from rigsim.scenarios.core.rig import Rig, RigRecord
 from rigsim.scenarios.core.run import run
-from rigsim.scenarios.studies.validate.settings import IDENT_RATE_HZ, IDENT_SKIP_S, STEP_AT_S, STEP_RUN_S, validation_scenario
+from rigsim.scenarios.studies.validate.settings import IDENT_RATE_HZ, STEP_AT_S, STEP_RUN_S, validation_scenario
 
 __all__ = ["IdentificationRun", "ScenarioRun", "LINEAR_KINDS", "identification_run", "step_run", "scenario_run",
            "linear_model_run"]
@@ -43,7 +43,7 @@ class IdentificationRun:
         Drive x_ref (m) and pan displacement x_a (m) at :data:`IDENT_RATE_HZ` from t = 0,
         hydraulic states and events.
     drive_rms_m : float, m
-        RMS displacement of the drives after :data:`IDENT_SKIP_S`, mean over the wheels.
+        RMS displacement of the drives after :data:`~rigsim.scenarios.core.drive.IDENT_SKIP_S`, mean over the wheels.
     drive_velocity_rms_m_s : float, m/s
         RMS velocity (differences per time step) of the drives, mean over the wheels.
     """
@@ -90,8 +90,8 @@ def _scenario_run(result, keep: bool) -> ScenarioRun:
 
 def identification_run(path: str, duration_s: float, friction: bool = True) -> IdentificationRun:
     """Route 3's record: the rig under :func:`identification_drive` for ``duration_s`` (s)
-    after :data:`IDENT_SKIP_S`, kept at :data:`IDENT_RATE_HZ`; ``friction`` False: without the
-    leaf springs' dry friction (a diagnostic)."""
+    after :data:`~rigsim.scenarios.core.drive.IDENT_SKIP_S`, kept at :data:`IDENT_RATE_HZ`; ``friction``
+    False: without the leaf springs' dry friction (a diagnostic)."""
     rig = Rig(validation_scenario(path, friction=friction))
     dt = rig.dt_s
     drive = identification_drive(duration_s + IDENT_SKIP_S, dt)
