@@ -3,7 +3,8 @@
 The rules by which :func:`rigsim.correction.input.iterate.iterate_drive` refuses a gain before any run and
 judges its runs:
 
-- the error measure of a run, :func:`nrmse` (per response channel, means removed);
+- the error measure of a run, :func:`dynamic_error` (per response channel: the NRMSE of
+  :func:`rigsim.correction.metrics.dlc.nrmse` with the error's mean left out);
 - stability of the relaxation gain: with the true rig ``H`` and the estimate ``H_e``, the error
   obeys ``e_{k+1} = (I - g H H_e^-1) e_k`` per frequency in the band. Its spectral radius must
   stay below 1. :func:`error_map_spectral_radius` computes it for a known ``H``; from the
@@ -23,9 +24,10 @@ from __future__ import annotations
 import numpy as np
 
 from rigsim.correction.input.frf import FRF, as_columns
+from rigsim.correction.metrics.dlc import nrmse
 from rigsim.errors import RigsimError
 
-__all__ = ["IterationStabilityError", "error_map_spectral_radius", "predicted_spectral_radius", "nrmse"]
+__all__ = ["IterationStabilityError", "error_map_spectral_radius", "predicted_spectral_radius", "dynamic_error"]
 
 
 class IterationStabilityError(RigsimError, ValueError):
@@ -68,17 +70,27 @@ def predicted_spectral_radius(frf: FRF, gain: float, weight) -> np.ndarray:
     return np.abs(1.0 - g * w) + g * w * delta
 
 
-def nrmse(target, response) -> np.ndarray:
-    """Per channel ``rms(e - mean(e)) / std(target)``, ``e = target - response`` (means removed:
-    the static level is not what a drive iteration controls).
+def dynamic_error(target, response) -> np.ndarray:
+    """The drive iteration's error measure, per response channel (1): how far ``response`` is from
+    ``target``, the static level left out (it is not what a drive iteration controls).
 
-    Not the project's figure of merit against the road force, :func:`rigsim.correction.metrics.dlc.nrmse`,
-    which keeps the mean of the error; a constant target (std 0) is divided by 1 here.
+    The NRMSE of the response against the target with the error's mean left out,
+    :func:`rigsim.correction.metrics.dlc.nrmse` ``(response, target, mean_free=True)``: the error's
+    standard deviation over the target's. A constant target column (std 0), where the NRMSE is
+    undefined, scores the error's standard deviation itself (in the target's unit).
+
+    Parameters
+    ----------
+    target, response : array_like, (N,) or (N, p)
+        The desired and the measured response, time along the first axis, finite.
+
+    Returns
+    -------
+    numpy.ndarray, (p,), 1
     """
     t = as_columns(target, "target")
     y = as_columns(response, "response")
-    e = t - y
-    e = e - e.mean(axis=0)
     s = t.std(axis=0)
-    s = np.where(s > 0, s, 1.0)
-    return np.sqrt(np.mean(e ** 2, axis=0)) / s
+    if np.all(s > 0):
+        return nrmse(y, t, mean_free=True)
+    return (t - y).std(axis=0) / np.where(s > 0, s, 1.0)

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigsim.correction.input.convergence import IterationStabilityError, nrmse, predicted_spectral_radius
+from rigsim.correction.input.convergence import IterationStabilityError, dynamic_error, predicted_spectral_radius
 from rigsim.correction.input.frf import FRF, as_columns, frf_on_grid, inverse_frf
 from rigsim.correction.input.update import band_weight, end_taper, drive_update
 from rigsim.correction.output.lowpass import BAND_HZ
@@ -47,7 +47,7 @@ class IterationStep:
     """One rig run of the iteration: the drive ``k`` and how well its response met the target."""
 
     index: int
-    nrmse: np.ndarray  # per response channel, 1
+    nrmse: np.ndarray  # per response channel, 1: the dynamic error (convergence.dynamic_error)
     nrmse_mean: float
     drive_rms: np.ndarray  # per drive channel, unit of the drive
 
@@ -239,7 +239,7 @@ def iterate_drive(
         raise ValueError(f"the record ({n / fs:g} s) is too short for tapers of {taper_s:g} s at both ends")
 
     def record(k, d_, y_):
-        e = nrmse(tgt[scored], y_[scored])
+        e = dynamic_error(tgt[scored], y_[scored])
         s = IterationStep(index=k, nrmse=e, nrmse_mean=float(np.mean(e)),
                           drive_rms=np.sqrt(np.mean((d_ - d_.mean(axis=0)) ** 2, axis=0)))
         if callback is not None:

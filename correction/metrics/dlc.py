@@ -115,7 +115,7 @@ def force_statistics(force_N, axis: int = 0) -> dict[str, np.ndarray]:
     return {"mean_force_N": mean, "std_force_N": std, "dlc": std / mean}
 
 
-def nrmse(x, reference, axis: int = 0) -> np.ndarray:
+def nrmse(x, reference, axis: int = 0, *, mean_free: bool = False) -> np.ndarray:
     """Normalized root-mean-square error of ``x`` against ``reference``, per column.
 
     ``sqrt(mean((x - reference)^2)) / std(reference)`` along ``axis``: the RMS of the error over
@@ -134,6 +134,10 @@ def nrmse(x, reference, axis: int = 0) -> np.ndarray:
         The reference forces, same shape as ``x``.
     axis : int
         Time axis.
+    mean_free : bool
+        Leave the error's mean out: ``rms(e - mean(e)) / std(reference)``, ``e = x - reference``
+        (the static level, which a drive iteration does not control, does not count; the drive
+        iteration's :func:`rigsim.correction.input.convergence.dynamic_error`).
 
     Returns
     -------
@@ -157,4 +161,7 @@ def nrmse(x, reference, axis: int = 0) -> np.ndarray:
     s = r.std(axis=axis)
     if np.any(s == 0):
         raise ValueError("the reference force is constant (std 0) in a column, so its NRMSE is undefined")
-    return np.sqrt(np.mean((a - r) ** 2, axis=axis)) / s
+    e = a - r
+    if mean_free:
+        e = e - e.mean(axis=axis, keepdims=True)
+    return np.sqrt(np.mean(e ** 2, axis=axis)) / s

@@ -37,6 +37,14 @@ def test_nrmse_is_per_column_and_along_the_given_axis():
     np.testing.assert_allclose(nrmse(x.T, ref.T, axis=1), expected, rtol=1e-12)
 
 
+def test_nrmse_mean_free_leaves_the_errors_mean_out():
+    """A shift by a constant is all mean: mean_free scores it 0; a scaled copy keeps its error."""
+    ref = np.column_stack([_sine(), 30e3 + 3e3 * _sine()])
+    assert np.all(nrmse(ref + np.array([0.1, 600.0]), ref, mean_free=True) < 1e-12)
+    np.testing.assert_allclose(nrmse(1.1 * ref + 5.0, ref, mean_free=True), [0.1, 0.1], rtol=1e-9)
+    np.testing.assert_allclose(nrmse(ref.T + 0.2, ref.T, axis=1, mean_free=True), [0.0, 0.0], atol=1e-12)
+
+
 def test_nrmse_is_zero_for_the_reference_and_one_for_its_mean():
     ref = 30e3 + 3e3 * _sine()
     assert float(nrmse(ref, ref)) == 0.0
