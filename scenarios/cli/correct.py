@@ -81,6 +81,7 @@ FLAGS = (
     ("--calibration-windows", "calibration_windows", "model", "calibration_windows"),
     ("--cab", "cab", "model", "cab"),
     ("--drift-cut-hz", "drift_cut_hz", "model", "drift_cut_hz"),
+    ("--calibration", "calibration", "model", "calibration"),
     ("--columns", "columns", "call", "columns"),
     ("--map", "map", "call", "corner_map"),
     ("--transient", "transient", "call", "transient"),
@@ -173,12 +174,14 @@ def cmd_correct(args) -> int:
 
     if args.model is None:
         refuse_model_options(args)
-    with claimed_out_file(args.out, [args.input, args.model, args.actuator, args.actuators], args.force):
+    inputs = [args.input, args.model, args.actuator, args.actuators, getattr(args, "calibration", None)]
+    with claimed_out_file(args.out, inputs, args.force):
         options, call = options_from_args(args)
         plan = plan_correction(args.input, options, **call, naming=CLI_NAMING, time_col=args.time_col,
                                decimal=args.decimal, thousands=args.thousands)
         plan.check_output(args.out)
         if args.model is not None:
+            correct_model.check_calibration_output(args, plan.inputs)
             return correct_model.report_model(args, plan.run(progress=None if args.quiet else correct_model.say))
         result = plan.run()
         result.write(args.out, overwrite=args.force)

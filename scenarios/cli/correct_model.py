@@ -68,6 +68,25 @@ def add_model_arguments(group) -> None:
                        help="the cab (default auto): docs/model_correction.md")
     group.add_argument("--drift-cut-hz", type=float, default=None, metavar="HZ",
                        help="drift cut, Hz; 0: none (default 0.7, at most 1.5)")
+    group.add_argument("--calibration", metavar="CAL.json", default=None,
+                       help="reuse this truck's calibration (OUT.calibration.json of an earlier run)")
+
+
+def check_calibration_output(args, inputs) -> None:
+    """Refuse, before the work, a calibration file beside ``-o`` that exists (without ``--force``) or is
+    an input (:func:`~rigsim.scenarios.records.corrected.calibration_path`)."""
+    import pathlib
+
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.records.corrected import calibration_path
+
+    path = calibration_path(args.out)
+    if any(i and pathlib.Path(i).resolve() == path.resolve() for i in inputs):
+        raise ScenarioError(f"-o {args.out} would write its calibration to {str(path)!r}, an input of this run; "
+                            "name another output")
+    if path.exists() and not args.force:
+        raise ScenarioError(f"-o {args.out} writes its calibration to {str(path)!r}, which exists; pass --force to "
+                            "replace it, or name another output")
 
 
 def report_model(args, result) -> int:
@@ -89,15 +108,33 @@ def report_model(args, result) -> int:
             print(cal.cab_choice[0].upper() + cal.cab_choice[1:])
     if "residual_noise" in meta:
         print(meta["residual_noise"][0].upper() + meta["residual_noise"][1:])
-    result.write(args.out, overwrite=args.force)
+    written = _write_both(args, result)
     if result.settled.any():
         print(result.table())
     what = (f"by {result.description}" if result.method == "model"
             else f"by the linear correction ({result.description})")
     print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz {what}; "
           f"{result.transient_samples} transient samples {'dropped' if args.transient == 'drop' else 'kept'}; "
-          f"wrote {args.out}")
+          f"wrote {' and '.join(map(str, written))}")
     return 0
+
+
+def _write_both(args, result) -> list:
+    """Write the corrected file and (where the truck was calibrated) its calibration beside it, both
+    or neither: the calibration first, removed again if the corrected file cannot be written."""
+    import os
+
+    from rigsim.scenarios.records.corrected import calibration_path
+
+    if result.saved_calibration is None:
+        return [result.write(args.out, overwrite=args.force)]
+    cal = result.write_calibration(calibration_path(args.out), overwrite=args.force)
+    try:
+        out = result.write(args.out, overwrite=args.force)
+    except BaseException:
+        os.unlink(cal)
+        raise
+    return [out, cal]
 
 
 def say(line: str) -> None:

@@ -22,7 +22,7 @@ import numpy as np
 
 from rigsim.scenarios.records.output import fit_metadata, output_units
 
-__all__ = ["ChannelLoads", "channel_loads", "loads_table", "CorrectionResult"]
+__all__ = ["ChannelLoads", "channel_loads", "loads_table", "CorrectionResult", "calibration_path"]
 
 
 @dataclass(frozen=True)
@@ -141,6 +141,9 @@ class CorrectionResult:
         Per channel the loads on the settled samples; empty when no sample is settled.
     calibration : rigsim.scenarios.records.model.result.Calibration or None
         The truck model's calibration, when the model was asked for and could be calibrated.
+    saved_calibration : rigsim.scenarios.records.model.saved.SavedCalibration or None
+        The same with the truck description and the record it came from, as
+        :meth:`write_calibration` writes it for the next record of this truck.
     actuators : tuple
         The T_a of each channel (linear; ``(num, den)`` or an identified
         :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit`); empty for the model.
@@ -192,6 +195,7 @@ class CorrectionResult:
     metadata: Mapping = field(default_factory=dict)
     loads: tuple = ()
     calibration: object = None
+    saved_calibration: object = None
     actuators: tuple = ()
     filters: tuple = ()
     inputs: tuple = ()
@@ -255,3 +259,33 @@ class CorrectionResult:
             from rigsim.scenarios.core.config import ScenarioError
 
             raise ScenarioError(str(exc)) from None
+
+    def write_calibration(self, path, *, overwrite: bool = False) -> pathlib.Path:
+        """Write the truck model's calibration (:attr:`saved_calibration`) to ``path`` (JSON), for
+        ``ModelOptions(..., calibration=path)`` on the next record of this truck
+        (:func:`rigsim.scenarios.records.model.saved.write_calibration`).
+
+        Raises
+        ------
+        ScenarioError
+            No calibration (a linear correction, or a model that could not be calibrated), a path
+            of the wrong type, an existing file without ``overwrite``, an input file (one sentence).
+        """
+        from rigsim.scenarios.records.arguments import file_path, flag
+        from rigsim.scenarios.records.model.saved import write_calibration
+        from rigsim.scenarios.records.naming import KEYWORDS
+
+        path, overwrite = file_path(path, "path"), flag(KEYWORDS, "overwrite", overwrite)
+        if self.saved_calibration is None:
+            from rigsim.scenarios.core.config import ScenarioError
+
+            raise ScenarioError("this result has no calibration to write: it was corrected linearly, or the truck "
+                                "model could not be calibrated on the record")
+        return write_calibration(path, self.saved_calibration, overwrite=overwrite, inputs=self.inputs)
+
+
+def calibration_path(out) -> pathlib.Path:
+    """The calibration file ``rigsim correct --model -o OUT`` writes beside ``OUT``:
+    ``OUT``'s name without its extension, then ``.calibration.json``."""
+    out = pathlib.Path(out)
+    return out.with_name(out.stem + ".calibration.json")

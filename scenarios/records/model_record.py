@@ -162,6 +162,9 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
     method = "probe" if model_result is None else model_result.method
     meta = {"made_by": "rigsim correct --model", "rigsim_version": rigsim_version(), "input": str(record.path),
             "scenario_file": str(settings.scenario_file), "method": method}
+    if settings.saved is not None:  # the calibration came from another record, checked on this one
+        meta["cal_source"] = (f"{str(settings.saved_file)} (calibrated on {settings.saved.record!r})"
+                              if model_result is not None else "x " * 200)
     reason = "x " * 100 if model_result is None else model_result.reason
     if reason:
         meta["fallback_reason"] = reason
@@ -229,7 +232,10 @@ def run_model(plan, progress=None) -> CorrectionResult:
     ``plan``: a :class:`~rigsim.scenarios.records.plan.CorrectionPlan` of the model correction;
     ``progress``: called with each progress line and note (None: silent)."""
     from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S
+    import dataclasses
+
     from rigsim.scenarios.records.model.differential import correct_with_model
+    from rigsim.scenarios.records.model.saved import SavedCalibration, spec_of
 
     s, record, pairs = plan.settings, plan.record, plan.pairs
     say = progress or (lambda line: None)
@@ -260,14 +266,19 @@ def run_model(plan, progress=None) -> CorrectionResult:
     res = correct_with_model(record.time_s, record.array([d for d, _ in pairs.values()]),
                              record.array([x for _, x in pairs.values()]), forces, base_scenario=s.scenario,
                              workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
-                             linear=linear, drift_hz=s.drift_hz)
+                             linear=linear, drift_hz=s.drift_hz, saved=None if s.saved is None else s.saved.calibration)
     cal = res.calibration
+    saved = None if cal is None else SavedCalibration(cal, spec_of(s.scenario), str(s.scenario_file), str(record.path),
+                                                      forces.shape[0] / fs, float(fs), rigsim_version())
     from rigsim.scenarios.records.model.skew import skew_note
 
     for hint in (description_note(cal, s.scenario_file), skew_note(cal)):
         if hint:
             say(hint)
-    if cal is not None:
+    if cal is not None and s.saved is not None and not cal.second_start:
+        say(f"calibration {str(s.saved_file)!r} (calibrated on {s.saved.record!r}) holds on this record: model error "
+            + ", ".join(f"{c} {v:.3f}" for c, v in zip(pairs, cal.excess_nrmse)) + f", checked in {cal.wall_time_s:.0f} s")
+    elif cal is not None:
         say(f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
             f"{'converged' if cal.converged else 'not converged'}, worst fit NRMSE {cal.worst_fit_nrmse:.3f})"
             + (f"; corrected in {res.timings['correction_s']:.1f} s" if not res.use_linear else ""))
@@ -279,6 +290,7 @@ def run_model(plan, progress=None) -> CorrectionResult:
             corrected_N=res.corrected_N, settled=settled, fs_hz=float(fs), method="model", reason=res.reason,
             description=f"{MODEL_TEXT}, L with T_a {source}", transient=s.transient,
             metadata=model_metadata(s, record, pairs, plan.channels, res, source), loads=loads, calibration=cal,
-            inputs=plan.inputs)
-    return linear_result(plan, tas, source, corners=list(pairs), reason=res.reason, calibration=cal,
-                         metadata=model_metadata(s, record, pairs, plan.channels, res, source))
+            inputs=plan.inputs, saved_calibration=saved)
+    return dataclasses.replace(
+        linear_result(plan, tas, source, corners=list(pairs), reason=res.reason, calibration=cal,
+                      metadata=model_metadata(s, record, pairs, plan.channels, res, source)), saved_calibration=saved)

@@ -103,6 +103,12 @@ class ModelOptions:
         The corner below which W takes the model's residual for the load cells' drift and leaves
         the slow force to the model (default :data:`~rigsim.correction.output.denoise.DRIFT_HZ`,
         0.7 Hz; at most 1.5 Hz); 0: no drift cut, for load cells that do not drift.
+    calibration : str, bytes, os.PathLike or SavedCalibration, optional
+        A calibration of this truck saved from another record (``rigsim correct --model`` writes
+        ``OUT.calibration.json``): the record is corrected with it once its model error on this
+        record's own windows is within the limit (model runs only, no fit); beyond it, the truck
+        is calibrated again from the saved values, and the result says so. Default: calibrated
+        on this record.
 
     Examples
     --------
@@ -119,6 +125,7 @@ class ModelOptions:
     calibration_windows: int | None = None
     cab: str | None = None
     drift_cut_hz: float | None = None
+    calibration: object = None
 
     def __repr__(self) -> str:
         return _repr(self, ModelOptions(None))

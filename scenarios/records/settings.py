@@ -90,6 +90,10 @@ class CorrectionSettings:
     force_filter, lvdt_filter : rigsim.correction.io.acquisition.ChannelFilter or None
         The force and LVDT channels' anti-alias filters and delays, undone before correcting
         (:mod:`rigsim.scenarios.records.timing`); None: the channels as recorded.
+    saved : rigsim.scenarios.records.model.saved.SavedCalibration or None
+        A calibration to correct with (checked on the record first); None: calibrate on the record.
+    saved_file : str or None
+        Its file as given, or :data:`~rigsim.scenarios.records.output.GIVEN`.
     drift_hz : float or None, Hz
         The model correction's drift cut (:func:`rigsim.scenarios.records.model.differential.hybrid_correction`);
         None: no cut (asked for with 0), or the linear correction.
@@ -119,6 +123,8 @@ class CorrectionSettings:
     force_filter: object = None
     lvdt_filter: object = None
     drift_hz: float | None = None
+    saved: object = None
+    saved_file: str | None = None
 
     @property
     def channels(self) -> list[str] | None:
@@ -271,6 +277,32 @@ def _scenario(naming: Naming, model) -> tuple:
         raise _error(f"{naming('truck')}: {exc}") from None
 
 
+def _saved(naming: Naming, calibration, scenario) -> tuple:
+    """(the saved calibration or None, its file or :data:`~rigsim.scenarios.records.output.GIVEN`) from
+    ``calibration``, refused where it was made for a truck described otherwise than ``scenario``'s."""
+    if calibration is None:
+        return None, None
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.records.model.saved import SavedCalibration, read_calibration, spec_of, truck_differs
+
+    opt = naming("calibration")
+    if isinstance(calibration, SavedCalibration):
+        saved, source = calibration, GIVEN
+    elif _is_path(calibration):
+        source = file_path(calibration, opt)
+        try:
+            saved = read_calibration(source)
+        except ScenarioError as exc:
+            raise _error(f"{opt}: {exc}") from None
+    else:
+        raise _error(f"{opt} must be a calibration file (rigsim correct --model writes one) or a SavedCalibration, "
+                     f"got {shown(calibration)}")
+    differs = truck_differs(saved, spec_of(scenario))
+    if differs:
+        raise _error(f"{opt} {str(source)!r}: {differs}")
+    return saved, source
+
+
 def _fallback_tas(naming: Naming, actuator, actuators):
     """(the model's linear fallback T_a: one, or one per corner in corner order, or None; its source)."""
     from rigsim.mjcf.names import CORNERS
@@ -361,6 +393,7 @@ def correction_settings(options, *, columns=None, corner_map=None, transient: st
     calibration_windows = count(n, "calibration_windows", model.calibration_windows)
     drift_hz = _drift_hz(n, model.drift_cut_hz)
     scenario, scenario_file = _scenario(n, model.truck)
+    saved, saved_file = _saved(n, model.calibration, scenario)
     asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
     ta, source = _fallback_tas(n, actuator, actuators)
     return CorrectionSettings(
@@ -368,4 +401,5 @@ def correction_settings(options, *, columns=None, corner_map=None, transient: st
         corner_map=None if items is None else tuple(items), identify=(), ta=ta, per_corner=False,
         ta_source=source, pairs=pairs, scenario=scenario, scenario_file=scenario_file, workers=workers,
         max_evaluations=max_evaluations, calibration_windows=calibration_windows, drift_hz=drift_hz,
-        inputs=tuple(f for f in (scenario_file, source) if f not in (None, GIVEN)), **common)
+        saved=saved, saved_file=saved_file,
+        inputs=tuple(f for f in (scenario_file, source, saved_file) if f not in (None, GIVEN)), **common)

@@ -62,9 +62,11 @@ from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WI
 from rigsim.scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from rigsim.scenarios.records.model.restart import calibrate_again
 from rigsim.scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
+from rigsim.scenarios.records.model.saved import check_saved
 
-__all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "hybrid_correction", "settled_mask", "correct_with_model",
-           "fallback_reason"]
+__all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA",
+           "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "hybrid_correction",
+           "settled_mask", "correct_with_model", "fallback_reason"]
 
 #: The model runs' start-up transient, s: samples before it are not settled. Measured on the
 #: medium 72 km/h case with the exact truck as model: the differential's start-up error (rms per
@@ -75,19 +77,14 @@ START_S = 3.0
 #: Largest per-wheel model error (:attr:`Calibration.excess_nrmse`: the model's force, pans
 #: following x_a, against the measured F_rig on the calibration windows, its dynamic part in the
 #: correction's band, the load cells' white noise there taken out) for which the differential
-#: correction (no ``linear``) is used, 1. Derived on the whole-band excess, which equals it where
-#: the model's error lies in the band and the noise estimate holds (the band's noise share is
-#: small). The differential correction's own
-#: error against the road follows that excess (with a progressive tire the model lacks: the
-#: corrected NRMSE 0.78-1.27 x the excess wherever it exceeds 0.06, 67 wheels,
-#: benchmarks/model_error.py), so past the linear correction's typical error (0.11-0.20 on the
-#: paper's cases) the linear correction is the better one: at +50 % tire the light truck's wheels
-#: show excess 0.145-0.168 and a model correction worse than the linear one (1.01-1.40 x its NRMSE),
-#: the heavy truck's 0.03-0.135 and a better one (0.18-0.79 x); at +25 % at most 0.117, always
-#: better; in the family at most 0.062 (paper cases and the generalization suite, README). These
-#: figures are of a model family with linear tires; with each axle's stiffening fitted, every plant
-#: measured stays at or below 0.079 (the gradual stiffening included), below the limit.
-#: Another case's forces give ~1.
+#: correction (no ``linear``) is used, 1 (derived on the whole-band excess, which equals it where
+#: the model's error lies in the band). The differential correction's own error against the road
+#: follows that excess (with a progressive tire the model lacks: the corrected NRMSE 0.78-1.27 x the
+#: excess wherever it exceeds 0.06, 67 wheels, benchmarks/model_error.py), so past the linear
+#: correction's typical error (0.11-0.20 on the paper's cases) the linear correction is the better
+#: one: at +50 % tire the light truck's wheels show excess 0.145-0.168 and a model correction worse
+#: than the linear one (1.01-1.40 x its NRMSE), the heavy truck's 0.03-0.135 and a better one
+#: (0.18-0.79 x); in the family at most 0.062; with each axle's stiffening fitted, at most 0.079.
 DIFFERENTIAL_LIMIT = 0.14
 #: The model error past which the hybrid correction F_model(x_ref) + L(F_rig - F_model(x_a)) (``linear``
 #: given, what ``rigsim correct --model`` and ``rigsim paper --model`` use) searches again: a lone wheel
@@ -103,14 +100,12 @@ HYBRID_LIMIT = 0.25
 #: of a second calibration (:func:`outlier_wheel`), 1: a broken channel, or one wheel unlike the
 #: model's, pulls the parameters the other wheels share (a channel of pure noise on rr, 20 s of the
 #: high 72 km/h case: model errors fl 0.20, fr 0.19, rl 0.76, rr 4.7 against 0.015-0.019 with rr
-#: left out); two or more wheels alike past the limit are a model that does not fit, which a
-#: second calibration cannot mend.
+#: left out); two or more wheels alike past the limit are a model that does not fit.
 OUTLIER_RATIO = 2.0
 
 
 def settled_mask(t_s, start_s: float = START_S) -> np.ndarray:
-    """Samples (bool, (n,)) of the corrected force past the model runs' start-up (``start_s``, s,
-    after the record's first sample)."""
+    """Samples (bool, (n,)) past the model runs' start-up (``start_s``, s, after the first sample)."""
     t = np.asarray(t_s, dtype=float)
     return (t - t[0]) >= start_s - 1e-9
 
@@ -122,8 +117,7 @@ def model_force_pair(variant: TruckVariant, t_s, x_ref_m, x_a_m, *, base_scenari
     t, _ = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m})
     base = portable(base_scenario)
     jobs = [(window_job, (variant, t, np.asarray(x, float), base, SETTLE_S)) for x in (x_ref_m, x_a_m)]
-    f_ref, f_a = run_jobs(jobs, workers=workers, executor=executor)
-    return f_ref, f_a
+    return tuple(run_jobs(jobs, workers=workers, executor=executor))
 
 
 def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
@@ -256,20 +250,15 @@ def wheels_reason(calibration, holds, excess_limit: float = HYBRID_LIMIT) -> str
 def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario, workers: int | None = None,
                        excess_limit: float | None = None, cab: str = AUTO, linear=None,
                        drift_hz: float | None = DRIFT_HZ, drift_rms_N: float | None = DRIFT_RMS_N,
-                       **calibrate_kw) -> ModelCorrection:
+                       saved: Calibration | None = None, **calibrate_kw) -> ModelCorrection:
     """Calibrate the truck model on the record, then correct it, or say why the linear correction is to be used.
 
-    With ``linear`` (the record's linear correction L, ``T_a^-1 T_F`` per wheel) the corrected force
-    is :data:`HYBRID_FORMULA` (:func:`hybrid_correction`): the model predicts the road force and what the rig
-    made of it, and the part of the rig force the model does not explain is corrected for the
-    actuators as the linear correction corrects the whole. Where the model is exact this is the
-    model's road force plus the corrected noise; where it explains nothing it is L(F_rig) above
-    W's drift cut (0.7 Hz; below it the model's slow force); in between, L(F_rig) plus the model's
-    estimate of L's own error. A wheel where the model's runs show that L could turn the model's
-    residual against the hybrid (:func:`~rigsim.scenarios.records.model.fallback.hybrid_outlook`) is
-    corrected by L alone, the others by the model (the sentence in ``reason`` names them). Without
-    ``linear``: F_rig + F_model(x_ref) - F_model(x_a) on every wheel, or the linear correction for
-    all of them, as the model error stays within ``excess_limit``.
+    With ``linear`` (L, ``T_a^-1 T_F`` per wheel) the corrected force is :data:`HYBRID_FORMULA`
+    (:func:`hybrid_correction`): the model's road force, plus the rig force the model does not
+    explain corrected by L; a wheel where the model's runs show that L could turn the residual
+    against it (:func:`~rigsim.scenarios.records.model.fallback.hybrid_outlook`) is corrected by L
+    alone (``reason`` names it). Without ``linear``: :data:`DIFFERENTIAL_FORMULA` on every wheel, or
+    L on all of them, as the model error stays within ``excess_limit``.
 
     Parameters
     ----------
@@ -296,6 +285,10 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     drift_rms_N : float or None, N
         The load cells' drift level the cut subtracts (:func:`hybrid_correction`); None: every
         wheel's slow residual cut.
+    saved : Calibration, optional
+        A calibration of this truck from another record, used where its model error on this
+        record holds (:func:`~rigsim.scenarios.records.model.saved.check_saved`), else the start of
+        a calibration on this record (said in its ``second_start``).
     **calibrate_kw
         Passed to :func:`~rigsim.scenarios.records.model.calibrate.calibrate` (windows, max_nfev,
         fitted_guess...).
@@ -322,8 +315,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         raise ScenarioError(str(exc)) from None
     # A record too short for the calibration's windows is the caller's to fix (raised); any other
     # refusal by the calibration means the model cannot be used on this record (the fallback).
-    fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),
-                                                          ("lead_s", WINDOW_LEAD_S))))
+    wins = fit_windows(t, *(calibrate_kw.get(k, d) for k, d in (("windows", WINDOWS), ("window_s", WINDOW_S),
+                                                                ("lead_s", WINDOW_LEAD_S))))
     timings = {}
 
     def defer(held: Calibration) -> str:  # a wheel to leave out first: the cab chosen on the others' fit
@@ -337,30 +330,20 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
             return calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
                                  executor=ex, defer=defer, **(calibrate_kw | kw))
 
-        try:
-            cal = calibrated()
-        except ScenarioError as exc:
-            return _linear(f"the truck model could not be calibrated on this record ({str(exc).rstrip('.')}), "
-                           "so the linear correction is to be used.", None, wall0, timings)
-        except SimulationError as exc:
-            return _linear(f"a truck-model run failed during the calibration ({str(exc).rstrip('.')}), "
-                           "so the linear correction is to be used.", None, wall0, timings)
-        if cal.converged:  # a fit refused for its model error: searched again (the springs sliding, the
-            cal = calibrate_again(cal, calibrated, excess_limit)  # stations alike); a failed search skipped
-        timings["calibration_s"] = cal.wall_time_s
-        reason = fallback_reason(cal, excess_limit)
-        bad = outlier_wheel(cal, excess_limit) if reason and linear is not None and cal.converged else None
-        if bad is not None:  # one wheel the model cannot reproduce: calibrated again on the others,
-            try:  # from where the fit with it ended (its second start's sliding springs, if kept)
-                again = calibrated(wheels=tuple(c for c in CORNERS if c != CORNERS[bad]),
-                                   start=dict(zip(cal.names, cal.fitted)))
-            except (ScenarioError, SimulationError):
-                again = None
-            if again is not None and again.converged:
-                timings["calibration_s"] = round(cal.wall_time_s + again.wall_time_s, 3)
-                again = dataclasses.replace(again, evaluations=cal.evaluations + again.evaluations,
-                                            wall_time_s=timings["calibration_s"])
-                cal, reason = again, fallback_reason(again, excess_limit)
+        cal, pair, refit, reason = None, None, "", ""
+        if saved is not None:  # checked on this record by the model runs the correction needs
+            cal, pair, refit = check_saved(saved, lambda v: model_force_pair(
+                v, t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex), force_N, x_a_m, t, wins, excess_limit)
+            calibrate_kw = calibrate_kw | ({"start": dict(zip(saved.names, saved.fitted))} if refit else {})
+        if cal is not None:
+            timings["calibration_s"] = cal.wall_time_s
+        else:
+            fitted = _fit(calibrated, excess_limit, linear, wall0, timings)
+            if isinstance(fitted, ModelCorrection):
+                return fitted
+            cal, reason = fitted
+            if refit:
+                cal = dataclasses.replace(cal, second_start=refit)
         if linear is None:  # the differential form: the model error's limit decides
             holds = np.asarray(cal.excess_nrmse) <= excess_limit
             if reason or not holds.all():
@@ -370,7 +353,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         else:  # the hybrid: decided on the model runs (fallback.hybrid_outlook); a wheel left out stays linear
             holds = np.isin(CORNERS, cal.wheels)
         t1 = time.perf_counter()
-        f_ref, f_a = model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex)
+        f_ref, f_a = pair or model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario,
+                                              executor=ex)
         # the load cells' uncompensated mass, fitted with the truck, taken out
         force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
         noise = outlook = None
@@ -399,6 +383,36 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                            wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings,
                            wheels=tuple(c for c, ok in zip(CORNERS, holds) if ok or linear is None), formula=formula,
                            model_N=(f_ref, f_a), residual_noise_N=noise, outlook=outlook)
+
+
+def _fit(calibrated, excess_limit: float, linear, wall0: float, timings: dict):
+    """(the record's calibration, the fallback's reason) or, where none could be made, the linear
+    fallback's :class:`ModelCorrection`: searched again past the limit, a lone bad wheel left out."""
+    try:
+        cal = calibrated()
+    except ScenarioError as exc:
+        return _linear(f"the truck model could not be calibrated on this record ({str(exc).rstrip('.')}), "
+                       "so the linear correction is to be used.", None, wall0, timings)
+    except SimulationError as exc:
+        return _linear(f"a truck-model run failed during the calibration ({str(exc).rstrip('.')}), "
+                       "so the linear correction is to be used.", None, wall0, timings)
+    if cal.converged:  # a fit refused for its model error: searched again (the springs sliding, the
+        cal = calibrate_again(cal, calibrated, excess_limit)  # stations alike); a failed search skipped
+    timings["calibration_s"] = cal.wall_time_s
+    reason = fallback_reason(cal, excess_limit)
+    bad = outlier_wheel(cal, excess_limit) if reason and linear is not None and cal.converged else None
+    if bad is not None:  # one wheel the model cannot reproduce: calibrated again on the others,
+        try:  # from where the fit with it ended (its second start's sliding springs, if kept)
+            again = calibrated(wheels=tuple(c for c in CORNERS if c != CORNERS[bad]),
+                               start=dict(zip(cal.names, cal.fitted)))
+        except (ScenarioError, SimulationError):
+            again = None
+        if again is not None and again.converged:
+            timings["calibration_s"] = round(cal.wall_time_s + again.wall_time_s, 3)
+            again = dataclasses.replace(again, evaluations=cal.evaluations + again.evaluations,
+                                        wall_time_s=timings["calibration_s"])
+            cal, reason = again, fallback_reason(again, excess_limit)
+    return cal, reason
 
 
 def _linear(reason: str, cal, wall0: float, timings: dict, outlook=None) -> ModelCorrection:

@@ -22,7 +22,8 @@ from dataclasses import MISSING, dataclass, fields
 from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.records.model.result import Calibration
 
-__all__ = ["FORMAT", "VERSION", "SavedCalibration", "write_calibration", "read_calibration", "truck_differs"]
+__all__ = ["FORMAT", "VERSION", "SavedCalibration", "spec_of", "write_calibration", "read_calibration",
+           "truck_differs", "on_record", "check_saved"]
 
 #: The file's ``format`` key: what a reader checks before anything else.
 FORMAT = "rigsim calibration"
@@ -222,6 +223,15 @@ def read_calibration(path) -> SavedCalibration:
                             record_s=duration, fs_hz=fs, rigsim_version=str(doc.get("rigsim_version", "")))
 
 
+def spec_of(scenario) -> dict:
+    """The truck description a scenario's ``[vehicle]`` gives: its given
+    :data:`~rigsim.mjcf.description.DESCRIPTION_FIELDS`, SI (empty: the catalogue truck)."""
+    from rigsim.scenarios.records.model.first_guess import SPEC_FIELDS, description
+
+    desc = description(scenario)
+    return {k: getattr(desc, k) for k in SPEC_FIELDS if getattr(desc, k) is not None}
+
+
 def truck_differs(saved: SavedCalibration, truck: Mapping) -> str:
     """One sentence naming the first description field where ``truck`` (the given ``[vehicle]``
     fields, SI) differs from the one ``saved`` was calibrated from (numbers to 1e-9 relative), or ""."""
@@ -233,3 +243,79 @@ def truck_differs(saved: SavedCalibration, truck: Mapping) -> str:
             return (f"the calibration was made for a truck described with {key} = {a!r}, this one has {b!r}: "
                     "calibrate this truck on its own record, or give its own description")
     return ""
+
+
+def on_record(cal: Calibration, model_N, force_N, x_a_m, t_s, windows: tuple) -> Calibration:
+    """``cal`` as this record shows it: its fit figures and model error on this record's own
+    ``windows`` (each (lead-in start, scored start, end), samples), from the model's force with the
+    pans following the measured x_a (``model_N``, N, (n, 4)); no fit, no evaluation counted.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration saved from another record.
+    model_N : numpy.ndarray, N, (n, 4)
+        The calibrated model's force on this record, pans following ``x_a_m``.
+    force_N : numpy.ndarray, N, (n, 4)
+        This record's measured wheel forces.
+    x_a_m : numpy.ndarray, m, (n, 4)
+        Its measured pan displacement (the load cells' fitted mass is taken out with it).
+    t_s : numpy.ndarray, s, (n,)
+    windows : tuple of (int, int, int)
+        :func:`~rigsim.scenarios.records.model.calibrate.fit_windows` of this record.
+
+    Returns
+    -------
+    Calibration
+        ``cal`` with this record's ``fit_nrmse``, ``noise_nrmse``, ``band_nrmse``,
+        ``band_noise_nrmse`` and ``windows_s`` (its :attr:`~Calibration.excess_nrmse` is the model
+        error here), ``evaluations`` 0.
+    """
+    import dataclasses
+
+    import numpy as np
+
+    from rigsim.correction.identification.noise import noise_rms
+    from rigsim.scenarios.records.model.band_error import band_errors
+    from rigsim.scenarios.records.model.cell_mass import without_cell_mass
+
+    t = np.asarray(t_s, dtype=float)
+    fs = 1.0 / (t[1] - t[0])
+    model = np.asarray(model_N, dtype=float)
+    force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
+    scored = np.concatenate([np.arange(s, e) for _, s, e in windows])
+    norm = force[scored].std(axis=0)
+    fit = np.sqrt(np.mean((force[scored] - model[scored]) ** 2, axis=0)) / norm
+    noise = noise_rms(np.asarray(force_N, dtype=float), fs)
+    band, band_noise = band_errors([model[a:e] for a, _, e in windows], force, windows, fs, noise)
+    return dataclasses.replace(cal, fit_nrmse=tuple(float(v) for v in fit),
+                               noise_nrmse=tuple(float(v) for v in noise / norm), band_nrmse=band,
+                               band_noise_nrmse=band_noise, evaluations=0,
+                               windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in windows))
+
+
+def check_saved(cal: Calibration, model_pair, force_N, x_a_m, t_s, windows: tuple, limit: float) -> tuple:
+    """A saved calibration checked on this record: (``cal`` as :func:`on_record` shows it, the
+    model's (F_model(x_ref), F_model(x_a)), "") where its model error is within ``limit`` (1) on
+    every wheel it was fitted on, else (None, None, one sentence: the truck is calibrated again).
+
+    ``model_pair(variant)`` runs the calibrated truck on this record (the runs the correction
+    needs anyway); ``windows`` are this record's
+    (:func:`~rigsim.scenarios.records.model.calibrate.fit_windows`)."""
+    import dataclasses
+    import time
+
+    import numpy as np
+
+    from rigsim.mjcf.names import CORNERS
+
+    t0 = time.perf_counter()
+    pair = model_pair(cal.variant())
+    here = on_record(cal, pair[1], force_N, x_a_m, t_s, windows)
+    here = dataclasses.replace(here, wall_time_s=round(time.perf_counter() - t0, 3))
+    excess = np.where(np.isin(CORNERS, here.wheels), here.excess_nrmse, 0.0)
+    if excess.max() <= limit:
+        return here, pair, ""
+    worst = int(np.argmax(excess))
+    return None, None, (f"the saved calibration's model error on this record ({excess[worst]:.3f} on "
+                        f"{CORNERS[worst]}) is past {limit:g}, so the truck was calibrated again from its values")
