@@ -12,7 +12,8 @@ The names here are the lab's API: reading a record (:func:`read_record`), identi
 its drive and LVDT channels (:func:`identify_record`, :class:`RecordedIdentification`),
 correcting it linearly or by a truck model calibrated on it (:func:`correct_record`, with
 :class:`LinearOptions` or :class:`ModelOptions`,
-:class:`CorrectionResult`, :class:`ChannelLoads`, the truck model's :class:`Calibration`), and the
+:class:`CorrectionResult`, :class:`ChannelLoads`, the truck model's :class:`Calibration`, kept
+for the next record of the truck as a :class:`SavedCalibration` file, :func:`read_calibration`), and the
 one error class (:class:`RigsimError`). The sub-packages are the simulator's layers:
 :mod:`rigsim.mjcf` (the truck and rig as MJCF), :mod:`rigsim.hydraulics` (the actuators'
 equations), :mod:`rigsim.correction` (transfer functions, filters, identification, metrics and the
@@ -30,7 +31,7 @@ import importlib
 from rigsim.errors import RigsimError
 
 __all__ = ["read_record", "identify_record", "correct_record", "LinearOptions", "ModelOptions", "CorrectionResult",
-           "ChannelLoads",
+           "ChannelLoads", "SavedCalibration", "read_calibration",
            "RecordedIdentification", "Calibration", "RigsimError", "__version__"]
 
 #: The distribution's version (pyproject.toml's).
@@ -47,6 +48,8 @@ _HOMES = {
     "ChannelLoads": "rigsim.scenarios.records.api",
     "RecordedIdentification": "rigsim.scenarios.records.recorded",
     "Calibration": "rigsim.scenarios.records.model.result",
+    "SavedCalibration": "rigsim.scenarios.records.model.saved",
+    "read_calibration": "rigsim.scenarios.records.model.saved",
 }
 
 

@@ -33,7 +33,7 @@ FOLDERS = {"rigsim": "rigsim", "mjcf": "rigsim.mjcf", "hydraulics": "rigsim.hydr
            "correction": "rigsim.correction", "scenarios": "rigsim.scenarios"}
 #: The lab's API: what ``rigsim`` exports (a change here is a change of the public API).
 PUBLIC = ["read_record", "identify_record", "correct_record", "LinearOptions", "ModelOptions", "CorrectionResult",
-          "ChannelLoads",
+          "ChannelLoads", "SavedCalibration", "read_calibration",
           "RecordedIdentification", "Calibration", "RigsimError", "__version__"]
 
 

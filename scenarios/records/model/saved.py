@@ -53,6 +53,22 @@ class SavedCalibration:
         Its sampling rate.
     rigsim_version : str
         The rigsim that calibrated it.
+
+    Examples
+    --------
+    What ``CorrectionResult.saved_calibration`` holds after a correction by the truck model; one
+    made by hand here, the payload and its place fitted:
+
+    >>> import rigsim
+    >>> cal = rigsim.Calibration(names=("payload_kg", "payload_x_m"), units=("kg", "m"),
+    ...                          initial=(6000.0, -1.0), fitted=(6352.4, -1.32), sigma=(8.1, 0.004),
+    ...                          sigma_robust=(21.0, 0.011), fixed={}, fit_nrmse=(0.041, 0.043, 0.052, 0.049),
+    ...                          initial_nrmse=(0.31, 0.30, 0.42, 0.40), windows_s=((5.0, 10.0),),
+    ...                          weighted=True, evaluations=42, converged=True, message="", wall_time_s=95.0)
+    >>> saved = rigsim.SavedCalibration(cal, truck={"wheelbase_m": 4.6}, truck_file="truck.toml",
+    ...                                 record="run1.csv", record_s=60.0, fs_hz=1000.0, rigsim_version="0.1.0")
+    >>> saved.model_error
+    (0.041, 0.043, 0.052, 0.049)
     """
 
     calibration: Calibration
@@ -193,6 +209,18 @@ def read_calibration(path) -> SavedCalibration:
     ScenarioError
         The file cannot be read, is not JSON, not a calibration, of a later layout, or its values
         make no truck (one sentence naming the key).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import rigsim
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "run1.calibration.json"
+    >>> _ = path.write_text('{"format": "rigsim calibration", "version": 9}')
+    >>> try:
+    ...     rigsim.read_calibration(path)
+    ... except rigsim.RigsimError as error:
+    ...     print(str(error).split(": ", 1)[1])
+    has layout version 9, this rigsim reads 1
     """
     import pathlib
 
