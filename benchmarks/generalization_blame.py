@@ -65,7 +65,7 @@ from rigsim.scenarios.core.config import parse_scenario  # noqa: E402
 from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
 from rigsim.scenarios.core.rig import Rig  # noqa: E402
 from rigsim.scenarios.core.run import run  # noqa: E402
-from rigsim.scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE  # noqa: E402
 from rigsim.scenarios.studies import scoring  # noqa: E402
 from rigsim.scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 from rigsim.scenarios.studies.identify.compute import identify_rig  # noqa: E402
@@ -117,9 +117,9 @@ def analyse_job(doc: dict, runs: dict) -> dict:
         return np.column_stack([correct_zero_phase(force[:, i], e) for i, e in enumerate(exact)])
 
     ident = correct_forces(measured(runs[("rig", True)]), runs[("identify", True)].actuators(), fs,
-                           lowpass=LOWPASS, mode=MODE, settling_tolerance=tol)
+                           lowpass=BAND_LOWPASS, mode=BAND_MODE, settling_tolerance=tol)
     n = ident.corrected_N.shape[0]
-    rows = ident.settled & reference_filter(fs, LOWPASS, settling_tolerance=tol).transient_mask(n, MODE)
+    rows = ident.settled & reference_filter(fs, BAND_LOWPASS, settling_tolerance=tol).transient_mask(n, BAND_MODE)
     for e in exact:
         rows &= e.transient_mask(n)
     road_on = np.asarray(runs[("road", True)].signals["tire_force_N"], dtype=float)
@@ -133,7 +133,7 @@ def analyse_job(doc: dict, runs: dict) -> dict:
         "linearized": err(exactly(measured(runs[("rig", True)])), road_on),
         "linear_pans": err(exactly(measured(runs[("linear", True)])), road_on),
         "no_friction": err(exactly(measured(runs[("linear", False)])), road_off),
-        "band_limit": err(band_limit(road_off, fs, LOWPASS, MODE), road_off),
+        "band_limit": err(band_limit(road_off, fs, BAND_LOWPASS, BAND_MODE), road_off),
     }
     shares = {"identification": steps["identified"] - steps["linearized"],
               "actuators": steps["linearized"] - steps["linear_pans"],

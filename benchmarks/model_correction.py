@@ -90,7 +90,8 @@ from rigsim.scenarios.core.rig import Rig  # noqa: E402
 from rigsim.scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
 from rigsim.scenarios.records.model.differential import correct_with_model, settled_mask  # noqa: E402
 from rigsim.scenarios.records.model.first_guess import xml_nominal  # noqa: E402, F401  (the plants' nominal values)
-from rigsim.scenarios.records.model.score import LOWPASS, MODE, band_rows  # noqa: E402
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE  # noqa: E402
+from rigsim.scenarios.studies.correction_score import band_rows  # noqa: E402
 from rigsim.scenarios.studies import scoring  # noqa: E402
 from rigsim.scenarios.studies.model_suite.plants import (TIRE_PLANT, mismatch, plant_job, plant_keys,  # noqa: E402
                                                          plant_name, plant_scenario, plant_truck, plant_variant)
@@ -143,16 +144,16 @@ def analyse(case, duration_s, plant, road, rig, ident, noise_N, workers, cab: st
     best = score.methods[scoring.BEST.name]
     wall0, cpu0 = time.perf_counter(), cpu_s()
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], rig.signals["pan_m"], rig_N, base_scenario=sc,
-                            workers=workers, cab=cab, linear=scoring.linear_correction(ident.actuators(), fs))
+                            workers=workers, cab=cab, linear=scoring.best_linear(ident.actuators(), fs))
     wall, cpu = time.perf_counter() - wall0, cpu_s() - cpu0
-    road_b = band_limit(road_f, fs, LOWPASS, MODE)
+    road_b = band_limit(road_f, fs, BAND_LOWPASS, BAND_MODE)
     rows = band_rows(road_f.shape[0], fs) & best.settled & settled_mask(rig.t_s)
     out = {"linear": nrmse(best.corrected_N[rows], road_b[rows]),
            "linear_dlc_error": dlc(best.corrected_N[rows]) / dlc(road_f[rows]) - 1.0,
-           "rig": nrmse(band_limit(rig_N, fs, LOWPASS, MODE)[rows], road_b[rows]),
+           "rig": nrmse(band_limit(rig_N, fs, BAND_LOWPASS, BAND_MODE)[rows], road_b[rows]),
            "floor": linear_floor(rig_N, road_b, LEAD, LAG, rows=rows).nrmse}
     if not mc.use_linear:
-        corr_b = band_limit(mc.corrected_N, fs, LOWPASS, MODE)
+        corr_b = band_limit(mc.corrected_N, fs, BAND_LOWPASS, BAND_MODE)
         out["model"] = nrmse(corr_b[rows], road_b[rows])
         out["model_dlc_error"] = dlc(mc.corrected_N[rows]) / dlc(road_f[rows]) - 1.0
     truth = {k: getattr(sc.vehicle, k) for k in (mc.calibration.names if mc.calibration else ())}

@@ -90,7 +90,7 @@ from rigsim.scenarios.core.files import to_json  # noqa: E402
 from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
 from rigsim.scenarios.core.rig import Rig  # noqa: E402
 from rigsim.scenarios.core.run import run  # noqa: E402
-from rigsim.scenarios.records.model.score import LOWPASS, MODE  # noqa: E402
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE  # noqa: E402
 from rigsim.scenarios.studies import scoring  # noqa: E402
 from rigsim.scenarios.studies.decomposition import ExactLinearCorrection, linear_pans_run, with_friction  # noqa: E402
 from rigsim.scenarios.studies.identify.compute import identify_rig  # noqa: E402
@@ -158,10 +158,10 @@ def analyse_job(path: str, duration_s: float, kind: str, friction: bool, road, m
     plant = rig_model.linearize()  # the same linear T_a the "linear" run's pans followed
     fs = road.rate_hz
     tol = scoring.SETTLING_TOLERANCE
-    road_band = band_limit(np.asarray(road.signals["tire_force_N"], dtype=float), fs, LOWPASS, MODE)
+    road_band = band_limit(np.asarray(road.signals["tire_force_N"], dtype=float), fs, BAND_LOWPASS, BAND_MODE)
     rig_N = scoring.measured_force(measured, noise_N, sc.seed)  # the load cells' force with their noise
     noise = rig_N - np.asarray(measured.signals["tire_force_N"], dtype=float)
-    rows = reference_filter(fs, LOWPASS, settling_tolerance=tol).transient_mask(rig_N.shape[0], MODE)
+    rows = reference_filter(fs, BAND_LOWPASS, settling_tolerance=tol).transient_mask(rig_N.shape[0], BAND_MODE)
     cache: dict = {}
     exact = [ExactLinearCorrection(plant, i, fs, tol, cache) for i in range(4)]
     for e in exact:
@@ -176,7 +176,7 @@ def analyse_job(path: str, duration_s: float, kind: str, friction: bool, road, m
             raise RuntimeError("the scoring measured another rig force than scoring.measured_force gives")
         rows &= best.settled
         corr = best.corrected_N
-        corr_noise = correct_forces(noise, identification.actuators(), fs, lowpass=LOWPASS, mode=MODE,
+        corr_noise = correct_forces(noise, identification.actuators(), fs, lowpass=BAND_LOWPASS, mode=BAND_MODE,
                                     settling_tolerance=tol).corrected_N
         out["corrected_identified"] = nrmse(corr[rows], road_band[rows])
         out["corrected_identified_scoring"] = np.asarray(best.figures["nrmse_corrected"])  # on its own samples

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BAND_HZ", "BAND_ORDER", "LowPass", "paper_lowpass", "regularized_lowpass", "as_lowpass"]
+__all__ = ["BAND_HZ", "BAND_ORDER", "BAND_LOWPASS", "BAND_MODE", "LowPass", "paper_lowpass", "regularized_lowpass", "as_lowpass"]
 
 #: The correction's band limit, Hz: the corner of the regularized low-pass, and the top of the band
 #: in which the identification fits and checks T_a, the drive iteration updates the drive and the
@@ -39,6 +39,12 @@ BAND_HZ = 30.0
 #: Order of the regularized low-pass (Butterworth), 1: above T_a's relative degree (3 for eq. 4),
 #: so the corrected force rolls off beyond :data:`BAND_HZ`.
 BAND_ORDER = 6
+#: The correction's own low-pass (``rigsim correct``'s default ``--lowpass``): the regularized one,
+#: at :data:`BAND_HZ`; the band limit a correction is judged through.
+BAND_LOWPASS = "regularized"
+#: How the correction and its band limit are applied by default
+#: (:func:`rigsim.correction.output.apply.correct`): zero-phase, offline.
+BAND_MODE = "zerophase"
 
 
 @dataclass(frozen=True, eq=False)

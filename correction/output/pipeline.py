@@ -20,6 +20,7 @@ from rigsim.correction.identification.actuator_fit import ActuatorFit
 from rigsim.correction.output.apply import correct
 from rigsim.correction.output.correction_filter import SETTLING_TOLERANCE
 from rigsim.correction.output.filters import design_correction, reference_filter
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.correction.output.transfer import is_transfer_function
 from rigsim.errors import RigsimError
 
@@ -132,7 +133,7 @@ def _actuator_list(actuators, k: int) -> list:
     return tas
 
 
-def correct_forces(force_N, actuators, fs: float, *, lowpass="regularized", mode: str = "zerophase",
+def correct_forces(force_N, actuators, fs: float, *, lowpass=BAND_LOWPASS, mode: str = BAND_MODE,
                    settling_tolerance: float = SETTLING_TOLERANCE, normalize_dc: bool = False) -> CorrectedForces:
     """Correct measured wheel forces by ``T_a^-1 T_F``, each column with its own ``T_a``.
 
@@ -147,9 +148,11 @@ def correct_forces(force_N, actuators, fs: float, *, lowpass="regularized", mode
     fs : float, Hz
         Sampling rate.
     lowpass : {"paper", "regularized"} or LowPass
-        ``T_F`` (:mod:`rigsim.correction.output.lowpass`).
+        ``T_F`` (:mod:`rigsim.correction.output.lowpass`; default
+        :data:`~rigsim.correction.output.lowpass.BAND_LOWPASS`).
     mode : {"causal", "zerophase"}
-        How the filters are applied (:func:`rigsim.correction.output.apply.correct`).
+        How the filters are applied (:func:`rigsim.correction.output.apply.correct`; default
+        :data:`~rigsim.correction.output.lowpass.BAND_MODE`).
     settling_tolerance : float, 1
         Tolerance of the filters' transients (:func:`rigsim.correction.output.filters.design_correction`).
     normalize_dc : bool

@@ -22,11 +22,11 @@ import dataclasses
 import numpy as np
 
 from rigsim.correction.output.filters import reference_filter
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.scenarios.core.config import Scenario
 from rigsim.scenarios.core.drive import Drive
 from rigsim.scenarios.core.rig import Rig
 from rigsim.scenarios.core.run import run
-from rigsim.scenarios.records.model.score import LOWPASS, MODE
 
 __all__ = ["KERNEL_WINDOW_S", "with_friction", "linear_pans_run", "kernel_tail", "ExactLinearCorrection"]
 
@@ -80,7 +80,7 @@ class ExactLinearCorrection:
     :class:`~rigsim.correction.output.correction_filter.CorrectionFilter` (``fs``,
     ``zero_phase_response``, ``transient_samples``); its margins come from its own kernel (on a
     :data:`KERNEL_WINDOW_S` grid) at ``tolerance``. T_F is the project's band limit
-    (:data:`rigsim.scenarios.records.model.score.LOWPASS`).
+    (:data:`rigsim.correction.output.lowpass.BAND_LOWPASS`).
 
     Parameters
     ----------
@@ -99,7 +99,7 @@ class ExactLinearCorrection:
     def __init__(self, plant, wheel: int, fs: float, tolerance: float, cache: dict | None = None):
         self.plant, self.wheel, self.fs = plant, int(wheel), float(fs)
         self.cache = {} if cache is None else cache
-        self.reference = reference_filter(fs, LOWPASS, settling_tolerance=tolerance)
+        self.reference = reference_filter(fs, BAND_LOWPASS, settling_tolerance=tolerance)
         m = int(KERNEL_WINDOW_S * fs)
         kernel = np.fft.irfft(self.zero_phase_response(np.fft.rfftfreq(m, 1.0 / fs)), m)
         self.margins = (kernel_tail(kernel[:m // 2], tolerance), kernel_tail(kernel[m // 2:][::-1], tolerance))
@@ -113,7 +113,7 @@ class ExactLinearCorrection:
         ta = self.cache[key][:, self.wheel, self.wheel]
         return self.reference.zero_phase_response(f) / ta
 
-    def transient_samples(self, mode: str = MODE) -> tuple[int, int]:
+    def transient_samples(self, mode: str = BAND_MODE) -> tuple[int, int]:
         """Samples (start, end) the correction's transients spoil."""
         return self.margins
 

@@ -41,16 +41,69 @@ from rigsim.correction.output.apply import band_limit
 from rigsim.correction.metrics.damage import damage_equivalent_load, rainflow_cycles, stress_factor
 from rigsim.correction.metrics.dlc import dlc, nrmse
 from rigsim.correction.output.eq4 import eq4_coefficients_from
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.correction.output.pipeline import SETTLING_TOLERANCE, correct_forces
 from rigsim.hydraulics.linearization import eq4_parameters
 from rigsim.hydraulics.params import GRAVITY_M_S2
 from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.core.lab import LabChain, measure
-from rigsim.scenarios.records.methods import BEST, METHODS, NOISE_N, PAPER, Method, method_named
 
 __all__ = ["NOISE_N", "MIN_SCORED_S", "MIN_DURATION_S", "Method", "PAPER", "BEST", "METHODS", "method_named", "MethodScore",
            "PairScore", "score_pair", "SETTLING_TOLERANCE", "check_noise", "measured_force", "shortest_scorable_s",
-           "linear_correction"]
+           "best_linear"]
+
+#: Default rms of the white measurement noise added to the rig's wheel forces, N. A strain-gauge
+#: load cell rated for the 156 kN actuator force resolves ~0.05 % of its range (~80 N);
+#: 100 N rms at 1 kHz is that, rounded up.
+NOISE_N = 100.0
+
+
+@dataclass(frozen=True)
+class Method:
+    """How a correction is made.
+
+    Attributes
+    ----------
+    name : str
+    actuator : {"eq4", "identified"}
+        Where T_a comes from: eq. 4 from the actuator parameters, or identified per wheel from
+        the rig run's drive and pan displacement.
+    lowpass : {"paper", "regularized"}
+        The low-pass T_F (:mod:`rigsim.correction.output.lowpass`).
+    mode : {"causal", "zerophase"}
+        How the filter is applied (:func:`rigsim.correction.output.apply.correct`).
+    description : str
+    """
+
+    name: str
+    actuator: str
+    lowpass: str
+    mode: str
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        for field, value, allowed in (("actuator", self.actuator, ("eq4", "identified")),
+                                      ("lowpass", self.lowpass, ("paper", "regularized")),
+                                      ("mode", self.mode, ("causal", "zerophase"))):
+            if value not in allowed:
+                raise ScenarioError(f"correction {field} must be one of {', '.join(allowed)}, got {value!r}")
+
+
+PAPER = Method("paper", "eq4", "paper", "causal",
+               "eq. 4 from the actuator parameters at each wheel's static load, paper's low-pass (16/24 Hz), causal")
+BEST = Method("best", "identified", BAND_LOWPASS, BAND_MODE,
+              "T_a identified per corner from independent random drives at the test drive's rms (rigsim identify), "
+              "30 Hz 6th-order Butterworth, zero-phase")
+METHODS = (PAPER, BEST)
+
+
+def method_named(actuator: str, lowpass: str, mode: str) -> Method:
+    """The :class:`Method` with these settings: ``paper`` or ``best`` when it is one of them."""
+    for m in METHODS:
+        if (m.actuator, m.lowpass, m.mode) == (actuator, lowpass, mode):
+            return m
+    return Method("custom", actuator, lowpass, mode, f"T_a {actuator}, low-pass {lowpass}, {mode}")
+
 
 #: Fewer settled seconds than this cannot give a meaningful DLC, s.
 MIN_SCORED_S = 0.25
@@ -295,9 +348,11 @@ def score_pair(road, rig, rig_model, *, methods=METHODS, identified=None, noise_
                      dlc_rig=dlc(rig_f), methods=scores, corners=tuple(road.corners))
 
 
-def linear_correction(actuators, fs_hz: float):
-    """The project's linear correction with T_a ``actuators`` (one per wheel) at ``fs_hz`` (Hz), as the
-    model correction's ``linear``: forces (N, (n, 4)) -> (corrected (N), settled (bool, (n,)))."""
+def best_linear(actuators, fs_hz: float):
+    """The :data:`BEST` method's linear correction with T_a ``actuators`` (one per wheel) at ``fs_hz``
+    (Hz), as the model correction's ``linear`` (L): forces (N, (n, 4)) -> (corrected (N), settled
+    (bool, (n,))). A T_a the correction refuses raises its
+    :class:`~rigsim.correction.output.pipeline.CorrectionError`."""
     def correct(forces):
         res = correct_forces(forces, actuators, fs_hz, lowpass=BEST.lowpass, mode=BEST.mode)
         return res.corrected_N, res.settled

@@ -19,12 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from rigsim.correction.output.apply import band_limit
-from rigsim.correction.output.lowpass import as_lowpass
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE, as_lowpass
 
-__all__ = ["BAND_LOWPASS", "band_errors", "noise_bandwidth_hz"]
-
-#: The band limit of the model error: the correction's own low-pass (``rigsim correct``'s default).
-BAND_LOWPASS = "regularized"
+__all__ = ["band_errors", "noise_bandwidth_hz"]
 
 
 def noise_bandwidth_hz(fs: float, lowpass=BAND_LOWPASS) -> float:
@@ -60,7 +57,7 @@ def band_errors(model_N, force_N, windows, fs: float, noise_N) -> tuple[tuple, t
     both = []  # per window: the residual's columns, then the force's, band-limited together
     for m, (a, s, e) in zip(model_N, windows):
         err = m[s - a:] - force_N[s:e]
-        both.append(band_limit(np.hstack([err - err.mean(axis=0), force_N[s:e]]), fs, BAND_LOWPASS, "zerophase"))
+        both.append(band_limit(np.hstack([err - err.mean(axis=0), force_N[s:e]]), fs, BAND_LOWPASS, BAND_MODE))
     both = np.concatenate(both)
     k = force_N.shape[1]
     residual, force = both[:, :k], both[:, k:]

@@ -21,7 +21,7 @@ typical lab's compensation 7.5 kg too large): worst DLC error 3.1 % with a mass 
 with one shared (both read by plain least squares, below), 2.6 % without the fit.
 
 The acceleration is band-limited by the correction's own low-pass H
-(:data:`~rigsim.scenarios.records.model.band_error.BAND_LOWPASS`, zero-phase): the LVDT's noise
+(:data:`~rigsim.correction.output.lowpass.BAND_LOWPASS`, zero-phase): the LVDT's noise
 differentiated twice dominates above the truck's band, and the correction passes nothing above it.
 The cells' force in the residual is not band-limited, so the mass is read against ``H a``
 (``test``: the regressor band-limited twice) over ``|H a|^2``: ``(H^2 a) . (m a) = m |H a|^2``
@@ -35,8 +35,8 @@ from __future__ import annotations
 import numpy as np
 
 from rigsim.correction.output.apply import band_limit
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.scenarios.core.lab import pan_acceleration
-from rigsim.scenarios.records.model.band_error import BAND_LOWPASS
 
 __all__ = ["band_acceleration", "without_cell_mass", "mass_of", "mass_sigma"]
 
@@ -57,7 +57,7 @@ def without_cell_mass(force_N, x_a_m, fs: float, mass_kg: float) -> np.ndarray:
 
 def band_limited(x, fs: float) -> np.ndarray:
     """``x`` ((n, k)) through the correction's band limit at ``fs`` (Hz), zero-phase."""
-    return band_limit(np.asarray(x, dtype=float), float(fs), BAND_LOWPASS, "zerophase")
+    return band_limit(np.asarray(x, dtype=float), float(fs), BAND_LOWPASS, BAND_MODE)
 
 
 def mass_of(error_N, acc_m_s2, weights, test=None) -> float:

@@ -40,8 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigsim.correction.output.apply import band_limit
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.mjcf.names import CORNERS
-from rigsim.scenarios.records.model.band_error import BAND_LOWPASS
 
 __all__ = ["LAGS_S", "FIT_RATE_HZ", "RIDGE", "DLC_GOAL", "HybridOutlook", "linear_part", "hybrid_outlook"]
 
@@ -181,13 +181,13 @@ def hybrid_outlook(f_ref_N, f_a_N, residual_N, hybrid_N, linear, fs_hz: float, r
     rows = np.asarray(rows, dtype=bool)
     f_ref, f_a = np.asarray(f_ref_N, dtype=float), np.asarray(f_a_N, dtype=float)
     r, hybrid = np.asarray(residual_N, dtype=float), np.asarray(hybrid_N, dtype=float)
-    road = band_limit(f_ref, fs_hz, BAND_LOWPASS, "zerophase")[rows]
+    road = band_limit(f_ref, fs_hz, BAND_LOWPASS, BAND_MODE)[rows]
     lin_model = linear(f_a)[0][rows]
     first = int(np.argmax(rows))  # the residual's part linear in the pans fitted where it has settled
     if pans_m is not None and rows.any():
         r = r.copy()
         r[first:] = r[first:] - linear_part(r[first:], np.asarray(pans_m, dtype=float)[first:], fs_hz)
-    moved = (linear(r)[0] - band_limit(r, fs_hz, BAND_LOWPASS, "zerophase"))[rows]  # (L - B) r_nl
+    moved = (linear(r)[0] - band_limit(r, fs_hz, BAND_LOWPASS, BAND_MODE))[rows]  # (L - B) r_nl
     scale = road.std(axis=0)
     mean = road.mean(axis=0)
     h = hybrid[rows]

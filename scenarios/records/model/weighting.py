@@ -21,8 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigsim.correction.output.lowpass import as_lowpass
-from rigsim.scenarios.records.methods import BEST
+from rigsim.correction.output.lowpass import BAND_LOWPASS, as_lowpass
 
 __all__ = ["KERNEL_S", "differential_weight", "differential_kernel"]
 
@@ -40,7 +39,7 @@ def differential_weight(x_ref_m, x_a_m, fs: float, nperseg: int = 2048) -> tuple
     _, s_a = welch(x_a, fs=fs, nperseg=nper, axis=0)
     ratio = np.sqrt(s_dx.sum(axis=1) / np.maximum(s_a.sum(axis=1), 1e-300))
     ratio[0] = ratio[1]  # the mean is no frequency the correction has to follow
-    band = np.abs(as_lowpass(BEST.lowpass).response(f))  # the band limit the correction is judged through
+    band = np.abs(as_lowpass(BAND_LOWPASS).response(f))  # the band limit the correction is judged through
     return f, ratio * band
 
 

@@ -23,12 +23,13 @@ import numpy as np
 from rigsim.correction.output.apply import band_limit
 from rigsim.correction.output.denoise import DRIFT_HZ
 from rigsim.correction.output.floor import linear_floor
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.scenarios.core.lab import LabChain, aligned, measure
 from rigsim.scenarios.records.model.cell_mass import without_cell_mass
 from rigsim.scenarios.records.model.differential import (correct_with_model, hybrid_correction, model_force_pair,
                                                    settled_mask)
-from rigsim.scenarios.records.model.score import LOWPASS, MODE, band_rows, score_correction
-from rigsim.scenarios.studies.scoring import linear_correction
+from rigsim.scenarios.studies.correction_score import band_rows, score_correction
+from rigsim.scenarios.studies.scoring import best_linear
 
 __all__ = ["FLOOR_TAPS", "PlantScore", "score_plant"]
 
@@ -153,7 +154,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     raw = measure(rig, lab, noise_N, seed)
     measured = aligned(raw, fs, align if isinstance(align, LabChain) else lab) if align else raw
     road_N = np.asarray(road.signals["tire_force_N"], dtype=float)
-    lin = linear_correction(identification.actuators(), fs)
+    lin = best_linear(identification.actuators(), fs)
     linear_N, linear_settled = lin(measured.force_N)
     wall0, cpu0 = time.perf_counter(), _cpu_s()
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
@@ -173,7 +174,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
         scores["hybrid"] = score_correction(hybrid, road_N, fs, rows)
     scores["delivered"] = (score_correction(mc.corrected_N, road_N, fs, rows) if mc.method == "model"
                            else scores["linear"])
-    floor = linear_floor(raw.force_N, band_limit(road_N, fs, LOWPASS, MODE), *FLOOR_TAPS, rows=rows).nrmse
+    floor = linear_floor(raw.force_N, band_limit(road_N, fs, BAND_LOWPASS, BAND_MODE), *FLOOR_TAPS, rows=rows).nrmse
     cal = mc.calibration
     fit = None if cal is None else np.asarray(cal.fit_nrmse, dtype=float)
     error = None if cal is None else np.asarray(cal.excess_nrmse, dtype=float)

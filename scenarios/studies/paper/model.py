@@ -26,8 +26,8 @@ from rigsim.correction.output.denoise import DRIFT_HZ
 from rigsim.scenarios.core.lab import LabChain, measure_lvdt
 from rigsim.scenarios.records.model.differential import HYBRID_LIMIT, HYBRID_FORMULA, correct_with_model
 from rigsim.scenarios.records.model.result import ModelCorrection
-from rigsim.scenarios.records.model.score import score_correction
-from rigsim.scenarios.studies.scoring import linear_correction
+from rigsim.scenarios.studies.correction_score import score_correction
+from rigsim.scenarios.studies.scoring import best_linear
 
 __all__ = ["ModelScore", "drift_corner", "model_scores", "model_table"]
 
@@ -89,7 +89,7 @@ def _score_case(case, workers: int | None) -> ModelScore:
     rig, road, score = case.rig, case.road, case.score
     best = score.methods["best"]
     lvdt = measure_lvdt(rig.signals["pan_m"], rig.rate_hz, case.scenario.lab, case.scenario.seed)
-    linear = linear_correction(case.identification.actuators(), rig.rate_hz)
+    linear = best_linear(case.identification.actuators(), rig.rate_hz)
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], lvdt, score.rig_N,
                             base_scenario=case.scenario, workers=workers, linear=linear,
                             drift_hz=drift_corner(case.scenario.lab))

@@ -25,7 +25,7 @@ from rigsim.scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, 
 from rigsim.scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, correct_with_model,
                                                              differential_correction, settled_mask)
 from rigsim.scenarios.records.model.model_runs import model_scenario, pan_motion_drive
-from rigsim.scenarios.records.model.score import score_correction
+from rigsim.scenarios.studies.correction_score import score_correction
 
 DURATION_S = 8.0
 
