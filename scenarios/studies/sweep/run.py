@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import pathlib
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from rigsim.scenarios.core.progress import Progress, format_eta
 from rigsim.scenarios.studies.sweep.case import evaluate_payload
 from rigsim.scenarios.studies.sweep.grid import Case, SweepGrid
 from rigsim.scenarios.studies.sweep.store import (CASES_DIR, collect_results, read_case_files, write_case, write_meta,
@@ -26,16 +26,6 @@ from rigsim.scenarios.studies.sweep.store import (CASES_DIR, collect_results, re
 __all__ = ["SweepOutcome", "run_sweep", "SUMMARY_FILE", "format_eta"]
 
 SUMMARY_FILE = "summary.png"
-
-
-def format_eta(seconds: float) -> str:
-    """A duration (s) as ``HH:MM:SS``, with days in front from 24 h on (``3d 04:05:06``)."""
-    if not seconds >= 0 or seconds == float("inf"):
-        return "--:--:--"
-    s = int(round(seconds))
-    days, s = divmod(s, 86400)
-    clock = f"{s // 3600:02d}:{s % 3600 // 60:02d}:{s % 60:02d}"
-    return f"{days}d {clock}" if days else clock
 
 
 @dataclass(frozen=True)
@@ -71,53 +61,6 @@ class SweepOutcome:
         """Throughput of this run: cases run now (ok or failed) per minute of wall time, 1/min."""
         n = self.ok + self.failed
         return 60.0 * n / self.wall_time_s if self.wall_time_s > 0 else float("nan")
-
-
-class _Progress:
-    """Finished / failed / remaining counts and an ETA: a tqdm bar on a terminal, else one line
-    per finished case on stderr."""
-
-    def __init__(self, total: int, skipped: int, enabled: bool, stream=None):
-        self.total, self.done, self.failed = total, skipped, 0
-        self.stream = stream if stream is not None else sys.stderr
-        self.enabled = enabled
-        self.t0 = time.perf_counter()
-        self.started = 0
-        self.bar = None
-        if enabled and getattr(self.stream, "isatty", lambda: False)():
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total, initial=skipped, unit="case", file=self.stream, dynamic_ncols=True,
-                            bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}] {postfix}")
-            self._postfix()
-
-    def _postfix(self) -> None:
-        self.bar.set_postfix_str(f"failed {self.failed}, remaining {self.total - self.done}")
-
-    def update(self, case_id: str, record: dict) -> None:
-        self.done += 1
-        self.started += 1
-        ok = record["status"] == "ok"
-        self.failed += 0 if ok else 1
-        if not self.enabled:
-            return
-        note = f"{case_id}: {'ok' if ok else 'FAILED: ' + str(record.get('error'))} " \
-               f"({record.get('wall_time_s') or 0:.1f} s)"
-        if self.bar is not None:
-            self.bar.update(1)
-            self._postfix()
-            if not ok:
-                self.bar.write(note, file=self.stream)
-            return
-        elapsed = time.perf_counter() - self.t0
-        left = self.total - self.done
-        eta = elapsed / self.started * left
-        print(f"[{self.done}/{self.total} finished, {self.failed} failed, {left} remaining, ETA "
-              f"{format_eta(eta)}] {note}", file=self.stream, flush=True)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
 
 
 def _lost(case: Case, exc: BaseException) -> dict:
@@ -168,7 +111,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
     finished = read_case_files(grid, out) if resume else {}
     finished = {cid: rec for cid, rec in finished.items() if not rec.get("retry")}
     todo = [c for c in grid.cases if c.case_id not in finished]
-    bar = _Progress(len(grid.cases), len(grid.cases) - len(todo), progress)
+    bar = Progress(len(grid.cases), len(grid.cases) - len(todo), progress)
     settings = grid.settings.as_dict()
     n_ok = n_failed = 0
     interrupted = False
@@ -192,7 +135,7 @@ def run_sweep(grid: SweepGrid, out_dir, executor: cf.Executor, *, resume: bool =
             timings[case.case_id] = record.get("wall_time_s")
             n_ok += record["status"] == "ok"
             n_failed += record["status"] != "ok"
-            bar.update(case.case_id, record)
+            bar.update(case.case_id, record["status"] == "ok", record.get("error"), record.get("wall_time_s"))
             if on_record is not None:
                 on_record(case.case_id, record)
     except KeyboardInterrupt:
