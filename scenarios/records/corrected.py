@@ -141,6 +141,9 @@ class CorrectionResult:
         Per channel the loads on the settled samples; empty when no sample is settled.
     calibration : rigsim.scenarios.records.model.result.Calibration or None
         The truck model's calibration, when the model was asked for and could be calibrated.
+    time_start_s : float, s
+        Where the record's time axis started on the lab's clock (its reader's ``time_start_s``;
+        :attr:`time_s` runs from 0 as the record was read): the written file's time is on that clock.
     saved_calibration : rigsim.scenarios.records.model.saved.SavedCalibration or None
         The same with the truck description and the record it came from, as
         :meth:`write_calibration` writes it for the next record of this truck.
@@ -196,6 +199,7 @@ class CorrectionResult:
     loads: tuple = ()
     calibration: object = None
     saved_calibration: object = None
+    time_start_s: float = 0.0
     actuators: tuple = ()
     filters: tuple = ()
     inputs: tuple = ()
@@ -251,7 +255,8 @@ class CorrectionResult:
         data = {f"{c}_corrected": self.corrected_N[rows, j] for j, c in enumerate(self.channels)}
         if self.transient == "mark":
             data["settled"] = self.settled[rows].astype(float)
-        out = SimpleNamespace(time_s=self.time_s[rows], data=data, units=output_units(self.channels, self.transient))
+        out = SimpleNamespace(time_s=self.time_s[rows] + self.time_start_s, data=data,
+                              units=output_units(self.channels, self.transient))
         try:
             return write_channels(path, out, metadata=fit_metadata(path, self.metadata), overwrite=overwrite,
                                   inputs=self.inputs)

@@ -86,7 +86,11 @@ class CorrectionPlan:
     def run(self, progress=None) -> CorrectionResult:
         """Correct the record. ``progress``: called with each progress line or note of a long run
         (the model's calibration), None: silent. The force and LVDT channels' timing, where the
-        settings give it, is undone first (:func:`rigsim.scenarios.records.timing.aligned_record`)."""
+        settings give it, is undone first (:func:`rigsim.scenarios.records.timing.aligned_record`). The
+        result keeps where the record's time axis started (its ``time_start_s``), so its file is on the
+        record's clock."""
+        from rigsim.correction.io.measured_core import TIME_START_KEY
+
         s = self.settings
         record = aligned_record(self.record, self.record.fs_hz,
                                 [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)])
@@ -94,8 +98,11 @@ class CorrectionPlan:
         if s.method == "model":
             from rigsim.scenarios.records.model_record import run_model
 
-            return run_model(plan, progress)
-        return run_linear(plan)
+            result = run_model(plan, progress)
+        else:
+            result = run_linear(plan)
+        start = float(self.record.metadata.get(TIME_START_KEY, 0.0))
+        return dataclasses.replace(result, time_start_s=start) if start else result
 
 
 def _check_band(settings, record) -> None:

@@ -292,3 +292,24 @@ def test_the_model_correction_gives_the_values_of_rigsim_correct_model(truck_rec
     timeless = functools.partial(re.sub, r"in [0-9.]+ s", "in _ s")  # the lines state wall times
     assert timeless("\n".join(lines) + "\n") == timeless(progress)  # the progress lines go to stderr, the same
     assert result.metadata["cal_runs"].endswith(", converged")
+
+
+def test_a_record_on_the_labs_clock_is_written_on_that_clock(rig, tmp_path):
+    """A record whose time axis starts at 86 400 s (a day's clock) is read from 0 s (its start in
+    ``time_start_s``); the corrected file's time is on the record's clock again: read back, its
+    start is the lab's 86 400 s plus the samples the correction's transients dropped."""
+    src = (rig / "rig.csv").read_text().splitlines()
+    shifted = [src[0]] + [",".join([repr(float(line.split(",")[0]) + 86400.0), *line.split(",")[1:]])
+                          for line in src[1:]]
+    (tmp_path / "clock.csv").write_text("\n".join(shifted) + "\n")
+    record = read_record(tmp_path / "clock.csv")
+    assert record.time_s[0] == 0.0 and float(record.metadata["time_start_s"]) == 86400.0
+    result = correct_record(record, LinearOptions(actuators=str(rig / "acts.toml")))
+    assert result.time_start_s == 86400.0
+    back = read_record(result.write(tmp_path / "out.csv"))
+    first = result.time_s[result.settled][0]  # the file starts at the first settled sample
+    assert float(back.metadata["time_start_s"]) == pytest.approx(86400.0 + first, abs=1e-9)
+    plain = correct_record(read_record(rig / "rig.csv"), LinearOptions(actuators=str(rig / "acts.toml")))
+    again = read_record(plain.write(tmp_path / "plain.csv"))
+    assert plain.time_start_s == 0.0 and float(again.metadata["time_start_s"]) == pytest.approx(first, abs=1e-9)
+    np.testing.assert_array_equal(back.array(), again.array())  # the same forces, on the other clock
