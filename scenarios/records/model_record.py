@@ -245,17 +245,21 @@ def run_model(plan, progress=None) -> CorrectionResult:
     if unused:
         say(f"note: {str(s.scenario_file)!r} [vehicle] {', '.join(unused)} not used: the model is the truck its "
             "description gives, its payload and position start from the record's static loads")
-    say(f"model correction of {str(record.path)!r} ({forces.shape[0] / fs:.4g} s at {fs:.6g} Hz): calibrating "
-        f"the truck model on {windows} window(s) of {WINDOW_LEAD_S + WINDOW_S:g} s, at most {max_nfev} fit "
-        f"evaluations, {s.workers} worker process(es); this takes minutes")
     if s.ta is not None:
         tas, source = s.ta, ta_text(s.ta_source)
-    else:
+    else:  # identified first: a drive and LVDT wired wrongly is refused before minutes of calibration
         from rigsim.scenarios.records.recorded import identify_pairs
 
         say("identifying T_a per corner from the drive and LVDT channels for the linear correction L")
         fits = identify_pairs(record, pairs=pairs, naming=s.naming).fits
         tas, source = [fits[c] for c in pairs], "identified per corner from the drive and LVDT channels"
+    if s.saved is None:
+        say(f"model correction of {str(record.path)!r} ({forces.shape[0] / fs:.4g} s at {fs:.6g} Hz): calibrating "
+            f"the truck model on {windows} window(s) of {WINDOW_LEAD_S + WINDOW_S:g} s, at most {max_nfev} fit "
+            f"evaluations, {s.workers} worker process(es); this takes minutes")
+    else:
+        say(f"model correction of {str(record.path)!r} ({forces.shape[0] / fs:.4g} s at {fs:.6g} Hz) with the "
+            f"calibration {str(s.saved_file)!r}: checking its model error on this record")
 
     def linear(f):
         res = linear_correction(f, tas, fs, list(plan.channels), list(pairs), lowpass=lowpass_filter(s.lowpass, s.lowpass_hz),

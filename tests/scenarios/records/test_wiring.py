@@ -102,6 +102,11 @@ def test_swapped_pairs_are_refused_by_the_corrections_before_any_calibration(lab
                  "-o", str(out), "--quiet"]) == 2
     line = one_line(capsys.readouterr().err)
     assert "--pairs rl:" in line and "swapped; give rl=Soll_RL:Weg_RL" in line, line
+    # with its progress lines: the refusal comes before the calibration is announced
+    assert main(["correct", lab["csv"], "--model", lab["scenario"], "--pairs", _pairs(rl="Weg_RL:Soll_RL"),
+                 "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "swapped" in err.splitlines()[-1] and "calibrating" not in err, err
     assert main(["correct", lab["csv"], "--identify", "Weg_FL,Soll_FL", "--columns", "Fz_FL", "-o", str(out)]) == 2
     line = one_line(capsys.readouterr().err)
     assert "--identify Weg_FL,Soll_FL" in line and "swapped" in line, line
