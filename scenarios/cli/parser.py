@@ -20,6 +20,7 @@ EXAMPLES = {
     "sweep": "rigsim sweep scenarios/data/sweeps/example.toml --out out/sweep --jobs 2",
     "iterate": "rigsim iterate scenarios/data/paper/high_72kmh_3640kg.toml --target displacement --out out/iterate",
     "model": "rigsim model --payload-kg 6360",
+    "programme": "rigsim programme day1/*.csv --model truck.toml --pairs fl=Soll_FL:Weg_FL,... --out out/programme",
 }
 
 
@@ -63,6 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     from rigsim.scenarios.studies.identify import command as identify
     from rigsim.scenarios.studies.iterate import command as iterate
     from rigsim.scenarios.studies.paper import command as paper
+    from rigsim.scenarios.studies.programme import command as programme
     from rigsim.scenarios.studies.sweep import command as sweep
     from rigsim.scenarios.studies.validate import command as validate
 
@@ -70,7 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
                 epilog="example: " + EXAMPLES["paper"])
     p.add_argument("--version", action="version", version=f"rigsim {_version()}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
-    for command in (run, paper, validate, identify, info, correct, sweep, iterate, model):
+    for command in (run, paper, validate, identify, info, correct, programme, sweep, iterate, model):
         command.add_parser(sub)
     for name, parser in sub.choices.items():
         parser.epilog = f"example: {EXAMPLES[name]}"

@@ -34,22 +34,12 @@ __all__ = ["add_parser", "cmd_sweep"]
 
 def cmd_sweep(args) -> int:
     """``rigsim sweep``: validate the options and the grid, run it, print where the results are."""
-    from rigsim.scenarios.core.config import ScenarioError
-    from rigsim.scenarios.core.pool import local_executor, worker_count
-    from rigsim.scenarios.studies.sweep.executors import dask_executor
+    from rigsim.scenarios.studies.sweep.executors import checked_where, executor_for
     from rigsim.scenarios.studies.sweep.grid import load_grid
     from rigsim.scenarios.studies.sweep.run import SUMMARY_FILE, SweepOutcome, run_sweep
-    from rigsim.scenarios.studies.sweep.scheduler import check_address
     from rigsim.scenarios.studies.sweep.store import CASES_DIR
 
-    if args.scheduler is not None and args.workers is not None:
-        raise ScenarioError("--jobs sets the local process pool; a Dask cluster's size is set where its "
-                            "workers are started, so give one of --jobs and --scheduler")
-    try:
-        worker_count(args.workers)
-    except ValueError:
-        raise ScenarioError(f"--jobs must be a whole number >= 1, got {args.workers}") from None
-    scheduler = None if args.scheduler is None else check_address(args.scheduler)  # before the grid is read
+    scheduler = checked_where(args.scheduler, args.workers)  # before the grid is read
     from rigsim.scenarios.core.outputs import claim_output_folder
 
     # a new, empty or earlier sweep's folder is resumed into; anything else is refused now
@@ -57,11 +47,7 @@ def cmd_sweep(args) -> int:
     grid = load_grid(args.grid)  # every case validated before anything starts
     out = pathlib.Path(args.out)
     quiet = getattr(args, "quiet", False)
-    if scheduler is not None:
-        executor_cm, label = dask_executor(scheduler), f"dask {scheduler}"
-    else:
-        n = worker_count(args.workers, len(grid.cases))
-        executor_cm, label = local_executor(n), f"local process pool, {n} worker{'s' if n > 1 else ''}"
+    executor_cm, label = executor_for(scheduler, args.workers, len(grid.cases))
     if not quiet:
         print(f"sweep {grid.name}: {len(grid.cases)} cases on {label}, scored by {grid.settings.method.name} "
               f"({grid.settings.method.description}; noise {grid.settings.noise_N:g} N rms)", file=sys.stderr)

@@ -13,10 +13,10 @@ import concurrent.futures as cf
 import contextlib
 from collections.abc import Iterator
 
-from rigsim.scenarios.core.pool import local_executor
-from rigsim.scenarios.studies.sweep.scheduler import connect
+from rigsim.scenarios.core.pool import local_executor, worker_count
+from rigsim.scenarios.studies.sweep.scheduler import check_address, connect
 
-__all__ = ["dask_executor", "local_executor"]
+__all__ = ["dask_executor", "local_executor", "checked_where", "executor_for"]
 
 
 @contextlib.contextmanager
@@ -48,3 +48,33 @@ def dask_executor(address: str) -> Iterator[cf.Executor]:
         # Everything is written by now: a scheduler that does not acknowledge the goodbye changes nothing.
         with contextlib.suppress(Exception):
             client.close()
+
+
+def checked_where(scheduler: str | None, jobs: int | None) -> str | None:
+    """Check a command's ``--scheduler`` and ``--jobs`` before any work; returns the scheduler's
+    address (:func:`~rigsim.scenarios.studies.sweep.scheduler.check_address`) or None (the local pool).
+
+    Raises
+    ------
+    ScenarioError
+        Both given, or ``--jobs`` below 1 (one sentence naming the flag).
+    """
+    from rigsim.scenarios.core.config import ScenarioError
+
+    if scheduler is not None and jobs is not None:
+        raise ScenarioError("--jobs sets the local process pool; a Dask cluster's size is set where its "
+                            "workers are started, so give one of --jobs and --scheduler")
+    try:
+        worker_count(jobs)
+    except ValueError:
+        raise ScenarioError(f"--jobs must be a whole number >= 1, got {jobs}") from None
+    return None if scheduler is None else check_address(scheduler)
+
+
+def executor_for(scheduler: str | None, jobs: int | None, n: int):
+    """(the executor's context manager, its label): the Dask cluster at ``scheduler`` (checked by
+    :func:`checked_where`), else a local pool of ``jobs`` workers (default one per core), at most ``n``."""
+    if scheduler is not None:
+        return dask_executor(scheduler), f"dask {scheduler}"
+    w = worker_count(jobs, n)
+    return local_executor(w), f"local process pool, {w} worker{'s' if w > 1 else ''}"

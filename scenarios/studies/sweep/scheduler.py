@@ -95,7 +95,7 @@ def check_address(address: str) -> str:
     if scheme not in ("tcp", "tls"):
         what = f"{scheme}://" if scheme.isprintable() and scheme.strip() == scheme and scheme else "its scheme"
         raise ScenarioError(f"--scheduler {shown}: {what} {_UNUSABLE.get(scheme, 'is not a Dask transport')} and "
-                            f"rigsim sweep connects over tcp:// (tls:// with Dask's TLS settings), so {_FIX}")
+                            f"rigsim connects over tcp:// (tls:// with Dask's TLS settings), so {_FIX}")
     match = _HOST_PORT.fullmatch(rest)
     if match is None:
         raise ScenarioError(f"--scheduler {shown} is not an address of the form {scheme}://HOST:PORT; {_FIX}")

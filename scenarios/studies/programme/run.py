@@ -1,0 +1,248 @@
+"""Running a programme: each truck calibrated once, every record corrected, side by side, resumably.
+
+Per truck configuration the first record not yet corrected is corrected by the model calibrated on
+it (what ``rigsim correct --model`` does) and its calibration written to ``NAME.calibration.json``;
+every other record of that truck is then corrected with ``ModelOptions(..., calibration=that
+file)``: the records API checks the calibration on the record and refits it where it does not
+hold. A record that cannot be corrected (unreadable, wrong channels, refused) is reported and the
+others go on; where the record a truck was to be calibrated on fails, or gives no calibration (the
+linear correction), the truck's next record is calibrated instead. Records run on a
+``concurrent.futures`` executor (the local pool or a Dask cluster's), each with one worker process
+for its own model runs; the workers read the records and TRUCK.toml and write into ``--out`` under
+the same paths (a shared file system on a cluster).
+
+Resume: a record whose corrected file exists and whose ``records/NAME.json`` says it was corrected
+with the same settings is not corrected again; a truck whose calibration file exists and whose
+calibrating record is such a record is not calibrated again. Outputs are written atomically and
+depend on nothing but the inputs (the calibration's wall time is left out of its file and goes to
+``timings.csv``), so a run resumed after a kill writes the same bytes as one run through.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import json
+import math
+import pathlib
+import time
+from dataclasses import dataclass
+
+from rigsim.scenarios.core.files import atomic_write_text, write_json
+from rigsim.scenarios.core.progress import Progress
+from rigsim.scenarios.studies.programme.report import (MADE, ProgrammeReport, RecordReport, TruckReport,
+                                                       failed_report, record_from_dict, record_report, write_report)
+from rigsim.scenarios.studies.programme.settings import Programme, RecordEntry, TruckSettings
+
+__all__ = ["RECORDS_DIR", "TIMINGS_FILE", "Job", "ProgrammeOutcome", "correct_one", "calibration_file",
+           "run_programme"]
+
+RECORDS_DIR, TIMINGS_FILE = "records", "timings.csv"
+
+
+@dataclass(frozen=True)
+class Job:
+    """One record to correct in a worker.
+
+    Attributes
+    ----------
+    entry : RecordEntry
+    truck : TruckSettings
+    output : str
+        The corrected file (absolute).
+    calibration : str or None
+        The saved calibration to reuse; None: calibrate on this record.
+    write_calibration : str or None
+        Where to write the calibration made on this record (with ``calibration`` None).
+    """
+
+    entry: RecordEntry
+    truck: TruckSettings
+    output: str
+    calibration: str | None
+    write_calibration: str | None
+
+    @property
+    def settings(self) -> dict:
+        """What the output depends on: the record, its truck configuration, the output file."""
+        return {"record": self.entry.path, "truck": self.truck.as_dict(), "output": self.entry.output}
+
+
+def calibration_file(out, truck: TruckSettings) -> pathlib.Path:
+    """A truck configuration's calibration in ``out``: ``NAME.calibration.json``."""
+    return pathlib.Path(out) / f"{truck.name}.calibration.json"
+
+
+def _without_wall_time(result):
+    """``result`` with its saved calibration's wall time left out (None), so that the file depends on
+    the inputs alone."""
+    import dataclasses
+
+    saved = result.saved_calibration
+    cal = dataclasses.replace(saved.calibration, wall_time_s=None)
+    return dataclasses.replace(result, saved_calibration=dataclasses.replace(saved, calibration=cal))
+
+
+def correct_one(job: Job) -> tuple[RecordReport, float]:
+    """Correct one record in a worker and write its corrected file (and, calibrating, the calibration
+    before it); returns its report and wall time (s). Never raises: a failure is the report's error."""
+    import os
+
+    os.environ.setdefault("MUJOCO_GL", "disable")
+    from rigsim.errors import RigsimError
+    from rigsim.scenarios.records.api import plan_correction
+
+    t0 = time.perf_counter()
+    try:
+        plan = plan_correction(job.entry.path, job.truck.options(job.calibration), **job.truck.call())
+        result = plan.run(None)
+        if job.write_calibration is not None and result.saved_calibration is not None:
+            _without_wall_time(result).write_calibration(job.write_calibration, overwrite=True)
+        result.write(job.output, overwrite=True)
+        report = record_report(job.entry, job.settings, result, "calibrate" if job.calibration is None else "reuse")
+    except (RigsimError, ValueError) as exc:  # a refusal of the records API, one sentence
+        report = failed_report(job.entry, job.settings, " ".join(str(exc).split()))
+    except Exception as exc:  # noqa: BLE001 - a record the readers choke on must not stop the programme
+        report = failed_report(job.entry, job.settings, f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+    return report, time.perf_counter() - t0
+
+
+@dataclass(frozen=True)
+class ProgrammeOutcome:
+    """What a call of :func:`run_programme` did.
+
+    Attributes
+    ----------
+    report : ProgrammeReport
+    skipped : int
+        Records corrected by an earlier run.
+    ran : int
+        Records corrected or failed now.
+    wall_time_s : float, s
+    written : tuple of pathlib.Path
+        The report's files.
+    """
+
+    report: ProgrammeReport
+    skipped: int
+    ran: int
+    wall_time_s: float
+    written: tuple
+
+    @property
+    def failed(self) -> tuple:
+        """The reports of the records that failed."""
+        return tuple(r for r in self.report.records if r.status != "corrected")
+
+
+def _job(out: pathlib.Path, programme: Programme, entry: RecordEntry, calibration: str | None) -> Job:
+    truck = programme.truck(entry.truck)
+    write = None if calibration is not None else str(calibration_file(out, truck))
+    return Job(entry, truck, str(out / entry.output), calibration, write)
+
+
+def _finished(out: pathlib.Path, job: Job) -> RecordReport | None:
+    """The report of a record corrected earlier with the same settings, its file in place; else None."""
+    path = out / RECORDS_DIR / f"{job.entry.name}.json"
+    try:
+        report = record_from_dict(json.loads(path.read_text(encoding="utf-8")))
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if report.status != "corrected" or report.settings != json.loads(json.dumps(job.settings)):
+        return None
+    return report if (out / job.entry.output).is_file() else None
+
+
+def run_programme(programme: Programme, out, executor: cf.Executor, *, progress: bool = True,
+                  on_record=None) -> ProgrammeOutcome:
+    """Correct the records of ``programme`` not finished in ``out`` on ``executor``.
+
+    Parameters
+    ----------
+    programme : Programme
+    out : path
+        The output folder (created): the corrected files, ``NAME.calibration.json`` per truck,
+        ``records/`` (one report per record), ``programme.json``, ``programme.md``,
+        ``programme.png``, ``timings.csv``.
+    executor : concurrent.futures.Executor
+        :func:`rigsim.scenarios.core.pool.local_executor` or a Dask cluster's
+        (:func:`rigsim.scenarios.studies.sweep.executors.dask_executor`).
+    progress : bool
+        A progress bar (or lines) on stderr.
+    on_record : callable, optional
+        ``on_record(report)`` after each record's report is written (tests).
+
+    Returns
+    -------
+    ProgrammeOutcome
+        Whatever failed is in its report; the report is written also after Ctrl-C.
+    """
+    out = pathlib.Path(out).absolute()
+    (out / RECORDS_DIR).mkdir(parents=True, exist_ok=True)
+    reports: dict[str, RecordReport] = {}
+    pending: dict[str, list[RecordEntry]] = {t.name: [] for t in programme.trucks}
+    calibrated_on: dict[str, str] = {}
+    for entry in programme.records:
+        truck = programme.truck(entry.truck)
+        done = _finished(out, _job(out, programme, entry, None))
+        if done is not None and (done.calibration != MADE or calibration_file(out, truck).is_file()):
+            reports[entry.name] = done
+            if done.calibration == MADE:
+                calibrated_on[truck.name] = entry.name
+        else:
+            pending[truck.name].append(entry)
+    skipped = len(reports)
+    bar = Progress(len(programme.records), skipped, progress, unit="record")
+    futures: dict[cf.Future, Job] = {}
+    timings: list[tuple[str, float]] = []
+    t0 = time.perf_counter()
+
+    def submit(truck_name: str) -> None:
+        queue = pending[truck_name]
+        if truck_name in calibrated_on:
+            cal = str(calibration_file(out, programme.truck(truck_name)))
+            for entry in queue:
+                job = _job(out, programme, entry, cal)
+                futures[executor.submit(correct_one, job)] = job
+            queue.clear()
+        elif queue:
+            job = _job(out, programme, queue.pop(0), None)
+            futures[executor.submit(correct_one, job)] = job
+
+    try:
+        for name in pending:
+            submit(name)
+        while futures:
+            finished, _ = cf.wait(futures, return_when=cf.FIRST_COMPLETED)
+            for fut in finished:
+                job = futures.pop(fut)
+                try:
+                    report, wall = fut.result()
+                except Exception as exc:  # noqa: BLE001 - a lost worker fails its record only
+                    report, wall = failed_report(job.entry, job.settings, f"the worker correcting it failed "
+                                                 f"({type(exc).__name__}: {' '.join(str(exc).split())})"), math.nan
+                reports[job.entry.name] = report
+                timings.append((job.entry.name, wall))
+                write_json(out / RECORDS_DIR / f"{job.entry.name}.json", report)
+                if report.calibration == MADE:
+                    calibrated_on[job.entry.truck] = job.entry.name
+                bar.update(job.entry.name, report.status == "corrected", report.error, wall)
+                if on_record is not None:
+                    on_record(report)
+                if job.calibration is None:
+                    submit(job.entry.truck)
+    finally:
+        bar.close()
+        report = _report(programme, out, reports, calibrated_on)
+        written = tuple(write_report(report, out))
+        atomic_write_text(out / TIMINGS_FILE, "record,wall_time_s\n" + "".join(f"{n},{w:.3f}\n" for n, w in timings))
+    return ProgrammeOutcome(report, skipped, len(timings), time.perf_counter() - t0, written)
+
+
+def _report(programme: Programme, out: pathlib.Path, reports: dict, calibrated_on: dict) -> ProgrammeReport:
+    from rigsim.scenarios.records.output import rigsim_version
+
+    trucks = tuple(TruckReport(t.name, t.model, calibration_file(out, t).name if t.name in calibrated_on else "",
+                               calibrated_on.get(t.name, "")) for t in programme.trucks)
+    records = tuple(reports[e.name] for e in programme.records if e.name in reports)
+    n_ok = sum(r.status == "corrected" for r in records)
+    return ProgrammeReport(trucks, records, n_ok, len(records) - n_ok, rigsim_version())

@@ -1,0 +1,187 @@
+"""rigsim programme: many records of one truck, one calibration, corrected side by side, resumable.
+
+Expected values: the records are 10.5 s of the paper's high-roughness 72 km/h case on the
+hydraulic rig, each on its own road section (seed) and with its own load-cell noise, as a lab's CSV
+(tests/scenarios/records/test_saved_calibration.py's ``lab``), calibrated on one window with the
+cab held. The programme's corrected forces are, record by record, those of ``rigsim correct
+--model --calibration`` run on that record alone with the programme's calibration (the same
+records API call); a run resumed after a kill, and the same programme on a Dask cluster, write the
+same bytes as one run through on the pool (nothing in the outputs depends on the run but the inputs).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import shutil
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from rigsim.correction.io.measured import read_channels
+from rigsim.scenarios.cli.main import main
+
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1] / "records"))
+
+PAIRS = "fl=Soll_FL:Weg_FL,fr=Soll_FR:Weg_FR,rl=Soll_RL:Weg_RL,rr=Soll_RR:Weg_RR"
+NAMES = ("run1", "run2", "run3")
+FAST = ["--calibration-windows", "1", "--cab", "held", "--quiet"]
+
+
+def _files(folder) -> dict:
+    """Every file's bytes below ``folder`` but the run's timings and the folder's marker."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file() and p.name != "timings.csv" and not p.name.startswith(".")}
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    """Three records (seeds 11, 12, 13; noise seeds 7, 8, 9), the truck file, and the programme run
+    through on the pool into ``out`` (its files kept in ``reference``)."""
+    from test_correct_model import _write_csv as write_lab_csv
+
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    from rigsim.scenarios.core.run import run
+
+    truck = paper_scenarios()[2]
+    base = dataclasses.replace(load_scenario(truck), duration_s=10.5)
+    d = tmp_path_factory.mktemp("programme")
+    (d / "records").mkdir()
+    for i, name in enumerate(NAMES):
+        res = run(dataclasses.replace(base, seed=11 + i), "rig")
+        force = res.signals["tire_force_N"] + np.random.default_rng(7 + i).normal(0.0, 100.0,
+                                                                                  res.signals["tire_force_N"].shape)
+        write_lab_csv(d / "records" / f"{name}.csv", res.t_s, force, res.signals["profile_m"], res.signals["pan_m"])
+    records = [str(d / "records" / f"{n}.csv") for n in NAMES]
+    argv = ["programme", *records, "--model", str(truck), "--pairs", PAIRS, *FAST]
+    assert main([*argv, "--jobs", "2", "--out", str(d / "out")]) == 0
+    shutil.copytree(d / "out", d / "reference")
+    return SimpleNamespace(dir=d, records=records, truck=truck, argv=argv)
+
+
+def test_one_calibration_and_the_forces_of_correct_alone(lab, tmp_path):
+    out = lab.dir / "out"
+    cals = sorted(p.name for p in out.glob("*.calibration.json"))
+    assert cals == ["high_72kmh_3640kg.calibration.json"]
+    report = json.loads((out / "programme.json").read_text())
+    assert [r["calibration"] for r in report["records"]] == ["made", "held", "held"]
+    assert report["corrected"] == 3 and report["failed"] == 0 and report["trucks"][0]["calibrated_on"] == "run1"
+    for r in report["records"]:
+        assert r["method"] == "model" and len(r["wheels"]) == 4
+        assert all(w["model_error"] < 0.25 and w["dlc_after"] > 0 and w["del5_after_N"] > 0 for w in r["wheels"])
+    md = (out / "programme.md").read_text()
+    assert "| run2 | high_72kmh_3640kg | model | held |" in md and (out / "programme.png").stat().st_size > 1000
+    for name, record in zip(NAMES, lab.records):
+        alone = tmp_path / f"{name}.csv"
+        argv = ["correct", record, "--model", str(lab.truck), "--pairs", PAIRS, *FAST, "--jobs", "1",
+                "--calibration", str(out / cals[0]), "-o", str(alone)]
+        assert main(argv) == 0
+        got, ref = read_channels(out / f"{name}_corrected.csv"), read_channels(alone)
+        assert got.names == ref.names
+        np.testing.assert_array_equal(got.time_s, ref.time_s)
+        for c in got.names:
+            np.testing.assert_array_equal(got.data[c], ref.data[c])
+
+
+def test_a_run_killed_mid_way_resumes_to_the_same_bytes(lab):
+    """Killed after run2's file was written but before its report, and before run3: run2 and run3 are
+    corrected again, run1 and the calibration are kept."""
+    out = lab.dir / "out"
+    (out / "records" / "run2.json").unlink()
+    for p in (out / "run3_corrected.csv", out / "records" / "run3.json", out / "programme.json"):
+        p.unlink()
+    seen = []
+    from rigsim.scenarios.core.pool import local_executor
+    from rigsim.scenarios.studies.programme.run import run_programme
+    from rigsim.scenarios.studies.programme.settings import from_flags
+
+    programme = from_flags(lab.records, model=str(lab.truck), pairs=PAIRS, calibration_windows=1, cab="held")
+    with local_executor(2) as ex:
+        outcome = run_programme(programme, out, ex, progress=False, on_record=seen.append)
+    assert outcome.skipped == 1 and sorted(r.name for r in seen) == ["run2", "run3"]
+    assert _files(out) == _files(lab.dir / "reference")
+
+
+def test_a_corrupt_record_is_reported_and_the_others_are_whole(lab, capsys):
+    bad = lab.dir / "records" / "broken.csv"
+    bad.write_text("time [s],Fz_FL [kN]\n0.0,1.0\n0.001,oops\n")
+    argv = ["programme", lab.records[0], str(bad), *lab.records[1:], "--model", str(lab.truck), "--pairs", PAIRS,
+            *FAST, "--jobs", "2", "--out", str(lab.dir / "out")]
+    capsys.readouterr()
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "record broken (" in err and "1 of 4 records failed: broken" in err
+    report = json.loads((lab.dir / "out" / "programme.json").read_text())
+    assert [r["status"] for r in report["records"]] == ["corrected", "failed", "corrected", "corrected"]
+    assert report["records"][1]["error"]
+    ref = _files(lab.dir / "reference")
+    now = _files(lab.dir / "out")
+    for name in NAMES:
+        assert now[f"{name}_corrected.csv"] == ref[f"{name}_corrected.csv"]
+    assert not (lab.dir / "out" / "broken_corrected.csv").exists()
+    bad.unlink()
+
+
+@pytest.mark.parametrize("extra, named", [
+    (["--jobs", "0"], "--jobs"),
+    (["--scheduler", "http://127.0.0.1:8787"], "--scheduler"),
+    (["--pairs", "fl=Soll_FL"], "--pairs"),
+    (["--model", "/nonexistent/truck.toml"], "truck.toml"),
+    (["--calibration-windows", "0"], "--calibration-windows"),
+])
+def test_bad_options_are_one_sentence_and_nothing_is_written(lab, tmp_path, capsys, extra, named):
+    argv = ["programme", *lab.records, "--model", str(lab.truck), "--pairs", PAIRS, *FAST, "--out",
+            str(tmp_path / "new"), *extra]
+    capsys.readouterr()
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and named in err, err
+    assert not (tmp_path / "new").exists()
+
+
+def test_no_records_or_a_missing_one_is_refused(lab, tmp_path, capsys):
+    for argv in (["programme", "--model", str(lab.truck), "--pairs", PAIRS],
+                 ["programme", str(tmp_path / "absent.csv"), "--model", str(lab.truck), "--pairs", PAIRS],
+                 ["programme", lab.records[0], str(tmp_path / "x" / "run1.csv"), "--model", str(lab.truck),
+                  "--pairs", PAIRS, "--programme", "p.toml"]):
+        assert main([*argv, "--out", str(tmp_path / "new")]) == 2
+        assert "\n" not in capsys.readouterr().err.strip()
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_programme_file_names_records_and_trucks(lab, tmp_path):
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.studies.programme.settings import read_programme
+
+    f = tmp_path / "p.toml"
+    f.write_text(f'[trucks.loaded]\nmodel = "{lab.truck}"\npairs = "{PAIRS}"\ncab = "held"\n'
+                 f'calibration_windows = 1\n\n[[records]]\npath = "{lab.dir / "records"}/run*.csv"\n')
+    p = read_programme(f, "rsp")
+    assert [e.output for e in p.records] == ["run1_corrected.rsp", "run2_corrected.rsp", "run3_corrected.rsp"]
+    assert p.trucks[0].options().calibration_windows == 1 and p.trucks[0].options().workers == 1
+    f.write_text(f.read_text().replace("cab =", "cabin ="))
+    with pytest.raises(ScenarioError, match=r"\[trucks.loaded\].*cabin"):
+        read_programme(f)
+
+
+def test_the_parser_formats_are_the_settings(lab):
+    from rigsim.scenarios.studies.programme import command, settings
+
+    assert command.FORMATS == settings.FORMATS
+
+
+def test_a_dask_cluster_writes_the_same_bytes(lab):
+    """Two records first (as a run killed after them), then the third added: on a local Dask cluster,
+    calibrated afresh, every file is the pool's byte for byte."""
+    distributed = pytest.importorskip("distributed")
+    out = lab.dir / "out"
+    shutil.rmtree(out)
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, host="127.0.0.1",
+                                  dashboard_address=None, silence_logs=50) as cluster:
+        for records in (lab.records[:2], lab.records):
+            argv = ["programme", *records, "--model", str(lab.truck), "--pairs", PAIRS, *FAST,
+                    "--scheduler", cluster.scheduler_address, "--out", str(out)]
+            assert main(argv) == 0
+    assert _files(out) == _files(lab.dir / "reference")
