@@ -35,14 +35,12 @@ import subprocess
 import sys
 import tempfile
 import time
-from types import SimpleNamespace
 
 import numpy as np
 
-from rigsim.correction.io.measured import write_channels
 from rigsim.mjcf.names import CORNERS
 from rigsim.scenarios.core.config import load_scenario, paper_scenarios
-from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.lab_record import write_lab_record
 from rigsim.scenarios.studies.results_page import script_command, write_results_page
 
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
@@ -58,15 +56,7 @@ def write_record(path: pathlib.Path, scenario_path: pathlib.Path, duration_s: fl
     None: rigid) as a lab's CSV at ``path``."""
     sc = load_scenario(scenario_path)
     sc = dataclasses.replace(sc, duration_s=duration_s, vehicle=dataclasses.replace(sc.vehicle, cab_mount_hz=cab_hz))
-    rig = run(sc, "rig")
-    force = rig.signals["tire_force_N"] + np.random.default_rng(7).normal(0.0, noise_N, rig.signals["tire_force_N"].shape)
-    data, units = {}, {}
-    for i, c in enumerate(CORNERS):
-        for name, values, unit in ((f"Fz_{c.upper()}", force[:, i] / 1e3, "kN"),
-                                   (f"Soll_{c.upper()}", rig.signals["profile_m"][:, i] * 1e3, "mm"),
-                                   (f"Weg_{c.upper()}", rig.signals["pan_m"][:, i] * 1e3, "mm")):
-            data[name], units[name] = values, unit
-    write_channels(path, SimpleNamespace(time_s=np.asarray(rig.t_s), data=data, units=units), metadata={})
+    write_lab_record(path, sc, noise_N)
 
 
 def timed(argv: list[str], env: dict) -> tuple[float, float]:

@@ -17,7 +17,7 @@ import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
 
-__all__ = ["worker_count", "local_executor", "stop_process_pool", "run_jobs", "keep_heap_memory"]
+__all__ = ["worker_count", "InProcessExecutor", "local_executor", "stop_process_pool", "run_jobs", "keep_heap_memory"]
 
 
 def keep_heap_memory(mmap_threshold_bytes: int = 64 * 2**20) -> bool:
@@ -99,12 +99,35 @@ def stop_process_pool(pool: cf.ProcessPoolExecutor) -> None:
             proc.terminate()
 
 
+class InProcessExecutor(cf.Executor):
+    """An executor that runs each job in the calling process as it is submitted (its future done
+    on return): the pool of a process that may start none, a Dask worker (a daemonic process)."""
+
+    def submit(self, fn, /, *args, **kwargs) -> cf.Future:
+        future: cf.Future = cf.Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # noqa: BLE001 - handed to the future, as a pool would
+            if isinstance(exc, (KeyboardInterrupt, SystemExit)):
+                raise
+            future.set_exception(exc)
+        return future
+
+
 @contextlib.contextmanager
 def local_executor(workers: int | None = None) -> Iterator[cf.Executor]:
     """A process pool of ``workers`` processes (default: all cores), each one job at a time.
 
-    On an exception (Ctrl-C included) the workers are terminated before it propagates.
+    On an exception (Ctrl-C included) the workers are terminated before it propagates. In a
+    daemonic process (a Dask worker: it may start no process) the jobs run in this process, one
+    after the other (:class:`InProcessExecutor`), whatever ``workers`` says.
     """
+    import multiprocessing
+
+    if multiprocessing.current_process().daemon:
+        worker_count(workers)
+        yield InProcessExecutor()
+        return
     pool = cf.ProcessPoolExecutor(max_workers=worker_count(workers), initializer=_init_worker,
                                   initargs=(os.getpid(),))
     try:
