@@ -6,7 +6,7 @@
     python benchmarks/model_error.py run.txt [more runs...] [--results docs/results]
 
 For every calibrated row of the runs' JSON lines (the last line of each file): the model error per
-wheel as the fallback (``differential.HYBRID_LIMIT``) reads it,
+wheel as the fallback (``fallback.HYBRID_LIMIT``) reads it,
 :attr:`~rigsim.scenarios.records.model.result.Calibration.excess_nrmse`: the calibrated model's residual
 against the measured F_rig on the calibration windows in the correction's band (its mean per window
 taken out), beyond the load cells' noise there, sqrt(band^2 - noise^2); beside it the outcome
@@ -31,7 +31,7 @@ import sys
 import numpy as np
 
 from rigsim.mjcf.names import CORNERS
-from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 from rigsim.scenarios.records.model.result import Calibration
 from rigsim.scenarios.studies.results_page import script_command, write_results_page
 

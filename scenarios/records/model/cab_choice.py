@@ -16,7 +16,7 @@ below the held cab's, and the mount frequency not at its search range's bottom
 practically rigid, and a fit that is still clearly better there found a better minimum of the
 truck's other values than the cab-held fit did: it is kept. Convergence is not
 part of the choice: the chosen calibration's is checked where every calibration's is (a fit that did not converge falls back to the linear
-correction, :func:`~rigsim.scenarios.records.model.differential.fallback_reason`). Measured on generalization cases (30 s, docs/model_correction.md): a
+correction, :func:`~rigsim.scenarios.records.model.fallback.fallback_reason`). Measured on generalization cases (30 s, docs/model_correction.md): a
 truck with its cab on 2 Hz mounts fits 0.10 against the rigid cab's 0.50 (front wheels), a
 rigid-cab truck 0.095 held against 0.35 fitted (gen00) or 0.057 against 0.057 (gen05, the mount
 at the range's top, 30 Hz): the two families are far apart where the cab matters and level where
@@ -38,7 +38,7 @@ the cab stays held, without the second calibration (a few seconds of model runs 
 The scan is a first-order answer, trusted only where the cab-held model already reproduces the
 record (its model error, :attr:`Calibration.excess_nrmse`, within :data:`SCAN_TRUSTED` on all
 fitted wheels but one: a cab loads both wheels of an axle, and one wheel alone far off, a broken
-channel say, is that wheel's own matter, ``differential.outlier_wheel``). Where it does not, a cab
+channel say, is that wheel's own matter, ``fallback.outlier_wheel``). Where it does not, a cab
 can open another basin that no small step shows: on the paper suite's stiffening tire (medium
 72 km/h case, the tire +50 % over 2 cm, a mismatch the family lacks) the held fit leaves model
 errors of 0.20-0.21 on the front wheels and the scan finds no gain at any mount (0 %), yet the
@@ -61,6 +61,7 @@ from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.core.pool import local_executor
 from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
+from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 from rigsim.scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
 from rigsim.scenarios.records.model.result import Calibration
 
@@ -85,10 +86,11 @@ EDGE = 0.02
 SCAN_HZ = tuple(float(v) for v in np.round(1.0 * 2.0 ** (np.arange(13) / 4.0), 2))
 #: Largest model error of the cab-held fit (:attr:`Calibration.excess_nrmse` of its second-worst
 #: fitted wheel, :func:`scan_error`) at which :func:`cab_scan` decides, 1: half the hybrid
-#: correction's limit on it (``differential.HYBRID_LIMIT``, 0.25), above every fit of a truck in the
-#: model's family (at most 0.062 on the paper and generalization cases) and below the paper suite's
-#: stiffening tire, whose held fit (0.20-0.21) the scan misjudges. Above it both calibrations run.
-SCAN_TRUSTED = 0.125
+#: correction's limit on it (:data:`~rigsim.scenarios.records.model.fallback.HYBRID_LIMIT`, 0.25),
+#: above every fit of a truck in the model's family (at most 0.062 on the paper and generalization
+#: cases) and below the paper suite's stiffening tire, whose held fit (0.20-0.21) the scan
+#: misjudges. Above it both calibrations run.
+SCAN_TRUSTED = HYBRID_LIMIT / 2
 
 
 def mean_square(cal: Calibration) -> float:
@@ -188,7 +190,7 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
     defer : callable, optional
         ``defer(held)`` -> str: with "auto", why the cab-held calibration is to be redone before the
         cab is chosen ("" where it is not), e.g. one wheel far off every other, to be left out
-        (``differential.outlier_wheel``); where it gives a reason the held calibration is returned
+        (``fallback.outlier_wheel``); where it gives a reason the held calibration is returned
         as it is, its :attr:`~Calibration.cab_choice` saying so.
     symmetric : bool
         Hold each axle's left and right wheel stations alike: the fields of

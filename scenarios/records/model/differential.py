@@ -36,10 +36,11 @@ linear correction's filter transients are not.
 (:func:`rigsim.scenarios.records.model.calibrate.calibrate`) and corrects, or says in one
 sentence why the linear correction is to be used instead: the calibration did not converge or could
 not run; without L, the calibrated model does not reproduce F_rig's dynamic part in the correction's
-band beyond the load cells' noise (:data:`DIFFERENTIAL_LIMIT`); with L, the model's own runs show
+band beyond the load cells' noise; with L, the model's own runs show
 that L could turn the model's residual against the hybrid on the wheels it names
-(:mod:`~rigsim.scenarios.records.model.fallback`: derived from the linear correction's error on the model
-truck and what L does to the residual, the DLC guarded apart).
+(derived from the linear correction's error on the model truck and what L does to the residual,
+the DLC guarded apart). The limits, those decisions and their sentences are
+:mod:`~rigsim.scenarios.records.model.fallback`'s.
 """
 
 from __future__ import annotations
@@ -57,51 +58,23 @@ from rigsim.scenarios.core.pool import local_executor, run_jobs
 from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
 from rigsim.scenarios.records.model.cell_mass import without_cell_mass
-from rigsim.scenarios.records.model.fallback import hybrid_outlook
+from rigsim.scenarios.records.model.fallback import (calibration_failed, differential_holds, fallback_reason,
+                                                     hybrid_outlook, hybrid_reason, model_error_limit, outlier_reason,
+                                                     outlier_wheel)
 from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from rigsim.scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
 from rigsim.scenarios.records.model.restart import calibrate_again
 from rigsim.scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 from rigsim.scenarios.records.model.saved import check_saved
 
-__all__ = ["START_S", "DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "outlier_wheel", "HYBRID_FORMULA",
-           "DIFFERENTIAL_FORMULA", "wheels_reason", "model_force_pair", "differential_correction", "hybrid_correction",
-           "settled_mask", "correct_with_model", "fallback_reason"]
+__all__ = ["START_S", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "model_force_pair", "differential_correction",
+           "hybrid_correction", "settled_mask", "correct_with_model"]
 
 #: The model runs' start-up transient, s: samples before it are not settled. Measured on the
 #: medium 72 km/h case with the exact truck as model: the differential's start-up error (rms per
 #: wheel) is 0.4-1.5 kN in the first 0.1 s, 0.1-0.2 kN at 1-2 s, 35-90 N at 3-5 s and 10-25 N
 #: after 5 s, against the load cells' 25 N rms through the 30 Hz band limit.
 START_S = 3.0
-
-#: Largest per-wheel model error (:attr:`Calibration.excess_nrmse`: the model's force, pans
-#: following x_a, against the measured F_rig on the calibration windows, its dynamic part in the
-#: correction's band, the load cells' white noise there taken out) for which the differential
-#: correction (no ``linear``) is used, 1 (derived on the whole-band excess, which equals it where
-#: the model's error lies in the band). The differential correction's own error against the road
-#: follows that excess (with a progressive tire the model lacks: the corrected NRMSE 0.78-1.27 x the
-#: excess wherever it exceeds 0.06, 67 wheels, benchmarks/model_error.py), so past the linear
-#: correction's typical error (0.11-0.20 on the paper's cases) the linear correction is the better
-#: one: at +50 % tire the light truck's wheels show excess 0.145-0.168 and a model correction worse
-#: than the linear one (1.01-1.40 x its NRMSE), the heavy truck's 0.03-0.135 and a better one
-#: (0.18-0.79 x); in the family at most 0.062; with each axle's stiffening fitted, at most 0.079.
-DIFFERENTIAL_LIMIT = 0.14
-#: The model error past which the hybrid correction F_model(x_ref) + L(F_rig - F_model(x_a)) (``linear``
-#: given, what ``rigsim correct --model`` and ``rigsim paper --model`` use) searches again: a lone wheel
-#: left out (:func:`outlier_wheel`), a fit started anew (:func:`~rigsim.scenarios.records.model.restart.calibrate_again`),
-#: 1; whether the hybrid is then used is derived from the record (:mod:`~rigsim.scenarios.records.model.fallback`). Where the model explains
-#: less, the hybrid tends to the linear correction instead of keeping the model's error, so it stays
-#: the better one further out: on the mismatch suite (``benchmarks/mismatch_suite.py``, 24 plants
-#: off the catalogue in several ways at once, a lab's channels, the cab's choice) the hybrid, forced
-#: on every wheel, beat the linear correction's NRMSE on all 96 wheels, whose model errors reach
-#: 0.228. No wheel past that was measured, so the limit sits just above it.
-HYBRID_LIMIT = 0.25
-#: A wheel whose model error exceeds the limit and this many times every other wheel's is left out
-#: of a second calibration (:func:`outlier_wheel`), 1: a broken channel, or one wheel unlike the
-#: model's, pulls the parameters the other wheels share (a channel of pure noise on rr, 20 s of the
-#: high 72 km/h case: model errors fl 0.20, fr 0.19, rl 0.76, rr 4.7 against 0.015-0.019 with rr
-#: left out); two or more wheels alike past the limit are a model that does not fit.
-OUTLIER_RATIO = 2.0
 
 
 def settled_mask(t_s, start_s: float = START_S) -> np.ndarray:
@@ -199,52 +172,10 @@ def hybrid_correction(force_N, f_ref_N, f_a_N, linear, fs_hz: float, settled=Non
     return out + (denoised,) if with_residual else out
 
 
-def fallback_reason(calibration, excess_limit: float = HYBRID_LIMIT) -> str:
-    """One sentence why the linear correction is to be used with this calibration, "" if not."""
-    excess = calibration.excess_nrmse
-    worst = int(np.argmax(excess))
-    if excess[worst] > excess_limit:
-        where, fit, noise_share = calibration.error_figures()
-        noise = (f" beyond the load cells' noise ({noise_share[worst]:.3f}; limit {excess_limit:g})"
-                 if noise_share else f" (limit {excess_limit:g})")
-        return (f"the calibrated truck model reproduces the measured wheel force of {CORNERS[worst]}{where} only to "
-                f"NRMSE {fit[worst]:.3f}: a model error of {excess[worst]:.3f}{noise}, so the linear "
-                "correction is to be used.")
-    if not calibration.converged:
-        return (f"the truck model's calibration did not converge within its evaluation limit ({calibration.evaluations} "
-                f"truck variants run; {calibration.message.rstrip('.')}), so the linear correction is to be used.")
-    return ""
-
-
 #: The model correction with the linear correction L of the model's residual (``linear`` given).
 HYBRID_FORMULA = "F_model(x_ref) + L(W(F_rig - F_model(x_a)))"
 #: The differential model correction (no ``linear``).
 DIFFERENTIAL_FORMULA = "F_rig + F_model(x_ref) - F_model(x_a)"
-
-
-def outlier_wheel(calibration, excess_limit: float = HYBRID_LIMIT, ratio: float = OUTLIER_RATIO) -> int | None:
-    """The index (in :data:`CORNERS`) of the one wheel whose model error exceeds ``excess_limit`` and
-    ``ratio`` times every other wheel's, or None."""
-    excess = np.asarray(calibration.excess_nrmse, dtype=float)
-    order = np.argsort(excess)
-    worst, next_worst = int(order[-1]), excess[order[-2]]
-    return worst if excess[worst] > excess_limit and excess[worst] > ratio * next_worst else None
-
-
-def wheels_reason(calibration, holds, excess_limit: float = HYBRID_LIMIT) -> str:
-    """One sentence naming the wheels whose model error exceeds the limit (``holds`` False), "" if none;
-    a wheel left out of the calibration (:attr:`Calibration.wheels`) is named as such."""
-    bad = [i for i, ok in enumerate(holds) if not ok]
-    if not bad:
-        return ""
-    where, fit, _ = calibration.error_figures()
-    figures = ", ".join(f"{CORNERS[i]} {fit[i]:.3f} (model error {calibration.excess_nrmse[i]:.3f})" for i in bad)
-    out = [c for c in CORNERS if c not in calibration.wheels]
-    left_out = (f"; {', '.join(out)}, alone far past it, {'was' if len(out) == 1 else 'were'} left out of the "
-                "calibration" if out else "")
-    return (f"the calibrated truck model reproduces the measured wheel force{where} only to NRMSE {figures} (limit "
-            f"{excess_limit:g} beyond the load cells' noise){left_out}, so {'that wheel is' if len(bad) == 1 else 'those wheels are'} "
-            "corrected linearly.")
 
 
 def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario, workers: int | None = None,
@@ -272,7 +203,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     excess_limit : float, 1, optional
         The model error past which (without ``linear``) the linear correction is used, and (with
         ``linear``) a lone wheel is left out and the truck calibrated again, or a fit searched
-        again: default :data:`HYBRID_LIMIT` with ``linear``, else :data:`DIFFERENTIAL_LIMIT`.
+        again: default :func:`~rigsim.scenarios.records.model.fallback.model_error_limit`
+        (``HYBRID_LIMIT`` with ``linear``, else ``DIFFERENTIAL_LIMIT``).
     cab : {"auto", "held", "fitted"}
         Whether the model's cab is held, fitted, or (default) chosen by the two fits
         (:func:`~rigsim.scenarios.records.model.cab_choice.calibrate_cab`).
@@ -306,7 +238,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     """
     wall0 = time.perf_counter()
     if excess_limit is None:
-        excess_limit = DIFFERENTIAL_LIMIT if linear is None else HYBRID_LIMIT
+        excess_limit = model_error_limit(hybrid=linear is not None)
     t, fs = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
     check_cab(cab, calibrate_kw.get("names"))
     try:  # refused before any run, as the hybrid's noise gain would refuse it after the calibration
@@ -322,8 +254,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
     def defer(held: Calibration) -> str:  # a wheel to leave out first: the cab chosen on the others' fit
         first = len(held.wheels) == len(CORNERS)  # the fit without that wheel chooses
         bad = outlier_wheel(held, excess_limit) if linear is not None and held.converged and first else None
-        return "" if bad is None else (f"{CORNERS[bad]}'s model error ({held.excess_nrmse[bad]:.3f}) is far past every "
-                                       "other wheel's, so the truck is calibrated again without it")
+        return "" if bad is None else outlier_reason(held, bad)
 
     with local_executor(workers) as ex:
         def calibrated(**kw) -> Calibration:
@@ -345,7 +276,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
             if refit:
                 cal = dataclasses.replace(cal, second_start=refit)
         if linear is None:  # the differential form: the model error's limit decides
-            holds = np.asarray(cal.excess_nrmse) <= excess_limit
+            holds = differential_holds(cal, excess_limit)
             if reason or not holds.all():
                 return _linear(reason, cal, wall0, timings)
         elif not cal.converged:
@@ -366,8 +297,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                                                     with_residual=True)
             outlook = hybrid_outlook(f_ref, f_a, residual, corrected, linear, fs,
                                      settled_mask(t) & np.asarray(settled, dtype=bool), pans_m=x_a_m)
-            reason = " ".join(r for r in (wheels_reason(cal, holds, excess_limit), outlook.reason(holds, cal.excess_nrmse))
-                              if r)
+            reason = hybrid_reason(cal, holds, outlook, excess_limit)
             holds = holds & outlook.holds
             if not holds.any():
                 return _linear(reason, cal, wall0, timings, outlook)
@@ -390,12 +320,8 @@ def _fit(calibrated, excess_limit: float, linear, wall0: float, timings: dict):
     fallback's :class:`ModelCorrection`: searched again past the limit, a lone bad wheel left out."""
     try:
         cal = calibrated()
-    except ScenarioError as exc:
-        return _linear(f"the truck model could not be calibrated on this record ({str(exc).rstrip('.')}), "
-                       "so the linear correction is to be used.", None, wall0, timings)
-    except SimulationError as exc:
-        return _linear(f"a truck-model run failed during the calibration ({str(exc).rstrip('.')}), "
-                       "so the linear correction is to be used.", None, wall0, timings)
+    except (ScenarioError, SimulationError) as exc:
+        return _linear(calibration_failed(exc), None, wall0, timings)
     if cal.converged:  # a fit refused for its model error: searched again (the springs sliding, the
         cal = calibrate_again(cal, calibrated, excess_limit)  # stations alike); a failed search skipped
     timings["calibration_s"] = cal.wall_time_s

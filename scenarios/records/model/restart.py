@@ -28,11 +28,10 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
-
 from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.cab_choice import mean_square
+from rigsim.scenarios.records.model.fallback import past_limit
 from rigsim.scenarios.records.model.family import STATION_FITTED
 from rigsim.scenarios.records.model.result import Calibration
 
@@ -79,7 +78,7 @@ def calibrate_again(cal: Calibration, run, excess_limit: float) -> Calibration:
         :attr:`~Calibration.second_start` says what was searched and which is kept.
     """
     def refused(c: Calibration) -> bool:
-        return float(np.max(c.excess_nrmse)) > excess_limit
+        return past_limit(c, excess_limit)
 
     def best() -> Calibration:  # the first fit, or a converged search's that fits better (ties: the first)
         return min([cal, *(f for f in fits[1:] if f.converged)], key=mean_square)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 
 __all__ = ["pct", "DLC_GOOD", "DLC_ALL", "FLOOR_RATIO", "SHARE", "ABOVE_LINEAR", "limit_evidence", "rows_and_goals",
            "good_wheels", "share_interval"]

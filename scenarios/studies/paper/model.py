@@ -24,7 +24,8 @@ import numpy as np
 
 from rigsim.correction.output.denoise import DRIFT_HZ
 from rigsim.scenarios.core.lab import LabChain, measure_lvdt
-from rigsim.scenarios.records.model.differential import HYBRID_LIMIT, HYBRID_FORMULA, correct_with_model
+from rigsim.scenarios.records.model.differential import HYBRID_FORMULA, correct_with_model
+from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 from rigsim.scenarios.records.model.result import ModelCorrection
 from rigsim.scenarios.studies.correction_score import score_correction
 from rigsim.scenarios.studies.scoring import best_linear

@@ -207,7 +207,7 @@ def test_the_scan_is_judged_by_the_second_worst_fitted_wheel():
     """A cab loads both wheels of an axle: one wheel far off (the walk-through's rr channel of pure
     noise: model error 9.4 against 0.035-0.039) leaves the scan trusted, two do not; a wheel the
     calibration left out does not count."""
-    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 
     assert SCAN_TRUSTED == HYBRID_LIMIT / 2  # the threshold's stated source
     cal = _cal(("payload_kg",), (1.0,), (0.035, 0.039, 0.038, 9.4))

@@ -173,7 +173,7 @@ def test_fallback_is_the_linear_correction_with_its_reason(record, tmp_path, cap
 
 def test_a_wheel_the_model_cannot_reproduce_is_corrected_linearly_the_others_by_the_model(record, tmp_path, capsys):
     """Pure noise on rr only, the calibration run to convergence: rr's model error, far past every
-    other wheel's, has it left out of a second calibration (differential.outlier_wheel), so its noise
+    other wheel's, has it left out of a second calibration (fallback.outlier_wheel), so its noise
     does not pull the parameters the others share; the front wheels keep the model correction, rr is
     the linear correction alone, the one ``rigsim identify --from-file`` + ``rigsim correct
     --actuators`` gives, and the sentence names the wheels."""

@@ -108,7 +108,7 @@ def test_a_wrong_description_shows_in_the_model_error_and_is_said(tractor_record
     long wheelbase, on one 5 s window; the leaves' rate, damper and friction are
     fitted, so a leaf model can take an air spring's part but for its rate's rise with load); a model
     error past the fallback's limit gets the note naming the description's fields, one within it none."""
-    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
     from rigsim.scenarios.records.model_record import description_note
 
     spec, plant, rig, force = tractor_record

@@ -22,8 +22,8 @@ from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.family import AIR_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, STATION_FITTED
 from rigsim.scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                         empty_truck_kg, is_light, xml_nominal)
-from rigsim.scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, correct_with_model,
-                                                             differential_correction, settled_mask)
+from rigsim.scenarios.records.model.differential import correct_with_model, differential_correction, settled_mask
+from rigsim.scenarios.records.model.fallback import DIFFERENTIAL_LIMIT
 from rigsim.scenarios.records.model.model_runs import model_scenario, pan_motion_drive
 from rigsim.scenarios.studies.correction_score import score_correction
 

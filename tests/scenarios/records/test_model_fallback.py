@@ -13,8 +13,10 @@ import math
 
 import pytest
 
-from rigsim.scenarios.records.model.differential import (DIFFERENTIAL_LIMIT, HYBRID_LIMIT, OUTLIER_RATIO, fallback_reason,
-                                                         outlier_wheel, wheels_reason)
+from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.records.model.fallback import (DIFFERENTIAL_LIMIT, HYBRID_LIMIT, OUTLIER_RATIO, calibration_failed,
+                                                     differential_holds, fallback_reason, model_error_limit,
+                                                     outlier_reason, outlier_wheel, wheels_reason)
 from rigsim.scenarios.records.model.result import Calibration, fitted_text
 
 
@@ -56,7 +58,7 @@ def test_a_noisy_record_is_not_taken_for_a_bad_model():
 
 
 def test_the_limit_and_convergence():
-    """The hybrid's limit by default, the differential form's lower one when given (differential.py says why)."""
+    """The hybrid's limit by default, the differential form's lower one when given (fallback.py says why)."""
     assert DIFFERENTIAL_LIMIT < HYBRID_LIMIT
     for just, kw in ((HYBRID_LIMIT, {}), (DIFFERENTIAL_LIMIT, {"excess_limit": DIFFERENTIAL_LIMIT})):
         assert fallback_reason(_cal((just,) * 4), **kw) == ""
@@ -64,6 +66,20 @@ def test_the_limit_and_convergence():
     assert fallback_reason(_cal((0.05,) * 4, converged=False)) == (
         "the truck model's calibration did not converge within its evaluation limit (3 truck variants run; stopped), "
         "so the linear correction is to be used.")
+
+
+def test_each_form_has_its_limit_and_the_failures_their_sentence():
+    """The hybrid's limit with L, the differential's without; the differential holds wheel by wheel
+    within it; a calibration that refuses the record or whose run fails says which."""
+    assert model_error_limit(hybrid=True) == HYBRID_LIMIT and model_error_limit(hybrid=False) == DIFFERENTIAL_LIMIT
+    assert differential_holds(_cal((0.05, DIFFERENTIAL_LIMIT, 0.15, 0.05))).tolist() == [True, True, False, True]
+    assert calibration_failed(ScenarioError("too short.")) == (
+        "the truck model could not be calibrated on this record (too short), so the linear correction is to be used.")
+    assert calibration_failed(RuntimeError("MuJoCo warned at 3 s")) == (
+        "a truck-model run failed during the calibration (MuJoCo warned at 3 s), so the linear correction is to be "
+        "used.")
+    assert outlier_reason(_cal((0.05, 0.06, 0.30, 0.76)), 3) == (
+        "rr's model error (0.760) is far past every other wheel's, so the truck is calibrated again without it")
 
 
 def test_one_wheel_far_past_every_other_is_the_outlier_left_out():

@@ -16,7 +16,7 @@ import pytest
 
 from rigsim.scenarios.core.config import ScenarioError, load_scenario, paper_scenarios
 from rigsim.scenarios.records.model import differential
-from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 from rigsim.scenarios.records.model.restart import SLIDING_START, calibrate_again, sliding_start
 from rigsim.scenarios.records.model.result import Calibration
 
