@@ -130,7 +130,7 @@ def cal_key(name: str) -> str:
 def calibration_meta(cal) -> dict[str, str]:
     """The calibration in metadata: one key per fitted value (unit, 1-sigma, first guess), fit NRMSE per wheel."""
     from rigsim.mjcf.names import CORNERS
-    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 
     meta = {cal_key(n): f"{v:.6g} {u} +- {s:.2g} (robust {sr:.2g}; first guess {g:.6g})"
             for n, u, g, v, s, sr in zip(cal.names, cal.units, cal.initial, cal.fitted, cal.sigma, cal.sigma_robust)}
@@ -215,7 +215,7 @@ def description_note(cal, scenario_file) -> str:
     import numpy as np
 
     from rigsim.mjcf.names import CORNERS
-    from rigsim.scenarios.records.model.differential import HYBRID_LIMIT
+    from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 
     excess = np.asarray(cal.excess_nrmse, dtype=float)
     worst = int(np.argmax(excess))
