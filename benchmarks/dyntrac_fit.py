@@ -53,6 +53,7 @@ from rigsim.mjcf.variant import BOUNDS
 from rigsim.scenarios.core.config import Scenario, load_scenario, paper_scenarios
 from rigsim.scenarios.core.rig import Rig
 from rigsim.scenarios.core.run import run
+from rigsim.scenarios.studies.model_suite.goals import DLC_ALL
 from rigsim.scenarios.studies.paper.table import PAPER_TABLE2
 from rigsim.scenarios.studies.results_page import script_command, write_results_page
 from rigsim.scenarios.studies.scoring import BEST, NOISE_N, PAPER, score_pair
@@ -63,8 +64,9 @@ GOAL = 0.05
 #: asks them within +-3 %, 1.
 TABLE1_GOAL = 0.03
 #: This project's linear correction (T_a identified from the record's drive and LVDT, 30 Hz
-#: regularized low-pass) against the road force through the same low-pass, per case, 1.
-LINEAR_GOAL = 0.02
+#: regularized low-pass) against the road force through the same low-pass, per case, 1: the
+#: suites' goal for every wheel.
+LINEAR_GOAL = DLC_ALL
 #: Table 2's columns as (simulated key, paper key).
 COLUMNS = (("road", "road"), ("rig", "rig"), ("paper", "corrected"))
 

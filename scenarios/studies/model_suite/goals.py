@@ -1,6 +1,12 @@
-"""The goals a suite of model corrections is judged by, its table and their text.
+"""The goals the corrections are judged by, a suite of model corrections' table and their text.
 
-Shared by the mismatch suite (``benchmarks/mismatch_suite.py``) and the fleet suite
+The goals' one home: DLC within 1 % of the road's (:data:`DLC_GOOD`, the lab's own
+:data:`~rigsim.scenarios.records.model.fallback.DLC_GOAL`) on :data:`SHARE` of the wheels and within
+2 % (:data:`DLC_ALL`) on all, NRMSE at most :data:`FLOOR_RATIO` times the linear floor, at most
+:data:`ABOVE_LINEAR` above the linear correction; read by every benchmark that judges a correction
+(``generalization.py``, ``generalization_blame.py``, ``dyntrac_fit.py``, ``model_correction.py``
+through :mod:`rigsim.scenarios.studies.model_suite.report`). The table and the goals' text are
+shared by the mismatch suite (``benchmarks/mismatch_suite.py``) and the fleet suite
 (``benchmarks/fleet_suite.py``): per plant the worse wheel's figures; over the wheels, the share
 within 1 % of the road DLC at NRMSE at most half the plant's linear floor, the worst DLC error,
 the worst NRMSE above the linear correction, and the fallbacks with their reasons.
@@ -10,14 +16,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
+from rigsim.scenarios.records.model.fallback import DLC_GOAL, HYBRID_LIMIT
 
 __all__ = ["pct", "DLC_GOOD", "DLC_ALL", "FLOOR_RATIO", "SHARE", "ABOVE_LINEAR", "limit_evidence", "rows_and_goals",
            "good_wheels", "share_interval"]
 
-#: Goals of the suite: DLC within 1 % (95 % of wheels) and 2 % (all), NRMSE at most half the floor
-#: (95 %), at most 0.05 above the linear correction (all).
-DLC_GOOD, DLC_ALL, FLOOR_RATIO, SHARE, ABOVE_LINEAR = 0.01, 0.02, 0.5, 0.95, 0.05
+#: The goals, 1: DLC within 1 % of the road's (95 % of wheels; the lab's fallback guards the same
+#: figure) and 2 % (all), NRMSE at most half the linear floor (95 %), at most 0.05 above the linear
+#: correction (all).
+DLC_GOOD = DLC_GOAL
+DLC_ALL, FLOOR_RATIO, SHARE, ABOVE_LINEAR = 0.02, 0.5, 0.95, 0.05
 
 
 def pct(x: float) -> str:
