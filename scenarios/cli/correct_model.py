@@ -69,7 +69,7 @@ def add_model_arguments(group) -> None:
     group.add_argument("--drift-cut-hz", type=float, default=None, metavar="HZ",
                        help="drift cut, Hz; 0: none (default 0.7, at most 1.5)")
     group.add_argument("--calibration", metavar="CAL.json", default=None,
-                       help="reuse this truck's calibration (OUT.calibration.json of an earlier run)")
+                       help="reuse an earlier run's OUT.calibration.json")
 
 
 def check_calibration_output(args, inputs) -> None:
