@@ -13,7 +13,11 @@ in a module, including imports inside functions):
 - rigsim/ (the top package) imports none of them: errors.py (the one error class every layer
   raises) imports nothing, __init__.py loads the lab's names on first use; __main__.py is the
   command, on top of everything;
-- no import circle between any two modules of the project, and no module over 420 lines.
+- no import circle between any two modules of the project, and no module over 420 lines;
+- one home each: a concept's name (the identification settings, the one NRMSE, the lab's linear
+  correction, the model correction's fallback limits, the band limit's defaults, the goals) is
+  defined in one module of the package or the benchmarks, and the studies' comparison of methods
+  is neither defined nor imported in scenarios/records (the lab's floor).
 """
 
 from __future__ import annotations
@@ -205,3 +209,92 @@ def test_the_checker_sees_imports_inside_functions(tmp_path):
     p = tmp_path / "m.py"
     p.write_text("def f():\n    from rigsim.scenarios.core.run import run\n    import rerun as rr\n")
     assert _imports(p) == {"scenarios", "rerun"}
+
+
+#: Each concept's name and the one module that defines it (a def, a class or an assignment, at any
+#: depth of any module of the package or of benchmarks/).
+ONE_HOME = {
+    "IDENT_SKIP_S": "rigsim.scenarios.core.drive",
+    "IDENT_MIN_S": "rigsim.scenarios.core.drive",
+    "nrmse": "rigsim.correction.metrics.dlc",
+    "dynamic_error": "rigsim.correction.input.convergence",
+    "linear_correction": "rigsim.scenarios.records.output",
+    "BAND_LOWPASS": "rigsim.correction.output.lowpass",
+    "BAND_MODE": "rigsim.correction.output.lowpass",
+    "DIFFERENTIAL_LIMIT": "rigsim.scenarios.records.model.fallback",
+    "HYBRID_LIMIT": "rigsim.scenarios.records.model.fallback",
+    "OUTLIER_RATIO": "rigsim.scenarios.records.model.fallback",
+    "DLC_GOAL": "rigsim.scenarios.records.model.fallback",
+    "fallback_reason": "rigsim.scenarios.records.model.fallback",
+    "DLC_GOOD": "rigsim.scenarios.studies.model_suite.goals",
+    "DLC_ALL": "rigsim.scenarios.studies.model_suite.goals",
+    "SHARE": "rigsim.scenarios.studies.model_suite.goals",
+    "FLOOR_RATIO": "rigsim.scenarios.studies.model_suite.goals",
+    "ABOVE_LINEAR": "rigsim.scenarios.studies.model_suite.goals",
+}
+#: The studies' comparison of correction methods (scenarios/studies/scoring.py, correction_score.py).
+METHOD_COMPARISON = {"Method", "PAPER", "BEST", "METHODS", "method_named", "NOISE_N", "score_correction", "band_rows"}
+
+
+def _defined(path: pathlib.Path) -> set[str]:
+    """Names a module defines: functions and classes at any depth, names assigned at module level
+    (a dataclass's field or a function's local variable is not a home; imports are not definitions)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    names = {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))}
+    todo = list(tree.body)
+    while todo:
+        node = todo.pop()
+        if isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            for target in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                names.update(n.id for n in ast.walk(target) if isinstance(n, ast.Name))
+        elif isinstance(node, (ast.If, ast.Try, ast.With, ast.For)):  # module level, conditionally
+            todo += [c for c in ast.iter_child_nodes(node) if isinstance(c, ast.stmt)]
+            todo += [c for h in getattr(node, "handlers", ()) for c in h.body]
+    return names
+
+
+def _homes(names, paths) -> dict[str, list[str]]:
+    """Per name, the modules (installed names; a benchmark by its file) that define it."""
+    homes = {n: [] for n in names}
+    for path in paths:
+        inside = path.resolve().is_relative_to(ROOT / "benchmarks") or not path.resolve().is_relative_to(ROOT)
+        module = f"benchmarks/{path.name}" if inside else _module_name(path)
+        for n in _defined(path) & set(names):
+            homes[n].append(module)
+    return homes
+
+
+def _sources():
+    return [p for pkg in (*PACKAGES, "rigsim") for p in _modules(pkg)] + sorted((ROOT / "benchmarks").glob("*.py"))
+
+
+def test_each_concept_has_one_home():
+    homes = _homes(ONE_HOME, _sources())
+    wrong = {n: where for n, where in homes.items() if where != [ONE_HOME[n]]}
+    assert not wrong, f"defined elsewhere or more than once (expected {ONE_HOME}): {wrong}"
+
+
+def _method_comparison_in(paths) -> list[str]:
+    """Where the modules define or import a name of :data:`METHOD_COMPARISON`, one line each."""
+    offenders = []
+    for path in paths:
+        named = {t.rpartition(".")[2] for t in _import_targets(path)} | _defined(path)
+        offenders += [f"{path.name}: {n}" for n in sorted(named & METHOD_COMPARISON)]
+    return offenders
+
+
+def test_the_lab_floor_holds_none_of_the_studies_method_comparison():
+    """scenarios/records neither defines nor imports Method, PAPER, BEST, ... (studies' code)."""
+    offenders = _method_comparison_in(_modules("scenarios/records"))
+    assert not offenders, offenders
+
+
+def test_the_one_home_checker_can_fail(tmp_path):
+    """A second nrmse, or an assigned IDENT_SKIP_S, in any module is found; a local variable is none."""
+    a, b = tmp_path / "a.py", tmp_path / "b.py"
+    a.write_text("def nrmse(x, r):\n    IDENT_SKIP_S = 1\n    return 0\n")
+    b.write_text("import numpy\nIDENT_SKIP_S, x = 3.0, 1\nfrom rigsim.correction.metrics.dlc import nrmse\n")
+    assert _homes({"nrmse", "IDENT_SKIP_S"}, [a, b]) == {"nrmse": ["benchmarks/a.py"], "IDENT_SKIP_S": ["benchmarks/b.py"]}
+    c = tmp_path / "c.py"
+    c.write_text("def f():\n    from rigsim.scenarios.studies.scoring import BEST\n    return BEST\n")
+    assert _method_comparison_in([a, c]) == ["c.py: BEST"]
