@@ -30,6 +30,9 @@ class _Formatter(argparse.RawDescriptionHelpFormatter):
 
     def __init__(self, prog, indent_increment=2, max_help_position=30, width=None):
         super().__init__(prog, indent_increment, max_help_position, width)
+        # argparse measures a command's name without the 4 columns it is indented by in rigsim's
+        # list of commands: room for the longest, "programme", so each command keeps one line
+        self._action_max_length = len("    programme")
 
     def _get_help_string(self, action):
         text = action.help or ""
@@ -50,12 +53,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
+    import rigsim
 
-    try:
-        return version("rigsim")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree not installed
-        return "unknown (not installed)"
+    return rigsim.__version__
 
 
 def build_parser() -> argparse.ArgumentParser:

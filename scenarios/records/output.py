@@ -77,13 +77,10 @@ def fit_metadata(out, meta) -> dict[str, str]:
 
 
 def rigsim_version() -> str:
-    """The installed rigsim's version."""
-    from importlib.metadata import PackageNotFoundError, version
+    """rigsim's version (:data:`rigsim.__version__`, pyproject.toml's)."""
+    import rigsim
 
-    try:
-        return version("rigsim")
-    except PackageNotFoundError:  # pragma: no cover - a source tree that is not installed
-        return "unknown (not installed)"
+    return rigsim.__version__
 
 
 def lowpass_filter(lowpass: str, lowpass_hz: float | None = None):

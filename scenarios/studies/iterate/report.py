@@ -56,12 +56,9 @@ def drive_metadata(result) -> dict[str, str]:
     """Header keys of the RPC III drive: what made it, for which scenario and target, after how
     many drive updates (``iterations``: the updates behind the drive written, ``rig_runs``: rig
     runs the iteration made), its status and gain."""
-    from importlib.metadata import PackageNotFoundError, version
+    from rigsim.scenarios.records.output import rigsim_version
 
-    try:
-        rigsim = version("rigsim")
-    except PackageNotFoundError:  # pragma: no cover - a source tree that is not installed
-        rigsim = "unknown (not installed)"
+    rigsim = rigsim_version()
     it = result.iteration
     meta = {"made_by": "rigsim iterate", "rigsim_version": rigsim, "scenario": result.scenario_name,
             "target": result.target, "iterations": str(it.best_index), "rig_runs": str(it.runs),

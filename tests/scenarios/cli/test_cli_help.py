@@ -69,7 +69,8 @@ def test_a_shared_flag_reads_the_same_in_every_command(flag):
 
 def test_quiet_is_in_every_command_that_prints_progress_and_worded_once():
     helps = {name: _help_of(p, "--quiet") for name, p in _commands().items()}
-    assert {n for n, h in helps.items() if h} == {"run", "paper", "validate", "identify", "correct", "sweep", "iterate"}
+    assert {n for n, h in helps.items() if h} == {"run", "paper", "validate", "identify", "correct", "programme", "sweep",
+                                                  "iterate"}
     assert {h for h in helps.values() if h} == {"no progress bar, lines or notes on stderr"}
 
 
