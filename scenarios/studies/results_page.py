@@ -22,7 +22,7 @@ import sys
 from collections.abc import Sequence
 
 from rigsim.correction.io.atomic import atomic_write_text
-from rigsim.scenarios.records.output import rigsim_version
+from rigsim import __version__ as rigsim_version
 
 __all__ = ["configuration_line", "markdown_table", "output_page", "results_page", "script_command", "write_block",
            "write_output_page", "write_results_page"]
@@ -50,7 +50,7 @@ def configuration_line(command: str, date: datetime.date | str | None = None) ->
         date = date.date()
     day = date.isoformat() if isinstance(date, datetime.date) else str(date)
     cpus = os.cpu_count() or 1
-    return (f"Measured by `{command}` on {day}, rigsim {rigsim_version()}, "
+    return (f"Measured by `{command}` on {day}, rigsim {rigsim_version}, "
             f"{platform.system()} {platform.machine()}, {cpus} CPU{'s' if cpus != 1 else ''}, "
             f"Python {platform.python_version()}.")
 
