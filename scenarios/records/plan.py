@@ -88,9 +88,17 @@ class CorrectionPlan:
         (the model's calibration), None: silent. The force and LVDT channels' timing, where the
         settings give it, is undone first (:func:`rigsim.scenarios.records.timing.aligned_record`). The
         result keeps where the record's time axis started (its ``time_start_s``), so its file is on the
-        record's clock."""
+        record's clock. The linear algebra runs on one thread (threadpoolctl): a least-squares fit's
+        last digits depend on how many threads share its BLAS, and a correction is the same wherever it
+        runs (the command, a lab's script, a pool's or a Dask cluster's worker)."""
+        from threadpoolctl import threadpool_limits
+
         from rigsim.correction.io.measured_core import TIME_START_KEY
 
+        with threadpool_limits(limits=1):  # the same digits on any machine, pool or Dask worker
+            return self._run(progress, TIME_START_KEY)
+
+    def _run(self, progress, key: str) -> CorrectionResult:
         s = self.settings
         record = aligned_record(self.record, self.record.fs_hz,
                                 [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)])
@@ -101,7 +109,7 @@ class CorrectionPlan:
             result = run_model(plan, progress)
         else:
             result = run_linear(plan)
-        start = float(self.record.metadata.get(TIME_START_KEY, 0.0))
+        start = float(self.record.metadata.get(key, 0.0))
         return dataclasses.replace(result, time_start_s=start) if start else result
 
 
