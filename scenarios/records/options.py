@@ -7,12 +7,14 @@ same planning (:func:`rigsim.scenarios.records.api.plan_correction`). The object
 was given: every value is checked, and every file read, by
 :func:`rigsim.scenarios.records.settings.correction_settings` before any work, in one
 :class:`~rigsim.scenarios.core.config.ScenarioError` sentence naming the field. Imports nothing
-heavy.
+heavy (numpy, through the low-pass's defaults).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 
 __all__ = ["LinearOptions", "ModelOptions"]
 
@@ -63,9 +65,9 @@ class LinearOptions:
     actuator: object = None
     actuators: object = None
     identify: object = None
-    lowpass: str = "regularized"
+    lowpass: str = BAND_LOWPASS
     lowpass_hz: float | None = None
-    mode: str = "zerophase"
+    mode: str = BAND_MODE
     normalize_dc: bool = False
 
     def __repr__(self) -> str:
