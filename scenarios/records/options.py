@@ -6,8 +6,8 @@ its flags (:data:`rigsim.scenarios.cli.correct.FLAGS`, one table of flag and fie
 same planning (:func:`rigsim.scenarios.records.api.plan_correction`). The objects only hold what
 was given: every value is checked, and every file read, by
 :func:`rigsim.scenarios.records.settings.correction_settings` before any work, in one
-:class:`~rigsim.scenarios.core.config.ScenarioError` sentence naming the field. Imports nothing
-heavy (numpy, through the low-pass's defaults).
+:class:`~rigsim.scenarios.core.config.ScenarioError` sentence naming the field. Imports numpy
+alone (through the low-pass's defaults).
 """
 
 from __future__ import annotations
