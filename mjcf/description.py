@@ -30,7 +30,7 @@ import numpy as np
 
 from rigsim.mjcf import names
 
-__all__ = ["DESCRIPTION_FIELDS", "CHOICES", "BOUNDS", "AIR_RATE_N_PER_M", "AIR_DAMPING_NS_PER_M",
+__all__ = ["DESCRIPTION_FIELDS", "lever_loads", "CHOICES", "BOUNDS", "AIR_RATE_N_PER_M", "AIR_DAMPING_NS_PER_M",
            "SINGLE_TIRE_STIFFNESS_N_PER_M", "SINGLE_TIRE_DAMPING_NS_PER_M", "DUAL_HALF_SPACING_M",
            "described", "apply_geometry", "apply_suspension", "spring_loads", "suspension_of"]
 
@@ -183,28 +183,46 @@ def _single_rear(spec) -> None:
                       contype=0, conaffinity=0, density=0.0, **looks)
 
 
-def spring_loads(spec, payload: bool = True) -> np.ndarray:
-    """Each spring's static load (N, compression positive, corners fl fr rl rr) by the lever rule on the
-    spec's chassis and payload (``payload=False``: the empty truck), at the design pose.
+def lever_loads(bodies, x_f: float, x_r: float, y_corners) -> np.ndarray:
+    """Each corner's share (fl fr rl rr) of the bodies' weights by the lever rule.
 
-    Each sprung body's weight splits between the axles in proportion to its distance from the other
-    axle; its moment about the centreline splits between an axle's two springs (0.9 m apart), each axle
-    taking the share of the moment it takes of the weight."""
+    Each body's weight splits between the axles in proportion to its distance from the other axle
+    (``x_f``, ``x_r``: the front and rear axle's x, m); its moment about the centreline splits
+    between an axle's two corners, ``y_corners`` (m, + left) apart, each axle taking the share of
+    the moment it takes of the weight.
+
+    Parameters
+    ----------
+    bodies : iterable of (float, array_like)
+        Each body's weight (N) and its centre of mass (x, y, ...) (m).
+    x_f, x_r : float, m
+    y_corners : sequence of float, m
+        Each corner's y, in :data:`~rigsim.mjcf.names.CORNERS` order.
+
+    Returns
+    -------
+    numpy.ndarray, N, (4,)
+    """
+    out = np.zeros(4)
+    for weight, pos in bodies:
+        front = (pos[0] - x_r) / (x_f - x_r)
+        for i, (corner, y) in enumerate(zip(names.CORNERS, y_corners)):
+            share = front if corner in names.FRONT else 1.0 - front
+            out[i] += weight * share * (0.5 + pos[1] / (2.0 * abs(y)) * np.sign(y))
+    return out
+
+
+def spring_loads(spec, payload: bool = True) -> np.ndarray:
+    """Each spring's static load (N, compression positive, corners fl fr rl rr) by the lever rule
+    (:func:`lever_loads`, across each axle's two springs, 0.9 m apart) on the spec's chassis and
+    payload (``payload=False``: the empty truck), at the design pose."""
     g = -float(spec.option.gravity[2])
-    x_f, x_r = _axle_x(spec)
     chassis, body = spec.body("chassis"), spec.body("payload")
     masses = [(float(chassis.mass), np.array(chassis.ipos, dtype=float))]
     if payload:
         masses.append((float(spec.geom("payload_box").mass), np.array(body.pos, dtype=float)))
-    out = np.zeros(4)
-    for mass, pos in masses:
-        front = (pos[0] - x_r) / (x_f - x_r)
-        for i, corner in enumerate(names.CORNERS):
-            share = front if corner in names.FRONT else 1.0 - front
-            y = float(spec.site(f"hanger_{corner}").pos[1])  # the spring's y, + left
-            spacing = 2.0 * abs(y)
-            out[i] += mass * g * share * (0.5 + pos[1] / spacing * np.sign(y))
-    return out
+    springs_y = [float(spec.site(f"hanger_{corner}").pos[1]) for corner in names.CORNERS]  # + left
+    return lever_loads([(m * g, pos) for m, pos in masses], *_axle_x(spec), springs_y)
 
 
 def _design_gap(spec, corner: str) -> float:

@@ -13,6 +13,7 @@ import mujoco
 import numpy as np
 
 from rigsim.mjcf import names
+from rigsim.mjcf.description import lever_loads
 
 __all__ = ["MIN_TIRE_SHARE", "MIN_GAP_M", "MAX_GAP_M", "check_stands", "truck_layout"]
 
@@ -61,27 +62,16 @@ def check_stands(variant) -> None:
 
 
 def _lever_loads(model: mujoco.MjModel) -> np.ndarray:
-    """Each wheel's static load (N) by the lever rule on the truck bodies at the design pose: each body's
-    weight split between the axles by its distance from the other, and across each axle by its
-    moment about the centreline over the axle's track."""
+    """Each wheel's static load (N) by the lever rule (:func:`~rigsim.mjcf.description.lever_loads`,
+    across each axle's track) on the truck bodies at the design pose."""
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     site = {c: data.site_xpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, names.wheel_site(c))]
             for c in names.CORNERS}
-    x_f, x_r = site["fl"][0], site["rl"][0]
     g = -float(model.opt.gravity[2])
     pans = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, names.pan_body(c)) for c in names.CORNERS}
-    out = np.zeros(4)
-    for body in range(1, model.nbody):
-        if body in pans:
-            continue
-        w, (x, y, _) = float(model.body_mass[body]) * g, data.xipos[body]
-        front = (x - x_r) / (x_f - x_r)
-        for i, corner in enumerate(names.CORNERS):
-            share = front if corner in names.FRONT else 1.0 - front
-            y_w = float(site[corner][1])
-            out[i] += w * share * (0.5 + y / (2.0 * abs(y_w)) * np.sign(y_w))
-    return out
+    bodies = [(float(model.body_mass[b]) * g, data.xipos[b]) for b in range(1, model.nbody) if b not in pans]
+    return lever_loads(bodies, site["fl"][0], site["rl"][0], [float(site[c][1]) for c in names.CORNERS])
 
 
 def _check_loads(model: mujoco.MjModel, loads: np.ndarray) -> None:
