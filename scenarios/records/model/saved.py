@@ -304,6 +304,7 @@ def on_record(cal: Calibration, model_N, force_N, x_a_m, t_s, windows: tuple) ->
     import numpy as np
 
     from rigsim.correction.identification.noise import noise_rms
+    from rigsim.correction.metrics.dlc import nrmse
     from rigsim.scenarios.records.model.band_error import band_errors
     from rigsim.scenarios.records.model.cell_mass import without_cell_mass
 
@@ -312,12 +313,11 @@ def on_record(cal: Calibration, model_N, force_N, x_a_m, t_s, windows: tuple) ->
     model = np.asarray(model_N, dtype=float)
     force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
     scored = np.concatenate([np.arange(s, e) for _, s, e in windows])
-    norm = force[scored].std(axis=0)
-    fit = np.sqrt(np.mean((force[scored] - model[scored]) ** 2, axis=0)) / norm
+    fit = nrmse(model[scored], force[scored])
     noise = noise_rms(np.asarray(force_N, dtype=float), fs)
     band, band_noise = band_errors([model[a:e] for a, _, e in windows], force, windows, fs, noise)
     return dataclasses.replace(cal, fit_nrmse=tuple(float(v) for v in fit),
-                               noise_nrmse=tuple(float(v) for v in noise / norm), band_nrmse=band,
+                               noise_nrmse=tuple(float(v) for v in noise / force[scored].std(axis=0)), band_nrmse=band,
                                band_noise_nrmse=band_noise, evaluations=0,
                                windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in windows))
 
