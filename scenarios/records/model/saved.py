@@ -87,11 +87,15 @@ class SavedCalibration:
 
     def to_dict(self) -> dict:
         """The file's content: ``format``, ``version``, then the fields (the model error per wheel
-        beside the calibration, for a reader of the file)."""
+        beside the calibration, for a reader of the file). The calibration's wall time is left out
+        (null): a time is kept apart from the outputs, so the same record gives the same file."""
+        import dataclasses
+
         return {"format": FORMAT, "version": VERSION, "rigsim_version": self.rigsim_version,
                 "truck_file": self.truck_file, "truck": dict(self.truck),
                 "record": {"path": self.record, "duration_s": self.record_s, "fs_hz": self.fs_hz},
-                "model_error": list(self.model_error), "calibration": self.calibration}
+                "model_error": list(self.model_error),
+                "calibration": dataclasses.replace(self.calibration, wall_time_s=None)}
 
 
 def write_calibration(path, saved: SavedCalibration, *, overwrite: bool = False, inputs=()):

@@ -14,7 +14,7 @@ the same paths (a shared file system on a cluster).
 Resume: a record whose corrected file exists and whose ``records/NAME.json`` says it was corrected
 with the same settings is not corrected again; a truck whose calibration file exists and whose
 calibrating record is such a record is not calibrated again. Outputs are written atomically and
-depend on nothing but the inputs (the calibration's wall time is left out of its file and goes to
+depend on nothing but the inputs (the calibration file holds no wall time; each record's goes to
 ``timings.csv``), so a run resumed after a kill writes the same bytes as one run through.
 """
 
@@ -72,16 +72,6 @@ def calibration_file(out, truck: TruckSettings) -> pathlib.Path:
     return pathlib.Path(out) / f"{truck.name}.calibration.json"
 
 
-def _without_wall_time(result):
-    """``result`` with its saved calibration's wall time left out (None), so that the file depends on
-    the inputs alone."""
-    import dataclasses
-
-    saved = result.saved_calibration
-    cal = dataclasses.replace(saved.calibration, wall_time_s=None)
-    return dataclasses.replace(result, saved_calibration=dataclasses.replace(saved, calibration=cal))
-
-
 def correct_one(job: Job) -> tuple[RecordReport, float]:
     """Correct one record in a worker and write its corrected file (and, calibrating, the calibration
     before it); returns its report and wall time (s). Never raises: a failure is the report's error."""
@@ -96,7 +86,7 @@ def correct_one(job: Job) -> tuple[RecordReport, float]:
         plan = plan_correction(job.entry.path, job.truck.options(job.calibration), **job.truck.call())
         result = plan.run(None)
         if job.write_calibration is not None and result.saved_calibration is not None:
-            _without_wall_time(result).write_calibration(job.write_calibration, overwrite=True)
+            result.write_calibration(job.write_calibration, overwrite=True)
         result.write(job.output, overwrite=True)
         report = record_report(job.entry, job.settings, result, "calibrate" if job.calibration is None else "reuse")
     except (RigsimError, ValueError) as exc:  # a refusal of the records API, one sentence
