@@ -93,12 +93,12 @@ class CorrectionPlan:
         runs (the command, a lab's script, a pool's or a Dask cluster's worker)."""
         from threadpoolctl import threadpool_limits
 
+        with threadpool_limits(limits=1):  # the same digits on any machine, pool or Dask worker
+            return self._run(progress)
+
+    def _run(self, progress) -> CorrectionResult:
         from rigsim.correction.io.measured_core import TIME_START_KEY
 
-        with threadpool_limits(limits=1):  # the same digits on any machine, pool or Dask worker
-            return self._run(progress, TIME_START_KEY)
-
-    def _run(self, progress, key: str) -> CorrectionResult:
         s = self.settings
         record = aligned_record(self.record, self.record.fs_hz,
                                 [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)])
@@ -109,7 +109,7 @@ class CorrectionPlan:
             result = run_model(plan, progress)
         else:
             result = run_linear(plan)
-        start = float(self.record.metadata.get(key, 0.0))
+        start = float(self.record.metadata.get(TIME_START_KEY, 0.0))
         return dataclasses.replace(result, time_start_s=start) if start else result
 
 
