@@ -191,29 +191,33 @@ def _change(before, after) -> str:
 
 def markdown(report: ProgrammeReport) -> str:
     """``programme.md``: the trucks, then per record the method and calibration, per wheel the figures."""
-    lines = ["# Programme", "",
-             f"{report.corrected} of {len(report.records)} records corrected, {report.failed} failed "
-             f"(rigsim {report.rigsim_version}).", "", "## Trucks", "",
-             "| truck | TRUCK.toml | calibration | calibrated on |", "| --- | --- | --- | --- |"]
-    lines += [f"| {t.name} | {t.model} | {t.calibration_file or '-'} | {t.calibrated_on or '-'} |" for t in report.trucks]
-    lines += ["", "## Records", "", "| record | truck | method | calibration | why |", "| --- | --- | --- | --- | --- |"]
+    from rigsim.scenarios.studies.results_page import markdown_table
+
+    trucks = markdown_table(["truck", "TRUCK.toml", "calibration", "calibrated on"],
+                            [[t.name, t.model, t.calibration_file or "-", t.calibrated_on or "-"] for t in report.trucks])
+    rows = []
     for r in report.records:
         if r.status != "corrected":
-            lines.append(f"| {r.name} | {r.truck} | FAILED | - | {r.error} |")
-            continue
-        cal = r.calibration + (f": {r.calibration_note}" if r.calibration == REFITTED else "")
-        lines.append(f"| {r.name} | {r.truck} | {r.method} | {cal} | {r.why} |")
-    lines += ["", "## Loads per wheel", "",
-              "Model error, then DLC, stress factor (SF4) and damage-equivalent load (DEL, m = 5, 1 Hz) of the "
-              "measured and the corrected force, on the settled samples.", "",
-              "| record | wheel | model error | DLC before | DLC after | change | SF4 before | SF4 after | "
-              "DEL before, kN | DEL after, kN |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+            rows.append([r.name, r.truck, "FAILED", "-", r.error])
+        else:
+            cal = r.calibration + (f": {r.calibration_note}" if r.calibration == REFITTED else "")
+            rows.append([r.name, r.truck, r.method, cal, r.why])
+    records = markdown_table(["record", "truck", "method", "calibration", "why"], rows)
+    rows = []
     for r in report.records:
         for w in r.wheels:
             kn = [None if v is None else v / 1e3 for v in (w.del5_before_N, w.del5_after_N)]
-            lines.append(f"| {r.name} | {w.corner or w.channel} | {_f(w.model_error, '.3f')} | {_f(w.dlc_before)} | "
-                         f"{_f(w.dlc_after)} | {_change(w.dlc_before, w.dlc_after)} | {_f(w.sf4_before)} | "
-                         f"{_f(w.sf4_after)} | {_f(kn[0], '.2f')} | {_f(kn[1], '.2f')} |")
+            rows.append([r.name, w.corner or w.channel, _f(w.model_error, ".3f"), _f(w.dlc_before), _f(w.dlc_after),
+                         _change(w.dlc_before, w.dlc_after), _f(w.sf4_before), _f(w.sf4_after), _f(kn[0], ".2f"),
+                         _f(kn[1], ".2f")])
+    loads = markdown_table(["record", "wheel", "model error", "DLC before", "DLC after", "change", "SF4 before",
+                            "SF4 after", "DEL before, kN", "DEL after, kN"], rows)
+    lines = ["# Programme", "",
+             f"{report.corrected} of {len(report.records)} records corrected, {report.failed} failed "
+             f"(rigsim {report.rigsim_version}).", "", "## Trucks", "", trucks.rstrip("\n"), "", "## Records", "",
+             records.rstrip("\n"), "", "## Loads per wheel", "",
+             "Model error, then DLC, stress factor (SF4) and damage-equivalent load (DEL, m = 5, 1 Hz) of the "
+             "measured and the corrected force, on the settled samples.", "", loads.rstrip("\n")]
     failed = [r for r in report.records if r.status != "corrected"]
     if failed:
         lines += ["", "## Failed", ""] + [f"- {r.name} ({r.record}): {r.error}" for r in failed]
