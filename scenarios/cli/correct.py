@@ -185,9 +185,5 @@ def cmd_correct(args) -> int:
             return correct_model.report_model(args, plan.run(progress=None if args.quiet else correct_model.say))
         result = plan.run()
         result.write(args.out, overwrite=args.force)
-        if result.settled.any():
-            print(result.table())
-        print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz "
-              f"({result.description}); {result.transient_samples} transient samples "
-              f"{'dropped' if args.transient == 'drop' else 'kept'}; wrote {args.out}")
+        correct_model.print_summary(args, result, f"({result.description})")
         return 0

@@ -49,7 +49,7 @@ from __future__ import annotations
 import sys
 
 
-__all__ = ["add_model_arguments", "report_model", "say"]
+__all__ = ["add_model_arguments", "report_model", "print_summary", "say"]
 
 
 def add_model_arguments(group) -> None:
@@ -108,33 +108,41 @@ def report_model(args, result) -> int:
             print(cal.cab_choice[0].upper() + cal.cab_choice[1:])
     if "residual_noise" in meta:
         print(meta["residual_noise"][0].upper() + meta["residual_noise"][1:])
-    written = _write_both(args, result)
-    if result.settled.any():
-        print(result.table())
-    what = (f"by {result.description}" if result.method == "model"
-            else f"by the linear correction ({result.description})")
-    print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz {what}; "
-          f"{result.transient_samples} transient samples {'dropped' if args.transient == 'drop' else 'kept'}; "
-          f"wrote {' and '.join(map(str, written))}")
+    calibration = _write_both(args, result)
+    print_summary(args, result, f"by {result.description}" if result.method == "model"
+                  else f"by the linear correction ({result.description})", calibration)
     return 0
 
 
-def _write_both(args, result) -> list:
+def print_summary(args, result, how: str, calibration=None) -> None:
+    """Print ``rigsim correct``'s last lines: the loads table (where samples settled) and one line of
+    what was corrected ``how``, and the files written (``-o``, and the ``calibration`` file if any)."""
+    if result.settled.any():
+        print(result.table())
+    wrote = str(args.out) + ("" if calibration is None else f" and {calibration}")
+    print(f"corrected {len(result.channels)} channel(s) of {str(args.input)!r} at {result.fs_hz:.6g} Hz {how}; "
+          f"{result.transient_samples} transient samples {'dropped' if args.transient == 'drop' else 'kept'}; "
+          f"wrote {wrote}")
+
+
+def _write_both(args, result):
     """Write the corrected file and (where the truck was calibrated) its calibration beside it, both
-    or neither: the calibration first, removed again if the corrected file cannot be written."""
+    or neither: the calibration first, removed again if the corrected file cannot be written.
+    Returns the calibration file written, or None."""
     import os
 
     from rigsim.scenarios.records.corrected import calibration_path
 
     if result.saved_calibration is None:
-        return [result.write(args.out, overwrite=args.force)]
+        result.write(args.out, overwrite=args.force)
+        return None
     cal = result.write_calibration(calibration_path(args.out), overwrite=args.force)
     try:
-        out = result.write(args.out, overwrite=args.force)
+        result.write(args.out, overwrite=args.force)
     except BaseException:
         os.unlink(cal)
         raise
-    return [out, cal]
+    return cal
 
 
 def say(line: str) -> None:
