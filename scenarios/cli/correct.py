@@ -82,6 +82,7 @@ FLAGS = (
     ("--cab", "cab", "model", "cab"),
     ("--drift-cut-hz", "drift_cut_hz", "model", "drift_cut_hz"),
     ("--calibration", "calibration", "model", "calibration"),
+    ("--calibrate-also", "calibrate_also", "model", "calibration_records"),
     ("--columns", "columns", "call", "columns"),
     ("--map", "map", "call", "corner_map"),
     ("--transient", "transient", "call", "transient"),
@@ -107,7 +108,9 @@ def options_from_args(args):
     linear = LinearOptions(**parts["linear"])
     if parts["model"]["truck"] is None:
         return linear, parts["call"]
-    return ModelOptions(**(parts["model"] | {"pairs": parts["model"]["pairs"] or None, "linear": linear})), parts["call"]
+    model = parts["model"] | {"pairs": parts["model"]["pairs"] or None, "linear": linear,
+                              "calibration_records": tuple(parts["model"]["calibration_records"] or ())}
+    return ModelOptions(**model), parts["call"]
 
 
 #: ``rigsim correct``'s usage line: the four ways to get T_a (or the model), then the rest.
@@ -174,7 +177,8 @@ def cmd_correct(args) -> int:
 
     if args.model is None:
         refuse_model_options(args)
-    inputs = [args.input, args.model, args.actuator, args.actuators, getattr(args, "calibration", None)]
+    inputs = [args.input, args.model, args.actuator, args.actuators, getattr(args, "calibration", None),
+              *(getattr(args, "calibrate_also", None) or ())]
     with claimed_out_file(args.out, inputs, args.force):
         options, call = options_from_args(args)
         plan = plan_correction(args.input, options, **call, naming=CLI_NAMING, time_col=args.time_col,

@@ -5,10 +5,11 @@
     rigsim correct IN --model TRUCK.toml --pairs fl=DRIVE:LVDT,fr=...,rl=...,rr=... -o OUT
                    [--map fl=CH,... | --columns A,B,C,D] [--actuator ACT.toml | --actuators ACTS.toml]
                    [--jobs N] [--max-evaluations N] [--calibration-windows N] [--cab auto|held|fitted]
-                   [--drift-cut-hz HZ] [--quiet]
+                   [--drift-cut-hz HZ] [--calibration CAL.json] [--calibrate-also REC]... [--quiet]
                    [--transient drop|mark|keep] [--force] [--time-col NAME]
 
-The truck model (the project's truck, ``truck_rig.xml``) is calibrated on ``IN`` alone: per
+The truck model (the truck ``TRUCK.toml`` describes) is calibrated on ``IN`` (and on windows of the
+other records of the same truck ``--calibrate-also`` names, read with the same channels): per
 corner the drive x_ref and the LVDT x_a (``--pairs``, the syntax of ``rigsim identify
 --from-file``; lengths, converted to m) and the wheel force F_rig (the force channel whose name
 holds the corner as a token, or ``--map``'s; converted to N); then
@@ -70,6 +71,8 @@ def add_model_arguments(group) -> None:
                        help="drift cut, Hz; 0: none (default 0.7, at most 1.5)")
     group.add_argument("--calibration", metavar="CAL.json", default=None,
                        help="reuse an earlier run's OUT.calibration.json")
+    group.add_argument("--calibrate-also", action="append", metavar="REC", default=None,
+                       help="fit windows of this record too (repeat for more)")
 
 
 def check_calibration_output(args, inputs) -> None:

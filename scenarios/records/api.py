@@ -142,9 +142,33 @@ def plan_correction(record, options, *, columns=None, corner_map=None, transient
     refuse; ``plan.run(progress)`` corrects."""
     settings = correction_settings(options, columns=columns, corner_map=corner_map, transient=transient,
                                    force_filter=force_filter, lvdt_filter=lvdt_filter, naming=naming)
-    if isinstance(record, (str, bytes, os.PathLike)):
-        return settings.read(record, time_col=time_col, decimal=decimal, thousands=thousands)
-    return settings.plan(record)
+
+    def planned(record):
+        if isinstance(record, (str, bytes, os.PathLike)):
+            return settings.read(record, time_col=time_col, decimal=decimal, thousands=thousands)
+        return settings.plan(record)
+
+    plan = planned(record)
+    if not settings.calibration_records:
+        return plan
+    import dataclasses
+    import pathlib
+
+    from rigsim.scenarios.core.config import ScenarioError
+
+    more, opt = [], naming("calibration_records")
+    for other in settings.calibration_records:
+        if isinstance(other, (str, bytes, os.PathLike)):
+            path = pathlib.Path(file_path(other, opt))
+            if plan.record.path and path.resolve() == pathlib.Path(str(plan.record.path)).resolve():
+                raise ScenarioError(f"{opt} {str(path)!r} is the record corrected itself; give other records of "
+                                    "this truck")
+        more.append(planned(other))
+        fs, here = more[-1].record.fs_hz, plan.record.fs_hz
+        if abs(fs - here) > 1e-6 * here:
+            raise ScenarioError(f"{opt} {str(more[-1].record.path)!r} is sampled at {fs:.6g} Hz, the record corrected "
+                                f"at {here:.6g} Hz; calibrate on records of one rate")
+    return dataclasses.replace(plan, more=tuple(more))
 
 
 def identify_record(record, *, pairs, lvdt_filter=None) -> RecordedIdentification:

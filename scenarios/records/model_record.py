@@ -153,6 +153,14 @@ def residual_noise_text(noise_N) -> str:
     return "white noise taken out of the model's residual (rms): " + ", ".join(read)
 
 
+def _shown_path(record) -> str:
+    """A record as given: its file, or a read record's path."""
+    import os
+
+    path = getattr(record, "path", record)
+    return os.fsdecode(path) if isinstance(path, (str, bytes, os.PathLike)) else str(path)
+
+
 def model_metadata(settings, record, pairs, force_cols, model_result, fallback_source: str | None) -> dict[str, str]:
     """How the output was made; ``model_result`` the ModelCorrection (None: every key the file may
     carry, with the longest sentences, to check an output before the work)."""
@@ -165,6 +173,8 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
     if settings.saved is not None:  # the calibration came from another record, checked on this one
         meta["cal_source"] = (f"{str(settings.saved_file)} (calibrated on {settings.saved.record!r})"
                               if model_result is not None else "x " * 200)
+    if settings.calibration_records:  # the calibration fitted windows of these records too
+        meta["cal_also"] = ",".join(_shown_path(r) for r in settings.calibration_records)
     reason = "x " * 100 if model_result is None else model_result.reason
     if reason:
         meta["fallback_reason"] = reason
@@ -267,13 +277,24 @@ def run_model(plan, progress=None) -> CorrectionResult:
                                 lowpass_hz=s.lowpass_hz, naming=s.naming)
         return res.corrected_N, res.settled
 
+    def arrays(p):  # time, drives, LVDTs, forces of a planned record, corners in order
+        r = p.record
+        return r.time_s, r.array([d for d, _ in p.pairs.values()]), r.array([x for _, x in p.pairs.values()]), \
+            r.array(p.channels)
+
+    more = [(t, x_a, f, x_ref) for t, x_ref, x_a, f in map(arrays, plan.more)]
+    if more:
+        say(f"the calibration fits {windows} window(s) of each of {len(more)} other record(s) too: "
+            + ", ".join(repr(str(p.record.path)) for p in plan.more))
     res = correct_with_model(record.time_s, record.array([d for d, _ in pairs.values()]),
                              record.array([x for _, x in pairs.values()]), forces, base_scenario=s.scenario,
                              workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
-                             linear=linear, drift_hz=s.drift_hz, saved=None if s.saved is None else s.saved.calibration)
+                             linear=linear, drift_hz=s.drift_hz, saved=None if s.saved is None else s.saved.calibration,
+                             **({"more": more} if more else {}))
     cal = res.calibration
     saved = None if cal is None else SavedCalibration(cal, spec_of(s.scenario), str(s.scenario_file), str(record.path),
-                                                      forces.shape[0] / fs, float(fs), rigsim_version())
+                                                      forces.shape[0] / fs, float(fs), rigsim_version(),
+                                                      tuple(str(p.record.path) for p in plan.more))
     from rigsim.scenarios.records.model.skew import skew_note
 
     for hint in (description_note(cal, s.scenario_file), skew_note(cal)):

@@ -111,6 +111,12 @@ class ModelOptions:
         record's own windows is within the limit (model runs only, no fit); beyond it, the truck
         is calibrated again from the saved values, and the result says so. Default: calibrated
         on this record.
+    calibration_records : sequence of records, optional
+        Other records of the same truck on the rig (files, or records read with
+        :func:`rigsim.read_record`), with the same channels and rate: the calibration fits
+        ``calibration_windows`` windows of each besides this record's (other roads and speeds
+        excite more of the truck). Each is read and checked before any work; the calibration
+        file names them.
 
     Examples
     --------
@@ -128,6 +134,7 @@ class ModelOptions:
     cab: str | None = None
     drift_cut_hz: float | None = None
     calibration: object = None
+    calibration_records: tuple = ()
 
     def __repr__(self) -> str:
         return _repr(self, ModelOptions(None))

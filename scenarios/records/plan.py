@@ -52,6 +52,9 @@ class CorrectionPlan:
     metadata : Mapping[str, str]
         The corrected file's metadata (the linear correction's), or every key the model's may carry
         (to check an output before the work).
+    more : tuple of CorrectionPlan
+        The model's other records of the same truck, planned with the same settings, whose windows
+        its calibration fits too.
     """
 
     settings: object
@@ -61,14 +64,15 @@ class CorrectionPlan:
     id_cols: tuple = ()
     pairs: Mapping | None = None
     metadata: Mapping = field(default_factory=dict)
+    more: tuple = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "metadata", MappingProxyType(dict(self.metadata)))
 
     @property
     def inputs(self) -> tuple:
-        """The files the correction reads: the record's and the settings'."""
-        return (str(self.record.path), *self.settings.inputs)
+        """The files the correction reads: the record's, the settings' and the other records'."""
+        return (str(self.record.path), *self.settings.inputs, *(str(p.record.path) for p in self.more))
 
     def check_output(self, path) -> None:
         """Refuse, before the work, an output ``path`` whose writer would refuse these channels or this
@@ -96,13 +100,21 @@ class CorrectionPlan:
         with threadpool_limits(limits=1):  # the same digits on any machine, pool or Dask worker
             return self._run(progress)
 
+    def aligned(self) -> CorrectionPlan:
+        """This plan with the force and LVDT channels' timing undone where the settings give it
+        (:func:`rigsim.scenarios.records.timing.aligned_record`)."""
+        s = self.settings
+        record = aligned_record(self.record, self.record.fs_hz,
+                                [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)])
+        return self if record is self.record else dataclasses.replace(self, record=record)
+
     def _run(self, progress) -> CorrectionResult:
         from rigsim.correction.io.measured_core import TIME_START_KEY
 
         s = self.settings
-        record = aligned_record(self.record, self.record.fs_hz,
-                                [(self.channels, s.force_filter), (lvdt_columns(self.pairs, self.id_cols), s.lvdt_filter)])
-        plan = self if record is self.record else dataclasses.replace(self, record=record)
+        plan = self.aligned()
+        if self.more:
+            plan = dataclasses.replace(plan, more=tuple(p.aligned() for p in self.more))
         if s.method == "model":
             from rigsim.scenarios.records.model_record import run_model
 

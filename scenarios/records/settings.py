@@ -94,6 +94,8 @@ class CorrectionSettings:
         A calibration to correct with (checked on the record first); None: calibrate on the record.
     saved_file : str or None
         Its file as given, or :data:`~rigsim.scenarios.records.output.GIVEN`.
+    calibration_records : tuple
+        Other records (paths or records) whose windows the calibration fits too.
     drift_hz : float or None, Hz
         The model correction's drift cut (:func:`rigsim.scenarios.records.model.differential.hybrid_correction`);
         None: no cut (asked for with 0), or the linear correction.
@@ -125,6 +127,7 @@ class CorrectionSettings:
     drift_hz: float | None = None
     saved: object = None
     saved_file: str | None = None
+    calibration_records: tuple = ()
 
     @property
     def channels(self) -> list[str] | None:
@@ -394,6 +397,10 @@ def correction_settings(options, *, columns=None, corner_map=None, transient: st
     drift_hz = _drift_hz(n, model.drift_cut_hz)
     scenario, scenario_file = _scenario(n, model.truck)
     saved, saved_file = _saved(n, model.calibration, scenario)
+    more = model.calibration_records
+    if isinstance(more, (str, bytes, os.PathLike)) or not isinstance(more, (tuple, list)):
+        raise _error(f"{n('calibration_records')} must be a list of other records of this truck (files or "
+                     f"read_record's records), got {shown(more)}")
     asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
     ta, source = _fallback_tas(n, actuator, actuators)
     return CorrectionSettings(
@@ -401,5 +408,5 @@ def correction_settings(options, *, columns=None, corner_map=None, transient: st
         corner_map=None if items is None else tuple(items), identify=(), ta=ta, per_corner=False,
         ta_source=source, pairs=pairs, scenario=scenario, scenario_file=scenario_file, workers=workers,
         max_evaluations=max_evaluations, calibration_windows=calibration_windows, drift_hz=drift_hz,
-        saved=saved, saved_file=saved_file,
+        saved=saved, saved_file=saved_file, calibration_records=tuple(more),
         inputs=tuple(f for f in (scenario_file, source, saved_file) if f not in (None, GIVEN)), **common)

@@ -40,6 +40,7 @@ from rigsim.scenarios.core.pool import local_executor
 from rigsim.scenarios.records.model.band_error import band_errors
 from rigsim.scenarios.records.model.cell_mass import band_acceleration
 from rigsim.scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
+from rigsim.scenarios.records.model.joined import join
 from rigsim.scenarios.records.model.first_guess import (catalogue, description, is_light, spring_fields, static_guess,
                                                         static_lateral, xml_nominal)
 from rigsim.scenarios.records.model.model_runs import check_record
@@ -133,7 +134,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
               fitted_guess: dict | None = None, start: dict | None = None, wheels=CORNERS,
               windows: int = WINDOWS, window_s: float = WINDOW_S, lead_s: float = WINDOW_LEAD_S,
               workers: int | None = None, max_nfev: int = MAX_NFEV, executor=None, cell_mass: bool = True,
-              with_state: bool = False, sigma: bool = True):
+              with_state: bool = False, sigma: bool = True, more=()):
     """Fit the truck model so that its force, pans following the measured x_a, matches F_rig.
 
     Parameters
@@ -168,7 +169,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         pulling the others' parameters. An axle with a wheel left out has its left/right factors
         (:data:`STATION_FITTED`) held at 1: one wheel cannot tell left from right.
     windows, window_s, lead_s : int, s, s
-        See :func:`fit_windows`.
+        See :func:`fit_windows`; ``windows`` of each record.
     workers : int, optional
         Worker processes (default: all cores).
     max_nfev : int
@@ -186,6 +187,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         finite differences, unless the fit's last one was. False (with ``with_state``) leaves
         :attr:`Calibration.sigma` NaN and the state's Jacobian None, for :func:`with_sigma` to
         complete where the calibration is kept (of two compared, say).
+    more : sequence of (t_s, x_a_m, force_N, x_ref_m), optional
+        Other records of the same truck on the rig (s, m, N, m; ``x_ref_m`` where the record's is
+        given, else None), at the record's rate: ``windows`` windows of each are fitted too
+        (:mod:`~rigsim.scenarios.records.model.joined`), and :attr:`Calibration.window_records` says
+        which record each window is of (0: this one, whose windows come first).
 
     Returns
     -------
@@ -218,10 +224,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     # a left/right factor (named by its axle's left corner) needs both wheels of its axle
     names = tuple(k for k in names if k not in STATION_FITTED
                   or set(FRONT if k.endswith(FRONT[0]) else REAR) <= set(wheels))
-    t, fs = check_record(t_s, {"x_a_m": x_a_m, "force_N": force_N} | ({} if x_ref_m is None else {"x_ref_m": x_ref_m}))
-    x_a, force = np.asarray(x_a_m, float), np.asarray(force_N, float)
-    kernel = None if x_ref_m is None else differential_kernel(x_ref_m, x_a, fs)
-    wins = fit_windows(t, windows, window_s, lead_s)
+    joined = join((t_s, x_a_m, force_N, x_ref_m), more, check_record)
+    t, x_a, force = joined.t_s, joined.x_a_m, joined.force_N
+    fs = 1.0 / (t[1] - t[0])
+    kernel = None if x_ref_m is None else differential_kernel(joined.x_ref_m, x_a, fs)
+    wins, owners = joined.windows(windows, window_s, lead_s, fit_windows)
     payload, x = static_guess(force, base_scenario)
     given = "payload_kg" in (fitted_guess or {})
     if not given and is_light(payload, base_scenario):  # a light payload's height barely matters: the stand-in
@@ -269,7 +276,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
         lower.append(a)
         upper.append(b)
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
-        acc = band_acceleration(x_a, fs) if cell_mass else None
+        acc = joined.each(lambda x: band_acceleration(x, fs), x_a) if cell_mass else None
         prob = FitProblem(names, t, x_a, force, wins, base_scenario, guess, fixed, ex, kernel, loads, use, acc)
         lb, ub = prob.thetas(lower, upper)
         theta0 = prob.theta_of(start or {}, lb, ub)
@@ -296,14 +303,17 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     def per_wheel(model_N):
         return tuple(float(v) for v in np.sqrt(np.mean(prob.plain(model_N) ** 2, axis=0)) / prob.norm)
 
-    noise = noise_rms(force, fs)  # the load cells' white noise (whole record), N
+    # the load cells' white noise (whole record; of several, their mean square by length), N
+    sizes = np.diff(joined.starts)
+    noise = noise_rms(force, fs) if not more else np.sqrt(
+        sum(n * noise_rms(force[a:a + n], fs) ** 2 for a, n in zip(joined.starts, sizes)) / sizes.sum())
     band, band_noise = band_errors(m_opt, force, wins, fs, noise)
 
     cal = Calibration(names=names, units=tuple(UNITS[k] for k in names),
                        initial=tuple(float(guess[k]) for k in names), fitted=tuple(float(v) for v in fitted),
                        sigma=tuple(float(s) for s in sig), sigma_robust=tuple(float(s) for s in robust), fixed=fixed, fit_nrmse=per_wheel(m_opt),
                        initial_nrmse=per_wheel(m_init), weighted=kernel is not None,
-                       windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in wins),
+                       windows_s=joined.window_times(wins, owners, fs), window_records=owners if more else (),
                        evaluations=int(prob.evaluations), converged=bool(res.status > 0),
                        message=str(res.message) + "".join(f"; {k} set to 0 (its onset lies beyond every measured load)"
                                                           for k in linear), wall_time_s=round(time.perf_counter() - wall0, 3),

@@ -105,6 +105,11 @@ class Calibration:
         Where the calibration chose whether to fit the cab's mount
         (:func:`rigsim.scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
         and why; "" otherwise.
+    window_records : tuple of int
+        Where the calibration fitted windows of other records too (``calibrate(more=...)``): the
+        record of each window of :attr:`windows_s` (0: the record calibrated, 1, 2...: the others in
+        the order given), each window's times on its own record's clock; empty: every window is
+        the record's.
     second_start : str
         Where the first fit was refused for its model error and searched again, from the leaf
         springs sliding and with each axle's stations held alike
@@ -150,6 +155,7 @@ class Calibration:
     wall_time_s: float
     bounds: tuple = ()
     cab_choice: str = ""
+    window_records: tuple = ()
     second_start: str = ""
     noise_nrmse: tuple = ()
     band_nrmse: tuple = ()

@@ -53,6 +53,9 @@ class SavedCalibration:
         Its sampling rate.
     rigsim_version : str
         The rigsim that calibrated it.
+    also : tuple of str
+        The other records whose windows were fitted too, as given (:attr:`Calibration.window_records`
+        numbers them from 1); empty: the record's windows alone.
 
     Examples
     --------
@@ -78,6 +81,7 @@ class SavedCalibration:
     record_s: float
     fs_hz: float
     rigsim_version: str
+    also: tuple = ()
 
     @property
     def model_error(self) -> tuple:
@@ -94,6 +98,7 @@ class SavedCalibration:
         return {"format": FORMAT, "version": VERSION, "rigsim_version": self.rigsim_version,
                 "truck_file": self.truck_file, "truck": dict(self.truck),
                 "record": {"path": self.record, "duration_s": self.record_s, "fs_hz": self.fs_hz},
+                **({"also_records": list(self.also)} if self.also else {}),
                 "model_error": list(self.model_error),
                 "calibration": dataclasses.replace(self.calibration, wall_time_s=None)}
 
@@ -187,6 +192,11 @@ def _calibration(path, d) -> Calibration:
                 raise _fail(path, f"calibration.{key} must be a list of [start, end] pairs")
             values[key] = tuple(_numbers(path, f"calibration.{key}", r, 2) for r in rows)
     values["wheels"] = tuple(d.get("wheels", ()))
+    owners = d.get("window_records", [])
+    if (not isinstance(owners, list) or any(isinstance(i, bool) or not isinstance(i, int) or i < 0 for i in owners)
+            or (owners and len(owners) != len(values.get("windows_s", ())))):
+        raise _fail(path, "calibration.window_records must list a record number (0, 1, ...) per window of windows_s")
+    values["window_records"] = tuple(owners)
     values["fixed"] = {k: (float(v) if isinstance(v, (int, float)) else v) for k, v in fixed.items()}
     cal = Calibration(**values)
     try:
@@ -250,9 +260,17 @@ def read_calibration(path) -> SavedCalibration:
     truck = doc.get("truck")
     if not isinstance(truck, Mapping):
         raise _fail(path, "truck must be a table of the description's fields")
-    return SavedCalibration(calibration=_calibration(path, doc.get("calibration")), truck=dict(truck),
+    also = doc.get("also_records", [])
+    if not isinstance(also, list) or not all(isinstance(a, str) for a in also):
+        raise _fail(path, "also_records must be a list of the other records' paths")
+    cal = _calibration(path, doc.get("calibration"))
+    if cal.window_records and max(cal.window_records) > len(also):
+        raise _fail(path, f"calibration.window_records names record {max(cal.window_records)}, but also_records "
+                          f"lists {len(also)}")
+    return SavedCalibration(calibration=cal, truck=dict(truck),
                             truck_file=str(doc.get("truck_file", "")), record=str(record.get("path", "")),
-                            record_s=duration, fs_hz=fs, rigsim_version=str(doc.get("rigsim_version", "")))
+                            record_s=duration, fs_hz=fs, rigsim_version=str(doc.get("rigsim_version", "")),
+                            also=tuple(also))
 
 
 def spec_of(scenario) -> dict:
@@ -322,7 +340,7 @@ def on_record(cal: Calibration, model_N, force_N, x_a_m, t_s, windows: tuple) ->
     band, band_noise = band_errors([model[a:e] for a, _, e in windows], force, windows, fs, noise)
     return dataclasses.replace(cal, fit_nrmse=tuple(float(v) for v in fit),
                                noise_nrmse=tuple(float(v) for v in noise / force[scored].std(axis=0)), band_nrmse=band,
-                               band_noise_nrmse=band_noise, evaluations=0,
+                               band_noise_nrmse=band_noise, evaluations=0, window_records=(),
                                windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in windows))
 
 

@@ -99,6 +99,10 @@ def _edit(doc, key, value):
     ("calibration.windows_s", [[5.0]], "calibration.windows_s must be a list of 2 numbers"),
     ("calibration.fixed", {"cab_mount_hz": [1]}, "calibration.fixed must be a table"),
     ("calibration.fixed", {"wheelbase_m": "long"}, "make no truck"),
+    ("calibration.window_records", [0, "x"], "calibration.window_records must list a record number"),
+    ("calibration.window_records", [0], "calibration.window_records must list a record number (0, 1, ...) per window"),
+    ("calibration.window_records", [0, 1], "names record 1, but also_records lists 0"),
+    ("also_records", "rec2.csv", "also_records must be a list of the other records' paths"),
 ])
 def test_a_corrupt_file_is_one_sentence_naming_the_key(tmp_path, key, value, named):
     path = tmp_path / "cal.json"
@@ -215,3 +219,17 @@ def test_a_calibration_of_another_truck_is_refused_before_any_work(lab, tmp_path
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "--calibration" in err and "wheelbase_m = 5.6, this one has None" in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["other.json"]
+
+
+def test_a_calibration_on_several_records_names_them_and_reads_back(tmp_path):
+    """Windows of two records (calibrate(more=...)): also_records and window_records round-trip, the
+    same bytes written again."""
+    import dataclasses
+
+    saved = dataclasses.replace(SAVED, calibration=dataclasses.replace(CAL, window_records=(0, 1)), also=("rec2.csv",))
+    path = write_calibration(tmp_path / "cal.json", saved)
+    back = read_calibration(path)
+    assert back.also == ("rec2.csv",) and back.calibration.window_records == (0, 1)
+    assert json.loads(path.read_text())["also_records"] == ["rec2.csv"]
+    assert write_calibration(tmp_path / "again.json", back).read_bytes() == path.read_bytes()
+    assert "also_records" not in json.loads(write_calibration(tmp_path / "one.json", SAVED).read_text())
