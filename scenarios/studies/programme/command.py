@@ -30,7 +30,7 @@ USAGE = ("%(prog)s IN... --model TRUCK.toml --pairs fl=DRIVE:LVDT,... --out DIR 
 #: The corrected files' formats (``settings.FORMATS``, pinned by the tests; the parser imports no settings).
 FORMATS = ("csv", "rsp", "mf4", "tdms")
 _TRUCK_FLAGS = ("model", "pairs", "map", "columns", "time_col", "decimal", "thousands", "cab", "calibration_windows",
-                "max_evaluations")
+                "max_evaluations", "calibrate_on")
 
 
 def _programme(args):
@@ -56,7 +56,8 @@ def cmd_programme(args) -> int:
     from rigsim.scenarios.studies.sweep.executors import checked_where, executor_for
 
     scheduler = checked_where(args.scheduler, args.jobs)
-    for flag, value in (("--calibration-windows", args.calibration_windows), ("--max-evaluations", args.max_evaluations)):
+    for flag, value in (("--calibration-windows", args.calibration_windows), ("--max-evaluations", args.max_evaluations),
+                        ("--calibrate-on", args.calibrate_on)):
         if value is not None and value < 1:
             raise ScenarioError(f"{flag} must be a whole number >= 1, got {value}; give a positive number")
     programme = _programme(args)
@@ -90,7 +91,7 @@ def add_parser(subparsers) -> None:
     """Register ``rigsim programme`` on an argparse sub-parsers object (``func=cmd_programme``)."""
     p = add_command(subparsers, "programme", "correct a test programme's records by the truck model, one calibration "
                     "per truck, on all cores or a Dask cluster",
-                    "Calibrates each truck on its first record, corrects every record with that calibration "
+                    "Calibrates each truck on its first record(s), corrects every record with that calibration "
                     "(checked on each, refitted where it does not hold), and writes the corrected files, the "
                     "calibrations and a report to OUT (resumable). Each option in full is on docs/guide/programme.md.",
                     usage=USAGE)
@@ -109,6 +110,8 @@ def add_parser(subparsers) -> None:
                    help="the cab (default auto)")
     g.add_argument("--calibration-windows", type=int, default=None, metavar="N", help="windows of the fit (default 2)")
     g.add_argument("--max-evaluations", type=int, default=None, metavar="N", help="most evaluations of the fit (default 60)")
+    g.add_argument("--calibrate-on", type=int, default=None, metavar="N",
+                   help="fit windows of the truck's first N records (default 1)")
     g = p.add_argument_group("where")
     add_jobs(g)
     g.add_argument("--scheduler", metavar="tcp://HOST:PORT", default=None,

@@ -1,15 +1,17 @@
 """Running a programme: each truck calibrated once, every record corrected, side by side, resumably.
 
 Per truck configuration the first record not yet corrected is corrected by the model calibrated on
-it (what ``rigsim correct --model`` does) and its calibration written to ``NAME.calibration.json``;
-every other record of that truck is then corrected with ``ModelOptions(..., calibration=that
-file)``: the records API checks the calibration on the record and refits it where it does not
-hold. A record that cannot be corrected (unreadable, wrong channels, refused) is reported and the
-others go on; where the record a truck was to be calibrated on fails, or gives no calibration (the
-linear correction), the truck's next record is calibrated instead. Records run on a
-``concurrent.futures`` executor (the local pool or a Dask cluster's), each with one worker process
-for its own model runs; the workers read the records and TRUCK.toml and write into ``--out`` under
-the same paths (a shared file system on a cluster).
+it (what ``rigsim correct --model`` does; with ``calibrate_on`` N, on windows of the truck's next
+N - 1 records too) and its calibration written to ``NAME.calibration.json``; every other record
+of that truck is then corrected with ``ModelOptions(..., calibration=that file)``: the records API
+checks the calibration on the record and refits it where it does not hold. A record that cannot be
+corrected (unreadable, wrong channels, refused) is reported and the others go on; where the record
+a truck was to be calibrated on fails, or gives no calibration (the linear correction), the truck's
+next record is calibrated instead. The calibrations run first, here, one after the other, each on
+all local cores (a calibration runs its model variants side by side; nothing else can start before
+it). The other records then run on a ``concurrent.futures`` executor (the local pool or a Dask
+cluster's), each with one worker process for its own model runs; the workers read the records and
+TRUCK.toml and write into ``--out`` under the same paths (a shared file system on a cluster).
 
 Resume: a record whose corrected file exists and whose ``records/NAME.json`` says it was corrected
 with the same settings is not corrected again; a truck whose calibration file exists and whose
@@ -53,6 +55,10 @@ class Job:
         The saved calibration to reuse; None: calibrate on this record.
     write_calibration : str or None
         Where to write the calibration made on this record (with ``calibration`` None).
+    more : tuple of str
+        Other records of the truck whose windows the calibration fits too (with ``calibration`` None).
+    workers : int or None
+        Worker processes of its model runs (None: all cores).
     """
 
     entry: RecordEntry
@@ -60,6 +66,8 @@ class Job:
     output: str
     calibration: str | None
     write_calibration: str | None
+    more: tuple = ()
+    workers: int | None = 1
 
     @property
     def settings(self) -> dict:
@@ -83,7 +91,8 @@ def correct_one(job: Job) -> tuple[RecordReport, float]:
 
     t0 = time.perf_counter()
     try:
-        plan = plan_correction(job.entry.path, job.truck.options(job.calibration), **job.truck.call())
+        options = job.truck.options(job.calibration, workers=job.workers, more=job.more)
+        plan = plan_correction(job.entry.path, options, **job.truck.call())
         result = plan.run(None)
         if job.write_calibration is not None and result.saved_calibration is not None:
             result.write_calibration(job.write_calibration, overwrite=True)
@@ -125,9 +134,14 @@ class ProgrammeOutcome:
 
 
 def _job(out: pathlib.Path, programme: Programme, entry: RecordEntry, calibration: str | None) -> Job:
+    """A record's job: with ``calibration`` (a file) reusing it on one worker process, else calibrating
+    on all cores on the record and the truck's next ``calibrate_on`` - 1 records."""
     truck = programme.truck(entry.truck)
-    write = None if calibration is not None else str(calibration_file(out, truck))
-    return Job(entry, truck, str(out / entry.output), calibration, write)
+    if calibration is not None:
+        return Job(entry, truck, str(out / entry.output), calibration, None)
+    after = [e.path for e in programme.records if e.truck == truck.name]
+    after = after[after.index(entry.path) + 1:][:(truck.calibrate_on or 1) - 1]
+    return Job(entry, truck, str(out / entry.output), None, str(calibration_file(out, truck)), tuple(after), None)
 
 
 def _finished(out: pathlib.Path, job: Job) -> RecordReport | None:
@@ -186,21 +200,28 @@ def run_programme(programme: Programme, out, executor: cf.Executor, *, progress:
     timings: list[tuple[str, float]] = []
     t0 = time.perf_counter()
 
-    def submit(truck_name: str) -> None:
-        queue = pending[truck_name]
-        if truck_name in calibrated_on:
-            cal = str(calibration_file(out, programme.truck(truck_name)))
-            for entry in queue:
-                job = _job(out, programme, entry, cal)
-                futures[executor.submit(correct_one, job)] = job
-            queue.clear()
-        elif queue:
-            job = _job(out, programme, queue.pop(0), None)
-            futures[executor.submit(correct_one, job)] = job
+    def finish(job: Job, report: RecordReport, wall: float) -> None:
+        reports[job.entry.name] = report
+        timings.append((job.entry.name, wall))
+        write_json(out / RECORDS_DIR / f"{job.entry.name}.json", report)
+        if report.calibration == MADE:
+            calibrated_on[job.entry.truck] = job.entry.name
+        bar.update(job.entry.name, report.status == "corrected", report.error, wall)
+        if on_record is not None:
+            on_record(report)
 
     try:
-        for name in pending:
-            submit(name)
+        for name, queue in pending.items():  # the calibrations, here, each on all cores
+            while name not in calibrated_on and queue:
+                job = _job(out, programme, queue.pop(0), None)
+                finish(job, *correct_one(job))
+        for name, queue in pending.items():  # then every other record, side by side
+            if name in calibrated_on:
+                cal = str(calibration_file(out, programme.truck(name)))
+                for entry in queue:
+                    job = _job(out, programme, entry, cal)
+                    futures[executor.submit(correct_one, job)] = job
+                queue.clear()
         while futures:
             finished, _ = cf.wait(futures, return_when=cf.FIRST_COMPLETED)
             for fut in finished:
@@ -210,16 +231,7 @@ def run_programme(programme: Programme, out, executor: cf.Executor, *, progress:
                 except Exception as exc:  # noqa: BLE001 - a lost worker fails its record only
                     report, wall = failed_report(job.entry, job.settings, f"the worker correcting it failed "
                                                  f"({type(exc).__name__}: {' '.join(str(exc).split())})"), math.nan
-                reports[job.entry.name] = report
-                timings.append((job.entry.name, wall))
-                write_json(out / RECORDS_DIR / f"{job.entry.name}.json", report)
-                if report.calibration == MADE:
-                    calibrated_on[job.entry.truck] = job.entry.name
-                bar.update(job.entry.name, report.status == "corrected", report.error, wall)
-                if on_record is not None:
-                    on_record(report)
-                if job.calibration is None:
-                    submit(job.entry.truck)
+                finish(job, report, wall)
     finally:
         bar.close()
         report = _report(programme, out, reports, calibrated_on)

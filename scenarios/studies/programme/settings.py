@@ -10,7 +10,8 @@ one configuration from ``rigsim programme``'s flags and expands the inputs (file
     model = "truck.toml"              # relative to the programme file
     pairs = "fl=Soll_FL:Weg_FL,fr=Soll_FR:Weg_FR,rl=Soll_RL:Weg_RL,rr=Soll_RR:Weg_RR"
     cab = "held"                      # map, columns, time_col, decimal, thousands, cab,
-                                      # calibration_windows, max_evaluations, drift_cut_hz
+                                      # calibration_windows, max_evaluations, drift_cut_hz,
+    calibrate_on = 3                  # calibrate_on: windows of the truck's first N records
 
     [[records]]
     path = "day1/*.csv"               # a file, a folder or a glob
@@ -40,14 +41,14 @@ FORMATS = ("csv", "rsp", "mf4", "tdms")
 TRUCK_KEYS = {"model": "--model", "pairs": "--pairs", "map": "--map", "columns": "--columns",
               "time_col": "--time-col", "decimal": "--decimal", "thousands": "--thousands", "cab": "--cab",
               "calibration_windows": "--calibration-windows", "max_evaluations": "--max-evaluations",
-              "drift_cut_hz": "--drift-cut-hz"}
+              "drift_cut_hz": "--drift-cut-hz", "calibrate_on": "--calibrate-on"}
 #: The extensions a folder's records are found by.
 RECORD_EXTENSIONS = (".csv", ".txt", ".dat", ".rsp", ".drv", ".tim", ".rpc", ".mf4", ".mdf", ".tdms")
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 #: The records API's field -> the configuration's key.
 _FIELDS = {"truck": "model", "pairs": "pairs", "corner_map": "map", "columns": "columns", "cab": "cab",
            "calibration_windows": "calibration_windows", "max_evaluations": "max_evaluations",
-           "drift_cut_hz": "drift_cut_hz"}
+           "drift_cut_hz": "drift_cut_hz", "calibration_records": "calibrate_on"}
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,9 @@ class TruckSettings:
         As ``rigsim correct`` takes them.
     calibration_windows, max_evaluations : int or None
     drift_cut_hz : float or None, Hz
+    calibrate_on : int or None
+        The truck is calibrated on windows of its first this many records (default 1: its first
+        record's alone; ``ModelOptions.calibration_records``).
     where : str
         How messages name a key: ``""`` (the flags) or ``"[trucks.NAME] "`` (a programme file).
     """
@@ -82,6 +86,7 @@ class TruckSettings:
     calibration_windows: int | None = None
     max_evaluations: int | None = None
     drift_cut_hz: float | None = None
+    calibrate_on: int | None = None
     where: str = ""
 
     def naming(self):
@@ -92,15 +97,16 @@ class TruckSettings:
             return TRUCK_KEYS[key] if not self.where else f"{self.where}{key}"
         return Naming({field: name(key) for field, key in _FIELDS.items()} | {"model": name("model"), "path": "--out"})
 
-    def options(self, calibration=None):
-        """The :class:`~rigsim.scenarios.records.options.ModelOptions` of a record of this truck: one
-        worker process for its model runs (the programme runs records side by side), ``calibration``
-        the saved calibration to reuse (None: calibrate on the record)."""
+    def options(self, calibration=None, *, workers: int | None = 1, more=()):
+        """The :class:`~rigsim.scenarios.records.options.ModelOptions` of a record of this truck:
+        ``workers`` processes for its model runs (one where the programme runs records side by side;
+        None: all cores), ``calibration`` the saved calibration to reuse (None: calibrate on the
+        record, and on windows of the records ``more`` too)."""
         from rigsim.scenarios.records.options import ModelOptions
 
-        return ModelOptions(self.model, pairs=self.pairs, workers=1, max_evaluations=self.max_evaluations,
+        return ModelOptions(self.model, pairs=self.pairs, workers=workers, max_evaluations=self.max_evaluations,
                             calibration_windows=self.calibration_windows, cab=self.cab,
-                            drift_cut_hz=self.drift_cut_hz, calibration=calibration)
+                            drift_cut_hz=self.drift_cut_hz, calibration=calibration, calibration_records=tuple(more))
 
     def call(self) -> dict:
         """The keywords of :func:`rigsim.scenarios.records.api.plan_correction` besides the options."""
@@ -116,6 +122,9 @@ class TruckSettings:
         from rigsim.scenarios.records.settings import correction_settings
 
         call = self.call()
+        if self.calibrate_on is not None and self.calibrate_on < 1:
+            raise ScenarioError(f"{self.naming()('calibration_records')} must be a whole number >= 1 (the records "
+                                f"the truck is calibrated on), got {self.calibrate_on}; give a positive number")
         correction_settings(self.options(), columns=call["columns"], corner_map=call["corner_map"],
                             naming=call["naming"])
 
@@ -264,7 +273,7 @@ def read_programme(path, out_format: str | None = None) -> Programme:
         raise ScenarioError(f"{shown} has no [trucks.NAME] table; add one with model and pairs")
     if not isinstance(records_doc, list) or not records_doc:
         raise ScenarioError(f"{shown} has no [[records]]; add one with path (and truck)")
-    kinds = {"calibration_windows": int, "max_evaluations": int, "drift_cut_hz": float}
+    kinds = {"calibration_windows": int, "max_evaluations": int, "drift_cut_hz": float, "calibrate_on": int}
     trucks = []
     for name, table in trucks_doc.items():
         where = f"[trucks.{_truck_name(name, shown)}] "

@@ -130,6 +130,7 @@ def test_a_corrupt_record_is_reported_and_the_others_are_whole(lab, capsys):
     (["--pairs", "fl=Soll_FL"], "--pairs"),
     (["--model", "/nonexistent/truck.toml"], "truck.toml"),
     (["--calibration-windows", "0"], "--calibration-windows"),
+    (["--calibrate-on", "0"], "--calibrate-on"),
 ])
 def test_bad_options_are_one_sentence_and_nothing_is_written(lab, tmp_path, capsys, extra, named):
     argv = ["programme", *lab.records, "--model", str(lab.truck), "--pairs", PAIRS, *FAST, "--out",
@@ -164,6 +165,22 @@ def test_a_programme_file_names_records_and_trucks(lab, tmp_path):
     f.write_text(f.read_text().replace("cab =", "cabin ="))
     with pytest.raises(ScenarioError, match=r"\[trucks.loaded\].*cabin"):
         read_programme(f)
+
+
+def test_the_truck_is_calibrated_on_its_first_records(lab, tmp_path):
+    """--calibrate-on 2: one window of run1 and one of run2 fitted (the calibration names run2, each
+    window's record numbered), run1 corrected with it as calibrated, run2 and run3 with it as saved."""
+    from rigsim.scenarios.records.model.saved import read_calibration
+
+    out = tmp_path / "two"
+    assert main([*lab.argv, "--calibrate-on", "2", "--jobs", "2", "--out", str(out)]) == 0
+    saved = read_calibration(out / "high_72kmh_3640kg.calibration.json")
+    assert saved.record == lab.records[0] and saved.also == (lab.records[1],)
+    assert saved.calibration.window_records == (0, 1)
+    report = json.loads((out / "programme.json").read_text())
+    assert [r["calibration"] for r in report["records"]] == ["made", "held", "held"]
+    one = read_calibration(lab.dir / "reference" / "high_72kmh_3640kg.calibration.json")
+    assert saved.calibration.fitted != one.calibration.fitted  # another fit: windows of two records
 
 
 def test_the_parser_formats_are_the_settings(lab):
