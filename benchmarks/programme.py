@@ -4,6 +4,7 @@
 
     python benchmarks/programme.py [--records 20] [--duration-s 60] [--jobs 2] [--seed 0] [--dask]
                                    [--alone N] [--cab auto|held|fitted] [--calibration-windows N]
+                                   [--calibrate-on N]
 
 One plant truck is drawn as the mismatch suite draws them (``scenarios/data/suites/mismatch_plants.toml``,
 :func:`rigsim.scenarios.studies.model_suite.mismatch.mismatch_plants`) for the paper's high-roughness
@@ -69,6 +70,8 @@ def main(argv=None) -> int:
     ap.add_argument("--alone", type=int, default=None, help="records also corrected alone (default: all)")
     ap.add_argument("--cab", choices=("auto", "held", "fitted"), default="auto", help="the calibration's --cab")
     ap.add_argument("--calibration-windows", type=int, default=None, help="the calibration's windows (default 2)")
+    ap.add_argument("--calibrate-on", type=int, default=None,
+                    help="the programme's --calibrate-on: the truck calibrated on its first N records (default 1)")
     ap.add_argument("--dask", action="store_true", help="also on a local Dask cluster")
     args = ap.parse_args(argv)
     if args.records < 1 or args.jobs < 1:
@@ -90,8 +93,10 @@ def main(argv=None) -> int:
             write_lab_record(tmp / "records" / f"rec{i:03d}.csv", sc, noise_seed=7 + i)
         records = sorted(str(p) for p in (tmp / "records").glob("*.csv"))
         out = tmp / "out"
-        wall = _timed([rigsim, "programme", *records, *options, "--jobs", str(args.jobs), "--out", str(out)], env)
-        print(f"pool: {args.records} records of {args.duration_s:g} s, --jobs {args.jobs}, --cab {args.cab}: "
+        on = [] if args.calibrate_on is None else ["--calibrate-on", str(args.calibrate_on)]
+        wall = _timed([rigsim, "programme", *records, *options, *on, "--jobs", str(args.jobs), "--out", str(out)], env)
+        print(f"pool: {args.records} records of {args.duration_s:g} s, --jobs {args.jobs}, --cab {args.cab}, "
+              f"--calibrate-on {args.calibrate_on or 1}: "
               f"{wall:.1f} s wall ({wall / 60:.2f} min; {args.records / wall * 60:.2f} records/min)")
         worst = 0.0
         for rec in records[:args.alone]:
@@ -112,7 +117,7 @@ def main(argv=None) -> int:
             shutil.move(out, tmp / "pool")
             with distributed.LocalCluster(n_workers=args.jobs, processes=True, threads_per_worker=1,
                                           host="127.0.0.1", dashboard_address=None, silence_logs=50) as cluster:
-                dwall = _timed([rigsim, "programme", *records, *options, "--scheduler", cluster.scheduler_address,
+                dwall = _timed([rigsim, "programme", *records, *options, *on, "--scheduler", cluster.scheduler_address,
                                 "--out", str(out)], env)
             same = _files(out) == reference
             print(f"dask: {dwall:.1f} s wall, throughput {wall / dwall:.0%} of the pool's (goal 90 %); files "
