@@ -41,10 +41,10 @@ the file's own drive, LVDT and force channels (:mod:`rigsim.scenarios.cli.correc
 correction, output); each option in full is on the guide's page, ``docs/guide/correct.md``.
 
 This module parses and prints: the flags become the option objects a lab's script passes to
-:func:`rigsim.correct_record` (:data:`FLAGS`, one table of flag and field), and the work is the
+:func:`rigsim.correct_record` (:data:`rigsim.scenarios.records.naming.FLAGS`, one table of flag and field), and the work is the
 records API's (:func:`rigsim.scenarios.records.api.plan_correction`, then the plan's
 ``check_output``, ``run`` and the result's ``write``), whose messages name the command's flags
-(:data:`CLI_NAMING`).
+(:data:`rigsim.scenarios.records.naming.CLI_NAMING`).
 """
 
 from __future__ import annotations
@@ -53,52 +53,18 @@ import argparse
 
 from rigsim.scenarios.core.flags import (add_channel_timing, add_command, add_force, add_number_format, add_out, add_quiet,
                                          add_time_col)
-from rigsim.scenarios.records.naming import Naming
+from rigsim.scenarios.records.naming import CLI_NAMING, FLAGS
 from rigsim.scenarios.records.output import claimed_out_file
 from rigsim.scenarios.studies.identify.command import channel_timing
 
-__all__ = ["FLAGS", "CLI_NAMING", "USAGE", "options_from_args", "refuse_model_options", "add_parser", "cmd_correct"]
+__all__ = ["USAGE", "options_from_args", "refuse_model_options", "add_parser", "cmd_correct"]
 
-#: Each flag of ``rigsim correct`` that sets a correction's field: (flag, argparse dest, where, field),
-#: where is ``"linear"`` (a :class:`~rigsim.scenarios.records.options.LinearOptions` field),
-#: ``"model"`` (a :class:`~rigsim.scenarios.records.options.ModelOptions` field) or ``"call"`` (a
-#: keyword of :func:`~rigsim.scenarios.records.api.correct_record`). The option objects
-#: (:func:`options_from_args`) and the messages' names of the fields (:data:`CLI_NAMING`) both come
-#: from this table; ``--force-filter`` and ``--lvdt-filter`` take ``--force-delay`` and
-#: ``--lvdt-delay`` with them.
-FLAGS = (
-    ("--actuator", "actuator", "linear", "actuator"),
-    ("--actuators", "actuators", "linear", "actuators"),
-    ("--identify", "identify", "linear", "identify"),
-    ("--lowpass", "lowpass", "linear", "lowpass"),
-    ("--lowpass-hz", "lowpass_hz", "linear", "lowpass_hz"),
-    ("--mode", "mode", "linear", "mode"),
-    ("--normalize-dc", "normalize_dc", "linear", "normalize_dc"),
-    ("--model", "model", "model", "truck"),
-    ("--pairs", "pairs", "model", "pairs"),
-    ("--jobs", "jobs", "model", "workers"),
-    ("--max-evaluations", "max_evaluations", "model", "max_evaluations"),
-    ("--calibration-windows", "calibration_windows", "model", "calibration_windows"),
-    ("--cab", "cab", "model", "cab"),
-    ("--drift-cut-hz", "drift_cut_hz", "model", "drift_cut_hz"),
-    ("--calibration", "calibration", "model", "calibration"),
-    ("--calibrate-also", "calibrate_also", "model", "calibration_records"),
-    ("--columns", "columns", "call", "columns"),
-    ("--map", "map", "call", "corner_map"),
-    ("--transient", "transient", "call", "transient"),
-    ("--force-filter", "force_filter", "call", "force_filter"),
-    ("--lvdt-filter", "lvdt_filter", "call", "lvdt_filter"),
-)
-
-#: The correction's fields as ``rigsim correct`` names them in its messages (from :data:`FLAGS`; the
-#: model correction as a whole is ``--model``, the output ``-o``).
-CLI_NAMING = Naming({field: flag for flag, _, _, field in FLAGS} | {"model": "--model", "path": "-o"})
 
 
 def options_from_args(args):
     """(the :class:`~rigsim.scenarios.records.options.LinearOptions` or
     :class:`~rigsim.scenarios.records.options.ModelOptions`, ``correct_record``'s keywords) that
-    ``rigsim correct``'s flags give, by :data:`FLAGS`."""
+    ``rigsim correct``'s flags give, by :data:`~rigsim.scenarios.records.naming.FLAGS`."""
     from rigsim.scenarios.records.options import LinearOptions, ModelOptions
 
     parts = {"linear": {}, "model": {}, "call": {}}
@@ -160,7 +126,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def refuse_model_options(args) -> None:
     """Refuse (one sentence) a flag of a :class:`~rigsim.scenarios.records.options.ModelOptions` field
-    (:data:`rigsim.scenarios.cli.correct.FLAGS`) given without ``--model``."""
+    (:data:`rigsim.scenarios.records.naming.FLAGS`) given without ``--model``."""
     for option, dest, where, _ in FLAGS:
         if where == "model" and dest != "model" and getattr(args, dest, None) not in (None, False, ""):
             from rigsim.scenarios.core.config import ScenarioError

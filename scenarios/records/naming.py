@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-__all__ = ["Naming", "KEYWORDS"]
+__all__ = ["Naming", "KEYWORDS", "FLAGS", "CLI_NAMING"]
 
 
 @dataclass(frozen=True)
@@ -51,3 +51,38 @@ class Naming:
 
 #: Messages for a call from Python: every parameter named by its keyword.
 KEYWORDS = Naming()
+
+#: Each flag of ``rigsim correct`` that sets a correction's field: (flag, argparse dest, where, field),
+#: where is ``"linear"`` (a :class:`~rigsim.scenarios.records.options.LinearOptions` field),
+#: ``"model"`` (a :class:`~rigsim.scenarios.records.options.ModelOptions` field) or ``"call"`` (a
+#: keyword of :func:`~rigsim.scenarios.records.api.correct_record`). The option objects
+#: (:func:`rigsim.scenarios.cli.correct.options_from_args`) and the messages' names of the fields (:data:`CLI_NAMING`) both come
+#: from this table; ``--force-filter`` and ``--lvdt-filter`` take ``--force-delay`` and
+#: ``--lvdt-delay`` with them.
+FLAGS = (
+    ("--actuator", "actuator", "linear", "actuator"),
+    ("--actuators", "actuators", "linear", "actuators"),
+    ("--identify", "identify", "linear", "identify"),
+    ("--lowpass", "lowpass", "linear", "lowpass"),
+    ("--lowpass-hz", "lowpass_hz", "linear", "lowpass_hz"),
+    ("--mode", "mode", "linear", "mode"),
+    ("--normalize-dc", "normalize_dc", "linear", "normalize_dc"),
+    ("--model", "model", "model", "truck"),
+    ("--pairs", "pairs", "model", "pairs"),
+    ("--jobs", "jobs", "model", "workers"),
+    ("--max-evaluations", "max_evaluations", "model", "max_evaluations"),
+    ("--calibration-windows", "calibration_windows", "model", "calibration_windows"),
+    ("--cab", "cab", "model", "cab"),
+    ("--drift-cut-hz", "drift_cut_hz", "model", "drift_cut_hz"),
+    ("--calibration", "calibration", "model", "calibration"),
+    ("--calibrate-also", "calibrate_also", "model", "calibration_records"),
+    ("--columns", "columns", "call", "columns"),
+    ("--map", "map", "call", "corner_map"),
+    ("--transient", "transient", "call", "transient"),
+    ("--force-filter", "force_filter", "call", "force_filter"),
+    ("--lvdt-filter", "lvdt_filter", "call", "lvdt_filter"),
+)
+
+#: The correction's fields as ``rigsim correct`` names them in its messages (from :data:`FLAGS`; the
+#: model correction as a whole is ``--model``, the output ``-o``).
+CLI_NAMING = Naming({field: flag for flag, _, _, field in FLAGS} | {"model": "--model", "path": "-o"})

@@ -2,7 +2,7 @@
 :class:`ModelOptions`.
 
 :func:`rigsim.correct_record` takes one of them; ``rigsim correct`` builds the same object from
-its flags (:data:`rigsim.scenarios.cli.correct.FLAGS`, one table of flag and field) and calls the
+its flags (:data:`rigsim.scenarios.records.naming.FLAGS`, one table of flag and field) and calls the
 same planning (:func:`rigsim.scenarios.records.api.plan_correction`). The objects only hold what
 was given: every value is checked, and every file read, by
 :func:`rigsim.scenarios.records.settings.correction_settings` before any work, in one

@@ -32,23 +32,24 @@ import re
 from dataclasses import asdict, dataclass
 
 from rigsim.scenarios.core.config import ScenarioError
+from rigsim.scenarios.records.naming import CLI_NAMING
 
 __all__ = ["FORMATS", "TRUCK_KEYS", "TruckSettings", "RecordEntry", "Programme", "from_flags", "read_programme"]
 
 #: The output formats ``--format`` names (default: each record's own).
 FORMATS = ("csv", "rsp", "mf4", "tdms")
-#: A truck configuration's keys in a programme file, and the flag each is in ``rigsim programme``.
-TRUCK_KEYS = {"model": "--model", "pairs": "--pairs", "map": "--map", "columns": "--columns",
-              "time_col": "--time-col", "decimal": "--decimal", "thousands": "--thousands", "cab": "--cab",
-              "calibration_windows": "--calibration-windows", "max_evaluations": "--max-evaluations",
-              "drift_cut_hz": "--drift-cut-hz", "calibrate_on": "--calibrate-on"}
-#: The extensions a folder's records are found by.
-RECORD_EXTENSIONS = (".csv", ".txt", ".dat", ".rsp", ".drv", ".tim", ".rpc", ".mf4", ".mdf", ".tdms")
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 #: The records API's field -> the configuration's key.
 _FIELDS = {"truck": "model", "pairs": "pairs", "corner_map": "map", "columns": "columns", "cab": "cab",
            "calibration_windows": "calibration_windows", "max_evaluations": "max_evaluations",
            "drift_cut_hz": "drift_cut_hz", "calibration_records": "calibrate_on"}
+#: A truck configuration's keys in a programme file, and the flag each is in ``rigsim programme``:
+#: ``rigsim correct``'s (:data:`~rigsim.scenarios.records.naming.FLAGS`), the reader's, and the
+#: programme's own ``--calibrate-on``.
+TRUCK_KEYS = {key: CLI_NAMING(field) for field, key in _FIELDS.items() if field != "calibration_records"} | {
+    "time_col": "--time-col", "decimal": "--decimal", "thousands": "--thousands", "calibrate_on": "--calibrate-on"}
+#: The extensions a folder's records are found by.
+RECORD_EXTENSIONS = (".csv", ".txt", ".dat", ".rsp", ".drv", ".tim", ".rpc", ".mf4", ".mdf", ".tdms")
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
 
 @dataclass(frozen=True)
