@@ -104,6 +104,34 @@ def test_a_run_killed_mid_way_resumes_to_the_same_bytes(lab):
     assert _files(out) == _files(lab.dir / "reference")
 
 
+def test_ctrl_c_leaves_a_report_and_the_same_command_finishes(lab, tmp_path):
+    """Ctrl-C (KeyboardInterrupt) once run2 is reported: it reaches the caller, the report of what
+    was done is written (run1 and run2), nothing half-written; the same call then corrects run3
+    alone, and the folder holds the bytes of one run through."""
+    from rigsim.scenarios.core.pool import local_executor
+    from rigsim.scenarios.studies.programme.run import run_programme
+    from rigsim.scenarios.studies.programme.settings import from_flags
+
+    programme = from_flags(lab.records, model=str(lab.truck), pairs=PAIRS, calibration_windows=1, cab="held")
+    out = tmp_path / "out"
+
+    def interrupt(report):
+        if report.name == "run2":
+            raise KeyboardInterrupt
+
+    with local_executor(1) as ex, pytest.raises(KeyboardInterrupt):
+        run_programme(programme, out, ex, progress=False, on_record=interrupt)
+    done = json.loads((out / "programme.json").read_text())
+    assert [r["name"] for r in done["records"]] == ["run1", "run2"]
+    assert not [p.name for p in out.rglob("*") if p.name.startswith(".") or p.suffix == ".tmp"]
+    seen = []
+    with local_executor(1) as ex:
+        outcome = run_programme(programme, out, ex, progress=False, on_record=seen.append)
+    assert outcome.skipped == 2 and [r.name for r in seen] == ["run3"]
+    here = {k: v.replace(str(out).encode(), str(lab.dir / "out").encode()) for k, v in _files(out).items()}
+    assert here == _files(lab.dir / "reference")  # the files name their folder: the reference's written in
+
+
 def test_a_corrupt_record_is_reported_and_the_others_are_whole(lab, capsys):
     bad = lab.dir / "records" / "broken.csv"
     bad.write_text("time [s],Fz_FL [kN]\n0.0,1.0\n0.001,oops\n")
