@@ -104,7 +104,8 @@ class RecordReport:
 
 @dataclass(frozen=True)
 class TruckReport:
-    """One truck configuration: its TRUCK.toml, its calibration file and the record it was calibrated on."""
+    """One truck configuration: its TRUCK.toml, its calibration file and the record it was calibrated on
+    (with the other records whose windows the calibration fitted, ``run1 (and run2, run3)``)."""
 
     name: str
     model: str

@@ -139,9 +139,16 @@ def _job(out: pathlib.Path, programme: Programme, entry: RecordEntry, calibratio
     truck = programme.truck(entry.truck)
     if calibration is not None:
         return Job(entry, truck, str(out / entry.output), calibration, None)
-    after = [e.path for e in programme.records if e.truck == truck.name]
-    after = after[after.index(entry.path) + 1:][:(truck.calibrate_on or 1) - 1]
-    return Job(entry, truck, str(out / entry.output), None, str(calibration_file(out, truck)), tuple(after), None)
+    more = tuple(e.path for e in _also(programme, entry))
+    return Job(entry, truck, str(out / entry.output), None, str(calibration_file(out, truck)), more, None)
+
+
+def _also(programme: Programme, entry: RecordEntry) -> list[RecordEntry]:
+    """The records whose windows a calibration on ``entry`` fits too: its truck's next
+    ``calibrate_on`` - 1 records in the programme's order."""
+    truck = programme.truck(entry.truck)
+    same = [e for e in programme.records if e.truck == truck.name]
+    return same[same.index(entry) + 1:][:(truck.calibrate_on or 1) - 1]
 
 
 def _finished(out: pathlib.Path, job: Job) -> RecordReport | None:
@@ -243,8 +250,15 @@ def run_programme(programme: Programme, out, executor: cf.Executor, *, progress:
 def _report(programme: Programme, out: pathlib.Path, reports: dict, calibrated_on: dict) -> ProgrammeReport:
     from rigsim.scenarios.records.output import rigsim_version
 
+    def on(t) -> str:  # the record calibrated on, and the others whose windows it fitted
+        if t.name not in calibrated_on:
+            return ""
+        name = calibrated_on[t.name]
+        also = _also(programme, next(e for e in programme.records if e.name == name))
+        return name + (f" (and {', '.join(e.name for e in also)})" if also else "")
+
     trucks = tuple(TruckReport(t.name, t.model, calibration_file(out, t).name if t.name in calibrated_on else "",
-                               calibrated_on.get(t.name, "")) for t in programme.trucks)
+                               on(t)) for t in programme.trucks)
     records = tuple(reports[e.name] for e in programme.records if e.name in reports)
     n_ok = sum(r.status == "corrected" for r in records)
     return ProgrammeReport(trucks, records, n_ok, len(records) - n_ok, rigsim_version())

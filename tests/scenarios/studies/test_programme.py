@@ -207,6 +207,7 @@ def test_the_truck_is_calibrated_on_its_first_records(lab, tmp_path):
     assert saved.calibration.window_records == (0, 1)
     report = json.loads((out / "programme.json").read_text())
     assert [r["calibration"] for r in report["records"]] == ["made", "held", "held"]
+    assert report["trucks"][0]["calibrated_on"] == "run1 (and run2)"
     one = read_calibration(lab.dir / "reference" / "high_72kmh_3640kg.calibration.json")
     assert saved.calibration.fitted != one.calibration.fitted  # another fit: windows of two records
 
