@@ -111,7 +111,7 @@ def add_parser(subparsers) -> None:
     g.add_argument("--calibration-windows", type=int, default=None, metavar="N", help="windows of the fit (default 2)")
     g.add_argument("--max-evaluations", type=int, default=None, metavar="N", help="most evaluations of the fit (default 60)")
     g.add_argument("--calibrate-on", type=int, default=None, metavar="N",
-                   help="fit windows of the truck's first N records (default 1)")
+                   help="fit windows of the truck's first N records (default 3)")
     g = p.add_argument_group("where")
     add_jobs(g)
     g.add_argument("--scheduler", metavar="tcp://HOST:PORT", default=None,

@@ -1,9 +1,10 @@
 """Running a programme: each truck calibrated once, every record corrected, side by side, resumably.
 
 Per truck configuration the first record not yet corrected is corrected by the model calibrated on
-it (what ``rigsim correct --model`` does; with ``calibrate_on`` N, on windows of the truck's next
-N - 1 records too) and its calibration written to ``NAME.calibration.json``; every other record
-of that truck is then corrected with ``ModelOptions(..., calibration=that file)``: the records API
+it (what ``rigsim correct --model`` does), on windows of the truck's next ``calibrate_on`` - 1
+records too (:data:`~rigsim.scenarios.studies.programme.settings.CALIBRATE_ON`, 3, by default),
+and its calibration written to ``NAME.calibration.json``; every other record of that truck is
+then corrected with ``ModelOptions(..., calibration=that file)``: the records API
 checks the calibration on the record and refits it where it does not hold. A record that cannot be
 corrected (unreadable, wrong channels, refused) is reported and the others go on; where the record
 a truck was to be calibrated on fails, or gives no calibration (the linear correction), the truck's
@@ -29,11 +30,12 @@ import pathlib
 import time
 from dataclasses import dataclass
 
+from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.core.files import atomic_write_text, write_json
 from rigsim.scenarios.core.progress import Progress
 from rigsim.scenarios.studies.programme.report import (MADE, ProgrammeReport, RecordReport, TruckReport,
                                                        failed_report, record_from_dict, record_report, write_report)
-from rigsim.scenarios.studies.programme.settings import Programme, RecordEntry, TruckSettings
+from rigsim.scenarios.studies.programme.settings import CALIBRATE_ON, Programme, RecordEntry, TruckSettings
 
 __all__ = ["RECORDS_DIR", "TIMINGS_FILE", "Job", "ProgrammeOutcome", "correct_one", "calibration_file",
            "run_programme"]
@@ -148,7 +150,7 @@ def _also(programme: Programme, entry: RecordEntry) -> list[RecordEntry]:
     ``calibrate_on`` - 1 records in the programme's order."""
     truck = programme.truck(entry.truck)
     same = [e for e in programme.records if e.truck == truck.name]
-    return same[same.index(entry) + 1:][:(truck.calibrate_on or 1) - 1]
+    return same[same.index(entry) + 1:][:(truck.calibrate_on or CALIBRATE_ON) - 1]
 
 
 def _finished(out: pathlib.Path, job: Job) -> RecordReport | None:
@@ -250,12 +252,17 @@ def run_programme(programme: Programme, out, executor: cf.Executor, *, progress:
 def _report(programme: Programme, out: pathlib.Path, reports: dict, calibrated_on: dict) -> ProgrammeReport:
     from rigsim.scenarios.records.output import rigsim_version
 
-    def on(t) -> str:  # the record calibrated on, and the others whose windows it fitted
+    def on(t) -> str:  # the record calibrated on, and the others whose windows it fitted (as its file says)
         if t.name not in calibrated_on:
             return ""
-        name = calibrated_on[t.name]
-        also = _also(programme, next(e for e in programme.records if e.name == name))
-        return name + (f" (and {', '.join(e.name for e in also)})" if also else "")
+        from rigsim.scenarios.records.model.saved import read_calibration
+
+        try:
+            also = read_calibration(calibration_file(out, t)).also
+        except ScenarioError:
+            also = ()
+        names = [next((e.name for e in programme.records if e.path == a), pathlib.Path(a).stem) for a in also]
+        return calibrated_on[t.name] + (f" (and {', '.join(names)})" if names else "")
 
     trucks = tuple(TruckReport(t.name, t.model, calibration_file(out, t).name if t.name in calibrated_on else "",
                                on(t)) for t in programme.trucks)
