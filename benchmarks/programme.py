@@ -37,6 +37,7 @@ from rigsim.correction.metrics.dlc import dlc
 from rigsim.scenarios.core.config import load_scenario, paper_scenarios
 from rigsim.scenarios.studies.lab_record import PAIRS, write_lab_record
 from rigsim.scenarios.studies.model_suite.mismatch import mismatch_plants, mismatch_scenario
+from rigsim.scenarios.studies.programme.settings import CALIBRATE_ON
 
 CASE = "high_72kmh_3640kg"
 SPEEDS_KMH = (48.0, 60.0, 72.0, 80.0)
@@ -71,7 +72,7 @@ def main(argv=None) -> int:
     ap.add_argument("--cab", choices=("auto", "held", "fitted"), default="auto", help="the calibration's --cab")
     ap.add_argument("--calibration-windows", type=int, default=None, help="the calibration's windows (default 2)")
     ap.add_argument("--calibrate-on", type=int, default=None,
-                    help="the programme's --calibrate-on: the truck calibrated on its first N records (default 1)")
+                    help="the programme's --calibrate-on: the truck calibrated on its first N records (default 3)")
     ap.add_argument("--dask", action="store_true", help="also on a local Dask cluster")
     args = ap.parse_args(argv)
     if args.records < 1 or args.jobs < 1:
@@ -96,7 +97,7 @@ def main(argv=None) -> int:
         on = [] if args.calibrate_on is None else ["--calibrate-on", str(args.calibrate_on)]
         wall = _timed([rigsim, "programme", *records, *options, *on, "--jobs", str(args.jobs), "--out", str(out)], env)
         print(f"pool: {args.records} records of {args.duration_s:g} s, --jobs {args.jobs}, --cab {args.cab}, "
-              f"--calibrate-on {args.calibrate_on or 1}: "
+              f"--calibrate-on {args.calibrate_on or CALIBRATE_ON}: "
               f"{wall:.1f} s wall ({wall / 60:.2f} min; {args.records / wall * 60:.2f} records/min)")
         worst = 0.0
         for rec in records[:args.alone]:
