@@ -13,7 +13,9 @@ One plant truck is drawn as the mismatch suite draws them (``scenarios/data/suit
 100 N rms of load-cell noise), and corrected with the catalogue truck's scenario as TRUCK.toml.
 Measured: the wall time of ``rigsim programme --jobs N`` (a fresh process), and for the first
 ``--alone`` records the DLC of each wheel against the same record corrected by ``rigsim correct
---model`` calibrated on it alone (the issue's goal: within 0.2 %); with ``--dask`` the same
+--model`` calibrated on it alone (the issue's goal: within 0.2 %), and both against the road: the
+truck's road test on the same road (the wheel forces the rig is to reproduce), its DLC over the
+corrected file's samples; with ``--dask`` the same
 programme on a local Dask cluster of ``--jobs`` single-threaded workers, into the same folder (the
 metadata names it), its files compared byte for byte and its throughput against the pool's.
 """
@@ -46,6 +48,18 @@ SPEEDS_KMH = (48.0, 60.0, 72.0, 80.0)
 def _dlcs(path) -> dict:
     got = read_channels(path)
     return {c: float(dlc(got.data[c])) for c in got.names if c.endswith("_corrected")}
+
+
+def _road_dlcs(scenario, path) -> dict:
+    """The road test's DLC per wheel over the samples the corrected file ``path`` holds."""
+    from rigsim.mjcf.names import CORNERS
+    from rigsim.scenarios.core.run import run
+
+    road = run(scenario, "road")
+    got = read_channels(path)
+    keep = np.isin(np.round(np.asarray(road.t_s) * 1e3).astype(int), np.round(got.time_s * 1e3).astype(int))
+    force = np.asarray(road.signals["tire_force_N"])[keep]
+    return {f"Fz_{c.upper()}_corrected": float(dlc(force[:, i])) for i, c in enumerate(CORNERS)}
 
 
 def _files(folder: pathlib.Path) -> dict:
@@ -87,10 +101,11 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
         (tmp / "records").mkdir()
-        base = load_scenario(truck)
+        base, scenarios = load_scenario(truck), {}
         for i in range(args.records):
             sc = mismatch_scenario(truck, plant, args.duration_s)
             sc = dataclasses.replace(sc, seed=base.seed + 101 * i, speed_kmh=SPEEDS_KMH[i % len(SPEEDS_KMH)])
+            scenarios[f"rec{i:03d}"] = sc
             write_lab_record(tmp / "records" / f"rec{i:03d}.csv", sc, noise_seed=7 + i)
         records = sorted(str(p) for p in (tmp / "records").glob("*.csv"))
         out = tmp / "out"
@@ -99,18 +114,27 @@ def main(argv=None) -> int:
         print(f"pool: {args.records} records of {args.duration_s:g} s, --jobs {args.jobs}, --cab {args.cab}, "
               f"--calibrate-on {args.calibrate_on or CALIBRATE_ON}: "
               f"{wall:.1f} s wall ({wall / 60:.2f} min; {args.records / wall * 60:.2f} records/min)")
-        worst = 0.0
+        worst, to_road = 0.0, {"programme": [], "alone": []}
         for rec in records[:args.alone]:
             name = pathlib.Path(rec).stem
             alone = tmp / f"{name}_alone.csv"
             _timed([rigsim, "correct", rec, *options, "--jobs", str(args.jobs), "-o", str(alone)], env)
             a, p = _dlcs(alone), _dlcs(out / f"{name}_corrected.csv")
+            r = _road_dlcs(scenarios[name], out / f"{name}_corrected.csv")
             diff = {c: 100.0 * (p[c] / a[c] - 1.0) for c in a}
             worst = max(worst, *(abs(d) for d in diff.values()))
+            to_road["programme"] += [100.0 * (p[c] / r[c] - 1.0) for c in r]
+            to_road["alone"] += [100.0 * (a[c] / r[c] - 1.0) for c in r]
             print(f"  {name}: DLC programme against alone: " + ", ".join(f"{c.split('_')[1]} {d:+.3f} %"
-                                                                          for c, d in diff.items()))
+                                                                          for c, d in diff.items())
+                  + "; against the road: programme " + " ".join(f"{v:+.2f}" for v in to_road["programme"][-4:])
+                  + " %, alone " + " ".join(f"{v:+.2f}" for v in to_road["alone"][-4:]) + " %")
         if records[:args.alone]:
             print(f"worst DLC difference against the records calibrated alone: {worst:.3f} % (goal 0.2 %)")
+            prog, own = np.abs(to_road["programme"]), np.abs(to_road["alone"])
+            print(f"DLC error against the road over {prog.size} wheels: programme mean {prog.mean():.3f} %, worst "
+                  f"{prog.max():.3f} %; alone mean {own.mean():.3f} %, worst {own.max():.3f} %; the programme closer "
+                  f"on {int(np.sum(prog < own))} of {prog.size}")
         if args.dask:
             import distributed
 
