@@ -13,7 +13,7 @@ One plant truck is drawn as the mismatch suite draws them (``scenarios/data/suit
 100 N rms of load-cell noise), and corrected with the catalogue truck's scenario as TRUCK.toml.
 Measured: the wall time of ``rigsim programme --jobs N`` (a fresh process), and for the first
 ``--alone`` records the DLC of each wheel against the same record corrected by ``rigsim correct
---model`` calibrated on it alone (the issue's goal: within 0.2 %), and both against the road: the
+--model`` calibrated on it alone (the goal: within 0.2 %), and both against the road: the
 truck's road test on the same road (the wheel forces the rig is to reproduce), its DLC over the
 corrected file's samples; with ``--dask`` the same
 programme on a local Dask cluster of ``--jobs`` single-threaded workers, into the same folder (the

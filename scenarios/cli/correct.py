@@ -60,7 +60,6 @@ from rigsim.scenarios.studies.identify.command import channel_timing
 __all__ = ["USAGE", "options_from_args", "refuse_model_options", "add_parser", "cmd_correct"]
 
 
-
 def options_from_args(args):
     """(the :class:`~rigsim.scenarios.records.options.LinearOptions` or
     :class:`~rigsim.scenarios.records.options.ModelOptions`, ``correct_record``'s keywords) that

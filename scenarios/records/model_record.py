@@ -251,7 +251,14 @@ def run_model(plan, progress=None) -> CorrectionResult:
     say = progress or (lambda line: None)
     windows, max_nfev = _windows(s)
     guess, unused = first_guess(s.scenario)
-    fs, forces = record.fs_hz, record.array(plan.channels)
+
+    def arrays(p):  # time, drives, LVDTs, forces of a planned record, corners in order
+        r = p.record
+        return r.time_s, r.array([d for d, _ in p.pairs.values()]), r.array([x for _, x in p.pairs.values()]), \
+            r.array(p.channels)
+
+    t, x_ref, x_a, forces = arrays(plan)
+    fs = record.fs_hz
     if unused:
         say(f"note: {str(s.scenario_file)!r} [vehicle] {', '.join(unused)} not used: the model is the truck its "
             "description gives, its payload and position start from the record's static loads")
@@ -277,17 +284,11 @@ def run_model(plan, progress=None) -> CorrectionResult:
                                 lowpass_hz=s.lowpass_hz, naming=s.naming)
         return res.corrected_N, res.settled
 
-    def arrays(p):  # time, drives, LVDTs, forces of a planned record, corners in order
-        r = p.record
-        return r.time_s, r.array([d for d, _ in p.pairs.values()]), r.array([x for _, x in p.pairs.values()]), \
-            r.array(p.channels)
-
-    more = [(t, x_a, f, x_ref) for t, x_ref, x_a, f in map(arrays, plan.more)]
+    more = [(t_o, x_a_o, f_o, x_ref_o) for t_o, x_ref_o, x_a_o, f_o in map(arrays, plan.more)]  # calibrate's order
     if more:
         say(f"the calibration fits {windows} window(s) of each of {len(more)} other record(s) too: "
             + ", ".join(repr(str(p.record.path)) for p in plan.more))
-    res = correct_with_model(record.time_s, record.array([d for d, _ in pairs.values()]),
-                             record.array([x for _, x in pairs.values()]), forces, base_scenario=s.scenario,
+    res = correct_with_model(t, x_ref, x_a, forces, base_scenario=s.scenario,
                              workers=s.workers, windows=windows, max_nfev=max_nfev, fitted_guess=guess, cab=s.cab,
                              linear=linear, drift_hz=s.drift_hz, saved=None if s.saved is None else s.saved.calibration,
                              **({"more": more} if more else {}))

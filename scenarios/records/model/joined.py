@@ -81,7 +81,7 @@ def _ordinal(k: int) -> str:
     return {2: "second", 3: "third", 4: "fourth", 5: "fifth"}.get(k, f"{k}th")
 
 
-def join(first, more=(), check=None) -> Joined:
+def join(first, more, check) -> Joined:
     """The records end to end.
 
     Parameters
@@ -91,8 +91,9 @@ def join(first, more=(), check=None) -> Joined:
         drive (m, (n, 4)) or None.
     more : sequence of the same
         Other records of the same truck, at the same rate; given a drive each where ``first`` has one.
-    check : callable, optional
-        ``check(t_s, signals) -> (t_s, fs)``, refusing a bad record (one sentence; default: none).
+    check : callable
+        ``check(t_s, signals) -> (t_s, fs)``, refusing a bad record in one sentence
+        (:func:`rigsim.scenarios.records.model.model_runs.check_record`).
 
     Raises
     ------
@@ -106,16 +107,12 @@ def join(first, more=(), check=None) -> Joined:
             raise ScenarioError(f"{_what(i)} has {'no' if x_ref is None else 'a'} drive where the record corrected "
                                 f"has {'one' if x_ref is None else 'none'}; give each record's drive x_ref_m or none")
         signals = {"x_a_m": x_a, "force_N": force} | ({} if x_ref is None else {"x_ref_m": x_ref})
-        if check is not None:
-            try:
-                t, fs = check(t, signals)
-            except ScenarioError as exc:
-                if not more:
-                    raise
-                raise ScenarioError(f"{_what(i)}: {exc}") from None
-        else:
-            t = np.asarray(t, float)
-            fs = 1.0 / (t[1] - t[0])
+        try:
+            t, fs = check(t, signals)
+        except ScenarioError as exc:
+            if not more:
+                raise
+            raise ScenarioError(f"{_what(i)}: {exc}") from None
         rates.append(fs)
         parts.append((np.asarray(t, float), *(None if a is None else np.asarray(a, float) for a in (x_a, force, x_ref))))
     for i, fs in enumerate(rates[1:], 1):
