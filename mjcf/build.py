@@ -148,7 +148,7 @@ def build_spec(variant: TruckVariant | None = None, *, pans: str = "slide", scen
         add_engine_mount(spec, ENGINE_MASS_KG if v.engine_mass_kg is None else float(v.engine_mass_kg),
                          v.engine_mount_hz)
     if v.frame_torsion_hz is not None:  # last: it cuts the chassis as everything above left it
-        add_frame_flex(spec, v.frame_torsion_hz, v.frame_bending_hz)
+        add_frame_flex(spec, v.frame_torsion_hz, v.frame_bending_hz, v.frame_hinge_share, v.frame_damping_ratio)
     return spec
 
 

@@ -1,13 +1,14 @@
-"""The flexible frame: the chassis as two rigid halves that twist and bend at mid-wheelbase
+"""The flexible frame: the chassis as two rigid halves that twist and bend between the axles
 (``TruckVariant.frame_torsion_hz``, ``TruckVariant.frame_bending_hz``).
 
 The XML's chassis is one rigid body; a truck's ladder frame twists about its length and bends in
 its vertical plane, in first modes at 5-12 Hz with its cab and body on it, within the band the rig
-excites. :func:`add_frame_flex` cuts the chassis at mid-wheelbase into a front half (the body
-``chassis``, its joints on the rig kept) and a rear half (:data:`rigsim.mjcf.names.FRAME_REAR_BODY`) on
-a torsion and a bending hinge (:data:`rigsim.mjcf.names.FRAME_JOINTS`) with rotational springs and light
-damping, keeping the truck's mass, centre of mass and inertia tensor (mjcf/README.md, "Flexible
-frame").
+excites. :func:`add_frame_flex` cuts the chassis between the axles (at mid-wheelbase unless
+``TruckVariant.frame_hinge_share`` puts the cut elsewhere) into a front half (the body ``chassis``,
+its joints on the rig kept) and a rear half (:data:`rigsim.mjcf.names.FRAME_REAR_BODY`) on a torsion
+and a bending hinge (:data:`rigsim.mjcf.names.FRAME_JOINTS`) with rotational springs and light
+damping (:data:`FRAME_DAMPING_RATIO` unless ``TruckVariant.frame_damping_ratio`` gives another),
+keeping the truck's mass, centre of mass and inertia tensor (mjcf/README.md, "Flexible frame").
 """
 
 from __future__ import annotations
@@ -20,12 +21,17 @@ import numpy as np
 from rigsim.mjcf import names
 from rigsim.mjcf.features import check_field, set_tensor, tensor_of
 
-__all__ = ["FRAME_DAMPING_RATIO", "BOUNDS", "RAIL_GEOM", "frame_split", "reduced_inertia", "add_frame_flex"]
+__all__ = ["FRAME_DAMPING_RATIO", "FRAME_HINGE_SHARE", "BOUNDS", "RAIL_GEOM", "frame_split", "reduced_inertia", "add_frame_flex"]
 
 #: Fraction of critical damping of each frame joint on its own mode: an estimate. A welded steel
 #: beam alone keeps under 1 %; a truck's ladder frame loses more in the friction of its bolted and
 #: riveted cross-member joints and the cab's and body's fixings, 2-5 % in its first modes; 0.04.
 FRAME_DAMPING_RATIO = 0.04
+#: Where the frame is cut: the share of the wheelbase behind the front axle (1; 0.5: mid-wheelbase).
+#: A real frame's flexibility concentrates where its section or its load changes, behind the cab or
+#: at the body's front mount (``TruckVariant.frame_hinge_share`` moves the cut there); mid-wheelbase
+#: assumes nothing of the frame.
+FRAME_HINGE_SHARE = 0.5
 #: The geom whose centre height (chassis frame, m) puts the frame's hinges at the rails' centre
 #: line, near a ladder frame's shear centre and neutral axis (truck_rig.xml: z = -0.06 m).
 RAIL_GEOM = "rail_left"
@@ -39,6 +45,13 @@ BOUNDS: dict[str, tuple[float, float, str, str]] = {
     "frame_bending_hz": (3.0, 20.0, "Hz", "a loaded truck frame bends vertically in its first mode at 5-12 Hz "
                          "(estimate); below 3 Hz it would bend with the body's bounce and pitch (1.8 and 2.5 Hz on "
                          "rigid pans), above 20 Hz it is rigid for the road's input"),
+    "frame_hinge_share": (0.25, 0.75, "1", "a ladder frame's flexibility concentrates where its section or load "
+                          "changes, behind the cab or at the body's front mount, some 0.3-0.5 of the wheelbase "
+                          "behind the front axle (estimate), or near mid-wheelbase on a uniform frame; a cut nearer "
+                          "an axle leaves one half little more than that axle's hangers"),
+    "frame_damping_ratio": (0.01, 0.1, "1", "a welded steel beam alone keeps under 1 %; a ladder frame with bolted "
+                            "and riveted cross-members and its cab's and body's fixings 2-5 % in its first modes "
+                            "(estimate); beyond 10 % is a frame with dampers of its own"),
 }
 
 _COPYING = "frame_flex_copy_"  # prefix of a subtree's copy while it moves (:func:`_move_body`)
@@ -169,8 +182,9 @@ def reduced_inertia(model: mujoco.MjModel) -> dict[str, float]:
     return {name: 1.0 / inverse[d, d] for name, d in zip(names.FRAME_JOINTS, dofs)}
 
 
-def add_frame_flex(spec: mujoco.MjSpec, torsion_hz: float, bending_hz: float) -> None:
-    """Cut the chassis at mid-wheelbase into two rigid halves on a torsion and a bending hinge.
+def add_frame_flex(spec: mujoco.MjSpec, torsion_hz: float, bending_hz: float, hinge_share: float | None = None,
+                   damping_ratio: float | None = None) -> None:
+    """Cut the chassis between the axles into two rigid halves on a torsion and a bending hinge.
 
     Parameters
     ----------
@@ -182,28 +196,39 @@ def add_frame_flex(spec: mujoco.MjSpec, torsion_hz: float, bending_hz: float) ->
         First torsion mode of the frame (``vehicle.frame_torsion_hz``, :data:`BOUNDS`).
     bending_hz : float, Hz
         First vertical bending mode of the frame (``vehicle.frame_bending_hz``).
+    hinge_share : float, 1, optional
+        Where the joints sit: this share of the way from the front axle's x to the rear axle's
+        (``vehicle.frame_hinge_share``, :data:`BOUNDS`); None: :data:`FRAME_HINGE_SHARE`, halfway.
+    damping_ratio : float, 1, optional
+        Each joint's fraction of critical damping on its own mode (``vehicle.frame_damping_ratio``,
+        :data:`BOUNDS`); None: :data:`FRAME_DAMPING_RATIO`.
 
     Notes
     -----
-    The joints sit halfway between the axles' x, at the rails' centre height (:data:`RAIL_GEOM`).
+    The joints sit ``hinge_share`` of the way from the front axle's x to the rear one's, at the
+    rails' centre height (:data:`RAIL_GEOM`).
     The chassis' mass splits by :func:`frame_split`; the rear half carries every child body of the
     chassis (the rear axle, a payload, ...) and every site (the rear hangers) behind the joints,
     each at the same place. Each spring k = (2 pi f)^2 I_red with I_red of :func:`reduced_inertia`
     (the frame's mode with the suspension removed); damping 2 zeta (2 pi f) I_red with zeta
-    :data:`FRAME_DAMPING_RATIO`. The chassis' geoms (rails, bed, cab) are drawing only and stay on
+    ``damping_ratio``. The chassis' geoms (rails, bed, cab) are drawing only and stay on
     the front half. The springs are not preloaded: the frame sags under its load as a real one does.
     """
     torsion_hz = check_field(BOUNDS, "frame_torsion_hz", torsion_hz)
     bending_hz = check_field(BOUNDS, "frame_bending_hz", bending_hz)
+    share = FRAME_HINGE_SHARE if hinge_share is None else check_field(BOUNDS, "frame_hinge_share", hinge_share)
+    zeta = FRAME_DAMPING_RATIO if damping_ratio is None else check_field(BOUNDS, "frame_damping_ratio", damping_ratio)
     if spec.body(names.FRAME_REAR_BODY) is not None:
         raise ValueError("the truck's frame is already flexible: add_frame_flex applies once")
     chassis = spec.body("chassis")
-    x_joint = 0.5 * (float(spec.body(names.axle_body("fl")).pos[0]) + float(spec.body(names.axle_body("rl")).pos[0]))
+    # (1 - s) x_f + s x_r: at s = 0.5 the midpoint 0.5 (x_f + x_r) to the bit (halving is exact)
+    x_joint = ((1.0 - share) * float(spec.body(names.axle_body("fl")).pos[0])
+               + share * float(spec.body(names.axle_body("rl")).pos[0]))
     anchor = [x_joint, 0.0, float(spec.geom(RAIL_GEOM).pos[2])]
     parts = frame_split(*tensor_of(chassis), x_joint)
     if parts is None:
         raise ValueError("vehicle.chassis_pitch_inertia_kg_m2 is too small for the chassis' mass to reach from its "
-                         f"centre of mass to mid-wheelbase (x = {x_joint:g} m), where the frame is cut")
+                         f"centre of mass to x = {x_joint:g} m, where the frame is cut")
     rear = chassis.add_body(name=names.FRAME_REAR_BODY, pos=[0.0, 0.0, 0.0])
     problem = ("vehicle.chassis_roll_inertia_kg_m2 leaves a half of the cut frame no rigid body's inertia; "
                "give the chassis a larger roll inertia")
@@ -219,4 +244,4 @@ def add_frame_flex(spec: mujoco.MjSpec, torsion_hz: float, bending_hz: float) ->
     for joint, hz in zip(joints, (torsion_hz, bending_hz)):
         omega, i_red = 2.0 * math.pi * hz, inertia[joint.name]
         joint.stiffness = [omega**2 * i_red] + [0.0] * (len(joint.stiffness) - 1)
-        joint.damping = [2.0 * FRAME_DAMPING_RATIO * omega * i_red] + [0.0] * (len(joint.damping) - 1)
+        joint.damping = [2.0 * zeta * omega * i_red] + [0.0] * (len(joint.damping) - 1)

@@ -235,8 +235,17 @@ class TruckVariant:
     frame_torsion_hz, frame_bending_hz : float, Hz, optional
         A frame that twists and bends (:func:`rigsim.mjcf.frame.add_frame_flex`): the chassis cut at
         mid-wheelbase into two halves on a torsion and a bending hinge whose springs put the frame's
-        first torsion and bending modes at these frequencies. Both or neither; 3 to 20 Hz. A plant
-        feature: the model family's frame is rigid.
+        first torsion and bending modes at these frequencies. Both or neither; 3 to 20 Hz. The model
+        family fits them on a described truck, its frame cut at mid-wheelbase with the default damping.
+    frame_hinge_share : float, 1, optional
+        Where the frame is cut (only with ``frame_torsion_hz``): this share of the wheelbase behind the
+        front axle (default :data:`rigsim.mjcf.frame.FRAME_HINGE_SHARE`, 0.5: mid-wheelbase); a frame's
+        flexibility concentrates behind the cab or at the body's front mount. 0.25 to 0.75. A plant
+        feature: the model family's frame is cut at mid-wheelbase.
+    frame_damping_ratio : float, 1, optional
+        The frame joints' fraction of critical damping on their own modes (only with
+        ``frame_torsion_hz``; default :data:`rigsim.mjcf.frame.FRAME_DAMPING_RATIO`, 0.04). 0.01 to 0.1.
+        A plant feature: the model family holds the default.
     engine_mount_hz : float, Hz, optional
         The engine and gearbox on rubber mounts (:func:`rigsim.mjcf.engine.add_engine_mount`), bouncing at
         this frequency on a held frame; 5 to 20 Hz. A plant feature.
@@ -313,6 +322,8 @@ class TruckVariant:
     spring_damping_rear_Ns_per_m: float | None = None
     frame_torsion_hz: float | None = None
     frame_bending_hz: float | None = None
+    frame_hinge_share: float | None = None
+    frame_damping_ratio: float | None = None
     engine_mount_hz: float | None = None
     engine_mass_kg: float | None = None
     damper_digressive_knee_m_per_s: float | None = None
@@ -349,6 +360,10 @@ class TruckVariant:
             if any(given) and not all(given):
                 missing = pair[given.index(False)]
                 raise ValueError(f"vehicle.{pair[given.index(True)]} needs vehicle.{missing} too: give both")
+        for k in ("frame_hinge_share", "frame_damping_ratio"):
+            if getattr(self, k) is not None and self.frame_torsion_hz is None:
+                raise ValueError(f"vehicle.{k} only applies to a flexible frame: set vehicle.frame_torsion_hz and "
+                                 "vehicle.frame_bending_hz too")
         if self.engine_mass_kg is not None and self.engine_mount_hz is None:
             raise ValueError("vehicle.engine_mass_kg only applies to an engine on its mounts: set vehicle.engine_mount_hz "
                              "too (without it the engine is part of the chassis' mass)")

@@ -241,3 +241,82 @@ def test_rests_on_pans_at_mid_stroke(pans, at_rest):
     mujoco.mj_step(model, data, int(round(0.5 / model.opt.timestep)))
     assert all(w.number == 0 for w in data.warning)
     assert np.max(np.abs(data.qvel)) < 1e-6
+
+
+def _frame_joint(model, name):
+    j = _id(model, OBJ.mjOBJ_JOINT, name)
+    return model.jnt_pos[j], model.jnt_stiffness[j], model.dof_damping[model.jnt_dofadr[j]]
+
+
+def test_the_defaults_are_the_frame_cut_at_mid_wheelbase_damped_at_the_ratio():
+    """A frame without a cut or a damping given, and one given mid-wheelbase (0.5) and FRAME_DAMPING_RATIO, are
+    the same model to the bit (masses, inertias, joints, springs, dampers, mass matrix) and have the same
+    modes on rigid pans; the joints sit at the mean of the axle bodies' x, and each damper over its spring is
+    2 zeta / omega (a damped oscillator's c / k) at zeta = 0.04."""
+    base = dict(payload_kg=3640.0, wheelbase_m=5.6, frame_torsion_hz=7.0, frame_bending_hz=10.0)
+    default = build_spec(TruckVariant(**base), pans="fixed").compile()
+    given = build_spec(TruckVariant(**base, frame_hinge_share=0.5, frame_damping_ratio=FRAME_DAMPING_RATIO),
+                       pans="fixed").compile()
+    for field in ("body_mass", "body_pos", "body_ipos", "body_inertia", "body_parentid", "jnt_pos", "jnt_stiffness",
+                  "dof_damping", "site_pos", "site_bodyid", "tendon_stiffness", "tendon_damping"):
+        assert np.array_equal(getattr(default, field), getattr(given, field)), field
+    mass = []
+    for model in (default, given):
+        data = _forward(model)
+        m = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, m)
+        mass.append(m)
+    assert np.array_equal(*mass)
+    rigid = build_spec(TruckVariant(payload_kg=3640.0, wheelbase_m=5.6), pans="fixed").compile()
+    x_axles = [rigid.body_pos[_id(rigid, OBJ.mjOBJ_BODY, names.axle_body(c))][0] for c in ("fl", "rl")]
+    for name, hz in zip(names.FRAME_JOINTS, (7.0, 10.0)):
+        pos, k, c = _frame_joint(default, name)
+        assert pos[0] == 0.5 * (x_axles[0] + x_axles[1])
+        assert c / k == pytest.approx(2 * FRAME_DAMPING_RATIO / (2 * math.pi * hz), rel=1e-12)
+
+
+def test_the_defaults_leave_the_modes_on_rigid_pans_as_they_were(at_rest):
+    base = dict(payload_kg=3640.0, frame_torsion_hz=8.0, frame_bending_hz=8.0)
+    default = modal_analysis(*at_rest(build_spec(TruckVariant(**base), pans="fixed").compile()))
+    given = modal_analysis(*at_rest(build_spec(TruckVariant(**base, frame_hinge_share=0.5,
+                                                            frame_damping_ratio=FRAME_DAMPING_RATIO),
+                                               pans="fixed").compile()))
+    assert [(m.name, m.frequency_hz, m.damping_ratio) for m in default] == \
+        [(m.name, m.frequency_hz, m.damping_ratio) for m in given]
+
+
+@pytest.mark.parametrize("share,zeta", [(0.35, 0.02), (0.65, 0.06)])
+def test_a_cut_elsewhere_keeps_the_truck_and_gives_the_requested_modes(share, zeta, same_rigid_truck):
+    """The cut at ``share`` of the way from the front axle to the rear one: the joints there; mass, centre
+    of mass and the rigid truck's mass matrix kept; with the suspension removed each mode at its
+    frequency (0.5 %, as at mid-wheelbase) damped at ``zeta``. A payload ahead of the cut rides on the
+    front half."""
+    spec = build_spec(TruckVariant(payload_kg=3640.0), pans="fixed")
+    rigid = spec.compile()
+    add_frame_flex(spec, 6.0, 11.0, hinge_share=share, damping_ratio=zeta)
+    flex = spec.compile()
+    same_rigid_truck(rigid, flex, BODIES)
+    x_f, x_r = (rigid.body_pos[_id(rigid, OBJ.mjOBJ_BODY, names.axle_body(c))][0] for c in ("fl", "rl"))
+    for name in names.FRAME_JOINTS:
+        assert _frame_joint(flex, name)[0][0] == pytest.approx(x_f + share * (x_r - x_f), abs=1e-12)
+    payload_parent = mujoco.mj_id2name(flex, OBJ.mjOBJ_BODY, flex.body_parentid[_id(flex, OBJ.mjOBJ_BODY, "payload")])
+    assert payload_parent == ("chassis" if x_f + share * (x_r - x_f) < -1.3 else names.FRAME_REAR_BODY)
+    _remove_suspension(spec)
+    model = spec.compile()
+    modes = {m.name: m for m in modal_analysis(model, _forward(model))}
+    for name, hz in zip(names.FRAME_JOINTS, (6.0, 11.0)):
+        mode = modes[name.replace("_", " ")]
+        assert mode.frequency_hz == pytest.approx(hz, rel=5e-3), name
+        assert mode.damping_ratio == pytest.approx(zeta, rel=0.02), name
+
+
+@pytest.mark.parametrize("field,value", [("frame_hinge_share", 0.2), ("frame_hinge_share", 0.8),
+                                         ("frame_damping_ratio", 0.005), ("frame_damping_ratio", float("inf"))])
+def test_a_bad_cut_or_damping_names_the_field(field, value):
+    with pytest.raises(ValueError, match=f"vehicle.{field}") as err:
+        TruckVariant(frame_torsion_hz=8.0, frame_bending_hz=8.0, **{field: value})
+    assert "\n" not in str(err.value)
+    with pytest.raises(ValueError, match=f"vehicle.{field}"):
+        add_frame_flex(build_spec(TruckVariant(), pans="fixed"), 8.0, 8.0, **{field.replace("frame_", ""): value})
+    with pytest.raises(ValueError, match=f"vehicle.{field} only applies to a flexible frame"):
+        TruckVariant(**{field: 0.5 if field == "frame_hinge_share" else 0.04})
