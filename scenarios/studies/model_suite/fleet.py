@@ -8,15 +8,22 @@ Truck ``i`` of a draw (``seed``) is drawn from ``scenarios/data/suites/fleet.tom
 * its **plant** (:attr:`FleetTruck.plant`): the spec sheet, the load (empty or 1.5-9 t at its place
   and height), the leaves' friction, then the mismatch suite's differences drawn on the described
   truck's own values (:func:`rigsim.scenarios.studies.model_suite.mismatch.draw_plant`) and the structure
-  no model of the family has: a frame that twists and bends (:mod:`rigsim.mjcf.frame`), an engine on
-  rubber mounts (:mod:`rigsim.mjcf.engine`), dampers digressive (:mod:`rigsim.mjcf.dampers`) or worn, and on an
-  air axle its bushings' friction;
+  no model of the family has: an engine on rubber mounts (:mod:`rigsim.mjcf.engine`), dampers
+  digressive (:mod:`rigsim.mjcf.dampers`) or worn, on an air axle its bushings' friction, and a frame
+  that twists and bends (:mod:`rigsim.mjcf.frame`) unlike the model's. The model of a described truck
+  fits a frame's first torsion and bending modes, its two halves hinged at mid-wheelbase and damped at
+  4 %; the plant's frame is cut where a real frame's flexibility concentrates, behind the cab or at
+  the body's front mount (0.35-0.65 of the wheelbase behind the front axle,
+  ``TruckVariant.frame_hinge_share``), and damped as its joints and fixings happen to be (2-6 %,
+  ``frame_damping_ratio``): the place and the damping of the frame's compliance are not the model's,
+  so its modes load the axles in other shares than any of the model's frames can;
 * its **road** (ISO class B-D, 30-90 km/h) and the lab chain that measured it: the typical lab
   (:data:`rigsim.scenarios.core.lab.TYPICAL_LAB`) with each filter corner off by up to +-5 % and the
   force channel's delay by up to +-10 %; the alignment uses the nominal chain.
 
 A truck that cannot stand (:func:`rigsim.mjcf.standing.check_stands`) is drawn again from the next of
-its seeds, so one seed gives one fleet.
+its seeds, so one seed gives one fleet. The frame's cut and damping come from a stream of their own
+(:data:`FRAME_STREAM`), so every other value of a seed's trucks is drawn as without them.
 """
 
 from __future__ import annotations
@@ -46,6 +53,9 @@ __all__ = ["FLEET_FILE", "FleetTruck", "fleet_ranges", "draw_spec", "draw_truck"
 FLEET_FILE = "fleet.toml"
 #: The seed stream of the fleet's draws: ``numpy.random.default_rng((seed, FLEET_STREAM, i, attempt))``.
 FLEET_STREAM = 41
+#: The seed stream of the plant frame's cut and damping (``fleet.toml``'s ``structure.frame``), beside a
+#: truck's own: ``numpy.random.default_rng((seed, FLEET_STREAM, i, attempt, FRAME_STREAM))``.
+FRAME_STREAM = 1
 #: Draws of one truck before giving up on a seed whose trucks cannot stand.
 ATTEMPTS = 20
 #: kg m^2: the least roll inertia of the chassis of a truck whose cab and engine are both on mounts.
@@ -140,6 +150,11 @@ def _structure(spec: Mapping, rng: np.random.Generator) -> dict:
     return out
 
 
+def _frame(rng: np.random.Generator) -> dict:
+    """Where the plant's frame is cut and how much it is damped (:data:`FLEET_FILE`'s ``structure.frame``)."""
+    return {k: _uniform(rng, v) for k, v in fleet_ranges()["structure"]["frame"].items()}
+
+
 def _road(i: int, rng: np.random.Generator, payload_kg: float, seed: int) -> dict:
     road = fleet_ranges()["road"]
     cls = str(road["classes"][int(rng.integers(len(road["classes"])))])
@@ -177,7 +192,8 @@ def draw_truck(i: int, seed: int) -> FleetTruck:
         described = TruckVariant(**spec, **hidden)
         nominal = nominal_values(build_model(described)) | {k: v for k, v in hidden.items()}
         mismatch = draw_plant(hidden["payload_kg"], rng, nominal=nominal)
-        plant = {**spec, **hidden, **mismatch, **_structure(spec, rng)}
+        plant = {**spec, **hidden, **mismatch, **_structure(spec, rng),
+                 **_frame(np.random.default_rng((int(seed), FLEET_STREAM, int(i), attempt, FRAME_STREAM)))}
         if "cab_mount_hz" in plant:  # cab and engine both off the chassis: its roll inertia must hold both
             plant["chassis_roll_inertia_kg_m2"] = max(plant["chassis_roll_inertia_kg_m2"], CAB_AND_ENGINE_ROLL_KG_M2)
         doc = _road(i, rng, hidden["payload_kg"], seed)
@@ -207,9 +223,11 @@ def fleet_job(truck: FleetTruck, duration_s: float, kind: str, rate_hz: float | 
 
 
 def lacks(truck: FleetTruck) -> str:
-    """What the plant has that its model lacks, in a few words."""
+    """What the plant has that its model lacks, in a few words: the frame's modes (the model fits its
+    own, cut at mid-wheelbase and damped 4 %) with where the plant's is cut and its damping, and the rest."""
     p = truck.plant
-    parts = [f"frame {p['frame_torsion_hz']:.1f}/{p['frame_bending_hz']:.1f} Hz",
+    parts = [f"frame {p['frame_torsion_hz']:.1f}/{p['frame_bending_hz']:.1f} Hz cut at "
+             f"{p['frame_hinge_share']:.2f} of the wheelbase, damped {100 * p['frame_damping_ratio']:.1f} %",
              f"engine {p['engine_mass_kg']:.0f} kg on {p['engine_mount_hz']:.1f} Hz"]
     if "damper_digressive_ratio" in p:
         parts.append(f"dampers digressive x{p['damper_digressive_ratio']:.2f} above {p['damper_digressive_knee_m_per_s']:.2f} m/s")

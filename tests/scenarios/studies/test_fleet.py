@@ -16,7 +16,7 @@ from rigsim.mjcf.standing import check_stands
 from rigsim.mjcf.variant import TruckVariant
 from rigsim.scenarios.core.lab import TYPICAL_LAB
 from rigsim.scenarios.records.model.first_guess import description
-from rigsim.scenarios.studies.model_suite.fleet import fleet_ranges, fleet_trucks
+from rigsim.scenarios.studies.model_suite.fleet import fleet_ranges, fleet_trucks, lacks
 
 N = 8
 
@@ -60,6 +60,10 @@ def test_every_plant_stands_and_carries_what_its_model_lacks(fleet):
         check_stands(plant)
         for field, (lo, hi) in structure.items():
             assert lo <= getattr(plant, field) <= hi
+        # the frame unlike the model's (cut at mid-wheelbase, damped 0.04): its cut and damping drawn, and said
+        for field, (lo, hi) in fleet_ranges()["structure"]["frame"].items():
+            assert lo <= getattr(plant, field) <= hi
+        assert f"cut at {plant.frame_hinge_share:.2f} of the wheelbase" in lacks(truck)
         digressive = plant.damper_digressive_ratio is not None
         worn = all(getattr(plant, f"spring_damping_factor_{c}") <= 0.5 for c in ("fl", "fr", "rl", "rr"))
         assert digressive or worn
