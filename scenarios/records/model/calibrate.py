@@ -39,10 +39,11 @@ from rigsim.scenarios.core.config import Scenario, ScenarioError
 from rigsim.scenarios.core.pool import local_executor
 from rigsim.scenarios.records.model.band_error import band_errors
 from rigsim.scenarios.records.model.cell_mass import band_acceleration
-from rigsim.scenarios.records.model.family import ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, RANGES, STATION_FITTED, UNITS
+from rigsim.scenarios.records.model.family import (ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, FRAME_FITTED,
+                                                   RANGES, STATION_FITTED, UNITS)
 from rigsim.scenarios.records.model.joined import join
-from rigsim.scenarios.records.model.first_guess import (catalogue, description, is_light, spring_fields, static_guess,
-                                                        static_lateral, xml_nominal)
+from rigsim.scenarios.records.model.first_guess import (catalogue, description, frame_guess, is_light, spring_fields,
+                                                        static_guess, static_lateral, xml_nominal)
 from rigsim.scenarios.records.model.model_runs import check_record
 from rigsim.scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
 from rigsim.scenarios.records.model.problem import FitProblem, FitState
@@ -50,7 +51,7 @@ from rigsim.scenarios.records.model.result import Calibration
 from rigsim.scenarios.records.model.uncertainty import uncertainties
 from rigsim.scenarios.records.model.weighting import differential_kernel
 
-__all__ = ["fit_windows", "calibrate", "with_sigma", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "MAX_NFEV", "FTOL",
+__all__ = ["fit_windows", "calibrate", "with_sigma", "DESCRIBED_ROLL", "DESCRIBED_FRAME", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "MAX_NFEV", "FTOL",
            "BLOCK_S"]
 
 #: Windows of the record fitted: how many, scored seconds each, measured lead-in before each (s).
@@ -111,13 +112,20 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
 #: 0.75-2 times the catalogue's (:data:`~rigsim.scenarios.records.model.family.RANGES`). The catalogue truck
 #: holds the XML's.
 DESCRIBED_ROLL = "chassis_roll_inertia_kg_m2"
+#: Fitted on a described truck beside the roll inertia: the frame's first torsion and bending modes
+#: (:data:`~rigsim.scenarios.records.model.family.FRAME_FITTED`, from
+#: :func:`~rigsim.scenarios.records.model.first_guess.frame_guess`). The body's pitch and roll are
+#: those of a sprung mass that twists and bends at 5-12 Hz, and a spec sheet gives no such mode. The
+#: catalogue truck keeps the XML's rigid chassis.
+DESCRIBED_FRAME = FRAME_FITTED
 
 
 def _spring_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
     """``names`` on the described truck (:func:`~.first_guess.spring_fields`): where ``names`` fit an
     axle's friction, its spring rate and damper are fitted too (an air axle's friction is its
     bushings' and dampers' seals'); where they fit the body's pitch (the payload's height or its
-    stand-in), its roll inertia too (:data:`DESCRIBED_ROLL`); the catalogue truck's names as given."""
+    stand-in), its roll inertia and its frame's modes too (:data:`DESCRIBED_ROLL`, :data:`DESCRIBED_FRAME`);
+    the catalogue truck's names as given."""
     fit, drop = spring_fields(desc)
     out = []
     for k in names:
@@ -126,7 +134,7 @@ def _spring_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
         if k.startswith("spring_friction_") and not k.startswith("spring_friction_factor"):
             out += [f for f in fit if k.split("_")[2] in f]
         if fit and k in ("payload_z_m", *EMPTY_STAND_IN.values()):
-            out.append(DESCRIBED_ROLL)
+            out += [DESCRIBED_ROLL, *DESCRIBED_FRAME]
     return tuple(dict.fromkeys(out))
 
 
@@ -246,11 +254,11 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, "payload_z_m": nominal["payload_z_m"],
              "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"],
              "chassis_roll_inertia_kg_m2": nominal["chassis_roll_inertia_kg_m2"], **catalogue(desc),
-             **dict.fromkeys(STATION_FITTED, 1.0), **(fitted_guess or {})}
+             **dict.fromkeys(STATION_FITTED, 1.0), **frame_guess(desc), **(fitted_guess or {})}
     held = [k for k in FITTED if k in ("cab_mount_hz", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values())
             or k.startswith("tire_progressive")
-            or k in STATION_FITTED]
-    for k in held:  # held: rigid cab, linear tire, left and right stations alike, the XML's chassis
+            or k in STATION_FITTED or (k in FRAME_FITTED and k in guess)]
+    for k in held:  # held: rigid cab and frame, linear tire, stations alike, the XML's chassis
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper, loads = [], [], {}
@@ -258,8 +266,8 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
              if k not in names}
     for k in names:
         if k not in guess:
-            raise ScenarioError(f"{k} is fitted on a described truck only (the catalogue truck's springs are held at "
-                                "truck_rig.xml's); describe the truck in [vehicle] or leave it out of names")
+            raise ScenarioError(f"{k} is fitted on a described truck only (the catalogue truck's springs and frame are "
+                                "held at truck_rig.xml's); describe the truck in [vehicle] or leave it out of names")
         if guess[k] is None:
             raise ScenarioError(f"fitted_guess gives no value for {k}, which is fitted; give a number or leave it out "
                                 "of names")

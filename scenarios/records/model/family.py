@@ -71,6 +71,27 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   default. The cab's mass is never fitted: it is locally identifiable on a suspended cab but not
   on a rigid one; the price is a larger front-wheel error where the plant's cab mass differs from
   the model's.
+* ``frame_torsion_hz``, ``frame_bending_hz`` (:data:`FRAME_FITTED`), on a described truck only, beside
+  the chassis' roll inertia (where the names fit the body's pitch,
+  :data:`~rigsim.scenarios.records.model.calibrate.DESCRIBED_FRAME`): the ladder frame's first torsion
+  and vertical bending modes (``TruckVariant.frame_torsion_hz``, :mod:`rigsim.mjcf.frame`: the
+  chassis cut at mid-wheelbase into two halves on a torsion and a bending hinge, damped at
+  :data:`rigsim.mjcf.frame.FRAME_DAMPING_RATIO`). A spec sheet gives a frame's rail section and
+  length, not its modes with the cab, body, tanks and load bolted on (5-12 Hz, the catalogue guess
+  the middle, :data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_FRAME_HZ`). The modes sit
+  among the wheel-hop modes and above the body's, where the rig excites the truck: a rigid-frame
+  model puts a flexible frame's twist and bend into the tires, the friction and the masses, and
+  misses the wheels the frame loads (fleet suite, development draw, 30 s: a 6 m leaf truck whose
+  only structure beyond the family is its frame, bending at 8.37 Hz, fits 8.31 Hz and its model
+  error falls from 0.17-0.18 to 0.05-0.08; a torsion mode a coherent road does not excite stays
+  near its guess, at no loss). Beside an engine on mounts near the frame's modes and a suspended
+  cab, the fit may settle in another minimum than the rigid frame's, better or worse
+  (fleet07, fleet19). Fitted through their compliance (:data:`COMPLIANCE`),
+  3-20 Hz (:data:`rigsim.mjcf.frame.BOUNDS`; at 20 Hz a frame is rigid for the road's input).
+  Where the frame is cut and how much it is damped are held (mid-wheelbase, 4 %): a real frame's
+  flexibility is spread along it and concentrates behind the cab or at the body's front mount, which
+  the fleet suite's plants draw (``TruckVariant.frame_hinge_share``, ``frame_damping_ratio``) and
+  the model does not. The catalogue truck keeps the XML's rigid chassis.
 
 The truck is the one the scenario's ``[vehicle]`` describes (its wheelbase, tracks, rear tires,
 suspensions, spring rates and dampers: :data:`~rigsim.scenarios.records.model.first_guess.SPEC_FIELDS`),
@@ -101,7 +122,7 @@ The fit itself: :mod:`rigsim.scenarios.records.model.calibrate`.
 
 from __future__ import annotations
 
-__all__ = ["FITTED", "STATION_FITTED", "AIR_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
+__all__ = ["FITTED", "STATION_FITTED", "AIR_FITTED", "FRAME_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
 
 #: Each axle's left tire stiffness, leaf-spring rate and interleaf friction over its right one (the
 #: module's description).
@@ -112,12 +133,15 @@ STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "tire_
 #: truck (:func:`~rigsim.scenarios.records.model.first_guess.spring_fields`), where the names fit the axle's friction.
 AIR_FITTED = ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spring_rate_rear_N_per_m",
               "spring_damping_rear_Ns_per_m")
+#: The frame's first torsion and bending modes: fitted on a described truck
+#: (:data:`~rigsim.scenarios.records.model.calibrate.DESCRIBED_FRAME`), both or neither.
+FRAME_FITTED = ("frame_torsion_hz", "frame_bending_hz")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2", "chassis_roll_inertia_kg_m2",
           "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
-          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED + AIR_FITTED
+          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED + AIR_FITTED + FRAME_FITTED
 UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pitch_inertia_kg_m2": "kg m^2",
          "chassis_roll_inertia_kg_m2": "kg m^2",
          "tire_stiffness_front_N_per_m": "N/m",
@@ -127,7 +151,8 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pi
          "tire_progressive_ratio": "1", "tire_progressive_onset_m": "m", "tire_progressive_ratio_rear": "1",
          "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz", **dict.fromkeys(STATION_FITTED, "1"),
          "spring_rate_front_N_per_m": "N/m", "spring_rate_rear_N_per_m": "N/m",
-         "spring_damping_front_Ns_per_m": "N s/m", "spring_damping_rear_Ns_per_m": "N s/m"}
+         "spring_damping_front_Ns_per_m": "N s/m", "spring_damping_rear_Ns_per_m": "N s/m",
+         **dict.fromkeys(FRAME_FITTED, "Hz")}
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
@@ -135,7 +160,7 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pi
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
 DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2",
-                                                     "chassis_roll_inertia_kg_m2") + AIR_FITTED)
+                                                     "chassis_roll_inertia_kg_m2") + AIR_FITTED + FRAME_FITTED)
 #: The payload's height's stand-in on an empty or light truck (fitted in its place where the payload is light):
 #: the chassis' pitch inertia (the module's description).
 EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
@@ -156,7 +181,9 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "cha
           "spring_friction_factor_fl": (0.4, 2.5), "spring_friction_factor_rl": (0.4, 2.5),
           # an air spring's rate is quoted at one load and pressure, its damper's at one speed
           "spring_rate_front_N_per_m": (0.5, 2.0), "spring_rate_rear_N_per_m": (0.5, 2.0),
-          "spring_damping_front_Ns_per_m": (0.3, 3.0), "spring_damping_rear_Ns_per_m": (0.3, 3.0)}
+          "spring_damping_front_Ns_per_m": (0.3, 3.0), "spring_damping_rear_Ns_per_m": (0.3, 3.0),
+          # from the 9 Hz guess to rigsim.mjcf.frame.BOUNDS' 3-20 Hz
+          **dict.fromkeys(FRAME_FITTED, (1.0 / 3.0, 20.0 / 9.0))}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`rigsim.mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
@@ -165,6 +192,6 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "cha
 ADDITIVE = ("payload_x_m", "payload_z_m", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
             "tire_progressive_onset_rear_m")
 #: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
-#: mount's frequency, whose effect on the wheel forces fades as 1 / f^2 towards a rigid cab (a
-#: frequency scale would crawl along that flat valley).
-COMPLIANCE = ("cab_mount_hz",)
+#: mount's and the frame's frequencies, whose effect on the wheel forces fades as 1 / f^2 towards a
+#: rigid cab or frame (a frequency scale would crawl along that flat valley).
+COMPLIANCE = ("cab_mount_hz",) + FRAME_FITTED

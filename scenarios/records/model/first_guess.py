@@ -30,9 +30,10 @@ from rigsim.mjcf.variant import BOUNDS, TruckVariant
 from rigsim.mjcf.names import CORNERS, FRONT
 from rigsim.mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.scenarios.records.model.family import FRAME_FITTED
 from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -50,6 +51,13 @@ CATALOGUE_CAB_MOUNT_HZ = 2.5
 #: (``TruckVariant.tire_progressive_ratio``; the XML's tire is linear, ratio 0): radial truck tires
 #: stiffen by some 10-30 % over their working deflection (mjcf/README.md), so the middle, 0.2.
 CATALOGUE_TIRE_RATIO = 0.2
+#: Hz: the catalogue guess of a described truck's frame's first torsion and bending modes
+#: (``TruckVariant.frame_torsion_hz``, ``frame_bending_hz``; the XML's chassis is rigid, so there is
+#: no nominal value to take a factor of). **Estimate**: a ladder frame with its cab and body on it
+#: has its first torsion and vertical bending modes at 5-12 Hz (mjcf/README.md, "Flexible frame";
+#: :data:`rigsim.mjcf.frame.BOUNDS`), so the middle, 9 Hz, for both; searched 3-20 Hz
+#: (:data:`~rigsim.scenarios.records.model.family.RANGES`).
+CATALOGUE_FRAME_HZ = 9.0
 
 
 #: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
@@ -102,6 +110,12 @@ def spring_fields(desc: TruckVariant) -> tuple[tuple[str, ...], tuple[str, ...]]
         if suspension_of(desc, axle == "front") == "air":
             drop += [f"spring_friction_factor_{corner}"]
     return tuple(fit), tuple(drop)
+
+
+def frame_guess(desc: TruckVariant) -> dict[str, float]:
+    """The first guess of the frame's modes (:data:`CATALOGUE_FRAME_HZ`, Hz) on a described truck, whose
+    calibration fits them; none on the catalogue truck, whose chassis stays the XML's rigid one."""
+    return dict.fromkeys(FRAME_FITTED, CATALOGUE_FRAME_HZ) if described(desc) else {}
 
 
 @functools.lru_cache(maxsize=8)

@@ -19,7 +19,8 @@ from rigsim.scenarios.core.rig import Rig
 from rigsim.scenarios.core.run import run
 from rigsim.scenarios.studies import scoring
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
-from rigsim.scenarios.records.model.family import AIR_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, STATION_FITTED
+from rigsim.scenarios.records.model.family import (AIR_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, FRAME_FITTED,
+                                                   STATION_FITTED)
 from rigsim.scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                         empty_truck_kg, is_light, xml_nominal)
 from rigsim.scenarios.records.model.differential import correct_with_model, differential_correction, settled_mask
@@ -130,7 +131,7 @@ def test_the_cab_is_fitted_only_on_request():
     family.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
     assert "cab_mount_hz" in FITTED and "cab_mount_hz" not in DEFAULT_NAMES
     assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values(),
-                                                *AIR_FITTED}  # the roll inertia: on a described truck only
+                                                *AIR_FITTED, *FRAME_FITTED}  # roll and frame: on a described truck only
 
 
 def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
