@@ -84,9 +84,10 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   misses the wheels the frame loads (fleet suite, development draw, 30 s: a 6 m leaf truck whose
   only structure beyond the family is its frame, bending at 8.37 Hz, fits 8.31 Hz and its model
   error falls from 0.17-0.18 to 0.05-0.08; a torsion mode a coherent road does not excite stays
-  near its guess, at no loss). Beside an engine on mounts near the frame's modes and a suspended
-  cab, the fit may settle in another minimum than the rigid frame's, better or worse
-  (fleet07, fleet19). Fitted through their compliance (:data:`COMPLIANCE`),
+  near its guess, at no loss). Beside an engine on mounts, a suspended cab and a frame cut elsewhere,
+  the fit from the 9 Hz guess may stop in a worse minimum than the rigid frame's (fleet07, 15, 16 of
+  that draw: model error up to 1.5 times the rigid frame's, its fit NRMSE worse alike), or a far
+  better one (fleet18: rear wheels 0.25 of the linear correction's NRMSE against 0.79). Fitted through their compliance (:data:`COMPLIANCE`),
   3-20 Hz (:data:`rigsim.mjcf.frame.BOUNDS`; at 20 Hz a frame is rigid for the road's input).
   Where the frame is cut and how much it is damped are held (mid-wheelbase, 4 %): a real frame's
   flexibility is spread along it and concentrates behind the cab or at the body's front mount, which
