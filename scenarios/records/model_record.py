@@ -205,11 +205,14 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         meta.update({k: "x" for k in ("cal_fit_nrmse", "cal_model_error", "cal_windows_s", "cal_runs")})
         meta["cal_cell_mass"] = "x " * 60
         meta["cal_cab"] = "x " * 150
+        meta["cal_frame"] = "x " * 150
         meta["cal_second_start"] = "x " * 180
     elif cal is not None:
         meta.update(calibration_meta(cal))
         if cal.cab_choice:
             meta["cal_cab"] = cal.cab_choice
+        if cal.frame_choice:
+            meta["cal_frame"] = cal.frame_choice
         if cal.second_start:
             meta["cal_second_start"] = cal.second_start
     return meta

@@ -8,13 +8,14 @@
   towards the frequencies the correction uses the model at;
 * :mod:`.cab_choice`: :func:`~.cab_choice.calibrate_cab`, the cab held, fitted, or (default) both
   calibrated and the clearly better fit kept;
+* :mod:`.frame_choice`: :func:`~.frame_choice.calibrate_truck`, the cab chosen, then a described
+  truck's frame held rigid or, where clearly better, fitted;
 * :mod:`.restart`: :func:`~.restart.calibrate_again`, a fit refused for its model error searched
   again from the leaf springs sliding and with each axle's stations held alike, the best kept;
 * :mod:`.differential`: :func:`~.differential.correct_with_model` (calibrate, check, correct with
   the linear correction L of the model's residual, or fall back to L on the wheels the model does
   not reproduce, with one sentence why) and the differential form
   :func:`~.differential.differential_correction`;
-* :mod:`.score`: the NRMSE / DLC of a corrected force against the road force;
 * :mod:`.result`: :class:`~.result.Calibration`, :class:`~.result.ModelCorrection`.
 
 Kept empty of imports: a command's parser may import the package without loading numpy or MuJoCo.

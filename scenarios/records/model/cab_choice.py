@@ -66,7 +66,7 @@ from rigsim.scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
 from rigsim.scenarios.records.model.result import Calibration
 
 __all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "scan_error",
-           "cab_scan", "choose", "check_cab", "calibrate_cab"]
+           "cab_scan", "scan_gains", "choose", "check_cab", "calibrate_cab"]
 
 #: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
 WITH_CAB = DEFAULT_NAMES + ("cab_mount_hz",)
@@ -124,9 +124,29 @@ def cab_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
         cab's added residual once the held fit's Jacobian columns are projected out of both) and the
         mount frequency that gives it (Hz).
     """
+    gains = scan_gains(state, [{"cab_mount_hz": float(f)} for f in hz])
+    best = int(np.argmax(gains))
+    return gains[best], float(hz[best])
+
+
+def scan_gains(state, changes) -> list[float]:
+    """Per change of the truck at a fit's optimum, the share of the fit's squared residual it would
+    remove beyond what the fitted values can, to first order (:func:`cab_scan`'s measure).
+
+    Parameters
+    ----------
+    state : FitState
+        The fit, its Jacobian computed and its worker pool running.
+    changes : sequence of dict
+        Each a set of ``TruckVariant`` fields (SI) given at the optimum: one truck run per window.
+
+    Returns
+    -------
+    list of float, 1
+    """
     prob, r0 = state.problem, np.asarray(state.residual, float)
     base = prob.variant(state.theta)
-    runs = prob.runs([dataclasses.replace(base, cab_mount_hz=float(f)) for f in hz])
+    runs = prob.runs([dataclasses.replace(base, **c) for c in changes])
     q, _ = np.linalg.qr(np.asarray(state.jacobian, float))
     r = r0 - q @ (q.T @ r0)
     total = float(r0 @ r0)
@@ -136,8 +156,7 @@ def cab_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
         d = d - q @ (q.T @ d)
         dd = float(d @ d)
         gains.append(float((d @ r) ** 2 / dd / total) if dd > 0.0 and total > 0.0 else 0.0)
-    best = int(np.argmax(gains))
-    return gains[best], float(hz[best])
+    return gains
 
 
 def choose(held: Calibration, fitted: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
@@ -169,7 +188,7 @@ def check_cab(cab: str, names=None) -> None:
 
 def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | None = None,
                   workers: int | None = None, executor=None, defer=None, symmetric: bool = False,
-                  **calibrate_kw) -> Calibration:
+                  with_state: bool = False, **calibrate_kw):
     """Calibrate the truck model with the cab held, fitted, or (default) whichever fits clearly better.
 
     Parameters
@@ -196,13 +215,17 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
         Hold each axle's left and right wheel stations alike: the fields of
         :data:`~rigsim.scenarios.records.model.family.STATION_FITTED` left out of every calibration
         (``names`` included).
+    with_state : bool
+        Return the kept fit's :class:`~rigsim.scenarios.records.model.problem.FitState` too, its
+        Jacobian computed (for runs at the optimum with ``executor`` still running); None where
+        ``defer`` gave a reason.
     **calibrate_kw
         Passed to ``calibrate`` (``base_scenario`` required; ``x_ref_m``, ``windows``, ``max_nfev``...);
         ``names`` (with ``cab`` "auto" only): exactly these fields, one calibration, no choice.
 
     Returns
     -------
-    Calibration
+    Calibration, or (Calibration, FitState or None) with ``with_state``
         The one used; with "auto", :attr:`Calibration.cab_choice` says which and why, and its
         :attr:`~Calibration.wall_time_s` (s) is both calibrations' (the cab-fitted one run only
         where it could be clearly better, :func:`cab_scan`).
@@ -220,32 +243,33 @@ def calibrate_cab(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | 
             return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, executor=ex,
                              **(calibrate_kw | kw))
 
-        if names is not None:
-            return run(names)
-        if cab != AUTO:
-            return run(WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES)
+        if names is not None or cab != AUTO:
+            return run(names or (WITH_CAB if cab == FITTED_CAB else DEFAULT_NAMES), with_state=with_state)
         # Each fit's uncertainties (a Jacobian at its optimum) are computed only where it is kept.
         w0 = time.perf_counter()
         held, state = run(DEFAULT_NAMES, with_state=True, sigma=False)
         later = defer(held) if defer is not None else ""
         if later:
-            held = with_sigma(held, state)[0]
-            return dataclasses.replace(held, cab_choice=f"cab held, not chosen on this calibration: {later}")
+            held = dataclasses.replace(with_sigma(held, state)[0],
+                                       cab_choice=f"cab held, not chosen on this calibration: {later}")
+            return (held, None) if with_state else held
         error = scan_error(held)
         gain, hz = 1.0, None  # a model far off, or a cab variant that would not run: the scan cannot tell
         if error <= SCAN_TRUSTED:
             held, state = with_sigma(held, state)  # the scan projects out the held fit's Jacobian
             with contextlib.suppress(ScenarioError, SimulationError):
                 gain, hz = cab_scan(state)
-        if gain < MIN_GAIN / 2:  # no cab could make the fit clearly better: the second fit not run
-            return dataclasses.replace(held, cab_choice=(
+        if gain < MIN_GAIN / 2:  # no cab could make the fit clearly better (the scan ran: its Jacobian computed)
+            held = dataclasses.replace(held, cab_choice=(
                 f"cab held: a cab on its own mounts would remove at most {gain:.0%} of the cab-held fit's squared "
                 f"residual (on {hz:.3g} Hz mounts, to first order; the held fit's model error {error:.3f} on its "
                 f"second-worst wheel), less than {MIN_GAIN / 2:.0%}, so it was not fitted."),
                 evaluations=state.problem.evaluations, wall_time_s=round(time.perf_counter() - w0, 3))
+            return (held, state) if with_state else held
         fitted, fitted_state = run(WITH_CAB, with_state=True, sigma=False)
         chosen, why = choose(held, fitted)
-        chosen = with_sigma(chosen, state if chosen is held else fitted_state)[0]
+        chosen, kept = with_sigma(chosen, state if chosen is held else fitted_state)
         evaluations = state.problem.evaluations + fitted_state.problem.evaluations
         wall = round(time.perf_counter() - w0, 3)
-    return dataclasses.replace(chosen, cab_choice=why, evaluations=evaluations, wall_time_s=wall)
+    chosen = dataclasses.replace(chosen, cab_choice=why, evaluations=evaluations, wall_time_s=wall)
+    return (chosen, kept) if with_state else chosen

@@ -51,7 +51,7 @@ from rigsim.scenarios.records.model.result import Calibration
 from rigsim.scenarios.records.model.uncertainty import uncertainties
 from rigsim.scenarios.records.model.weighting import differential_kernel
 
-__all__ = ["fit_windows", "calibrate", "with_sigma", "DESCRIBED_ROLL", "DESCRIBED_FRAME", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "MAX_NFEV", "FTOL",
+__all__ = ["fit_windows", "calibrate", "with_sigma", "DESCRIBED_ROLL", "WINDOWS", "WINDOW_S", "WINDOW_LEAD_S", "MAX_NFEV", "FTOL",
            "BLOCK_S"]
 
 #: Windows of the record fitted: how many, scored seconds each, measured lead-in before each (s).
@@ -112,20 +112,13 @@ def fit_windows(t_s, n: int = WINDOWS, scored_s: float = WINDOW_S,
 #: 0.75-2 times the catalogue's (:data:`~rigsim.scenarios.records.model.family.RANGES`). The catalogue truck
 #: holds the XML's.
 DESCRIBED_ROLL = "chassis_roll_inertia_kg_m2"
-#: Fitted on a described truck beside the roll inertia: the frame's first torsion and bending modes
-#: (:data:`~rigsim.scenarios.records.model.family.FRAME_FITTED`, from
-#: :func:`~rigsim.scenarios.records.model.first_guess.frame_guess`). The body's pitch and roll are
-#: those of a sprung mass that twists and bends at 5-12 Hz, and a spec sheet gives no such mode. The
-#: catalogue truck keeps the XML's rigid chassis.
-DESCRIBED_FRAME = FRAME_FITTED
 
 
 def _spring_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
     """``names`` on the described truck (:func:`~.first_guess.spring_fields`): where ``names`` fit an
     axle's friction, its spring rate and damper are fitted too (an air axle's friction is its
     bushings' and dampers' seals'); where they fit the body's pitch (the payload's height or its
-    stand-in), its roll inertia and its frame's modes too (:data:`DESCRIBED_ROLL`, :data:`DESCRIBED_FRAME`);
-    the catalogue truck's names as given."""
+    stand-in), its roll inertia too (:data:`DESCRIBED_ROLL`); the catalogue truck's names as given."""
     fit, drop = spring_fields(desc)
     out = []
     for k in names:
@@ -134,7 +127,7 @@ def _spring_names(names: tuple[str, ...], desc) -> tuple[str, ...]:
         if k.startswith("spring_friction_") and not k.startswith("spring_friction_factor"):
             out += [f for f in fit if k.split("_")[2] in f]
         if fit and k in ("payload_z_m", *EMPTY_STAND_IN.values()):
-            out += [DESCRIBED_ROLL, *DESCRIBED_FRAME]
+            out.append(DESCRIBED_ROLL)
     return tuple(dict.fromkeys(out))
 
 

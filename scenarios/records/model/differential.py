@@ -56,8 +56,9 @@ from rigsim.mjcf.names import CORNERS
 from rigsim.scenarios.core.config import Scenario, ScenarioError
 from rigsim.scenarios.core.pool import local_executor, run_jobs
 from rigsim.scenarios.core.watch import SimulationError
-from rigsim.scenarios.records.model.cab_choice import AUTO, calibrate_cab, check_cab
+from rigsim.scenarios.records.model.cab_choice import AUTO, check_cab
 from rigsim.scenarios.records.model.cell_mass import without_cell_mass
+from rigsim.scenarios.records.model.frame_choice import calibrate_truck
 from rigsim.scenarios.records.model.fallback import (calibration_failed, differential_holds, fallback_reason,
                                                      hybrid_outlook, hybrid_reason, model_error_limit, outlier_reason,
                                                      outlier_wheel)
@@ -207,7 +208,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         (``HYBRID_LIMIT`` with ``linear``, else ``DIFFERENTIAL_LIMIT``).
     cab : {"auto", "held", "fitted"}
         Whether the model's cab is held, fitted, or (default) chosen by the two fits
-        (:func:`~rigsim.scenarios.records.model.cab_choice.calibrate_cab`).
+        (:func:`~rigsim.scenarios.records.model.cab_choice.calibrate_cab`); on a described truck the
+        frame's modes are then fitted where they make the fit clearly better
+        (:func:`~rigsim.scenarios.records.model.frame_choice.calibrate_truck`).
     linear : callable, optional
         ``linear(forces)`` -> ``(corrected, settled)``: the linear correction of (n, 4) forces (N) and
         its settled samples (bool, (n,)).
@@ -258,8 +261,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
 
     with local_executor(workers) as ex:
         def calibrated(**kw) -> Calibration:
-            return calibrate_cab(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
-                                 executor=ex, defer=defer, **(calibrate_kw | kw))
+            return calibrate_truck(t, x_a_m, force_N, cab=cab, base_scenario=base_scenario, x_ref_m=x_ref_m,
+                                   executor=ex, defer=defer, **(calibrate_kw | kw))
 
         cal, pair, refit, reason = None, None, "", ""
         if saved is not None:  # checked on this record by the model runs the correction needs

@@ -71,9 +71,8 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   default. The cab's mass is never fitted: it is locally identifiable on a suspended cab but not
   on a rigid one; the price is a larger front-wheel error where the plant's cab mass differs from
   the model's.
-* ``frame_torsion_hz``, ``frame_bending_hz`` (:data:`FRAME_FITTED`), on a described truck only, beside
-  the chassis' roll inertia (where the names fit the body's pitch,
-  :data:`~rigsim.scenarios.records.model.calibrate.DESCRIBED_FRAME`): the ladder frame's first torsion
+* ``frame_torsion_hz``, ``frame_bending_hz`` (:data:`FRAME_FITTED`), on a described truck only, where
+  they make the fit clearly better (:mod:`~rigsim.scenarios.records.model.frame_choice`): the ladder frame's first torsion
   and vertical bending modes (``TruckVariant.frame_torsion_hz``, :mod:`rigsim.mjcf.frame`: the
   chassis cut at mid-wheelbase into two halves on a torsion and a bending hinge, damped at
   :data:`rigsim.mjcf.frame.FRAME_DAMPING_RATIO`). A spec sheet gives a frame's rail section and
@@ -135,7 +134,7 @@ STATION_FITTED = ("tire_stiffness_factor_fl", "tire_stiffness_factor_rl", "tire_
 AIR_FITTED = ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spring_rate_rear_N_per_m",
               "spring_damping_rear_Ns_per_m")
 #: The frame's first torsion and bending modes: fitted on a described truck
-#: (:data:`~rigsim.scenarios.records.model.calibrate.DESCRIBED_FRAME`), both or neither.
+#: (:mod:`~rigsim.scenarios.records.model.frame_choice`), both or neither.
 FRAME_FITTED = ("frame_torsion_hz", "frame_bending_hz")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2", "chassis_roll_inertia_kg_m2",

@@ -105,6 +105,9 @@ class Calibration:
         Where the calibration chose whether to fit the cab's mount
         (:func:`rigsim.scenarios.records.model.cab_choice.calibrate_cab`): one sentence on which
         and why; "" otherwise.
+    frame_choice : str
+        On a described truck, whether the frame's modes were fitted and why
+        (:func:`rigsim.scenarios.records.model.frame_choice.calibrate_truck`); "" otherwise.
     window_records : tuple of int
         Where the calibration fitted windows of other records too (``calibrate(more=...)``): the
         record of each window of :attr:`windows_s` (0: the record calibrated, 1, 2...: the others in
@@ -155,6 +158,7 @@ class Calibration:
     wall_time_s: float
     bounds: tuple = ()
     cab_choice: str = ""
+    frame_choice: str = ""
     window_records: tuple = ()
     second_start: str = ""
     noise_nrmse: tuple = ()

@@ -173,7 +173,7 @@ def test_a_drift_corner_outside_the_band_is_refused_before_any_run(drift_hz, mon
     def never(*_a, **_k):
         raise AssertionError("the calibration ran")
 
-    monkeypatch.setattr(differential, "calibrate_cab", never)
+    monkeypatch.setattr(differential, "calibrate_truck", never)
     t = np.arange(0.0, 12.0, 1e-3)
     z = np.zeros((t.size, 4))
     with pytest.raises(ScenarioError, match=r"drift_hz must be None \(no drift cut\) or a corner in Hz between 0 "

@@ -143,7 +143,7 @@ def test_the_cab_is_chosen_on_the_calibration_without_the_outlier_wheel(monkeypa
         said.append(defer(cal))
         return cal
 
-    monkeypatch.setattr(differential, "calibrate_cab", fake_calibrate_cab)
+    monkeypatch.setattr(differential, "calibrate_truck", fake_calibrate_cab)
     monkeypatch.setattr(differential, "calibrate_again", lambda cal, again, limit: cal)
     monkeypatch.setattr(differential, "model_force_pair", lambda variant, t, x_ref, x_a, **kw: (np.zeros((n, 4)),) * 2)
     # the hybrid's own weighing (fallback.hybrid_outlook) keeps every calibrated wheel: not this test's subject

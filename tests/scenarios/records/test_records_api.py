@@ -258,7 +258,7 @@ def truck_record(tmp_path_factory):
 def test_the_model_correction_gives_the_values_of_rigsim_correct_model(truck_record, tmp_path, capsys, monkeypatch):
     from rigsim.scenarios.records.model import differential
 
-    calls, real = [], differential.calibrate_cab
+    calls, real = [], differential.calibrate_truck
 
     def once(*args, **kw):  # the second calibration must get the first's inputs; it gets its result
         inputs = (args, {k: v for k, v in kw.items() if k not in ("executor", "defer")})  # callables made per call
@@ -272,7 +272,7 @@ def test_the_model_correction_gives_the_values_of_rigsim_correct_model(truck_rec
         calls.append((inputs, real(*args, **kw)))
         return calls[0][1]
 
-    monkeypatch.setattr(differential, "calibrate_cab", once)
+    monkeypatch.setattr(differential, "calibrate_truck", once)
     src, truck = str(truck_record / "messung.csv"), str(truck_record / "truck.toml")
     pairs = {c: (f"Soll_{c.upper()}", f"Weg_{c.upper()}") for c in ("fl", "fr", "rl", "rr")}
     assert main(["correct", src, "--model", truck, "--pairs", ",".join(f"{c}={d}:{x}" for c, (d, x) in pairs.items()),

@@ -82,7 +82,7 @@ def test_the_correction_searches_a_refused_fit_again(monkeypatch):
         calls.append(kw.get("start"))
         return _cal((0.47,) * 4)
 
-    monkeypatch.setattr(differential, "calibrate_cab", fake)
+    monkeypatch.setattr(differential, "calibrate_truck", fake)
     t = np.arange(12_000) / 1000.0
     x = 1e-3 * np.sin(2 * np.pi * t)[:, None] * np.ones(4)
     force = 2e4 + np.zeros((t.size, 4))
@@ -104,7 +104,7 @@ def test_a_second_search_that_fails_leaves_the_first(monkeypatch):
             raise ScenarioError("no")
         return _cal((0.47,) * 4)
 
-    monkeypatch.setattr(differential, "calibrate_cab", fake)
+    monkeypatch.setattr(differential, "calibrate_truck", fake)
     t = np.arange(12_000) / 1000.0
     x = 1e-3 * np.sin(2 * np.pi * t)[:, None] * np.ones(4)
 
