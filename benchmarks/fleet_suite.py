@@ -76,7 +76,14 @@ def _score(truck, runs, args, rate_hz):
 
 def _truck_text(score) -> str:
     p = score.plant
-    return f"{p['_spec']}; lacks: {p['_lacks']}"
+    return f"{p['_spec']}; lacks: {p['_lacks']}" + _frame_text(score)
+
+
+def _frame_text(score) -> str:
+    """Where the calibration fitted the model's frame: its torsion/bending modes, Hz."""
+    if score.frame_hz is None:
+        return ""
+    return f"; model's frame fitted {score.frame_hz[0]:.1f}/{score.frame_hz[1]:.1f} Hz"
 
 
 def run_draw(args) -> dict:
@@ -113,7 +120,7 @@ def run_draw(args) -> dict:
         print(f"[{time.perf_counter() - t0:6.0f} s] {s.name} ({spec_text(truck)}): {s.method}, DLC "
               f"{' '.join(pct(x) for x in s.dlc_error['delivered'])}, NRMSE/floor "
               f"{' '.join(f'{x:.2f}' for x in s.nrmse['delivered'] / s.floor)}, {s.wall_s:.0f} s"
-              + (f" ({s.reason})" if s.reason else ""), file=sys.stderr, flush=True)
+              + (f" ({s.reason})" if s.reason else "") + _frame_text(s), file=sys.stderr, flush=True)
     head, rows, goals, numbers = rows_and_goals(scores, _truck_text)
     interval = share_interval(scores)
     print(markdown_table(head, rows))

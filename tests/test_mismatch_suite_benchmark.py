@@ -63,6 +63,8 @@ def test_the_page_is_written_again_from_a_runs_printed_json(suite, tmp_path):
     scores = [_score("kept", "model", 0.2, 0.05, 0.3, 0.05), _score("wrong", "linear", 0.2, 0.1, 0.3, 0.18)]
     back = PlantScore.from_dict(json.loads(json.dumps(scores[1].to_dict())))
     assert back.to_dict() == scores[1].to_dict()
+    framed = dataclasses.replace(scores[0], frame_hz=(6.1, 8.0))  # a calibration that fitted the frame
+    assert PlantScore.from_dict(json.loads(json.dumps(framed.to_dict()))).frame_hz == (6.1, 8.0)
     out = tmp_path / "run.txt"
     run = {"lab": "ideal", "cab": "auto", "seed": 0, "duration_s": 30.0, "plants": [s.to_dict() for s in scores]}
     out.write_text("[ 1 s] progress\n" + json.dumps(run) + "\n", encoding="utf-8")

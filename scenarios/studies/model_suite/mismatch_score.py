@@ -26,6 +26,7 @@ from rigsim.correction.output.floor import linear_floor
 from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.scenarios.core.lab import LabChain, aligned, measure
 from rigsim.scenarios.records.model.cell_mass import without_cell_mass
+from rigsim.scenarios.records.model.family import FRAME_FITTED
 from rigsim.scenarios.records.model.differential import (correct_with_model, hybrid_correction, model_force_pair,
                                                    settled_mask)
 from rigsim.scenarios.studies.correction_score import band_rows, score_correction
@@ -69,6 +70,9 @@ class PlantScore:
         What the fallback reads (:attr:`~rigsim.scenarios.records.model.result.Calibration.excess_nrmse`:
         the dynamic residual in the correction's band beyond the noise there, 1), None without a
         calibration.
+    frame_hz : tuple of float or None, Hz
+        The model's frame modes (torsion, bending) where the calibration fitted its frame
+        (:mod:`~rigsim.scenarios.records.model.frame_choice`), None where it kept the frame rigid.
     """
 
     name: str
@@ -84,6 +88,7 @@ class PlantScore:
     fit_nrmse: np.ndarray | None = None
     model_error: np.ndarray | None = None
     timings: Mapping[str, float] = field(default_factory=dict)
+    frame_hz: tuple[float, float] | None = None
 
     def to_dict(self) -> dict:
         return {"name": self.name, "plant": dict(self.plant), "method": self.method, "reason": self.reason,
@@ -92,7 +97,7 @@ class PlantScore:
                 "wall_s": self.wall_s, "cpu_s": self.cpu_s, "scored_s": self.scored_s,
                 "fit_nrmse": None if self.fit_nrmse is None else self.fit_nrmse.tolist(),
                 "model_error": None if self.model_error is None else self.model_error.tolist(),
-                "timings": dict(self.timings)}
+                "timings": dict(self.timings), "frame_hz": None if self.frame_hz is None else list(self.frame_hz)}
 
     @classmethod
     def from_dict(cls, d: Mapping) -> "PlantScore":
@@ -106,7 +111,8 @@ class PlantScore:
         return cls(name=d["name"], plant=dict(d["plant"]), method=d["method"], reason=d["reason"],
                    nrmse=arrays(d["nrmse"]), dlc_error=arrays(d["dlc_error"]), floor=np.asarray(d["floor"], float),
                    wall_s=d["wall_s"], cpu_s=d["cpu_s"], scored_s=d["scored_s"], fit_nrmse=maybe(d["fit_nrmse"]),
-                   model_error=maybe(d["model_error"]), timings=dict(d.get("timings", {})))
+                   model_error=maybe(d["model_error"]), timings=dict(d.get("timings", {})),
+                   frame_hz=None if d.get("frame_hz") is None else tuple(d["frame_hz"]))
 
 
 def _cpu_s() -> float:
@@ -178,9 +184,11 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     cal = mc.calibration
     fit = None if cal is None else np.asarray(cal.fit_nrmse, dtype=float)
     error = None if cal is None else np.asarray(cal.excess_nrmse, dtype=float)
+    values = {} if cal is None else cal.values()
+    frame = tuple(float(values[k]) for k in FRAME_FITTED) if all(k in values for k in FRAME_FITTED) else None
     return PlantScore(name=name, plant=dict(plant), method=mc.method, reason=mc.reason,
                       nrmse={k: np.asarray(v["nrmse"]) for k, v in scores.items()},
                       dlc_error={k: np.asarray(v["dlc_error"]) for k, v in scores.items()},
                       floor=np.asarray(floor, dtype=float), wall_s=round(wall, 1), cpu_s=round(cpu, 1),
                       scored_s=float(scores["linear"]["scored_s"]), fit_nrmse=fit, model_error=error,
-                      timings=dict(mc.timings))
+                      timings=dict(mc.timings), frame_hz=frame)
