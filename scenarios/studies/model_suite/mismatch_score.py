@@ -184,8 +184,8 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     cal = mc.calibration
     fit = None if cal is None else np.asarray(cal.fit_nrmse, dtype=float)
     error = None if cal is None else np.asarray(cal.excess_nrmse, dtype=float)
-    values = {} if cal is None else cal.values()
-    frame = tuple(float(values[k]) for k in FRAME_FITTED) if all(k in values for k in FRAME_FITTED) else None
+    fitted = {} if cal is None else dict(zip(cal.names, cal.fitted))
+    frame = tuple(float(fitted[k]) for k in FRAME_FITTED) if all(k in fitted for k in FRAME_FITTED) else None
     return PlantScore(name=name, plant=dict(plant), method=mc.method, reason=mc.reason,
                       nrmse={k: np.asarray(v["nrmse"]) for k, v in scores.items()},
                       dlc_error={k: np.asarray(v["dlc_error"]) for k, v in scores.items()},
