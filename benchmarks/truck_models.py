@@ -6,7 +6,7 @@
 
 For each scenario file of ``scenarios/data/trucks/`` the truck its ``[vehicle]`` describes stands
 on rigid pans at its payload (``rigsim model SCENARIO.toml``'s computation:
-:func:`rigsim.mjcf.physics.static_equilibrium`, :func:`rigsim.mjcf.physics.modal_analysis`, leaf friction off);
+:func:`rigsim.mjcf.physics.static_equilibrium`, :func:`rigsim.mjcf.modes.modal_analysis`, leaf friction off);
 prints the table, and with ``--readme`` writes it between the page's markers.
 """
 
@@ -31,7 +31,8 @@ def truck_row(path: pathlib.Path) -> list[str]:
     import mujoco
 
     from rigsim.mjcf.build import build_model
-    from rigsim.mjcf.physics import modal_analysis, static_equilibrium, tire_forces
+    from rigsim.mjcf.physics import static_equilibrium, tire_forces
+    from rigsim.mjcf.modes import modal_analysis
     from rigsim.scenarios.core.config import load_scenario
 
     vehicle = load_scenario(path).vehicle

@@ -31,7 +31,8 @@ def cmd_model(args) -> int:
     from rigsim.mjcf.description import suspension_of
     from rigsim.mjcf.variant import TruckVariant
     from rigsim.mjcf.names import CORNERS
-    from rigsim.mjcf.physics import modal_analysis, static_equilibrium, tire_forces
+    from rigsim.mjcf.physics import static_equilibrium, tire_forces
+    from rigsim.mjcf.modes import modal_analysis
     from rigsim.mjcf.standing import truck_layout
     from rigsim.scenarios.core.config import ScenarioError, load_scenario
 

@@ -7,7 +7,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, static_equilibrium
+from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, static_equilibrium
+from rigsim.mjcf.modes import modal_analysis
 
 
 def _at_rest(model, pan_z_m=None):
@@ -49,7 +50,7 @@ def _held_frame_modes(spec) -> dict:
 @pytest.fixture()
 def held_frame_modes():
     """``held_frame_modes(spec) -> {name: Mode}``: the modes of ``spec``'s truck (edited: its
-    chassis' joints deleted) with the chassis held, about qpos0 (:func:`rigsim.mjcf.physics.modal_analysis`)."""
+    chassis' joints deleted) with the chassis held, about qpos0 (:func:`rigsim.mjcf.modes.modal_analysis`)."""
     return _held_frame_modes
 
 

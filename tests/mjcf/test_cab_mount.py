@@ -22,7 +22,8 @@ from rigsim.mjcf import names
 from rigsim.mjcf.build import build_model, build_spec, resource_path
 from rigsim.mjcf.cab import CAB_DAMPING_RATIO, CAB_MASS_KG, CAB_MOUNT_SPACING_M
 from rigsim.mjcf.variant import TruckVariant
-from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, static_equilibrium, tire_forces
+from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, static_equilibrium, tire_forces
+from rigsim.mjcf.modes import modal_analysis
 from rigsim.scenarios.core.config import ScenarioError, load_scenario, parse_scenario
 
 G = 9.81  # m/s^2, the model's gravity

@@ -18,7 +18,8 @@ import pytest
 from rigsim.mjcf import names
 from rigsim.mjcf.build import build_spec
 from rigsim.mjcf.dampers import BOUNDS, add_digressive_damping
-from rigsim.mjcf.physics import modal_analysis, static_equilibrium, tire_forces
+from rigsim.mjcf.physics import static_equilibrium, tire_forces
+from rigsim.mjcf.modes import modal_analysis
 from rigsim.mjcf.stations import add_rebound_damping
 from rigsim.mjcf.variant import TruckVariant
 

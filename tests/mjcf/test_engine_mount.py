@@ -22,7 +22,8 @@ from rigsim.mjcf.build import build_spec
 from rigsim.mjcf.cab import add_cab_mount
 from rigsim.mjcf.engine import (BOUNDS, ENGINE_MOUNT_DAMPING_RATIO, ENGINE_MOUNT_SPACING_M, ENGINE_SIZE_M, add_engine_mount)
 from rigsim.mjcf.frame import add_frame_flex
-from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, modal_analysis, tire_forces
+from rigsim.mjcf.physics import TRUCK_JOINTS, RigIndex, tire_forces
+from rigsim.mjcf.modes import modal_analysis
 from rigsim.mjcf.variant import TruckVariant
 
 OBJ = mujoco.mjtObj

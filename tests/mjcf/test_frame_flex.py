@@ -20,7 +20,8 @@ import pytest
 from rigsim.mjcf import names
 from rigsim.mjcf.build import build_spec
 from rigsim.mjcf.frame import BOUNDS, FRAME_DAMPING_RATIO, add_frame_flex
-from rigsim.mjcf.physics import OPTIONAL_JOINTS, TRUCK_JOINTS, RigIndex, modal_analysis, tire_forces
+from rigsim.mjcf.physics import OPTIONAL_JOINTS, TRUCK_JOINTS, RigIndex, tire_forces
+from rigsim.mjcf.modes import modal_analysis
 from rigsim.mjcf.variant import TruckVariant
 
 OBJ = mujoco.mjtObj

@@ -15,7 +15,8 @@ import pytest
 from rigsim.mjcf.build import build_model, build_spec, resource_path
 from rigsim.mjcf.variant import TruckVariant
 from rigsim.mjcf.names import CORNERS
-from rigsim.mjcf.physics import RigIndex, modal_analysis, static_equilibrium, tire_forces
+from rigsim.mjcf.physics import RigIndex, static_equilibrium, tire_forces
+from rigsim.mjcf.modes import modal_analysis
 
 G = 9.81  # m/s^2, the model's gravity (checked below)
 PAPER_PAYLOADS_KG = (3640.0, 6360.0)  # the paper's two payloads
