@@ -130,24 +130,11 @@ def run_draw(args) -> dict:
         print(f"- recorded at {RETRY_RATE_HZ:g} Hz where the linear correction refused 1 kHz: {', '.join(refused)}")
     settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "duration_s": args.duration_s,
                 "at_retry_rate": refused,
-                "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__, _argv_kept())}
+                "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__)}
     out = json.loads(to_json(settings | {"summary": numbers, "interval": interval,
                                          "wall_time_s": round(time.perf_counter() - t0, 1),
                                          "plants": [s.to_dict() for s in scores]}))
     print(json.dumps(out))
-    return out
-
-
-def _argv_kept() -> list[str]:
-    """The command line without ``--results DIR`` (where the page goes, not what was measured)."""
-    argv, out, skip = sys.argv[1:], [], False
-    for a in argv:
-        if skip:
-            skip = False
-        elif a == "--results":
-            skip = True
-        elif not a.startswith("--results="):
-            out.append(a)
     return out
 
 

@@ -63,7 +63,7 @@ def script_command(script, argv: Sequence[str] | None = None) -> str:
     script : str or path-like
         The script's file, e.g. ``__file__`` of ``benchmarks/generalization.py``.
     argv : sequence of str, optional
-        Its arguments (default: ``sys.argv[1:]``).
+        Its arguments (default: ``sys.argv[1:]``); ``--results DIR``, where a page is written, is left out.
 
     Returns
     -------
@@ -72,7 +72,15 @@ def script_command(script, argv: Sequence[str] | None = None) -> str:
         e.g. ``"python benchmarks/generalization.py --cases 4"``.
     """
     path = pathlib.Path(script)
-    args = list(sys.argv[1:] if argv is None else argv)
+    args, kept, skip = list(sys.argv[1:] if argv is None else argv), [], False
+    for a in args:  # where the page goes (--results DIR) is not what was measured
+        if skip:
+            skip = False
+        elif a == "--results":
+            skip = True
+        elif not a.startswith("--results="):
+            kept.append(a)
+    args = kept
     return " ".join(["python", f"{path.parent.name}/{path.name}", *([shlex.join(args)] if args else [])])
 
 

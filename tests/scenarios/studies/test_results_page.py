@@ -81,6 +81,9 @@ def test_script_command_names_the_script_and_its_arguments():
         "python benchmarks/generalization.py --cases 4"
     assert script_command(pathlib.Path("benchmarks/step_rate.py"), []) == "python benchmarks/step_rate.py"
     assert script_command("benchmarks/x.py", ["--only", "gen01 gen02"]) == "python benchmarks/x.py --only 'gen01 gen02'"
+    # where the page goes is not what was measured
+    assert script_command("benchmarks/x.py", ["--results", "/tmp/r", "--n", "2", "--results=/tmp/s"]) == \
+        "python benchmarks/x.py --n 2"
 
 
 def test_a_row_of_the_wrong_width_is_refused():
