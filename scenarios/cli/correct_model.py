@@ -78,18 +78,10 @@ def add_model_arguments(group) -> None:
 def check_calibration_output(args, inputs) -> None:
     """Refuse, before the work, a calibration file beside ``-o`` that exists (without ``--force``) or is
     an input (:func:`~rigsim.scenarios.records.corrected.calibration_path`)."""
-    import pathlib
-
-    from rigsim.scenarios.core.config import ScenarioError
     from rigsim.scenarios.records.corrected import calibration_path
+    from rigsim.scenarios.records.model.saved import check_target
 
-    path = calibration_path(args.out)
-    if any(i and pathlib.Path(i).resolve() == path.resolve() for i in inputs):
-        raise ScenarioError(f"-o {args.out} would write its calibration to {str(path)!r}, an input of this run; "
-                            "name another output")
-    if path.exists() and not args.force:
-        raise ScenarioError(f"-o {args.out} writes its calibration to {str(path)!r}, which exists; pass --force to "
-                            "replace it, or name another output")
+    check_target(calibration_path(args.out), overwrite=args.force, inputs=inputs, beside=f"of -o {args.out}")
 
 
 def report_model(args, result) -> int:

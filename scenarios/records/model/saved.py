@@ -22,7 +22,7 @@ from dataclasses import MISSING, dataclass, fields
 from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.records.model.result import Calibration
 
-__all__ = ["FORMAT", "VERSION", "SavedCalibration", "spec_of", "write_calibration", "read_calibration",
+__all__ = ["FORMAT", "VERSION", "SavedCalibration", "spec_of", "write_calibration", "check_target", "read_calibration",
            "truck_differs", "on_record", "check_saved"]
 
 #: The file's ``format`` key: what a reader checks before anything else.
@@ -126,16 +126,29 @@ def write_calibration(path, saved: SavedCalibration, *, overwrite: bool = False,
     ScenarioError
         ``path`` exists (without ``overwrite``) or is one of ``inputs`` (one sentence).
     """
-    import pathlib
-
     from rigsim.scenarios.core.files import write_json
 
+    return write_json(check_target(path, overwrite=overwrite, inputs=inputs), saved)
+
+
+def check_target(path, *, overwrite: bool = False, inputs=(), beside: str = ""):
+    """``path`` (a :class:`pathlib.Path`) where a calibration may be written: not one of ``inputs``
+    (paths, the files read for this output), and, without ``overwrite``, not an existing file.
+
+    Raises
+    ------
+    ScenarioError
+        One sentence naming the file (and ``beside``, the output it goes with: "of -o out.csv") and the fix.
+    """
+    import pathlib
+
     path = pathlib.Path(os.fsdecode(path))
+    said = f"calibration file {str(path)!r}" + (f" {beside}" if beside else "")
     if any(pathlib.Path(os.fsdecode(i)).resolve() == path.resolve() for i in inputs if i):
-        raise ScenarioError(f"calibration file {str(path)!r} is an input of this run; name another file")
+        raise ScenarioError(f"{said} is an input of this run; name another output")
     if path.exists() and not overwrite:
-        raise ScenarioError(f"calibration file {str(path)!r} exists; pass --force (overwrite=True) to replace it")
-    return write_json(path, saved)
+        raise ScenarioError(f"{said} exists; pass --force (overwrite=True) to replace it, or name another output")
+    return path
 
 
 def _fail(path, message: str):

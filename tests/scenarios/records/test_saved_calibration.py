@@ -221,6 +221,25 @@ def test_a_calibration_of_another_truck_is_refused_before_any_work(lab, tmp_path
     assert sorted(p.name for p in tmp_path.iterdir()) == ["other.json"]
 
 
+def test_a_calibration_file_beside_the_output_is_refused_before_any_work(lab, tmp_path, capsys):
+    """``-o out.csv`` writes ``out.calibration.json``: where that file exists (without --force) or is
+    the run's own --calibration, the command stops with one sentence and exit code 2 before any
+    model run, and nothing is written or changed."""
+    from rigsim.scenarios.cli.main import main
+
+    (tmp_path / "out.calibration.json").write_text("{}")
+    assert main([*lab.argv, "-o", str(tmp_path / "out.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "out.calibration.json' of -o " in err and "exists; pass --force" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.calibration.json"]
+    assert (tmp_path / "out.calibration.json").read_text() == "{}"
+    own = tmp_path / "own.calibration.json"
+    own.write_bytes((lab.dir / "first.calibration.json").read_bytes())
+    assert main([*lab.argv, "--calibration", str(own), "-o", str(tmp_path / "own.csv"), "--force"]) == 2
+    assert "is an input of this run; name another output" in capsys.readouterr().err
+    assert own.read_bytes() == (lab.dir / "first.calibration.json").read_bytes()
+
+
 def test_a_calibration_on_several_records_names_them_and_reads_back(tmp_path):
     """Windows of two records (calibrate(more=...)): also_records and window_records round-trip, the
     same bytes written again."""
