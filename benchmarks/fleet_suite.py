@@ -161,7 +161,10 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
                         f"({100 * lo:.1f}-{100 * hi:.1f} %)", f"{100 * numbers['worst_dlc_error']:.2f} %",
                         f"{numbers['worst_above_linear']:+.3f}", numbers["fallbacks"], f"{numbers['median_wall_s']:.0f}"])
         retried = run.get("at_retry_rate") or []
-        parts.append(f"**The {run['draw']} draw** (seed {run['seed']}, `{run['command']}`)\n\n"
+        unsaid = any("frame_hz" not in p for p in run["plants"])  # an output without the fitted frames
+        parts.append(f"**The {run['draw']} draw** (seed {run['seed']}, `{run['command']}`"
+                     + ("; its output does not say which trucks' calibrations fitted the frame" if unsaid else "")
+                     + ")\n\n"
                      + markdown_table(head, rows).rstrip("\n") + "\n\n" + goals
                      + (f"\n- recorded at {RETRY_RATE_HZ:g} Hz, where the linear correction refused the 1 kHz records "
                         f"(its T_a^-1 off by more than 1 % below 30 Hz at that step): {', '.join(retried)}" if retried else ""))
