@@ -66,7 +66,7 @@ from rigsim.scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
 from rigsim.scenarios.records.model.result import Calibration
 
 __all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "scan_error",
-           "cab_scan", "scan_gains", "choose", "check_cab", "calibrate_cab"]
+           "cab_scan", "best_scan", "scan_gains", "choose", "check_cab", "calibrate_cab"]
 
 #: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
 WITH_CAB = DEFAULT_NAMES + ("cab_mount_hz",)
@@ -124,7 +124,13 @@ def cab_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
         cab's added residual once the held fit's Jacobian columns are projected out of both) and the
         mount frequency that gives it (Hz).
     """
-    gains = scan_gains(state, [{"cab_mount_hz": float(f)} for f in hz])
+    return best_scan(state, ("cab_mount_hz",), hz)
+
+
+def best_scan(state, fields, hz) -> tuple[float, float]:
+    """The largest of :func:`scan_gains` (1) over ``hz`` (Hz) given to every one of ``fields`` at the
+    fit's optimum, and the frequency that gives it (Hz): :func:`cab_scan`'s, and the frame's scan's."""
+    gains = scan_gains(state, [dict.fromkeys(fields, float(f)) for f in hz])
     best = int(np.argmax(gains))
     return gains[best], float(hz[best])
 

@@ -38,8 +38,8 @@ import numpy as np
 from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.core.pool import local_executor
 from rigsim.scenarios.core.watch import SimulationError
-from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCAN_TRUSTED, calibrate_cab, mean_square,
-                                                       scan_error, scan_gains)
+from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCAN_TRUSTED, best_scan, calibrate_cab,
+                                                       mean_square, scan_error)
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.family import FRAME_FITTED
 from rigsim.scenarios.records.model.first_guess import description, frame_guess
@@ -67,23 +67,20 @@ def frame_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
     -------
     (float, float)
         The largest gain (1, :func:`~rigsim.scenarios.records.model.cab_choice.scan_gains`) and the
-        frame's modes that give it (Hz).
+        frame's modes that give it (Hz): :func:`~rigsim.scenarios.records.model.cab_choice.best_scan`.
     """
-    gains = scan_gains(state, [dict.fromkeys(FRAME_FITTED, float(f)) for f in hz])
-    best = int(np.argmax(gains))
-    return gains[best], float(hz[best])
+    return best_scan(state, FRAME_FITTED, hz)
 
 
 def choose_frame(rigid: Calibration, framed: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
     """The calibration to use of the frame rigid and the frame fitted, and one sentence why."""
     ms_r, ms_f = mean_square(rigid), mean_square(framed)
     gain = 1.0 - ms_f / ms_r if ms_r > 0 else 0.0
-    modes = "/".join(f"{framed.values()[k]:.3g}" for k in FRAME_FITTED)
+    values, bounds = framed.values(), dict(zip(framed.names, framed.bounds))
+    modes = "/".join(f"{values[k]:.3g}" for k in FRAME_FITTED)
     what = (f"the frame fitted (torsion/bending {modes} Hz) reproduces the measured forces to fit NRMSE "
             f"{np.sqrt(ms_f):.3f} (rms of the wheels), the rigid frame to {np.sqrt(ms_r):.3f}")
-    low = [k for k in FRAME_FITTED if framed.at_edge(k, EDGE)
-           and framed.values()[k] - framed.bounds[framed.names.index(k)][0]
-           < framed.bounds[framed.names.index(k)][1] - framed.values()[k]]
+    low = [k for k in FRAME_FITTED if framed.at_edge(k, EDGE) and values[k] - bounds[k][0] < bounds[k][1] - values[k]]
     if low:
         return rigid, f"frame rigid: {what}, but {low[0]} stopped at its search range's bottom."
     if gain < min_gain:
@@ -128,11 +125,11 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
         cal, state = calibrate_cab(t_s, x_a_m, force_N, cab=cab, fitted_guess=fitted_guess, executor=ex,
                                    with_state=True, **cab_kw)
-        if (cab_kw.get("names") is not None or state is None or set(FRAME_FITTED) & set(cal.names)
-                or not frame_guess(description(cab_kw["base_scenario"]))):
+        guess = frame_guess(description(cab_kw["base_scenario"]))  # none on the catalogue truck
+        if cab_kw.get("names") is not None or state is None or set(FRAME_FITTED) & set(cal.names) or not guess:
             return cal
         w0, runs0 = time.perf_counter(), state.problem.evaluations
-        gain, hz = 1.0, frame_guess(description(cab_kw["base_scenario"]))[FRAME_FITTED[0]]
+        gain, hz = 1.0, guess[FRAME_FITTED[0]]
         with contextlib.suppress(ScenarioError, SimulationError):  # a frame that would not run: fit it
             gain, hz = frame_scan(state)
         error = scan_error(cal)
