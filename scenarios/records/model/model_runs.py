@@ -2,8 +2,9 @@
 
 :func:`model_forces` is the road test of a truck variant (:class:`rigsim.mjcf.variant.TruckVariant`) whose
 wheelpans follow a given motion sampled at the output rate (a rig's drive x_ref or its LVDTs'
-x_a, 1 kHz): the motion is interpolated onto the road test's steps by a cubic spline
-(positions, velocities and the mid-step values each step holds, all from the one spline), the truck starts from static rest on the
+x_a, 1 kHz): the motion is interpolated onto the road test's steps (:data:`MODEL_STEP_S`) by a cubic
+spline (positions, velocities and the mid-step values each step holds, all from the one spline), and
+the forces on those steps are splined back onto the samples; the truck starts from static rest on the
 pans at the first sample's positions and is held there for a settling lead-in
 (:data:`SETTLE_S`, so the leaf springs' dry friction and the soft constraints settle), then the
 pans follow the motion. It uses the one rig (:class:`rigsim.scenarios.core.rig.Rig`, ``hydraulic=False``)
@@ -26,7 +27,7 @@ from rigsim.scenarios.core.config import Scenario, ScenarioError
 from rigsim.scenarios.core.drive import Drive
 from rigsim.scenarios.core.rig import Rig
 
-__all__ = ["SETTLE_S", "NoRestError", "model_forces", "pan_motion_drive", "static_axle_loads", "window_job",
+__all__ = ["SETTLE_S", "MODEL_STEP_S", "NoRestError", "on_samples", "model_forces", "pan_motion_drive", "static_axle_loads", "window_job",
            "fit_window_job", "check_record", "portable"]
 
 #: Settling lead-in before a model run follows its pan motion, s: the truck is put at static
@@ -36,6 +37,12 @@ __all__ = ["SETTLE_S", "NoRestError", "model_forces", "pan_motion_drive", "stati
 #: record's first sample, the model's is at rest (see ``differential.START_S`` and
 #: ``calibrate.WINDOW_LEAD_S``, which handle that).
 SETTLE_S = 0.5
+#: The model runs' integration step, s (RK4, as the rig's runs): their forces are computed on these
+#: steps and splined (cubic, not-a-knot) onto the record's samples. Against the same truck run at
+#: 2.5e-4 s, the forces' error is 0.0002 of their std at 1e-3 s, 0.0008 at 2e-3 s, 0.002 at
+#: 3e-3 s and 0.004 at 4e-3 s, where the load cells' 100 N of noise is 0.006-0.03 of it
+#: (``benchmarks/model_step.py``, docs/results/model_step.md); a run costs about the step's inverse.
+MODEL_STEP_S = 2e-3
 
 
 def check_record(t_s, signals: dict) -> tuple[np.ndarray, float]:
@@ -67,22 +74,17 @@ def check_record(t_s, signals: dict) -> tuple[np.ndarray, float]:
 def pan_motion_drive(t_s, pan_m, dt_s: float, settle_s: float = SETTLE_S, start_m=None) -> Drive:
     """The pans' drive on the model's steps: ``pan_m`` (m, (n, 4), sampled at ``t_s``, s) through
     a cubic spline (not-a-knot) onto steps of ``dt_s`` (s) from ``-settle_s`` (s) before the first
-    sample to the last one; held at the first sample (velocity 0) during the lead-in, or, with
-    ``start_m`` (m, (4,)), moved from ``start_m`` to the first sample over the lead-in (a
-    half-cosine: at rest at both ends). Each step holds the drive's value at mid-step
-    (:meth:`Drive.held`; the last step's is extrapolated). Times are relative to ``t_s[0]``; the
-    output rate's samples fall on steps exactly."""
+    sample to the first step at or past the last one (the spline extrapolated by less than a step);
+    held at the first sample (velocity 0) during the lead-in, or, with ``start_m`` (m, (4,)), moved
+    from ``start_m`` to the first sample over the lead-in (a half-cosine: at rest at both ends). Each
+    step holds the drive's value at mid-step (:meth:`Drive.held`; the last step's is extrapolated).
+    Times are relative to ``t_s[0]``."""
     from scipy.interpolate import CubicSpline
 
     t = np.asarray(t_s, dtype=float) - float(t_s[0])
     x = np.asarray(pan_m, dtype=float)
-    decim = (t[1] - t[0]) / dt_s
-    if abs(decim - round(decim)) > 1e-6:
-        raise ScenarioError(f"the record's sample interval {t[1] - t[0]:g} s must be a multiple of the model's "
-                            f"step {dt_s:g} s; resample the record (1 kHz works)")
-    decim = int(round(decim))
     n_lead = int(round(settle_s / dt_s))
-    k = np.arange(-n_lead, (t.size - 1) * decim + 1)
+    k = np.arange(-n_lead, int(np.ceil(t[-1] / dt_s - 1e-9)) + 1)
     tt = k * dt_s
     spline = CubicSpline(t, x, axis=0)
     ahead = k >= 0
@@ -136,7 +138,7 @@ def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
     variant : TruckVariant
         The model truck (every field; nothing is taken from ``base_scenario.vehicle``).
     t_s : array_like, s, (n,)
-        Sample times of the motion (uniform, a multiple of the road test's 1e-4 s step: 1 kHz).
+        Sample times of the motion (uniform: 1 kHz, say).
     pan_m : array_like, m, (n, 4)
         Pan displacement per corner (fl, fr, rl, rr) from mid-stroke: the drive x_ref or the
         measured x_a.
@@ -148,36 +150,47 @@ def model_forces(variant: TruckVariant, t_s, pan_m, *, base_scenario: Scenario,
     Returns
     -------
     numpy.ndarray, N, (n, 4)
-        Tire force on each pan at the samples ``t_s`` (compression positive), the force of the
-        state at that instant (as the rig's load cells and the road test record it).
+        Tire force on each pan at the samples ``t_s`` (compression positive): the force of the
+        state at each step of :data:`MODEL_STEP_S` (as the rig's load cells and the road test
+        record it), splined onto the samples.
 
     Raises
     ------
     ScenarioError
         A bad record, a motion that leaves the stroke, or a truck with no rest (before the run).
     """
-    t, fs = check_record(t_s, {"pan_m": pan_m})
+    t, _ = check_record(t_s, {"pan_m": pan_m})
     sc = model_scenario(variant, base_scenario, t[-1] - t[0], settle_s)
-    rig = Rig(sc, hydraulic=False)
+    rig = Rig(sc, hydraulic=False, timestep_s=MODEL_STEP_S)
     drive = pan_motion_drive(t, pan_m, rig.dt_s, settle_s)
     try:
         drive.check_stroke(rig.half_stroke_m)
     except ValueError as exc:
         raise ScenarioError(f"pan motion: {exc}") from None
     try:
-        rec = rig.run(drive, rate_hz=fs)  # its first act is the rest state: a truck with none stops before a step
+        rec = rig.run(drive, rate_hz=1.0 / rig.dt_s)  # its first act is the rest state: a truck with none stops before a step
     except EquilibriumError:
         # No rest on the first pose, even moved there from mid-stroke (static_equilibrium's
         # continuation): start on its planar part, which a truck whose frame is stiff in torsion
         # can stand on, and twist the pans in over the lead-in, which ends before any scored sample.
         drive = pan_motion_drive(t, pan_m, rig.dt_s, settle_s, start_m=planar_part(rig, np.asarray(pan_m)[0]))
         try:
-            rec = rig.run(drive, rate_hz=fs)
+            rec = rig.run(drive, rate_hz=1.0 / rig.dt_s)
         except EquilibriumError as exc:
             raise NoRestError(f"model truck: {exc}") from None
-    if rec.tire_force_N.shape != (t.size, 4):
-        raise RuntimeError(f"the model run gave {rec.tire_force_N.shape[0]} samples for {t.size}")
-    return np.asarray(rec.tire_force_N)
+    return on_samples(rec.t_s, rec.tire_force_N, t - t[0])
+
+
+def on_samples(step_t_s, force_N, t_s) -> np.ndarray:
+    """A model run's force (N, (m, 4)) at its steps ``step_t_s`` (s, from 0) splined (cubic,
+    not-a-knot) onto the record's sample times ``t_s`` (s, from 0, within the steps), N, (n, 4)."""
+    from scipy.interpolate import CubicSpline
+
+    step_t, tt = np.asarray(step_t_s, float), np.asarray(t_s, float)
+    if step_t.size < 4 or tt[-1] > step_t[-1] + 1e-9:
+        raise RuntimeError(f"the model run's {step_t.size} steps end at {step_t[-1]:g} s, before the record's "
+                           f"last sample at {tt[-1]:g} s")
+    return CubicSpline(step_t, np.asarray(force_N, float), axis=0)(tt)
 
 
 def static_axle_loads(variant: TruckVariant, base_scenario: Scenario) -> np.ndarray:
