@@ -47,7 +47,8 @@ MODEL_STEP_S = 2e-3
 #: force kinks at zero load, which steps of :data:`MODEL_STEP_S` resolve too coarsely for the fit
 #: (:func:`model_step`). Measured on the generalization suite's gen15 (an empty truck on a class D
 #: road at 100 km/h, whose rear wheels lift): against 0.25 ms, the forces' error 0.0005 of their std
-#: at 1 ms and 0.002 at 2 ms, the largest 72 N and 776 N; calibrated at 2 ms its tire plant's rear
+#: at 1 ms and 0.002 at 2 ms (a third of the load cells' noise there), the largest 71 N and 776 N
+#: (``benchmarks/model_step.py``); calibrated at 2 ms its tire plant's rear
 #: wheels ended at 1.11 of the linear floor, at 1 ms 0.00.
 LIFT_FRACTION = 0.05
 

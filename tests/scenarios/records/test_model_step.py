@@ -66,7 +66,7 @@ def test_a_step_of_its_own_is_for_road_tests_only():
 def test_a_record_whose_wheels_lift_runs_on_the_rigs_step():
     """A wheel whose measured force falls below LIFT_FRACTION of its mean leaves its pan: the tire law's
     kink at zero load, which 2 ms steps resolve too coarsely (generalization gen15, an empty truck on a
-    class D road at 100 km/h: 776 N of error at the kinks against 72 N at 1 ms); such a record runs on
+    class D road at 100 km/h: 776 N of error at the kinks against 71 N at 1 ms); such a record runs on
     min(1 ms, the sample interval), a smooth one on MODEL_STEP_S."""
     rng = np.random.default_rng(5)
     smooth = 20e3 + 3e3 * rng.standard_normal((1000, 4))
