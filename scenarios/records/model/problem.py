@@ -93,7 +93,8 @@ class FitProblem:
             fs = 1.0 / (t[1] - t[0])
             self.acc_w, self.acc_t = (self.weighted([x[a:e] for a, _, e in windows], subtract=False)
                                       for x in (acc, band_limited(acc, fs)))
-        self.step_s = model_step(force, 1.0 / (t[1] - t[0]))  # the model runs' step (a wheel that lifts: finer)
+        # the model runs' step (a wheel that lifts: finer); None where no record is given (a problem for its mappings)
+        self.step_s = None if force is None or t is None else model_step(force, 1.0 / (t[1] - t[0]))
         self.evaluations, self.cache = 0, {}
         self.last = None  # (theta, residual, Jacobian, Broyden updates in a row) of the last Jacobian
 
