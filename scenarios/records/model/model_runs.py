@@ -25,10 +25,10 @@ from rigsim.mjcf.variant import TruckVariant
 from rigsim.mjcf.physics import EquilibriumError, tire_forces
 from rigsim.scenarios.core.config import Scenario, ScenarioError
 from rigsim.scenarios.core.drive import Drive
-from rigsim.scenarios.core.rig import RIG_TIMESTEP_S, Rig
+from rigsim.scenarios.core.rig import Rig, rig_step_s
 
-__all__ = ["SETTLE_S", "MODEL_STEP_S", "LIFT_FRACTION", "model_step", "NoRestError", "on_samples", "model_forces", "pan_motion_drive", "static_axle_loads", "window_job",
-           "fit_window_job", "check_record", "portable"]
+__all__ = ["SETTLE_S", "MODEL_STEP_S", "LIFT_FRACTION", "model_step", "NoRestError", "on_samples", "model_forces",
+           "pan_motion_drive", "static_axle_loads", "window_job", "fit_window_job", "check_record", "portable"]
 
 #: Settling lead-in before a model run follows its pan motion, s: the truck is put at static
 #: rest on the pans' first positions (the frictionless equilibrium, :meth:`Rig.rest_state`), then
@@ -82,12 +82,12 @@ def check_record(t_s, signals: dict) -> tuple[np.ndarray, float]:
 def model_step(force_N, rate_hz: float) -> float:
     """The model runs' step for a record whose measured wheel forces are ``force_N`` (N, (n, 4)) at
     ``rate_hz`` (Hz), s: :data:`MODEL_STEP_S`, or where any wheel's force falls below
-    :data:`LIFT_FRACTION` of its mean (a wheel that leaves its pan) the rig's own step,
-    ``min(RIG_TIMESTEP_S, 1 / rate_hz)``, whose samples the runs then give without a spline."""
+    :data:`LIFT_FRACTION` of its mean (a wheel that leaves its pan) the rig's own step
+    (:func:`~rigsim.scenarios.core.rig.rig_step_s`), whose samples the runs then give without a spline."""
     force = np.asarray(force_N, dtype=float)
     mean = force.mean(axis=0)
     if np.any(force.min(axis=0) < LIFT_FRACTION * mean):
-        return min(RIG_TIMESTEP_S, 1.0 / float(rate_hz))
+        return rig_step_s(rate_hz)
     return MODEL_STEP_S
 
 
