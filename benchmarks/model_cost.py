@@ -18,8 +18,9 @@ minutes; the linear baseline, repeated alike, shows it):
 * ``rigsim correct --model SCENARIO --pairs ...`` with each ``--cab`` asked for: the calibration of
   the truck model on the file and its correction.
 
-The goal (the model correction's cost): a record calibrated and corrected within its own duration
-on 2 cores, i.e. wall / record length <= 1 (:data:`GOAL`). Prints one row per command (wall s, CPU
+The goal (the model correction's cost): a record calibrated and corrected with the defaults
+(``--cab auto``) in at most half its own duration on 2 cores, i.e. wall / record length <= 0.5
+(:data:`GOAL`: 30 s for a 60 s record); ``--cab held`` is timed beside it. Prints one row per command (wall s, CPU
 s, wall over the record's length, over the linear correction's) and writes them to
 ``docs/results/model_cost.md`` (``--results``: its folder).
 """
@@ -44,8 +45,8 @@ from rigsim.scenarios.studies.lab_record import write_lab_record
 from rigsim.scenarios.studies.results_page import script_command, write_results_page
 
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results"
-#: The goal: the model correction's wall time over the record's length, 1.
-GOAL = 1.0
+#: The goal: the default model correction's (``--cab auto``) wall time over the record's length, 1.
+GOAL = 0.5
 PAIRS = ",".join(f"{c}=Soll_{c.upper()}:Weg_{c.upper()}" for c in CORNERS)
 FORCES = ",".join(f"{c}=Fz_{c.upper()}" for c in CORNERS)
 
@@ -117,18 +118,21 @@ def main(argv=None) -> int:
             rows.append([truck, "linear: identify --from-file + correct --actuators", base, base[0]])
             for cab in args.cab:
                 rows.append([truck, f"model: correct --model --cab {cab}", median[cab], base[0]])
-                model_walls.append(median[cab][0])
+                if cab == "auto":
+                    model_walls.append(median[cab][0])
     table = [[truck, what, f"{wall:.1f}", f"{cpu:.1f}", f"{wall / args.duration_s:.2f}", f"{wall / base:.1f}"]
              for truck, what, (wall, cpu), base in rows]
     head = ("plant truck", "command", "wall s", "CPU s", "wall / record length", "wall / linear")
     print(" | ".join(head))
     for r in table:
         print(" | ".join(r))
-    worst = max(model_walls, default=0.0) / args.duration_s
+    worst = max(model_walls, default=float("nan")) / args.duration_s
+    goal = (f"goal: the default model correction (--cab auto) in at most half the record's length (wall / record "
+            f"length <= {GOAL:g}): {'met' if worst <= GOAL else 'not met'} (worst {worst:.2f})" if model_walls
+            else "the default (--cab auto) not timed")
     note = (f"A {args.duration_s:g} s record of `scenarios/data/paper/{args.case}.toml` (design rig, 100 N load-cell "
             f"noise) per plant truck, on {args.workers} cores, the median of {args.repeat} runs of each command "
-            f"(wall and CPU each); goal: the model correction within the record's length "
-            f"(wall / record length <= {GOAL:g}): {'met' if worst <= GOAL else 'not met'} (worst {worst:.2f}).")
+            f"(wall and CPU each); {goal}.")
     print(note)
     write_results_page(args.results, "model_cost", "What the truck-model correction costs: one record, each command "
                        "a fresh process", head, table, script_command(__file__, argv), note=note)

@@ -61,6 +61,7 @@ import numpy as np
 
 import rigsim.scenarios
 from rigsim.correction.io.measured import read_channels
+from rigsim.correction.io.measured_core import TIME_START_KEY
 from rigsim.correction.metrics.dlc import dlc
 from rigsim.mjcf.names import CORNERS
 from rigsim.scenarios.studies.results_page import (
@@ -221,13 +222,18 @@ def dlc_rows(folder: pathlib.Path) -> tuple[list[list[str]], str]:
             raise SystemExit("the corrected file's samples are not the road run's")
         return i
 
-    m_index = index(measured.time_s)
+    def clock(channels) -> np.ndarray:
+        """A file's samples on the lab's clock, s (readers count from the first sample)."""
+        return channels.time_s + float(channels.metadata.get(TIME_START_KEY, 0.0))
+
+    m_index = index(clock(measured))
     rows = []
     for label, path in (("linear correction (`out/lab/corrected.rsp`)", "out/lab/corrected.rsp"),
                         ("truck-model correction (`out/lab/corrected_model.csv`)", "out/lab/corrected_model.csv")):
         got = read_channels(folder / path)
-        i = index(got.time_s)
-        span = f"{got.time_s[0]:.3f}-{got.time_s[-1]:.3f} s"
+        t = clock(got)
+        i = index(t)
+        span = f"{t[0]:.3f}-{t[-1]:.3f} s"
         on = np.isin(m_index, i)
         if on.sum() != i.size:
             raise SystemExit(f"{path}: samples the measured file does not hold")

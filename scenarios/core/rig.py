@@ -38,7 +38,7 @@ from rigsim.scenarios.core.road_drive import RoadDrive, road_source
 from rigsim.scenarios.core.stepping import RigRecord, run_hydraulic, run_kinematic
 from rigsim.scenarios.core.watch import mujoco_warnings_captured, output_schedule
 
-__all__ = ["actuator_params", "Rig", "RIG_INTEGRATOR", "RIG_INTEGRATOR_NAME", "RIG_TIMESTEP_S"]
+__all__ = ["actuator_params", "rig_step_s", "Rig", "RIG_INTEGRATOR", "RIG_INTEGRATOR_NAME", "RIG_TIMESTEP_S"]
 
 #: How both tests are integrated, chosen by measurement (``benchmarks/integrator_study.py``,
 #: docs/integrator_study.md): MuJoCo's RK4 at 1e-3 s with the drive held at mid-step passes the
@@ -49,8 +49,18 @@ __all__ = ["actuator_params", "Rig", "RIG_INTEGRATOR", "RIG_INTEGRATOR_NAME", "R
 #: output period.
 RIG_INTEGRATOR = mujoco.mjtIntegrator.mjINT_RK4
 RIG_TIMESTEP_S = 1e-3
+#: The coarsest step a road test may be given (``Rig(timestep_s=...)``), s: with the drive held
+#: over each step, the error on the truck's forces grows as the step's square, 0.0035 of their std
+#: at 4e-3 s (``benchmarks/model_step.py``).
+MAX_KINEMATIC_STEP_S = 4e-3
 #: :data:`RIG_INTEGRATOR` as reports name it ("RK4").
 RIG_INTEGRATOR_NAME = RIG_INTEGRATOR.name.removeprefix("mjINT_")
+
+
+def rig_step_s(output_rate_hz: float) -> float:
+    """The rig's integration step for an output at ``output_rate_hz`` (Hz), s: :data:`RIG_TIMESTEP_S`,
+    or the output period where that is finer (RK4, finer)."""
+    return min(RIG_TIMESTEP_S, 1.0 / float(output_rate_hz))
 
 
 def actuator_params(scenario: Scenario) -> ActuatorParams:
@@ -75,6 +85,11 @@ class Rig:
         With ``hydraulic``: refuse actuator parameters whose loop is unstable under the design
         wheel station (:func:`rigsim.hydraulics.loop.check_design_station`) or whose closed loop under
         this truck is unstable (:meth:`check_stable`). False only to study an unstable rig.
+    timestep_s : float, s, optional
+        The integration step, instead of :data:`RIG_TIMESTEP_S` (or the output period, or
+        ``vehicle.timestep_s``): the model correction's truck runs take their own
+        (:data:`rigsim.scenarios.records.model.model_runs.MODEL_STEP_S`). Only without ``hydraulic``
+        (the oil columns' modes need the rig's step).
 
     Raises
     ------
@@ -82,9 +97,13 @@ class Rig:
         Bad actuator or vehicle parameters, disagreeing pan masses, an unstable loop.
     """
 
-    def __init__(self, scenario: Scenario, *, hydraulic: bool = True, check_stability: bool = True):
+    def __init__(self, scenario: Scenario, *, hydraulic: bool = True, check_stability: bool = True,
+                 timestep_s: float | None = None):
         self.scenario = scenario
         self.hydraulic = bool(hydraulic)
+        if timestep_s is not None and (hydraulic or not 0.0 < timestep_s <= MAX_KINEMATIC_STEP_S):
+            raise ValueError(f"timestep_s = {timestep_s!r} s is for a road test (hydraulic=False) with a step in "
+                             f"(0, {MAX_KINEMATIC_STEP_S:g}] s")
         self.params = params = actuator_params(scenario)
         variant = scenario.vehicle
         # The pan mass is one physical quantity with two homes (the MuJoCo pan body and the
@@ -116,8 +135,8 @@ class Rig:
         #: ``vehicle.timestep_s``), where :meth:`linearize` discretizes the plant.
         self.linear_dt_s = float(model.opt.timestep)
         model.opt.integrator = RIG_INTEGRATOR
-        # An output faster than the step's rate gets a step of its own period (RK4, finer).
-        model.opt.timestep = (min(RIG_TIMESTEP_S, 1.0 / scenario.output_rate_hz)
+        model.opt.timestep = (timestep_s if timestep_s is not None
+                              else rig_step_s(scenario.output_rate_hz)
                               if variant.timestep_s is None else variant.timestep_s)
         self.index = RigIndex.of(model)
         obj = mujoco.mjtObj

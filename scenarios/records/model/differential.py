@@ -63,7 +63,7 @@ from rigsim.scenarios.records.model.fallback import (calibration_failed, differe
                                                      hybrid_outlook, hybrid_reason, model_error_limit, outlier_reason,
                                                      outlier_wheel)
 from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
-from rigsim.scenarios.records.model.model_runs import SETTLE_S, check_record, portable, window_job
+from rigsim.scenarios.records.model.model_runs import SETTLE_S, check_record, model_step, portable, window_job
 from rigsim.scenarios.records.model.restart import calibrate_again
 from rigsim.scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 from rigsim.scenarios.records.model.saved import check_saved
@@ -84,13 +84,15 @@ def settled_mask(t_s, start_s: float = START_S) -> np.ndarray:
     return (t - t[0]) >= start_s - 1e-9
 
 
-def model_force_pair(variant: TruckVariant, t_s, x_ref_m, x_a_m, *, base_scenario: Scenario,
+def model_force_pair(variant: TruckVariant, t_s, x_ref_m, x_a_m, *, force_N, base_scenario: Scenario,
                      workers: int | None = None, executor=None) -> tuple[np.ndarray, np.ndarray]:
     """The model truck's wheel forces (N, (n, 4)) on pans following the drive and following the
-    measured pans: ``(F_model(x_ref), F_model(x_a))``; parameters as :func:`differential_correction`'s."""
-    t, _ = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m})
-    base = portable(base_scenario)
-    jobs = [(window_job, (variant, t, np.asarray(x, float), base, SETTLE_S)) for x in (x_ref_m, x_a_m)]
+    measured pans: ``(F_model(x_ref), F_model(x_a))``, on the step the record's measured force
+    ``force_N`` (N) calls for (:func:`~rigsim.scenarios.records.model.model_runs.model_step`);
+    parameters as :func:`differential_correction`'s."""
+    t, fs = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
+    base, step = portable(base_scenario), model_step(force_N, fs)
+    jobs = [(window_job, (variant, t, np.asarray(x, float), base, SETTLE_S, step)) for x in (x_ref_m, x_a_m)]
     return tuple(run_jobs(jobs, workers=workers, executor=executor))
 
 
@@ -116,8 +118,8 @@ def differential_correction(variant: TruckVariant, t_s, x_ref_m, x_a_m, force_N,
         A running pool to use instead.
     """
     check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
-    f_ref, f_a = model_force_pair(variant, t_s, x_ref_m, x_a_m, base_scenario=base_scenario, workers=workers,
-                                  executor=executor)
+    f_ref, f_a = model_force_pair(variant, t_s, x_ref_m, x_a_m, force_N=force_N, base_scenario=base_scenario,
+                                  workers=workers, executor=executor)
     return np.asarray(force_N, dtype=float) + f_ref - f_a
 
 
@@ -267,7 +269,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         cal, pair, refit, reason = None, None, "", ""
         if saved is not None:  # checked on this record by the model runs the correction needs
             cal, pair, refit = check_saved(saved, lambda v: model_force_pair(
-                v, t, x_ref_m, x_a_m, base_scenario=base_scenario, executor=ex), force_N, x_a_m, t, wins, excess_limit)
+                v, t, x_ref_m, x_a_m, force_N=force_N, base_scenario=base_scenario, executor=ex), force_N, x_a_m, t, wins,
+                excess_limit)
             calibrate_kw = calibrate_kw | ({"start": dict(zip(saved.names, saved.fitted))} if refit else {})
         if cal is not None:
             timings["calibration_s"] = cal.wall_time_s
@@ -287,8 +290,8 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         else:  # the hybrid: decided on the model runs (fallback.hybrid_outlook); a wheel left out stays linear
             holds = np.isin(CORNERS, cal.wheels)
         t1 = time.perf_counter()
-        f_ref, f_a = pair or model_force_pair(cal.variant(), t, x_ref_m, x_a_m, base_scenario=base_scenario,
-                                              executor=ex)
+        f_ref, f_a = pair or model_force_pair(cal.variant(), t, x_ref_m, x_a_m, force_N=force_N,
+                                              base_scenario=base_scenario, executor=ex)
         # the load cells' uncompensated mass, fitted with the truck, taken out
         force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
         noise = outlook = None

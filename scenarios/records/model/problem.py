@@ -15,7 +15,7 @@ from rigsim.mjcf.variant import BOUNDS, TruckVariant
 from rigsim.scenarios.core.pool import run_jobs
 from rigsim.scenarios.records.model.cell_mass import band_limited, mass_of, mass_sigma
 from rigsim.scenarios.records.model.family import ADDITIVE, COMPLIANCE, RANGES
-from rigsim.scenarios.records.model.model_runs import SETTLE_S, fit_window_job, portable
+from rigsim.scenarios.records.model.model_runs import SETTLE_S, fit_window_job, model_step, portable
 from rigsim.scenarios.records.model.onset_load import ONSET_STIFFNESS
 
 __all__ = ["FitProblem", "FitState", "FD_STEP", "REUSE_MAX", "REUSE_RATIO"]
@@ -93,6 +93,8 @@ class FitProblem:
             fs = 1.0 / (t[1] - t[0])
             self.acc_w, self.acc_t = (self.weighted([x[a:e] for a, _, e in windows], subtract=False)
                                       for x in (acc, band_limited(acc, fs)))
+        # the model runs' step (a wheel that lifts: finer); None where no record is given (a problem for its mappings)
+        self.step_s = None if force is None or t is None else model_step(force, 1.0 / (t[1] - t[0]))
         self.evaluations, self.cache = 0, {}
         self.last = None  # (theta, residual, Jacobian, Broyden updates in a row) of the last Jacobian
 
@@ -153,7 +155,7 @@ class FitProblem:
     def runs(self, variants) -> list[list[np.ndarray]]:
         """The force of each truck variant (:class:`~rigsim.mjcf.variant.TruckVariant`) on each window
         (lead-in included), N: one worker job per window and variant, all at once."""
-        jobs = [(fit_window_job, (v, self.t[a:e], self.x_a[a:e], self.base, SETTLE_S))
+        jobs = [(fit_window_job, (v, self.t[a:e], self.x_a[a:e], self.base, SETTLE_S, self.step_s))
                 for v in variants for a, _, e in self.windows]
         sizes = [e - a for _ in variants for a, _, e in self.windows]
         # a trial truck with no rest predicts no force: the whole measured force is its residual

@@ -169,7 +169,8 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     forced = hybrid = None
     if mc.calibration is not None:  # the model's two runs: the correction's, else run for the forced forms
         f_ref, f_a = mc.model_N or model_force_pair(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"],
-                                                    measured.pan_m, base_scenario=base_scenario, workers=workers)
+                                                    measured.pan_m, force_N=measured.force_N,
+                                                    base_scenario=base_scenario, workers=workers)
         force = without_cell_mass(measured.force_N, measured.pan_m, fs, mc.calibration.cell_mass_kg)
         forced = force + f_ref - f_a
         hybrid = hybrid_correction(force, f_ref, f_a, lin, fs, settled_mask(rig.t_s), drift_hz=drift_hz)[0]

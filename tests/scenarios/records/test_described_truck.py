@@ -183,7 +183,7 @@ def test_a_trial_truck_with_no_rest_is_the_worst_fit_not_the_end_of_the_calibrat
     with pytest.raises(NoRestError, match="model truck"):
         window_job(tipping, t, x, spec, 0.5)
     assert fit_window_job(tipping, t, x, spec, 0.5) is None
-    fake = SimpleNamespace(windows=[(0, 100, 300)], t=t, x_a=x, base=spec, executor=None, evaluations=0)
+    fake = SimpleNamespace(windows=[(0, 100, 300)], t=t, x_a=x, base=spec, executor=None, evaluations=0, step_s=None)
     monkeypatch.setattr(problem, "run_jobs", lambda jobs, executor=None: [None])
     out = problem.FitProblem.runs(fake, [tipping])
     assert out[0][0].shape == (300, 4) and not out[0][0].any() and fake.evaluations == 1
