@@ -63,9 +63,9 @@ from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 from rigsim.scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
-from rigsim.scenarios.records.model.result import Calibration
+from rigsim.scenarios.records.model.result import Calibration, model_error
 
-__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "scan_error",
+__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "excess_square", "scan_error",
            "cab_scan", "best_scan", "scan_gains", "choose", "check_cab", "calibrate_cab"]
 
 #: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
@@ -96,6 +96,15 @@ SCAN_TRUSTED = HYBRID_LIMIT / 2
 def mean_square(cal: Calibration) -> float:
     """Mean square fit NRMSE of the wheels the calibration fitted (:attr:`Calibration.wheels`), 1."""
     return float(np.mean([e * e for c, e in zip(CORNERS, cal.fit_nrmse) if c in cal.wheels]))
+
+
+def excess_square(cal: Calibration) -> float:
+    """Mean square over the wheels the calibration fitted of the fit NRMSE beyond the load cells' noise
+    (:func:`~rigsim.scenarios.records.model.result.model_error` of :attr:`Calibration.fit_nrmse` and
+    :attr:`Calibration.noise_nrmse`; the fit NRMSE itself where the noise was not estimated), 1: what
+    the model itself misses, which a structure added to it can remove (the noise it cannot)."""
+    errors = model_error(cal.fit_nrmse, cal.noise_nrmse) if cal.noise_nrmse else cal.fit_nrmse
+    return float(np.mean([e * e for c, e in zip(CORNERS, errors) if c in cal.wheels]))
 
 
 def scan_error(cal: Calibration) -> float:

@@ -108,6 +108,9 @@ class Calibration:
     frame_choice : str
         On a described truck, whether the frame's modes were fitted and why
         (:func:`rigsim.scenarios.records.model.frame_choice.calibrate_truck`); "" otherwise.
+    engine_choice : str
+        On a described truck, whether the engine on its mounts was fitted and why (the same
+        function, after the frame); "" otherwise.
     window_records : tuple of int
         Where the calibration fitted windows of other records too (``calibrate(more=...)``): the
         record of each window of :attr:`windows_s` (0: the record calibrated, 1, 2...: the others in
@@ -159,6 +162,7 @@ class Calibration:
     bounds: tuple = ()
     cab_choice: str = ""
     frame_choice: str = ""
+    engine_choice: str = ""
     window_records: tuple = ()
     second_start: str = ""
     noise_nrmse: tuple = ()

@@ -19,8 +19,9 @@ from rigsim.scenarios.core.config import load_scenario, paper_scenarios
 from rigsim.scenarios.core.run import run
 from rigsim.scenarios.records.model import frame_choice
 from rigsim.scenarios.records.model.cab_choice import MIN_GAIN
-from rigsim.scenarios.records.model.family import FRAME_FITTED
-from rigsim.scenarios.records.model.frame_choice import SCAN_HZ, calibrate_truck, choose_frame
+from rigsim.scenarios.records.model.family import ENGINE_FITTED, FRAME_FITTED
+from rigsim.scenarios.records.model.frame_choice import (ENGINE_SCAN_HZ, SCAN_HZ, calibrate_truck, choose_engine,
+                                                         choose_frame)
 from rigsim.scenarios.records.model.result import Calibration
 from rigsim.scenarios.studies import scoring
 
@@ -65,12 +66,33 @@ def test_a_frame_fit_no_better_or_gone_soft_keeps_the_rigid_frame():
     assert choose_frame(RIGID, _framed(19.9, 19.9, 0.24))[0] is RIGID
 
 
+def _engined(hz: float, kg: float, front: float) -> Calibration:
+    return _cal(("payload_kg", *ENGINE_FITTED), (1.0, hz, kg), (front, front, 0.24, 0.24),
+                ((0.5, 2.0), (5.0, 20.0), (300.0, 1500.0)))
+
+
+def test_the_engine_is_kept_on_its_mounts_where_clearly_better_and_not_gone_soft():
+    """The frame's rule for the engine: MIN_GAIN better in mean square and its mount not at the range's
+    bottom (5 Hz); its mass may end anywhere in its range (an engine of 300 kg on stiff mounts still
+    changes little)."""
+    plain = _cal(("payload_kg",), (1.0,), (0.24, 0.24, 0.24, 0.24), ((0.5, 2.0),))
+    better = _engined(8.2, 1150.0, 0.08)
+    chosen, why = choose_engine(plain, better)
+    assert chosen is better and why.startswith("engine on its mounts: ") and "8.2 Hz mounts, 1.15e+03 kg" in why
+    chosen, why = choose_engine(plain, _engined(5.01, 1150.0, 0.05))
+    assert chosen is plain and why.startswith("engine in the chassis: ") and "engine_mount_hz stopped" in why
+    chosen, why = choose_engine(plain, _engined(8.2, 300.0, 0.23))
+    assert chosen is plain and f"{MIN_GAIN:.0%}" in why
+    assert ENGINE_SCAN_HZ[0] == 5.0 and 14.0 < ENGINE_SCAN_HZ[-1] < 14.3 and len(ENGINE_SCAN_HZ) == 7
+
+
 def test_the_catalogue_truck_and_named_fields_get_no_frame(monkeypatch):
     """No scan, no second fit: the catalogue truck's chassis is the XML's, and fields the caller names
     are fitted as named."""
     cal = dataclasses.replace(RIGID, cab_choice="cab held: ...")
     monkeypatch.setattr(frame_choice, "calibrate_cab", lambda *a, **k: (cal, object()))
     monkeypatch.setattr(frame_choice, "frame_scan", lambda state: pytest.fail("scanned"))
+    monkeypatch.setattr(frame_choice, "engine_scan", lambda *a, **k: pytest.fail("scanned"))
     paper = load_scenario(paper_scenarios()[0])
     assert calibrate_truck(None, None, None, base_scenario=paper, workers=1) is cal
     tractor = load_scenario(TRUCKS / "tractor_air.toml")
