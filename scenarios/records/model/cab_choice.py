@@ -136,10 +136,11 @@ def cab_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
     return best_scan(state, ("cab_mount_hz",), hz)
 
 
-def best_scan(state, fields, hz) -> tuple[float, float]:
+def best_scan(state, fields, hz, fixed: dict | None = None) -> tuple[float, float]:
     """The largest of :func:`scan_gains` (1) over ``hz`` (Hz) given to every one of ``fields`` at the
-    fit's optimum, and the frequency that gives it (Hz): :func:`cab_scan`'s, and the frame's scan's."""
-    gains = scan_gains(state, [dict.fromkeys(fields, float(f)) for f in hz])
+    fit's optimum (with the fields of ``fixed`` at its values, SI), and the frequency that gives it
+    (Hz): :func:`cab_scan`'s, and the frame's and the engine's scans'."""
+    gains = scan_gains(state, [dict.fromkeys(fields, float(f)) | (fixed or {}) for f in hz])
     best = int(np.argmax(gains))
     return gains[best], float(hz[best])
 

@@ -49,7 +49,7 @@ from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.core.pool import local_executor
 from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCAN_TRUSTED, best_scan, calibrate_cab,
-                                                       excess_square, scan_error, scan_gains)
+                                                       excess_square, scan_error)
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.family import ENGINE_FITTED, FRAME_FITTED
 from rigsim.scenarios.records.model.first_guess import description, engine_guess, frame_guess
@@ -91,9 +91,7 @@ def engine_scan(state, hz=ENGINE_SCAN_HZ, mass_kg: float = ENGINE_MASS_KG) -> tu
     """The most an engine of ``mass_kg`` (kg) on its own mounts could reduce the squared residual of a
     fit whose engine is in the chassis, to first order: the largest gain (1) over the mounts ``hz``
     (Hz, each one truck run per window) and the mount that gives it (Hz)."""
-    gains = scan_gains(state, [{"engine_mount_hz": float(f), "engine_mass_kg": float(mass_kg)} for f in hz])
-    best = int(np.argmax(gains))
-    return gains[best], float(hz[best])
+    return best_scan(state, ("engine_mount_hz",), hz, {"engine_mass_kg": float(mass_kg)})
 
 
 def _choose(what: str, plain: Calibration, fitted: Calibration, fields, edge, min_gain: float):
@@ -177,7 +175,7 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
 
         if not set(FRAME_FITTED) & set(cal.names):
             cal, state, why = _structure(cal, state, fit, "a frame that twists and bends", "frame rigid",
-                                         FRAME_FITTED, lambda st: frame_scan(st),
+                                         FRAME_FITTED, frame_scan,
                                          lambda hz: dict.fromkeys(FRAME_FITTED, hz),
                                          frame_guess(desc)[FRAME_FITTED[0]], choose_frame)
             cal = dataclasses.replace(cal, frame_choice=why)
