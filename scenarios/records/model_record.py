@@ -207,6 +207,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         meta["cal_cab"] = "x " * 150
         meta["cal_frame"] = "x " * 150
         meta["cal_engine"] = "x " * 150
+        meta["cal_damper"] = "x " * 150
         meta["cal_second_start"] = "x " * 180
     elif cal is not None:
         meta.update(calibration_meta(cal))
@@ -216,6 +217,8 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
             meta["cal_frame"] = cal.frame_choice
         if cal.engine_choice:
             meta["cal_engine"] = cal.engine_choice
+        if cal.damper_choice:
+            meta["cal_damper"] = cal.damper_choice
         if cal.second_start:
             meta["cal_second_start"] = cal.second_start
     return meta

@@ -32,6 +32,12 @@ could win, the mount's frequency and the engine's mass are fitted with everythin
 optimum and the scan's best mount, and kept where the fit is :data:`~.cab_choice.MIN_GAIN` better in
 mean square and the mount did not stop at its range's bottom (5 Hz).
 
+The spring dampers' digressive knee and ratio (:data:`~.family.DAMPER_FITTED`) are chosen the same way
+after the engine: the scan runs the truck with dampers of
+:data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_RATIO` beyond each knee of
+:data:`DAMPER_SCAN_M_PER_S`; kept where clearly better and the knee did not stop at its range's bottom
+(0.05 m/s: a damper whose saturating part acts as friction, which the fitted friction already is).
+
 The catalogue truck keeps the XML's rigid chassis (no frame or engine is fitted or scanned), as
 does a calibration whose fitted fields the caller names.
 """
@@ -51,12 +57,12 @@ from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCAN_TRUSTED, best_scan, calibrate_cab,
                                                        excess_square, scan_error)
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
-from rigsim.scenarios.records.model.family import ENGINE_FITTED, FRAME_FITTED
-from rigsim.scenarios.records.model.first_guess import description, engine_guess, frame_guess
+from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
+from rigsim.scenarios.records.model.first_guess import damper_guess, description, engine_guess, frame_guess
 from rigsim.scenarios.records.model.result import Calibration
 
-__all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "frame_scan", "engine_scan", "choose_frame", "choose_engine",
-           "calibrate_truck"]
+__all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "DAMPER_SCAN_M_PER_S", "frame_scan", "engine_scan", "damper_scan",
+           "choose_frame", "choose_engine", "choose_damper", "calibrate_truck"]
 
 #: The frames tried at the rigid fit's optimum (:func:`frame_scan`), Hz, torsion and bending alike:
 #: 4-16 Hz a quarter octave apart, around the 5-12 Hz of a laden frame's first modes and inside the
@@ -66,6 +72,10 @@ SCAN_HZ = tuple(float(v) for v in np.round(4.0 * 2.0 ** (np.arange(9) / 4.0), 2)
 #: octave apart, around a truck engine's 6-12 Hz bounce, from the fitted mount's range's bottom
 #: (5-20 Hz, :data:`rigsim.mjcf.engine.BOUNDS`).
 ENGINE_SCAN_HZ = tuple(float(v) for v in np.round(5.0 * 2.0 ** (np.arange(7) / 4.0), 2))
+#: The digressive dampers' knees tried at the kept fit's optimum (:func:`damper_scan`), m/s: 0.07-0.4
+#: m/s a half octave apart, around the 0.1-0.3 m/s where vehicle dampers' blow-off valves open, inside
+#: the fitted knee's search range (0.05-0.5 m/s, :data:`rigsim.mjcf.dampers.BOUNDS`).
+DAMPER_SCAN_M_PER_S = tuple(float(v) for v in np.round(0.07 * 2.0 ** (np.arange(6) / 2.0), 3))
 
 
 def frame_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
@@ -92,6 +102,13 @@ def engine_scan(state, hz=ENGINE_SCAN_HZ, mass_kg: float = ENGINE_MASS_KG) -> tu
     fit whose engine is in the chassis, to first order: the largest gain (1) over the mounts ``hz``
     (Hz, each one truck run per window) and the mount that gives it (Hz)."""
     return best_scan(state, ("engine_mount_hz",), hz, {"engine_mass_kg": float(mass_kg)})
+
+
+def damper_scan(state, knees=DAMPER_SCAN_M_PER_S, ratio: float = 0.5) -> tuple[float, float]:
+    """The most digressive spring dampers (slope ``ratio`` beyond their knee, 1) could reduce the
+    squared residual of a fit whose dampers are linear, to first order: the largest gain (1) over the
+    knees ``knees`` (m/s, each one truck run per window) and the knee that gives it (m/s)."""
+    return best_scan(state, ("damper_digressive_knee_m_per_s",), knees, {"damper_digressive_ratio": float(ratio)})
 
 
 def _choose(what: str, plain: Calibration, fitted: Calibration, fields, edge, min_gain: float):
@@ -124,6 +141,13 @@ def choose_engine(plain: Calibration, engined: Calibration, min_gain: float = MI
     chosen, why = _choose("the engine fitted ({} Hz mounts, {} kg)", plain, engined, ENGINE_FITTED,
                           ("engine_mount_hz",), min_gain)
     return chosen, ("engine in the chassis: " if chosen is plain else "engine on its mounts: ") + why
+
+
+def choose_damper(plain: Calibration, digressive: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
+    """The calibration to use of the dampers linear and the dampers digressive, and one sentence why."""
+    chosen, why = _choose("digressive dampers fitted (knee {} m/s, slope beyond it x{})", plain, digressive,
+                          DAMPER_FITTED, ("damper_digressive_knee_m_per_s",), min_gain)
+    return chosen, ("dampers linear: " if chosen is plain else "dampers digressive: ") + why
 
 
 def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | None = None,
@@ -186,16 +210,27 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
                                          lambda hz: guess | {"engine_mount_hz": hz}, guess["engine_mount_hz"],
                                          choose_engine)
             cal = dataclasses.replace(cal, engine_choice=why)
+        if not set(DAMPER_FITTED) & set(cal.names):
+            guess = damper_guess(desc)
+            ratio = guess["damper_digressive_ratio"]
+            cal, state, why = _structure(cal, state, fit, "digressive dampers", "dampers linear", DAMPER_FITTED,
+                                         lambda st: damper_scan(st, ratio=ratio),
+                                         lambda knee: guess | {"damper_digressive_knee_m_per_s": knee},
+                                         guess["damper_digressive_knee_m_per_s"], choose_damper, unit="m/s")
+            cal = dataclasses.replace(cal, damper_choice=why)
     return cal
 
 
-def _structure(cal: Calibration, state, fit, what: str, kept: str, fields, scan, start_of, hz0: float, choose):
+def _structure(cal: Calibration, state, fit, what: str, kept: str, fields, scan, start_of, hz0: float, choose,
+               unit: str = "Hz"):
     """One structure's choice (the module's description) from the calibration ``cal`` and its fit's
     ``state`` (Jacobian computed, pool running): (the calibration kept, its state, one sentence why).
     ``fit(names, start)`` calibrates with ``names`` from the values ``start``; ``scan(state)`` gives
-    (gain, Hz); ``start_of(hz)`` the structure's fields at the scan's best ``hz`` (``hz0`` where the
-    scan would not run); ``choose(cal, fitted)`` keeps one and says why; ``kept`` starts the
-    sentence where the structure is not fitted."""
+    (gain, value); ``start_of(hz)`` the structure's fields at the scan's best value ``hz`` (in ``unit``;
+    ``hz0`` where the scan would not run); ``choose(cal, fitted)`` keeps one and says why; ``kept``
+    starts the sentence where the structure is not fitted. The structures chosen before keep their
+    sentences. A structure whose fit cannot run (a truck it cannot be built into) leaves ``cal`` as it
+    is and says why."""
     w0, runs0 = time.perf_counter(), state.problem.evaluations
     gain, hz = 1.0, hz0
     with contextlib.suppress(ScenarioError, SimulationError):  # a structure that would not run: fit it
@@ -205,16 +240,21 @@ def _structure(cal: Calibration, state, fit, what: str, kept: str, fields, scan,
     if gain < MIN_GAIN / 2 and error <= SCAN_TRUSTED:
         return dataclasses.replace(cal, evaluations=cal.evaluations + scanned,
                                    wall_time_s=round(cal.wall_time_s + time.perf_counter() - w0, 3)), state, (
-            f"{kept}: {what} would remove at most {gain:.0%} of the fit's squared residual (at {hz:.3g} Hz, to "
+            f"{kept}: {what} would remove at most {gain:.0%} of the fit's squared residual (at {hz:.3g} {unit}, to "
             f"first order; the fit's model error {error:.3f} on its second-worst wheel), less than "
             f"{MIN_GAIN / 2:.0%}, so it was not fitted.")
-    fitted, fitted_state = fit(cal.names + fields, dict(zip(cal.names, cal.fitted)) | start_of(hz))
+    try:
+        fitted, fitted_state = fit(cal.names + fields, dict(zip(cal.names, cal.fitted)) | start_of(hz))
+    except (ScenarioError, SimulationError) as exc:  # the calibration without it stands
+        return dataclasses.replace(cal, evaluations=cal.evaluations + scanned,
+                                   wall_time_s=round(cal.wall_time_s + time.perf_counter() - w0, 3)), state, (
+            f"{kept}: {what} could not be fitted ({str(exc).rstrip('.')}).")
     chosen, why = choose(cal, fitted)
     chosen_state = state
     if chosen is fitted:
         chosen, chosen_state = with_sigma(fitted, fitted_state)
         chosen = dataclasses.replace(chosen, cab_choice=cal.cab_choice, second_start=cal.second_start,
-                                     frame_choice=cal.frame_choice)
+                                     frame_choice=cal.frame_choice, engine_choice=cal.engine_choice)
     evaluations = cal.evaluations + scanned + fitted_state.problem.evaluations
     wall = round(cal.wall_time_s + time.perf_counter() - w0, 3)
     return dataclasses.replace(chosen, evaluations=evaluations, wall_time_s=wall), chosen_state, why
