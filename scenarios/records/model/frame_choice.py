@@ -1,5 +1,6 @@
-"""Whether a described truck's frame twists and bends and its engine sits on mounts: the rigid
-truck's fit, then each structure's fields fitted from it where they could win, the better fit kept.
+"""Whether a described truck's frame twists and bends, its engine sits on mounts and its dampers are
+digressive: the plain truck's fit, then each structure's fields fitted from it where they could win,
+the better fit kept.
 
 A ladder frame with the cab, body, tanks and load bolted on has its first torsion and bending modes
 at 5-12 Hz, among the wheel-hop modes, where the rig excites the truck; a spec sheet gives none of
@@ -153,7 +154,7 @@ def choose_damper(plain: Calibration, digressive: Calibration, min_gain: float =
 def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | None = None,
                     workers: int | None = None, executor=None, **cab_kw) -> Calibration:
     """Calibrate the truck model: the cab chosen (:func:`~.cab_choice.calibrate_cab`), then on a
-    described truck the frame and the engine (the module's description).
+    described truck the frame, the engine and the dampers (the module's description).
 
     Parameters
     ----------
@@ -170,13 +171,14 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
     **cab_kw
         Passed to ``calibrate_cab`` (``base_scenario`` required; ``defer``, ``symmetric``,
         ``x_ref_m``, ``windows``, ``start``, ``names``...). Given ``names``, exactly these fields are
-        fitted and no frame or engine is added.
+        fitted and no frame, engine or digressive damper is added.
 
     Returns
     -------
     Calibration
-        The one used; on a described truck its :attr:`~Calibration.frame_choice` and
-        :attr:`~Calibration.engine_choice` say whether each was fitted and why, and its
+        The one used; on a described truck its :attr:`~Calibration.frame_choice`,
+        :attr:`~Calibration.engine_choice` and :attr:`~Calibration.damper_choice` say whether each was
+        fitted and why, and its
         :attr:`~Calibration.wall_time_s` (s) and :attr:`~Calibration.evaluations` count every
         calibration and scan run.
 
