@@ -122,9 +122,10 @@ def first_guess(scenario) -> tuple[dict, list[str]]:
 
 def cal_key(name: str) -> str:
     """The metadata key of the fitted field ``name``: ``cal_`` and the name, "progressive" shortened
-    to "prog" and "spring_damping" to "spring_damp" so that every key fits RPC III's 32 bytes
-    (``cal_spring_damp_front_Ns_per_m``: 30)."""
-    return "cal_" + name.replace("progressive", "prog").replace("spring_damping", "spring_damp")
+    to "prog", "spring_damping" to "spring_damp" and "digressive" to "digr" so that every key fits
+    RPC III's 32 bytes (``cal_spring_damp_front_Ns_per_m``: 30)."""
+    return "cal_" + name.replace("progressive", "prog").replace("spring_damping", "spring_damp").replace("digressive",
+                                                                                                          "digr")
 
 
 def calibration_meta(cal) -> dict[str, str]:
