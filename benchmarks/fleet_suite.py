@@ -177,8 +177,9 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
             "its model lacks. The records pass through the lab's chain as it was (corners off by up to 5 %) and are "
             "aligned with its nominal settings.\n\n" + "\n\n".join(parts))
     command = " && ".join(r["command"] for r in runs)
-    page = write_results_page(results, "fleet_suite", "The model correction on trucks a lab brings: development "
-                              "and fresh draws", summary_head, summary, command, note=note,
+    draws = " and ".join(dict.fromkeys(r["draw"] for r in runs))
+    page = write_results_page(results, "fleet_suite", f"The model correction on trucks a lab brings: {draws} "
+                              f"draw{'s' if len(runs) > 1 else ''}", summary_head, summary, command, note=note,
                               script=script_command(__file__, ["--page", *(f"{r['draw'].upper()}.txt" for r in runs)]))
     print(page.read_text(encoding="utf-8"))
     return page
