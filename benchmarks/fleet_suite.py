@@ -80,10 +80,14 @@ def _truck_text(score) -> str:
 
 
 def _frame_text(score) -> str:
-    """Where the calibration fitted the model's frame: its torsion/bending modes, Hz."""
-    if score.frame_hz is None:
-        return ""
-    return f"; model's frame fitted {score.frame_hz[0]:.1f}/{score.frame_hz[1]:.1f} Hz"
+    """Where the calibration fitted the model's frame: its torsion/bending modes, Hz; its engine: mount Hz, mass kg;
+    its dampers digressive: knee m/s, slope ratio."""
+    out = "" if score.frame_hz is None else f"; model's frame fitted {score.frame_hz[0]:.1f}/{score.frame_hz[1]:.1f} Hz"
+    if score.engine is not None:
+        out += f"; model's engine fitted {score.engine[1]:.0f} kg on {score.engine[0]:.1f} Hz"
+    if score.damper is not None:
+        out += f"; model's dampers digressive x{score.damper[1]:.2f} above {score.damper[0]:.2f} m/s"
+    return out
 
 
 def run_draw(args) -> dict:
@@ -173,8 +177,9 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
             "its model lacks. The records pass through the lab's chain as it was (corners off by up to 5 %) and are "
             "aligned with its nominal settings.\n\n" + "\n\n".join(parts))
     command = " && ".join(r["command"] for r in runs)
-    page = write_results_page(results, "fleet_suite", "The model correction on trucks a lab brings: development "
-                              "and fresh draws", summary_head, summary, command, note=note,
+    draws = " and ".join(dict.fromkeys(r["draw"] for r in runs))
+    page = write_results_page(results, "fleet_suite", f"The model correction on trucks a lab brings: {draws} "
+                              f"draw{'s' if len(runs) > 1 else ''}", summary_head, summary, command, note=note,
                               script=script_command(__file__, ["--page", *(f"{r['draw'].upper()}.txt" for r in runs)]))
     print(page.read_text(encoding="utf-8"))
     return page

@@ -99,9 +99,8 @@ def report_model(args, result) -> int:
         print(f"model error per wheel (dynamic fit NRMSE in the correction's band beyond the load cells' noise): "
               f"{meta['cal_model_error']}")
         print(f"load cells' mass: {meta['cal_cell_mass']}")
-        for said in (cal.cab_choice, cal.frame_choice):
-            if said:
-                print(said[0].upper() + said[1:])
+        for said in cal.choices:
+            print(said[0].upper() + said[1:])
     if "residual_noise" in meta:
         print(meta["residual_noise"][0].upper() + meta["residual_noise"][1:])
     calibration = _write_both(args, result)

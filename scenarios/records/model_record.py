@@ -122,9 +122,10 @@ def first_guess(scenario) -> tuple[dict, list[str]]:
 
 def cal_key(name: str) -> str:
     """The metadata key of the fitted field ``name``: ``cal_`` and the name, "progressive" shortened
-    to "prog" and "spring_damping" to "spring_damp" so that every key fits RPC III's 32 bytes
-    (``cal_spring_damp_front_Ns_per_m``: 30)."""
-    return "cal_" + name.replace("progressive", "prog").replace("spring_damping", "spring_damp")
+    to "prog", "spring_damping" to "spring_damp" and "digressive" to "digr" so that every key fits
+    RPC III's 32 bytes (``cal_spring_damp_front_Ns_per_m``: 30)."""
+    return "cal_" + name.replace("progressive", "prog").replace("spring_damping", "spring_damp").replace("digressive",
+                                                                                                          "digr")
 
 
 def calibration_meta(cal) -> dict[str, str]:
@@ -206,6 +207,8 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         meta["cal_cell_mass"] = "x " * 60
         meta["cal_cab"] = "x " * 150
         meta["cal_frame"] = "x " * 150
+        meta["cal_engine"] = "x " * 150
+        meta["cal_damper"] = "x " * 150
         meta["cal_second_start"] = "x " * 180
     elif cal is not None:
         meta.update(calibration_meta(cal))
@@ -213,6 +216,10 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
             meta["cal_cab"] = cal.cab_choice
         if cal.frame_choice:
             meta["cal_frame"] = cal.frame_choice
+        if cal.engine_choice:
+            meta["cal_engine"] = cal.engine_choice
+        if cal.damper_choice:
+            meta["cal_damper"] = cal.damper_choice
         if cal.second_start:
             meta["cal_second_start"] = cal.second_start
     return meta

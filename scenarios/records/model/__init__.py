@@ -9,7 +9,7 @@
 * :mod:`.cab_choice`: :func:`~.cab_choice.calibrate_cab`, the cab held, fitted, or (default) both
   calibrated and the clearly better fit kept;
 * :mod:`.frame_choice`: :func:`~.frame_choice.calibrate_truck`, the cab chosen, then a described
-  truck's frame held rigid or, where clearly better, fitted;
+  truck's frame, engine on mounts and digressive dampers each left out or, where clearly better, fitted;
 * :mod:`.restart`: :func:`~.restart.calibrate_again`, a fit refused for its model error searched
   again from the leaf springs sliding and with each axle's stations held alike, the best kept;
 * :mod:`.differential`: :func:`~.differential.correct_with_model` (calibrate, check, correct with

@@ -63,9 +63,9 @@ from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT
 from rigsim.scenarios.records.model.family import DEFAULT_NAMES, STATION_FITTED
-from rigsim.scenarios.records.model.result import Calibration
+from rigsim.scenarios.records.model.result import Calibration, model_error
 
-__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "scan_error",
+__all__ = ["AUTO", "HELD", "FITTED_CAB", "CAB_CHOICES", "MIN_GAIN", "EDGE", "SCAN_HZ", "SCAN_TRUSTED", "mean_square", "excess_square", "scan_error",
            "cab_scan", "best_scan", "scan_gains", "choose", "check_cab", "calibrate_cab"]
 
 #: The fields of the calibration with the cab's mount frequency fitted: the default ones and the cab's.
@@ -98,6 +98,15 @@ def mean_square(cal: Calibration) -> float:
     return float(np.mean([e * e for c, e in zip(CORNERS, cal.fit_nrmse) if c in cal.wheels]))
 
 
+def excess_square(cal: Calibration) -> float:
+    """Mean square over the wheels the calibration fitted of the fit NRMSE beyond the load cells' noise
+    (:func:`~rigsim.scenarios.records.model.result.model_error` of :attr:`Calibration.fit_nrmse` and
+    :attr:`Calibration.noise_nrmse`; the fit NRMSE itself where the noise was not estimated), 1: what
+    the model itself misses, which a structure added to it can remove (the noise it cannot)."""
+    errors = model_error(cal.fit_nrmse, cal.noise_nrmse) if cal.noise_nrmse else cal.fit_nrmse
+    return float(np.mean([e * e for c, e in zip(CORNERS, errors) if c in cal.wheels]))
+
+
 def scan_error(cal: Calibration) -> float:
     """The model error (1) that decides whether :func:`cab_scan` is trusted: the second largest of
     :attr:`Calibration.excess_nrmse` over the wheels the calibration fitted (the largest where it
@@ -127,10 +136,11 @@ def cab_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
     return best_scan(state, ("cab_mount_hz",), hz)
 
 
-def best_scan(state, fields, hz) -> tuple[float, float]:
+def best_scan(state, fields, hz, fixed: dict | None = None) -> tuple[float, float]:
     """The largest of :func:`scan_gains` (1) over ``hz`` (Hz) given to every one of ``fields`` at the
-    fit's optimum, and the frequency that gives it (Hz): :func:`cab_scan`'s, and the frame's scan's."""
-    gains = scan_gains(state, [dict.fromkeys(fields, float(f)) for f in hz])
+    fit's optimum (with the fields of ``fixed`` at its values, SI), and the frequency that gives it
+    (Hz): :func:`cab_scan`'s, and the frame's and the engine's scans'."""
+    gains = scan_gains(state, [dict.fromkeys(fields, float(f)) | (fixed or {}) for f in hz])
     best = int(np.argmax(gains))
     return gains[best], float(hz[best])
 

@@ -39,11 +39,12 @@ from rigsim.scenarios.core.config import Scenario, ScenarioError
 from rigsim.scenarios.core.pool import local_executor
 from rigsim.scenarios.records.model.band_error import band_errors
 from rigsim.scenarios.records.model.cell_mass import band_acceleration
-from rigsim.scenarios.records.model.family import (ADDITIVE, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, FRAME_FITTED,
-                                                   RANGES, STATION_FITTED, UNITS)
+from rigsim.scenarios.records.model.family import (ADDITIVE, DAMPER_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN,
+                                                   ENGINE_FITTED, FITTED, FRAME_FITTED, RANGES, STATION_FITTED, UNITS)
 from rigsim.scenarios.records.model.joined import join
-from rigsim.scenarios.records.model.first_guess import (catalogue, description, frame_guess, is_light, spring_fields,
-                                                        static_guess, static_lateral, xml_nominal)
+from rigsim.scenarios.records.model.first_guess import (catalogue, damper_guess, description, engine_guess,
+                                                        frame_guess, is_light, spring_fields, static_guess,
+                                                        static_lateral, xml_nominal)
 from rigsim.scenarios.records.model.model_runs import check_record
 from rigsim.scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
 from rigsim.scenarios.records.model.problem import FitProblem, FitState
@@ -247,11 +248,12 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     guess = {"payload_kg": payload, "payload_x_m": x, "payload_y_m": y, "payload_z_m": nominal["payload_z_m"],
              "chassis_pitch_inertia_kg_m2": nominal["chassis_pitch_inertia_kg_m2"],
              "chassis_roll_inertia_kg_m2": nominal["chassis_roll_inertia_kg_m2"], **catalogue(desc),
-             **dict.fromkeys(STATION_FITTED, 1.0), **frame_guess(desc), **(fitted_guess or {})}
+             **dict.fromkeys(STATION_FITTED, 1.0), **frame_guess(desc), **engine_guess(desc), **damper_guess(desc),
+             **(fitted_guess or {})}
     held = [k for k in FITTED if k in ("cab_mount_hz", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values())
             or k.startswith("tire_progressive")
-            or k in STATION_FITTED or (k in FRAME_FITTED and k in guess)]
-    for k in held:  # held: rigid cab and frame, linear tire, stations alike, the XML's chassis
+            or k in STATION_FITTED or (k in FRAME_FITTED + ENGINE_FITTED + DAMPER_FITTED and k in guess)]
+    for k in held:  # held: rigid cab and frame, engine in the chassis, linear dampers and tire, stations alike, the XML's chassis
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper, loads = [], [], {}

@@ -92,6 +92,23 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   flexibility is spread along it and concentrates behind the cab or at the body's front mount, which
   the fleet suite's plants draw (``TruckVariant.frame_hinge_share``, ``frame_damping_ratio``) and
   the model does not. The catalogue truck keeps the XML's rigid chassis.
+* ``engine_mount_hz``, ``engine_mass_kg`` (:data:`ENGINE_FITTED`), on a described truck only, where
+  they make the fit clearly better (:mod:`~rigsim.scenarios.records.model.frame_choice`, after the
+  frame): the engine and gearbox as their own body on rubber mounts (:mod:`rigsim.mjcf.engine`,
+  taken out of the chassis' mass, which keeps the truck's mass and centre of mass). A truck's engine
+  bounces on its mounts at 6-12 Hz, among the wheel-hop modes, and with 0.7-1.3 t it is a tenth of
+  a laden two-axle truck's sprung mass over the front axle: a model without it puts its mode into
+  the front tires and the frame. From 9 Hz and 1 t (:data:`rigsim.mjcf.engine.ENGINE_MASS_KG`),
+  searched 5-20 Hz (through its compliance) and 0.3-1.5 t (:data:`rigsim.mjcf.engine.BOUNDS`); the
+  mounts' damping and the engine's place are held (:mod:`rigsim.mjcf.engine`'s estimates).
+* ``damper_digressive_knee_m_per_s``, ``damper_digressive_ratio`` (:data:`DAMPER_FITTED`), on a
+  described truck only, where they make the fit clearly better (after the engine): the spring
+  dampers digressive (:mod:`rigsim.mjcf.dampers`), their slope beyond the knee a fraction of the
+  slope below it, all four alike. A vehicle damper's blow-off valves open at 0.1-0.3 m/s and beyond
+  it its force grows at a fifth to a half of its low-speed slope; a linear damper fitted to such a
+  damper takes a slope between the two and errs at both ends of the speeds a rough road drives. From
+  0.15 m/s and 0.5, searched 0.05-0.5 m/s and 0.2-1 (:data:`rigsim.mjcf.dampers.BOUNDS`; 1 is a
+  linear damper); the slope below the knee is each axle's fitted damping.
 
 The truck is the one the scenario's ``[vehicle]`` describes (its wheelbase, tracks, rear tires,
 suspensions, spring rates and dampers: :data:`~rigsim.scenarios.records.model.first_guess.SPEC_FIELDS`),
@@ -122,7 +139,7 @@ The fit itself: :mod:`rigsim.scenarios.records.model.calibrate`.
 
 from __future__ import annotations
 
-__all__ = ["FITTED", "STATION_FITTED", "AIR_FITTED", "FRAME_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
+__all__ = ["FITTED", "STATION_FITTED", "AIR_FITTED", "FRAME_FITTED", "ENGINE_FITTED", "DAMPER_FITTED", "DEFAULT_NAMES", "EMPTY_STAND_IN", "UNITS", "COMPLIANCE", "ADDITIVE", "RANGES"]
 
 #: Each axle's left tire stiffness, leaf-spring rate and interleaf friction over its right one (the
 #: module's description).
@@ -136,12 +153,19 @@ AIR_FITTED = ("spring_rate_front_N_per_m", "spring_damping_front_Ns_per_m", "spr
 #: The frame's first torsion and bending modes: fitted on a described truck
 #: (:mod:`~rigsim.scenarios.records.model.frame_choice`), both or neither.
 FRAME_FITTED = ("frame_torsion_hz", "frame_bending_hz")
+#: The engine on its rubber mounts, its bounce frequency and its mass (with its gearbox): fitted on a
+#: described truck (:mod:`~rigsim.scenarios.records.model.frame_choice`), both or neither.
+ENGINE_FITTED = ("engine_mount_hz", "engine_mass_kg")
+#: The spring dampers' digressive knee and their slope beyond it over their slope below (all four
+#: dampers alike): fitted on a described truck (:mod:`~rigsim.scenarios.records.model.frame_choice`),
+#: both or neither.
+DAMPER_FITTED = ("damper_digressive_knee_m_per_s", "damper_digressive_ratio")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2", "chassis_roll_inertia_kg_m2",
           "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
           "tire_damping_front_Ns_per_m", "tire_damping_rear_Ns_per_m", "spring_friction_front_N",
           "spring_friction_rear_N", "axle_mass_front_kg", "axle_mass_rear_kg", "tire_progressive_ratio", "tire_progressive_onset_m", "tire_progressive_ratio_rear",
-          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED + AIR_FITTED + FRAME_FITTED
+          "tire_progressive_onset_rear_m", "cab_mount_hz") + STATION_FITTED + AIR_FITTED + FRAME_FITTED + ENGINE_FITTED + DAMPER_FITTED
 UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pitch_inertia_kg_m2": "kg m^2",
          "chassis_roll_inertia_kg_m2": "kg m^2",
          "tire_stiffness_front_N_per_m": "N/m",
@@ -152,7 +176,8 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pi
          "tire_progressive_onset_rear_m": "m", "cab_mount_hz": "Hz", **dict.fromkeys(STATION_FITTED, "1"),
          "spring_rate_front_N_per_m": "N/m", "spring_rate_rear_N_per_m": "N/m",
          "spring_damping_front_Ns_per_m": "N s/m", "spring_damping_rear_Ns_per_m": "N s/m",
-         **dict.fromkeys(FRAME_FITTED, "Hz")}
+         **dict.fromkeys(FRAME_FITTED, "Hz"), "engine_mount_hz": "Hz", "engine_mass_kg": "kg",
+         "damper_digressive_knee_m_per_s": "m/s", "damper_digressive_ratio": "1"}
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
@@ -160,7 +185,8 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pi
 #: 1.0 Hz, front wheels 1.36 of the linear floor against 0.19 with the cab held rigid; the paper's
 #: rougher cases fit a rigid cab to the top, 30 Hz, and lose nothing).
 DEFAULT_NAMES = tuple(k for k in FITTED if k not in ("cab_mount_hz", "chassis_pitch_inertia_kg_m2",
-                                                     "chassis_roll_inertia_kg_m2") + AIR_FITTED + FRAME_FITTED)
+                                                     "chassis_roll_inertia_kg_m2") + AIR_FITTED + FRAME_FITTED
+                                                     + ENGINE_FITTED + DAMPER_FITTED)
 #: The payload's height's stand-in on an empty or light truck (fitted in its place where the payload is light):
 #: the chassis' pitch inertia (the module's description).
 EMPTY_STAND_IN = {"payload_z_m": "chassis_pitch_inertia_kg_m2"}
@@ -183,7 +209,11 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "cha
           "spring_rate_front_N_per_m": (0.5, 2.0), "spring_rate_rear_N_per_m": (0.5, 2.0),
           "spring_damping_front_Ns_per_m": (0.3, 3.0), "spring_damping_rear_Ns_per_m": (0.3, 3.0),
           # from the 9 Hz guess to rigsim.mjcf.frame.BOUNDS' 3-20 Hz
-          **dict.fromkeys(FRAME_FITTED, (1.0 / 3.0, 20.0 / 9.0))}
+          **dict.fromkeys(FRAME_FITTED, (1.0 / 3.0, 20.0 / 9.0)),
+          # from the 9 Hz and 1 t guesses to rigsim.mjcf.engine.BOUNDS' 5-20 Hz and 0.3-1.5 t
+          "engine_mount_hz": (5.0 / 9.0, 20.0 / 9.0), "engine_mass_kg": (0.3, 1.5),
+          # from the 0.15 m/s and 0.5 guesses to rigsim.mjcf.dampers.BOUNDS' 0.05-0.5 m/s and 0.2-1
+          "damper_digressive_knee_m_per_s": (1.0 / 3.0, 10.0 / 3.0), "damper_digressive_ratio": (0.4, 2.0)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`rigsim.mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's
@@ -194,4 +224,4 @@ ADDITIVE = ("payload_x_m", "payload_z_m", "tire_progressive_ratio", "tire_progre
 #: Fields fitted through their compliance, theta = (guess / value)^2, not their value: the cab
 #: mount's and the frame's frequencies, whose effect on the wheel forces fades as 1 / f^2 towards a
 #: rigid cab or frame (a frequency scale would crawl along that flat valley).
-COMPLIANCE = ("cab_mount_hz",) + FRAME_FITTED
+COMPLIANCE = ("cab_mount_hz",) + FRAME_FITTED + ("engine_mount_hz",)

@@ -30,10 +30,11 @@ from rigsim.mjcf.variant import BOUNDS, TruckVariant
 from rigsim.mjcf.names import CORNERS, FRONT
 from rigsim.mjcf.tires import TIRE_PROGRESSIVE_ONSET_M
 from rigsim.scenarios.core.config import Scenario, ScenarioError
+from rigsim.mjcf.engine import ENGINE_MASS_KG
 from rigsim.scenarios.records.model.family import FRAME_FITTED
 from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "CATALOGUE_ENGINE_HZ", "engine_guess", "CATALOGUE_DAMPER_KNEE_M_PER_S", "CATALOGUE_DAMPER_RATIO", "damper_guess", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -58,6 +59,14 @@ CATALOGUE_TIRE_RATIO = 0.2
 #: :data:`rigsim.mjcf.frame.BOUNDS`), so the middle, 9 Hz, for both; searched 3-20 Hz
 #: (:data:`~rigsim.scenarios.records.model.family.RANGES`).
 CATALOGUE_FRAME_HZ = 9.0
+#: The first guess of an engine's bounce on its mounts, Hz: the middle of a truck engine's 6-12 Hz
+#: (:data:`rigsim.mjcf.engine.BOUNDS`); its mass the catalogue's :data:`rigsim.mjcf.engine.ENGINE_MASS_KG`.
+CATALOGUE_ENGINE_HZ = 9.0
+#: The first guess of a digressive damper's knee, m/s, and its slope beyond over its slope below, 1:
+#: the middle of the 0.1-0.3 m/s where vehicle dampers' blow-off valves open and of the fifth to a half
+#: of the low-speed slope beyond it (:data:`rigsim.mjcf.dampers.BOUNDS`).
+CATALOGUE_DAMPER_KNEE_M_PER_S = 0.15
+CATALOGUE_DAMPER_RATIO = 0.5
 
 
 #: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
@@ -116,6 +125,21 @@ def frame_guess(desc: TruckVariant) -> dict[str, float]:
     """The first guess of the frame's modes (:data:`CATALOGUE_FRAME_HZ`, Hz) on a described truck, whose
     calibration fits them; none on the catalogue truck, whose chassis stays the XML's rigid one."""
     return dict.fromkeys(FRAME_FITTED, CATALOGUE_FRAME_HZ) if described(desc) else {}
+
+
+def engine_guess(desc: TruckVariant) -> dict[str, float]:
+    """The first guess of the engine on its mounts (:data:`CATALOGUE_ENGINE_HZ`, Hz, and
+    :data:`rigsim.mjcf.engine.ENGINE_MASS_KG`, kg) on a described truck, whose calibration may fit it;
+    none on the catalogue truck, whose engine stays in the XML's rigid chassis."""
+    return {"engine_mount_hz": CATALOGUE_ENGINE_HZ, "engine_mass_kg": ENGINE_MASS_KG} if described(desc) else {}
+
+
+def damper_guess(desc: TruckVariant) -> dict[str, float]:
+    """The first guess of digressive spring dampers (:data:`CATALOGUE_DAMPER_KNEE_M_PER_S`, m/s, and
+    :data:`CATALOGUE_DAMPER_RATIO`, 1) on a described truck, whose calibration may fit them; none on the
+    catalogue truck, whose dampers stay the XML's linear ones."""
+    return ({"damper_digressive_knee_m_per_s": CATALOGUE_DAMPER_KNEE_M_PER_S,
+             "damper_digressive_ratio": CATALOGUE_DAMPER_RATIO} if described(desc) else {})
 
 
 @functools.lru_cache(maxsize=8)

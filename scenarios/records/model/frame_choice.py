@@ -1,5 +1,6 @@
-"""Whether a described truck's frame twists and bends: the rigid frame's fit, then the frame's modes
-fitted from it where they could win, the better fit kept.
+"""Whether a described truck's frame twists and bends, its engine sits on mounts and its dampers are
+digressive: the plain truck's fit, then each structure's fields fitted from it where they could win,
+the better fit kept.
 
 A ladder frame with the cab, body, tanks and load bolted on has its first torsion and bending modes
 at 5-12 Hz, among the wheel-hop modes, where the rig excites the truck; a spec sheet gives none of
@@ -18,13 +19,28 @@ what the fitted values can (:func:`~.cab_choice.scan_gains`). Where no frame cou
 clearly better (under half of :data:`~.cab_choice.MIN_GAIN`) and that first-order answer is trusted
 (the rigid fit's model error within :data:`~.cab_choice.SCAN_TRUSTED`), the frame stays rigid.
 Otherwise the frame's modes are fitted with everything else, started from the rigid fit's optimum
-and the scan's best frame, and kept where that fit's mean squared fit NRMSE over the wheels is at
+and the scan's best frame, and kept where that fit's mean squared model error over the wheels (its
+fit NRMSE beyond the load cells' noise, :func:`~.cab_choice.excess_square`: the noise, which no
+structure removes, would make a clear gain look small on a truck whose forces are small) is at
 least :data:`~.cab_choice.MIN_GAIN` below the rigid one's and neither mode stopped at its search
 range's bottom (3 Hz: a fit that wandered off). A frame fitted to the range's top (20 Hz) is
 practically rigid: kept only where it is still clearly better (a better minimum of the other values).
 
-The catalogue truck keeps the XML's rigid chassis (no frame is fitted or scanned), as does a
-calibration whose fitted fields the caller names.
+The engine (:data:`~.family.ENGINE_FITTED`) is chosen the same way after the frame, from the
+calibration kept: at its optimum the truck is run with an engine of
+:data:`rigsim.mjcf.engine.ENGINE_MASS_KG` on mounts at each of :data:`ENGINE_SCAN_HZ`; where one
+could win, the mount's frequency and the engine's mass are fitted with everything else from that
+optimum and the scan's best mount, and kept where the fit is :data:`~.cab_choice.MIN_GAIN` better in
+mean square and the mount did not stop at its range's bottom (5 Hz).
+
+The spring dampers' digressive knee and ratio (:data:`~.family.DAMPER_FITTED`) are chosen the same way
+after the engine: the scan runs the truck with dampers of
+:data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_RATIO` beyond each knee of
+:data:`DAMPER_SCAN_M_PER_S`; kept where clearly better and the knee did not stop at its range's bottom
+(0.05 m/s: a damper whose saturating part acts as friction, which the fitted friction already is).
+
+The catalogue truck keeps the XML's rigid chassis (no frame or engine is fitted or scanned), as
+does a calibration whose fitted fields the caller names.
 """
 
 from __future__ import annotations
@@ -35,22 +51,32 @@ import time
 
 import numpy as np
 
+from rigsim.mjcf.engine import ENGINE_MASS_KG
 from rigsim.scenarios.core.config import ScenarioError
 from rigsim.scenarios.core.pool import local_executor
 from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCAN_TRUSTED, best_scan, calibrate_cab,
-                                                       mean_square, scan_error)
+                                                       excess_square, scan_error)
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
-from rigsim.scenarios.records.model.family import FRAME_FITTED
-from rigsim.scenarios.records.model.first_guess import description, frame_guess
+from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
+from rigsim.scenarios.records.model.first_guess import damper_guess, description, engine_guess, frame_guess
 from rigsim.scenarios.records.model.result import Calibration
 
-__all__ = ["SCAN_HZ", "frame_scan", "choose_frame", "calibrate_truck"]
+__all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "DAMPER_SCAN_M_PER_S", "frame_scan", "engine_scan", "damper_scan",
+           "choose_frame", "choose_engine", "choose_damper", "calibrate_truck"]
 
 #: The frames tried at the rigid fit's optimum (:func:`frame_scan`), Hz, torsion and bending alike:
 #: 4-16 Hz a quarter octave apart, around the 5-12 Hz of a laden frame's first modes and inside the
 #: fitted frame's search range (3-20 Hz, :data:`rigsim.mjcf.frame.BOUNDS`).
 SCAN_HZ = tuple(float(v) for v in np.round(4.0 * 2.0 ** (np.arange(9) / 4.0), 2))
+#: The engine mounts tried at the kept fit's optimum (:func:`engine_scan`), Hz: 5-14 Hz a quarter
+#: octave apart, around a truck engine's 6-12 Hz bounce, from the fitted mount's range's bottom
+#: (5-20 Hz, :data:`rigsim.mjcf.engine.BOUNDS`).
+ENGINE_SCAN_HZ = tuple(float(v) for v in np.round(5.0 * 2.0 ** (np.arange(7) / 4.0), 2))
+#: The digressive dampers' knees tried at the kept fit's optimum (:func:`damper_scan`), m/s: 0.07-0.4
+#: m/s a half octave apart, around the 0.1-0.3 m/s where vehicle dampers' blow-off valves open, inside
+#: the fitted knee's search range (0.05-0.5 m/s, :data:`rigsim.mjcf.dampers.BOUNDS`).
+DAMPER_SCAN_M_PER_S = tuple(float(v) for v in np.round(0.07 * 2.0 ** (np.arange(6) / 2.0), 3))
 
 
 def frame_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
@@ -72,26 +98,63 @@ def frame_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
     return best_scan(state, FRAME_FITTED, hz)
 
 
+def engine_scan(state, hz=ENGINE_SCAN_HZ, mass_kg: float = ENGINE_MASS_KG) -> tuple[float, float]:
+    """The most an engine of ``mass_kg`` (kg) on its own mounts could reduce the squared residual of a
+    fit whose engine is in the chassis, to first order: the largest gain (1) over the mounts ``hz``
+    (Hz, each one truck run per window) and the mount that gives it (Hz)."""
+    return best_scan(state, ("engine_mount_hz",), hz, {"engine_mass_kg": float(mass_kg)})
+
+
+def damper_scan(state, knees=DAMPER_SCAN_M_PER_S, ratio: float = 0.5) -> tuple[float, float]:
+    """The most digressive spring dampers (slope ``ratio`` beyond their knee, 1) could reduce the
+    squared residual of a fit whose dampers are linear, to first order: the largest gain (1) over the
+    knees ``knees`` (m/s, each one truck run per window) and the knee that gives it (m/s)."""
+    return best_scan(state, ("damper_digressive_knee_m_per_s",), knees, {"damper_digressive_ratio": float(ratio)})
+
+
+def _choose(what: str, plain: Calibration, fitted: Calibration, fields, edge, min_gain: float):
+    """(the calibration to use, one sentence why, without its verdict) of ``plain`` and ``fitted``
+    (``fields`` fitted too, ``what`` their sentence with their values): ``fitted`` where it is
+    ``min_gain`` better in mean square (of the fit beyond the noise, :func:`~.cab_choice.excess_square`)
+    and none of ``edge`` stopped at its range's bottom."""
+    ms_p, ms_f = excess_square(plain), excess_square(fitted)
+    gain = 1.0 - ms_f / ms_p if ms_p > 0 else 0.0
+    values, bounds = fitted.values(), dict(zip(fitted.names, fitted.bounds))
+    text = (f"{what.format(*(f'{values[k]:.3g}' for k in fields))} leaves a model error of {np.sqrt(ms_f):.3f} (the "
+            f"fit NRMSE beyond the load cells' noise, rms of the wheels), without it {np.sqrt(ms_p):.3f}")
+    low = [k for k in edge if fitted.at_edge(k, EDGE) and values[k] - bounds[k][0] < bounds[k][1] - values[k]]
+    if low:
+        return plain, f"{text}, but {low[0]} stopped at its search range's bottom."
+    if gain < min_gain:
+        return plain, f"{text}, less than {min_gain:.0%} better in mean square."
+    return fitted, f"{text}."
+
+
 def choose_frame(rigid: Calibration, framed: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
     """The calibration to use of the frame rigid and the frame fitted, and one sentence why."""
-    ms_r, ms_f = mean_square(rigid), mean_square(framed)
-    gain = 1.0 - ms_f / ms_r if ms_r > 0 else 0.0
-    values, bounds = framed.values(), dict(zip(framed.names, framed.bounds))
-    modes = "/".join(f"{values[k]:.3g}" for k in FRAME_FITTED)
-    what = (f"the frame fitted (torsion/bending {modes} Hz) reproduces the measured forces to fit NRMSE "
-            f"{np.sqrt(ms_f):.3f} (rms of the wheels), the rigid frame to {np.sqrt(ms_r):.3f}")
-    low = [k for k in FRAME_FITTED if framed.at_edge(k, EDGE) and values[k] - bounds[k][0] < bounds[k][1] - values[k]]
-    if low:
-        return rigid, f"frame rigid: {what}, but {low[0]} stopped at its search range's bottom."
-    if gain < min_gain:
-        return rigid, f"frame rigid: {what}, less than {min_gain:.0%} better in mean square."
-    return framed, f"frame fitted: {what}."
+    chosen, why = _choose("the frame fitted (torsion/bending {}/{} Hz)", rigid, framed, FRAME_FITTED, FRAME_FITTED,
+                          min_gain)
+    return chosen, ("frame rigid: " if chosen is rigid else "frame fitted: ") + why
+
+
+def choose_engine(plain: Calibration, engined: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
+    """The calibration to use of the engine in the chassis and the engine on its mounts, and one sentence why."""
+    chosen, why = _choose("the engine fitted ({} Hz mounts, {} kg)", plain, engined, ENGINE_FITTED,
+                          ("engine_mount_hz",), min_gain)
+    return chosen, ("engine in the chassis: " if chosen is plain else "engine on its mounts: ") + why
+
+
+def choose_damper(plain: Calibration, digressive: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
+    """The calibration to use of the dampers linear and the dampers digressive, and one sentence why."""
+    chosen, why = _choose("digressive dampers fitted (knee {} m/s, slope beyond it x{})", plain, digressive,
+                          DAMPER_FITTED, ("damper_digressive_knee_m_per_s",), min_gain)
+    return chosen, ("dampers linear: " if chosen is plain else "dampers digressive: ") + why
 
 
 def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict | None = None,
                     workers: int | None = None, executor=None, **cab_kw) -> Calibration:
     """Calibrate the truck model: the cab chosen (:func:`~.cab_choice.calibrate_cab`), then on a
-    described truck the frame (the module's description).
+    described truck the frame, the engine and the dampers (the module's description).
 
     Parameters
     ----------
@@ -108,14 +171,16 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
     **cab_kw
         Passed to ``calibrate_cab`` (``base_scenario`` required; ``defer``, ``symmetric``,
         ``x_ref_m``, ``windows``, ``start``, ``names``...). Given ``names``, exactly these fields are
-        fitted and no frame is added.
+        fitted and no frame, engine or digressive damper is added.
 
     Returns
     -------
     Calibration
-        The one used; on a described truck its :attr:`~Calibration.frame_choice` says whether the
-        frame was fitted and why, and its :attr:`~Calibration.wall_time_s` (s) and
-        :attr:`~Calibration.evaluations` count every calibration and scan run.
+        The one used; on a described truck its :attr:`~Calibration.frame_choice`,
+        :attr:`~Calibration.engine_choice` and :attr:`~Calibration.damper_choice` say whether each was
+        fitted and why, and its
+        :attr:`~Calibration.wall_time_s` (s) and :attr:`~Calibration.evaluations` count every
+        calibration and scan run.
 
     Raises
     ------
@@ -125,31 +190,73 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
         cal, state = calibrate_cab(t_s, x_a_m, force_N, cab=cab, fitted_guess=fitted_guess, executor=ex,
                                    with_state=True, **cab_kw)
-        guess = frame_guess(description(cab_kw["base_scenario"]))  # none on the catalogue truck
-        if cab_kw.get("names") is not None or state is None or set(FRAME_FITTED) & set(cal.names) or not guess:
+        desc = description(cab_kw["base_scenario"])
+        if cab_kw.get("names") is not None or state is None or not frame_guess(desc):  # none on the catalogue truck
             return cal
-        w0, runs0 = time.perf_counter(), state.problem.evaluations
-        gain, hz = 1.0, guess[FRAME_FITTED[0]]
-        with contextlib.suppress(ScenarioError, SimulationError):  # a frame that would not run: fit it
-            gain, hz = frame_scan(state)
-        error = scan_error(cal)
-        scanned = state.problem.evaluations - runs0
-        if gain < MIN_GAIN / 2 and error <= SCAN_TRUSTED:
-            return dataclasses.replace(cal, frame_choice=(
-                f"frame rigid: a frame that twists and bends would remove at most {gain:.0%} of the rigid fit's "
-                f"squared residual (at {hz:.3g} Hz, to first order; the rigid fit's model error {error:.3f} on its "
-                f"second-worst wheel), less than {MIN_GAIN / 2:.0%}, so it was not fitted."),
-                evaluations=cal.evaluations + scanned,
-                wall_time_s=round(cal.wall_time_s + time.perf_counter() - w0, 3))
         kw = {k: v for k, v in cab_kw.items() if k not in ("defer", "symmetric", "start")}
-        start = dict(zip(cal.names, cal.fitted)) | dict.fromkeys(FRAME_FITTED, hz)
-        framed, framed_state = calibrate(t_s, x_a_m, force_N, names=cal.names + FRAME_FITTED,
-                                         fitted_guess=fitted_guess, start=start, executor=ex, with_state=True,
-                                         sigma=False, **kw)
-        chosen, why = choose_frame(cal, framed)
-        if chosen is framed:
-            chosen = dataclasses.replace(with_sigma(framed, framed_state)[0], cab_choice=cal.cab_choice,
-                                         second_start=cal.second_start)
-        evaluations = cal.evaluations + scanned + framed_state.problem.evaluations
-        wall = round(cal.wall_time_s + time.perf_counter() - w0, 3)
-    return dataclasses.replace(chosen, frame_choice=why, evaluations=evaluations, wall_time_s=wall)
+
+        def fit(names, start):
+            return calibrate(t_s, x_a_m, force_N, names=names, fitted_guess=fitted_guess, start=start, executor=ex,
+                             with_state=True, sigma=False, **kw)
+
+        if not set(FRAME_FITTED) & set(cal.names):
+            cal, state, why = _structure(cal, state, fit, "a frame that twists and bends", "frame rigid",
+                                         FRAME_FITTED, frame_scan,
+                                         lambda hz: dict.fromkeys(FRAME_FITTED, hz),
+                                         frame_guess(desc)[FRAME_FITTED[0]], choose_frame)
+            cal = dataclasses.replace(cal, frame_choice=why)
+        if not set(ENGINE_FITTED) & set(cal.names):
+            guess = engine_guess(desc)
+            cal, state, why = _structure(cal, state, fit, "an engine on its own mounts", "engine in the chassis",
+                                         ENGINE_FITTED, lambda st: engine_scan(st, mass_kg=guess["engine_mass_kg"]),
+                                         lambda hz: guess | {"engine_mount_hz": hz}, guess["engine_mount_hz"],
+                                         choose_engine)
+            cal = dataclasses.replace(cal, engine_choice=why)
+        if not set(DAMPER_FITTED) & set(cal.names):
+            guess = damper_guess(desc)
+            ratio = guess["damper_digressive_ratio"]
+            cal, state, why = _structure(cal, state, fit, "digressive dampers", "dampers linear", DAMPER_FITTED,
+                                         lambda st: damper_scan(st, ratio=ratio),
+                                         lambda knee: guess | {"damper_digressive_knee_m_per_s": knee},
+                                         guess["damper_digressive_knee_m_per_s"], choose_damper, unit="m/s")
+            cal = dataclasses.replace(cal, damper_choice=why)
+    return cal
+
+
+def _structure(cal: Calibration, state, fit, what: str, kept: str, fields, scan, start_of, hz0: float, choose,
+               unit: str = "Hz"):
+    """One structure's choice (the module's description) from the calibration ``cal`` and its fit's
+    ``state`` (Jacobian computed, pool running): (the calibration kept, its state, one sentence why).
+    ``fit(names, start)`` calibrates with ``names`` from the values ``start``; ``scan(state)`` gives
+    (gain, value); ``start_of(hz)`` the structure's fields at the scan's best value ``hz`` (in ``unit``;
+    ``hz0`` where the scan would not run); ``choose(cal, fitted)`` keeps one and says why; ``kept``
+    starts the sentence where the structure is not fitted. The structures chosen before keep their
+    sentences. A structure whose fit cannot run (a truck it cannot be built into) leaves ``cal`` as it
+    is and says why."""
+    w0, runs0 = time.perf_counter(), state.problem.evaluations
+    gain, hz = 1.0, hz0
+    with contextlib.suppress(ScenarioError, SimulationError):  # a structure that would not run: fit it
+        gain, hz = scan(state)
+    error = scan_error(cal)
+    scanned = state.problem.evaluations - runs0
+    if gain < MIN_GAIN / 2 and error <= SCAN_TRUSTED:
+        return dataclasses.replace(cal, evaluations=cal.evaluations + scanned,
+                                   wall_time_s=round(cal.wall_time_s + time.perf_counter() - w0, 3)), state, (
+            f"{kept}: {what} would remove at most {gain:.0%} of the fit's squared residual (at {hz:.3g} {unit}, to "
+            f"first order; the fit's model error {error:.3f} on its second-worst wheel), less than "
+            f"{MIN_GAIN / 2:.0%}, so it was not fitted.")
+    try:
+        fitted, fitted_state = fit(cal.names + fields, dict(zip(cal.names, cal.fitted)) | start_of(hz))
+    except (ScenarioError, SimulationError) as exc:  # the calibration without it stands
+        return dataclasses.replace(cal, evaluations=cal.evaluations + scanned,
+                                   wall_time_s=round(cal.wall_time_s + time.perf_counter() - w0, 3)), state, (
+            f"{kept}: {what} could not be fitted ({str(exc).rstrip('.')}).")
+    chosen, why = choose(cal, fitted)
+    chosen_state = state
+    if chosen is fitted:
+        chosen, chosen_state = with_sigma(fitted, fitted_state)
+        chosen = dataclasses.replace(chosen, cab_choice=cal.cab_choice, second_start=cal.second_start,
+                                     frame_choice=cal.frame_choice, engine_choice=cal.engine_choice)
+    evaluations = cal.evaluations + scanned + fitted_state.problem.evaluations
+    wall = round(cal.wall_time_s + time.perf_counter() - w0, 3)
+    return dataclasses.replace(chosen, evaluations=evaluations, wall_time_s=wall), chosen_state, why

@@ -108,6 +108,12 @@ class Calibration:
     frame_choice : str
         On a described truck, whether the frame's modes were fitted and why
         (:func:`rigsim.scenarios.records.model.frame_choice.calibrate_truck`); "" otherwise.
+    engine_choice : str
+        On a described truck, whether the engine on its mounts was fitted and why (the same
+        function, after the frame); "" otherwise.
+    damper_choice : str
+        On a described truck, whether the spring dampers were fitted digressive and why (the same
+        function, after the engine); "" otherwise.
     window_records : tuple of int
         Where the calibration fitted windows of other records too (``calibrate(more=...)``): the
         record of each window of :attr:`windows_s` (0: the record calibrated, 1, 2...: the others in
@@ -159,6 +165,8 @@ class Calibration:
     bounds: tuple = ()
     cab_choice: str = ""
     frame_choice: str = ""
+    engine_choice: str = ""
+    damper_choice: str = ""
     window_records: tuple = ()
     second_start: str = ""
     noise_nrmse: tuple = ()
@@ -167,6 +175,12 @@ class Calibration:
     wheels: tuple = CORNERS
     cell_mass_kg: float = 0.0
     cell_mass_sigma_kg: float = 0.0
+
+    @property
+    def choices(self) -> tuple[str, ...]:
+        """The sentences of the choices the calibration made (the cab's, the frame's, the engine's, the
+        dampers'), in that order, those it did not make left out."""
+        return tuple(s for s in (self.cab_choice, self.frame_choice, self.engine_choice, self.damper_choice) if s)
 
     def values(self) -> dict[str, float]:
         """The whole model truck: fitted and fixed fields, SI."""

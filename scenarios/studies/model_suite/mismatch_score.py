@@ -26,7 +26,7 @@ from rigsim.correction.output.floor import linear_floor
 from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE
 from rigsim.scenarios.core.lab import LabChain, aligned, measure
 from rigsim.scenarios.records.model.cell_mass import without_cell_mass
-from rigsim.scenarios.records.model.family import FRAME_FITTED
+from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
 from rigsim.scenarios.records.model.differential import (correct_with_model, hybrid_correction, model_force_pair,
                                                    settled_mask)
 from rigsim.scenarios.studies.correction_score import band_rows, score_correction
@@ -73,6 +73,12 @@ class PlantScore:
     frame_hz : tuple of float or None, Hz
         The model's frame modes (torsion, bending) where the calibration fitted its frame
         (:mod:`~rigsim.scenarios.records.model.frame_choice`), None where it kept the frame rigid.
+    engine : tuple of float or None, (Hz, kg)
+        The model's engine mount frequency and mass where the calibration fitted its engine on mounts
+        (the same module), None where it kept the engine in the chassis.
+    damper : tuple of float or None, (m/s, 1)
+        The model's digressive dampers' knee and slope ratio where the calibration fitted them (the
+        same module), None where it kept them linear.
     """
 
     name: str
@@ -89,6 +95,8 @@ class PlantScore:
     model_error: np.ndarray | None = None
     timings: Mapping[str, float] = field(default_factory=dict)
     frame_hz: tuple[float, float] | None = None
+    engine: tuple[float, float] | None = None
+    damper: tuple[float, float] | None = None
 
     def to_dict(self) -> dict:
         return {"name": self.name, "plant": dict(self.plant), "method": self.method, "reason": self.reason,
@@ -97,7 +105,9 @@ class PlantScore:
                 "wall_s": self.wall_s, "cpu_s": self.cpu_s, "scored_s": self.scored_s,
                 "fit_nrmse": None if self.fit_nrmse is None else self.fit_nrmse.tolist(),
                 "model_error": None if self.model_error is None else self.model_error.tolist(),
-                "timings": dict(self.timings), "frame_hz": None if self.frame_hz is None else list(self.frame_hz)}
+                "timings": dict(self.timings), "frame_hz": None if self.frame_hz is None else list(self.frame_hz),
+                "engine": None if self.engine is None else list(self.engine),
+                "damper": None if self.damper is None else list(self.damper)}
 
     @classmethod
     def from_dict(cls, d: Mapping) -> "PlantScore":
@@ -112,7 +122,9 @@ class PlantScore:
                    nrmse=arrays(d["nrmse"]), dlc_error=arrays(d["dlc_error"]), floor=np.asarray(d["floor"], float),
                    wall_s=d["wall_s"], cpu_s=d["cpu_s"], scored_s=d["scored_s"], fit_nrmse=maybe(d["fit_nrmse"]),
                    model_error=maybe(d["model_error"]), timings=dict(d.get("timings", {})),
-                   frame_hz=None if d.get("frame_hz") is None else tuple(d["frame_hz"]))
+                   frame_hz=None if d.get("frame_hz") is None else tuple(d["frame_hz"]),
+                   engine=None if d.get("engine") is None else tuple(d["engine"]),
+                   damper=None if d.get("damper") is None else tuple(d["damper"]))
 
 
 def _cpu_s() -> float:
@@ -187,9 +199,12 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     error = None if cal is None else np.asarray(cal.excess_nrmse, dtype=float)
     fitted = {} if cal is None else dict(zip(cal.names, cal.fitted))
     frame = tuple(float(fitted[k]) for k in FRAME_FITTED) if all(k in fitted for k in FRAME_FITTED) else None
+    engine = tuple(float(fitted[k]) for k in ENGINE_FITTED) if all(k in fitted for k in ENGINE_FITTED) else None
+    damper = tuple(float(fitted[k]) for k in DAMPER_FITTED) if all(k in fitted for k in DAMPER_FITTED) else None
     return PlantScore(name=name, plant=dict(plant), method=mc.method, reason=mc.reason,
                       nrmse={k: np.asarray(v["nrmse"]) for k, v in scores.items()},
                       dlc_error={k: np.asarray(v["dlc_error"]) for k, v in scores.items()},
                       floor=np.asarray(floor, dtype=float), wall_s=round(wall, 1), cpu_s=round(cpu, 1),
                       scored_s=float(scores["linear"]["scored_s"]), fit_nrmse=fit, model_error=error,
-                      timings=dict(mc.timings), frame_hz=frame)
+                      timings=dict(mc.timings), frame_hz=frame, engine=engine,
+                      damper=damper)

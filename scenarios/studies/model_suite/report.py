@@ -88,9 +88,8 @@ def table(rows: list[dict]) -> str:
                          + f"; calibration + correction {r['wall_s']:.0f} s wall, {r['cpu_s']:.0f} s CPU"
                          + (f"; calibration {cal.evaluations} model evaluations, converged {cal.converged}, "
                             f"{cal.wall_time_s:.0f} s" if cal else ""))
-            for said in (cal.cab_choice, cal.frame_choice) if cal else ():
-                if said:
-                    lines.append("\n" + said[0].upper() + said[1:])
+            for said in cal.choices if cal else ():
+                lines.append("\n" + said[0].upper() + said[1:])
             if cal and cal.second_start:
                 lines.append("\n" + cal.second_start[0].upper() + cal.second_start[1:])
             if cal:

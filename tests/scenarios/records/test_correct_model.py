@@ -327,6 +327,7 @@ def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
 
     meta = {cal_key(n): f"0 {UNITS[n]}" for n in FITTED}
     assert len(meta) == len(FITTED) and cal_key("tire_progressive_onset_rear_m") == "cal_tire_prog_onset_rear_m"
+    assert cal_key("damper_digressive_knee_m_per_s") == "cal_damper_digr_knee_m_per_s"
     write_rpc3(tmp_path / "keys.rsp", ["Fz_FL"], ["N"], np.zeros((1, 8)), 1e-3, extra=meta)
     header = read_rpc3(tmp_path / "keys.rsp").header
     assert all(header[k] == v for k, v in meta.items())

@@ -19,8 +19,9 @@ from rigsim.scenarios.core.config import load_scenario, paper_scenarios
 from rigsim.scenarios.core.run import run
 from rigsim.scenarios.records.model import frame_choice
 from rigsim.scenarios.records.model.cab_choice import MIN_GAIN
-from rigsim.scenarios.records.model.family import FRAME_FITTED
-from rigsim.scenarios.records.model.frame_choice import SCAN_HZ, calibrate_truck, choose_frame
+from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
+from rigsim.scenarios.records.model.frame_choice import (DAMPER_SCAN_M_PER_S, ENGINE_SCAN_HZ, SCAN_HZ, calibrate_truck,
+                                                         choose_damper, choose_engine, choose_frame)
 from rigsim.scenarios.records.model.result import Calibration
 from rigsim.scenarios.studies import scoring
 
@@ -65,12 +66,85 @@ def test_a_frame_fit_no_better_or_gone_soft_keeps_the_rigid_frame():
     assert choose_frame(RIGID, _framed(19.9, 19.9, 0.24))[0] is RIGID
 
 
+def _engined(hz: float, kg: float, front: float) -> Calibration:
+    return _cal(("payload_kg", *ENGINE_FITTED), (1.0, hz, kg), (front, front, 0.24, 0.24),
+                ((0.5, 2.0), (5.0, 20.0), (300.0, 1500.0)))
+
+
+def test_the_engine_is_kept_on_its_mounts_where_clearly_better_and_not_gone_soft():
+    """The frame's rule for the engine: MIN_GAIN better in mean square and its mount not at the range's
+    bottom (5 Hz); its mass may end anywhere in its range (an engine of 300 kg on stiff mounts still
+    changes little)."""
+    plain = _cal(("payload_kg",), (1.0,), (0.24, 0.24, 0.24, 0.24), ((0.5, 2.0),))
+    better = _engined(8.2, 1150.0, 0.08)
+    chosen, why = choose_engine(plain, better)
+    assert chosen is better and why.startswith("engine on its mounts: ") and "8.2 Hz mounts, 1.15e+03 kg" in why
+    chosen, why = choose_engine(plain, _engined(5.01, 1150.0, 0.05))
+    assert chosen is plain and why.startswith("engine in the chassis: ") and "engine_mount_hz stopped" in why
+    chosen, why = choose_engine(plain, _engined(8.2, 300.0, 0.23))
+    assert chosen is plain and f"{MIN_GAIN:.0%}" in why
+    assert ENGINE_SCAN_HZ[0] == 5.0 and 14.0 < ENGINE_SCAN_HZ[-1] < 14.3 and len(ENGINE_SCAN_HZ) == 7
+
+
+def _digressive(knee: float, ratio: float, rear: float) -> Calibration:
+    return _cal(("payload_kg", *DAMPER_FITTED), (1.0, knee, ratio), (0.24, 0.24, rear, rear),
+                ((0.5, 2.0), (0.05, 0.5), (0.2, 1.0)))
+
+
+def test_digressive_dampers_are_kept_where_clearly_better_and_not_gone_to_friction():
+    """The frame's rule for the dampers: MIN_GAIN better in mean square and the knee not at its range's
+    bottom (0.05 m/s, rigsim.mjcf.dampers.BOUNDS: a saturating part that acts as friction); the ratio
+    may end anywhere in 0.2-1. The scan's knees span the 0.1-0.3 m/s where blow-off valves open."""
+    plain = _cal(("payload_kg",), (1.0,), (0.24, 0.24, 0.24, 0.24), ((0.5, 2.0),))
+    better = _digressive(0.18, 0.35, 0.08)
+    chosen, why = choose_damper(plain, better)
+    assert chosen is better and why.startswith("dampers digressive: ") and "knee 0.18 m/s, slope beyond it x0.35" in why
+    chosen, why = choose_damper(plain, _digressive(0.0505, 0.35, 0.05))
+    assert chosen is plain and why.startswith("dampers linear: ") and "damper_digressive_knee_m_per_s stopped" in why
+    chosen, why = choose_damper(plain, _digressive(0.18, 0.95, 0.23))
+    assert chosen is plain and f"{MIN_GAIN:.0%}" in why
+    assert DAMPER_SCAN_M_PER_S[0] == 0.07 and DAMPER_SCAN_M_PER_S[0] < 0.1 and 0.3 < DAMPER_SCAN_M_PER_S[-1] < 0.5
+
+
+def test_a_calibration_says_its_choices_in_order():
+    """The cab's, frame's, engine's and dampers' sentences, those not made left out (what rigsim correct
+    --model prints and the suites' reports list)."""
+    cal = dataclasses.replace(RIGID, cab_choice="cab held: a", engine_choice="engine in the chassis: b",
+                              damper_choice="dampers digressive: c")
+    assert cal.choices == ("cab held: a", "engine in the chassis: b", "dampers digressive: c")
+    assert RIGID.choices == ()
+
+
+def test_a_structure_that_cannot_be_built_leaves_the_calibration(monkeypatch):
+    """fleet07 of the development draw: an engine of 1 t left that model's chassis no valid inertia,
+    and the whole calibration was lost to the linear correction; now the engine stays in the chassis
+    and the sentence says why."""
+    from rigsim.scenarios.core.config import ScenarioError
+
+    class State:
+        class problem:
+            evaluations = 0
+
+    def fit(names, start):
+        raise ScenarioError("vehicle.engine_mass_kg = 1000 kg leaves the chassis no rigid body's inertia.")
+
+    cal = dataclasses.replace(RIGID, cab_choice="cab held: a", frame_choice="frame rigid: b")
+    kept, state, why = frame_choice._structure(cal, State(), fit, "an engine on its own mounts", "engine in the chassis",
+                                               ENGINE_FITTED, lambda st: (0.5, 8.0), lambda hz: {}, 9.0,
+                                               frame_choice.choose_engine)
+    assert kept.fitted == cal.fitted and kept.choices == cal.choices and isinstance(state, State)
+    assert why == ("engine in the chassis: an engine on its own mounts could not be fitted (vehicle.engine_mass_kg "
+                   "= 1000 kg leaves the chassis no rigid body's inertia).")
+
+
 def test_the_catalogue_truck_and_named_fields_get_no_frame(monkeypatch):
     """No scan, no second fit: the catalogue truck's chassis is the XML's, and fields the caller names
     are fitted as named."""
     cal = dataclasses.replace(RIGID, cab_choice="cab held: ...")
     monkeypatch.setattr(frame_choice, "calibrate_cab", lambda *a, **k: (cal, object()))
     monkeypatch.setattr(frame_choice, "frame_scan", lambda state: pytest.fail("scanned"))
+    monkeypatch.setattr(frame_choice, "engine_scan", lambda *a, **k: pytest.fail("scanned"))
+    monkeypatch.setattr(frame_choice, "damper_scan", lambda *a, **k: pytest.fail("scanned"))
     paper = load_scenario(paper_scenarios()[0])
     assert calibrate_truck(None, None, None, base_scenario=paper, workers=1) is cal
     tractor = load_scenario(TRUCKS / "tractor_air.toml")

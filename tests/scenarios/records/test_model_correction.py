@@ -19,8 +19,8 @@ from rigsim.scenarios.core.rig import Rig
 from rigsim.scenarios.core.run import run
 from rigsim.scenarios.studies import scoring
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
-from rigsim.scenarios.records.model.family import (AIR_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN, FITTED, FRAME_FITTED,
-                                                   STATION_FITTED)
+from rigsim.scenarios.records.model.family import (AIR_FITTED, DAMPER_FITTED, DEFAULT_NAMES, EMPTY_STAND_IN,
+                                                   ENGINE_FITTED, FITTED, FRAME_FITTED, STATION_FITTED)
 from rigsim.scenarios.records.model.first_guess import (CATALOGUE_CAB_MOUNT_HZ, CATALOGUE_TIRE_RATIO, catalogue,
                                                         empty_truck_kg, is_light, xml_nominal)
 from rigsim.scenarios.records.model.differential import correct_with_model, differential_correction, settled_mask
@@ -131,7 +131,8 @@ def test_the_cab_is_fitted_only_on_request():
     family.DEFAULT_NAMES); FITTED, the fields that can be fitted, has it."""
     assert "cab_mount_hz" in FITTED and "cab_mount_hz" not in DEFAULT_NAMES
     assert set(DEFAULT_NAMES) == set(FITTED) - {"cab_mount_hz", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values(),
-                                                *AIR_FITTED, *FRAME_FITTED}  # roll and frame: on a described truck only
+                                                *AIR_FITTED, *FRAME_FITTED, *ENGINE_FITTED,
+                                                *DAMPER_FITTED}  # roll, frame, engine, dampers: on a described truck only
 
 
 def test_forces_of_another_case_fall_back_to_the_linear_correction(record):
@@ -208,7 +209,7 @@ def test_calibration_recovers_a_cab_mount_frequency():
     held = {k: getattr(plant, k) for k in FITTED
             if k not in ("cab_mount_hz", "payload_z_m", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values())
             and not k.startswith("tire_progressive")
-            and k not in STATION_FITTED and k not in AIR_FITTED and k not in FRAME_FITTED}
+            and k not in STATION_FITTED + AIR_FITTED + FRAME_FITTED + ENGINE_FITTED + DAMPER_FITTED}
     assert all(v is not None for v in held.values())  # the stations: held symmetric, the plant's
     cal = calibrate(road.t_s, road.signals["pan_m"], force, base_scenario=sc, names=("cab_mount_hz",),
                     fitted_guess=held, windows=1, window_s=3.0, lead_s=2.0, max_nfev=6, workers=2)
