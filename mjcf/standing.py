@@ -1,8 +1,10 @@
-"""Whether a described truck can stand on the rig: a rest found, every tire loaded, every spring in its travel.
+"""Whether a described truck can stand on the rig: a rest found, every tire loaded, every spring in its
+travel, the rest stable.
 
 A truck built from a spec sheet (:mod:`rigsim.mjcf.description`) may be one no rig could hold: a payload
 behind the rear axle of a short truck lifts the steer tires, springs too soft for the load close on
-their bump stops, a spring that never reaches its load finds no rest. :func:`check_stands` solves
+their bump stops, a spring that never reaches its load finds no rest, air springs too soft for a
+high payload hold a rest the truck leans away from. :func:`check_stands` solves
 the truck's rest on rigid pans at mid-stroke (:func:`rigsim.mjcf.physics.static_equilibrium`) and refuses
 such a truck in one sentence naming the field to change, before anything runs.
 """
@@ -15,7 +17,7 @@ import numpy as np
 from rigsim.mjcf import names
 from rigsim.mjcf.description import lever_loads
 
-__all__ = ["MIN_TIRE_SHARE", "MIN_GAP_M", "MAX_GAP_M", "check_stands", "truck_layout"]
+__all__ = ["MIN_TIRE_SHARE", "MIN_GAP_M", "MAX_GAP_M", "MAX_GROWTH_PER_S", "check_stands", "truck_layout"]
 
 #: A tire carrying less than this share of the truck's weight at rest (1) is lifted: a wheel so light
 #: leaves its pan at the first bump of any road (a steer tire carries 20-30 % of a truck's weight).
@@ -25,6 +27,10 @@ MIN_TIRE_SHARE = 0.02
 MIN_GAP_M = 0.05
 #: m: the gap above which a spring hangs in rebound, off its seat (0.3 m + 0.25 m, as :data:`MIN_GAP_M`).
 MAX_GAP_M = 0.55
+#: 1/s: a real eigenvalue of the truck at rest (dry friction off) above this is a rest it leaves, the
+#: truck leaning over on its springs; below it, the finite differences' noise about neutral states
+#: (the bound :meth:`rigsim.scenarios.core.rig.Rig.check_stable` uses for the rig's loop).
+MAX_GROWTH_PER_S = 1e-3
 
 
 def check_stands(variant) -> None:
@@ -59,6 +65,30 @@ def check_stands(variant) -> None:
                              "vehicle.payload_kg")
     if not np.all(np.isfinite(data.qpos)):  # pragma: no cover - static_equilibrium raises first
         raise ValueError("vehicle: the described truck's rest is not finite; check its masses and rates")
+    _check_upright(model, data)
+
+
+def _check_upright(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Refuse a rest the truck leaves: a real eigenvalue of its linearization there (dry friction off)
+    growing faster than :data:`MAX_GROWTH_PER_S`, named after the joint that moves most in it."""
+    from rigsim.mjcf.modes import MODE_NAMES
+    from rigsim.mjcf.physics import friction_disabled
+
+    nv, n = model.nv, 2 * model.nv + model.na
+    a = np.zeros((n, n))
+    with friction_disabled(model):
+        mujoco.mjd_transitionFD(model, data, 1e-6, True, a, None, None, None)
+    mu, vec = np.linalg.eig(a)
+    lam = np.log(mu.astype(complex)) / model.opt.timestep
+    k = int(np.argmax(lam.real))
+    if lam[k].real <= MAX_GROWTH_PER_S:
+        return
+    dof = int(np.argmax(np.abs(vec[:nv, k])))
+    joint = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, int(model.dof_jntid[dof]))
+    raise ValueError(f"vehicle: the described truck does not stand upright at rest: its "
+                     f"{MODE_NAMES.get(joint, joint)} grows at {lam[k].real:.3g} 1/s (springs too soft for the "
+                     "payload's height): stiffen vehicle.spring_rate_front_N_per_m and "
+                     "vehicle.spring_rate_rear_N_per_m, or lower vehicle.payload_z_m")
 
 
 def _lever_loads(model: mujoco.MjModel) -> np.ndarray:
