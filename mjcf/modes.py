@@ -13,7 +13,7 @@ import numpy as np
 
 from rigsim.mjcf.physics import friction_disabled
 
-__all__ = ["MODE_NAMES", "COUPLED_SHARE", "Mode", "modal_analysis"]
+__all__ = ["MODE_NAMES", "COUPLED_SHARE", "Mode", "eigen", "modal_analysis"]
 
 #: Name of a vibration mode after the joint that holds most of its kinetic energy.
 MODE_NAMES: dict[str, str] = {
@@ -61,6 +61,18 @@ class Mode:
     energy_share: dict
 
 
+def eigen(model: mujoco.MjModel, data: mujoco.MjData, eps: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+    """The continuous-time eigenvalues (1/s) and eigenvectors of the model linearized about the state in
+    ``data``: ``mujoco.mjd_transitionFD`` (centred differences, dry friction disabled), each eigenvalue
+    mu of the step mapped to lambda = log(mu) / dt. The vectors' first ``nv`` rows are the positions."""
+    n = 2 * model.nv + model.na
+    a = np.zeros((n, n))
+    with friction_disabled(model):
+        mujoco.mjd_transitionFD(model, data, eps, True, a, None, None, None)
+    mu, vec = np.linalg.eig(a)
+    return np.log(mu.astype(complex)) / model.opt.timestep, vec
+
+
 def modal_analysis(model: mujoco.MjModel, data: mujoco.MjData, eps: float = 1e-6) -> list[Mode]:
     """Vibration modes of the model about the state in ``data``.
 
@@ -73,15 +85,10 @@ def modal_analysis(model: mujoco.MjModel, data: mujoco.MjData, eps: float = 1e-6
     list of Mode
         Oscillatory modes, sorted by frequency.
     """
-    nv, na = model.nv, model.na
-    n = 2 * nv + na
-    a = np.zeros((n, n))
-    with friction_disabled(model):
-        mujoco.mjd_transitionFD(model, data, eps, True, a, None, None, None)
-        mass = np.zeros((nv, nv))
-        mujoco.mj_fullM(model, data, mass)
-    mu, vec = np.linalg.eig(a)
-    lam = np.log(mu.astype(complex)) / model.opt.timestep
+    nv = model.nv
+    lam, vec = eigen(model, data, eps)
+    mass = np.zeros((nv, nv))
+    mujoco.mj_fullM(model, data, mass)
     names = {}
     for j in range(model.njnt):
         names[int(model.jnt_dofadr[j])] = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)

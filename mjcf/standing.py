@@ -71,19 +71,13 @@ def check_stands(variant) -> None:
 def _check_upright(model: mujoco.MjModel, data: mujoco.MjData) -> None:
     """Refuse a rest the truck leaves: a real eigenvalue of its linearization there (dry friction off)
     growing faster than :data:`MAX_GROWTH_PER_S`, named after the joint that moves most in it."""
-    from rigsim.mjcf.modes import MODE_NAMES
-    from rigsim.mjcf.physics import friction_disabled
+    from rigsim.mjcf.modes import MODE_NAMES, eigen
 
-    nv, n = model.nv, 2 * model.nv + model.na
-    a = np.zeros((n, n))
-    with friction_disabled(model):
-        mujoco.mjd_transitionFD(model, data, 1e-6, True, a, None, None, None)
-    mu, vec = np.linalg.eig(a)
-    lam = np.log(mu.astype(complex)) / model.opt.timestep
+    lam, vec = eigen(model, data)
     k = int(np.argmax(lam.real))
     if lam[k].real <= MAX_GROWTH_PER_S:
         return
-    dof = int(np.argmax(np.abs(vec[:nv, k])))
+    dof = int(np.argmax(np.abs(vec[:model.nv, k])))
     joint = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, int(model.dof_jntid[dof]))
     raise ValueError(f"vehicle: the described truck does not stand upright at rest: its "
                      f"{MODE_NAMES.get(joint, joint)} grows at {lam[k].real:.3g} 1/s (springs too soft for the "

@@ -59,7 +59,8 @@ from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCA
                                                        excess_square, scan_error)
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
-from rigsim.scenarios.records.model.first_guess import damper_guess, description, engine_guess, frame_guess
+from rigsim.scenarios.records.model.first_guess import (CATALOGUE_DAMPER_RATIO, damper_guess, description,
+                                                        engine_guess, frame_guess)
 from rigsim.scenarios.records.model.result import Calibration
 
 __all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "DAMPER_SCAN_M_PER_S", "frame_scan", "engine_scan", "damper_scan",
@@ -105,7 +106,7 @@ def engine_scan(state, hz=ENGINE_SCAN_HZ, mass_kg: float = ENGINE_MASS_KG) -> tu
     return best_scan(state, ("engine_mount_hz",), hz, {"engine_mass_kg": float(mass_kg)})
 
 
-def damper_scan(state, knees=DAMPER_SCAN_M_PER_S, ratio: float = 0.5) -> tuple[float, float]:
+def damper_scan(state, knees=DAMPER_SCAN_M_PER_S, ratio: float = CATALOGUE_DAMPER_RATIO) -> tuple[float, float]:
     """The most digressive spring dampers (slope ``ratio`` beyond their knee, 1) could reduce the
     squared residual of a fit whose dampers are linear, to first order: the largest gain (1) over the
     knees ``knees`` (m/s, each one truck run per window) and the knee that gives it (m/s)."""
