@@ -306,6 +306,7 @@ def run_model(plan, progress=None) -> CorrectionResult:
     saved = None if cal is None else SavedCalibration(cal, spec_of(s.scenario), str(s.scenario_file), str(record.path),
                                                       forces.shape[0] / fs, float(fs), rigsim_version(),
                                                       tuple(str(p.record.path) for p in plan.more))
+    from rigsim.scenarios.records.model.refine import refined_names
     from rigsim.scenarios.records.model.skew import skew_note
 
     for hint in (description_note(cal, s.scenario_file), skew_note(cal)):
@@ -313,7 +314,9 @@ def run_model(plan, progress=None) -> CorrectionResult:
             say(hint)
     if cal is not None and s.saved is not None and not cal.second_start:
         say(f"calibration {str(s.saved_file)!r} (calibrated on {s.saved.record!r}) holds on this record: model error "
-            + ", ".join(f"{c} {v:.3f}" for c, v in zip(pairs, cal.excess_nrmse)) + f", checked in {cal.wall_time_s:.0f} s")
+            + ", ".join(f"{c} {v:.3f}" for c, v in zip(pairs, cal.excess_nrmse))
+            + (", the tire's progressive stiffening refitted on its loads" if refined_names(cal) else "")
+            + f", checked in {cal.wall_time_s:.0f} s")
     elif cal is not None:
         say(f"calibrated in {cal.wall_time_s:.0f} s ({cal.evaluations} truck variants run, "
             f"{'converged' if cal.converged else 'not converged'}, worst fit NRMSE {cal.worst_fit_nrmse:.3f})"

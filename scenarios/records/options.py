@@ -108,7 +108,8 @@ class ModelOptions:
     calibration : str, bytes, os.PathLike or SavedCalibration, optional
         A calibration of this truck saved from another record (``rigsim correct --model`` writes
         ``OUT.calibration.json``): the record is corrected with it once its model error on this
-        record's own windows is within the limit (model runs only, no fit); beyond it, the truck
+        record's own windows is within the limit, its tire's progressive stiffening refitted on
+        this record's loads (:mod:`~rigsim.scenarios.records.model.refine`); beyond it, the truck
         is calibrated again from the saved values, and the result says so. Default: calibrated
         on this record.
     calibration_records : sequence of records, optional

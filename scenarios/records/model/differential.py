@@ -67,6 +67,7 @@ from rigsim.scenarios.records.model.model_runs import SETTLE_S, check_record, mo
 from rigsim.scenarios.records.model.restart import calibrate_again
 from rigsim.scenarios.records.model.result import LINEAR, MODEL, Calibration, ModelCorrection
 from rigsim.scenarios.records.model.saved import check_saved
+from rigsim.scenarios.records.model.refine import refine_on_record, refined_names
 
 __all__ = ["START_S", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "model_force_pair", "differential_correction",
            "hybrid_correction", "settled_mask", "correct_with_model"]
@@ -224,8 +225,10 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
         wheel's slow residual cut.
     saved : Calibration, optional
         A calibration of this truck from another record, used where its model error on this
-        record holds (:func:`~rigsim.scenarios.records.model.saved.check_saved`), else the start of
-        a calibration on this record (said in its ``second_start``).
+        record holds (:func:`~rigsim.scenarios.records.model.saved.check_saved`) with its tire's
+        progressive stiffening refitted on this record's loads
+        (:func:`~rigsim.scenarios.records.model.refine.refine_on_record`), else the start of a
+        calibration on this record (said in its ``second_start``).
     **calibrate_kw
         Passed to :func:`~rigsim.scenarios.records.model.calibrate.calibrate` (windows, max_nfev,
         fitted_guess...).
@@ -272,6 +275,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                 v, t, x_ref_m, x_a_m, force_N=force_N, base_scenario=base_scenario, executor=ex), force_N, x_a_m, t, wins,
                 excess_limit)
             calibrate_kw = calibrate_kw | ({"start": dict(zip(saved.names, saved.fitted))} if refit else {})
+            if cal is not None and refined_names(cal):  # the tire's stiffening at this record's loads
+                cal, pair = refine_on_record(cal, t, x_a_m, force_N, base_scenario=base_scenario, x_ref_m=x_ref_m,
+                                             executor=ex, **calibrate_kw), None
         if cal is not None:
             timings["calibration_s"] = cal.wall_time_s
         else:

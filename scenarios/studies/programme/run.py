@@ -5,7 +5,9 @@ it (what ``rigsim correct --model`` does), on windows of the truck's next ``cali
 records too (:data:`~rigsim.scenarios.studies.programme.settings.CALIBRATE_ON`, 3, by default),
 and its calibration written to ``NAME.calibration.json``; every other record of that truck is
 then corrected with ``ModelOptions(..., calibration=that file)``: the records API
-checks the calibration on the record and refits it where it does not hold. A record that cannot be
+checks the calibration on the record, refits the tire's progressive stiffening on the record's own
+loads where it holds (:mod:`~rigsim.scenarios.records.model.refine`) and the whole truck where it
+does not. A record that cannot be
 corrected (unreadable, wrong channels, refused) is reported and the others go on; where the record
 a truck was to be calibrated on fails, or gives no calibration (the linear correction), the truck's
 next record is calibrated instead. The calibrations run first, here, one after the other, each on
