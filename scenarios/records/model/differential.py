@@ -45,6 +45,7 @@ the DLC guarded apart). The limits, those decisions and their sentences are
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
 
@@ -276,8 +277,9 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                 excess_limit)
             calibrate_kw = calibrate_kw | ({"start": dict(zip(saved.names, saved.fitted))} if refit else {})
             if cal is not None and refined_names(cal):  # the tire's stiffening at this record's loads
-                cal, pair = refine_on_record(cal, t, x_a_m, force_N, base_scenario=base_scenario, x_ref_m=x_ref_m,
-                                             executor=ex, **calibrate_kw), None
+                with contextlib.suppress(ScenarioError, SimulationError):  # a refit that cannot run: the check's
+                    cal, pair = refine_on_record(cal, t, x_a_m, force_N, base_scenario=base_scenario,
+                                                 x_ref_m=x_ref_m, executor=ex, **calibrate_kw), None
         if cal is not None:
             timings["calibration_s"] = cal.wall_time_s
         else:

@@ -224,6 +224,24 @@ def test_a_saved_tire_stiffening_is_refitted_on_the_records_loads(lab, tmp_path)
             assert v == pytest.approx(first[k], rel=1e-12), k
 
 
+def test_a_refit_that_cannot_run_keeps_the_saved_calibration(lab, tmp_path, monkeypatch):
+    """The tire's refit on the record refused (a ScenarioError from its model runs): the record is still
+    corrected, with the saved values as the check found them, none fitted."""
+    from rigsim.scenarios.cli.main import main
+    from rigsim.scenarios.core.config import ScenarioError
+    from rigsim.scenarios.records.model import differential
+
+    def refused(*a, **k):
+        raise ScenarioError("no rest for this variant")
+
+    monkeypatch.setattr(differential, "refine_on_record", refused)
+    argv = [*lab.argv, "--calibration", str(lab.dir / "first.calibration.json"), "-o", str(tmp_path / "out.csv")]
+    assert main(argv) == 0
+    got = read_calibration(tmp_path / "out.calibration.json").calibration
+    first = read_calibration(lab.dir / "first.calibration.json").calibration
+    assert got.evaluations == 0 and got.fitted == first.fitted and not got.second_start
+
+
 def test_a_calibration_the_record_refutes_is_fitted_again_from_its_values(lab, capsys, tmp_path):
     """A saved payload 40 % off (the truck loaded otherwise since): the model error on the record is
     past the limit, so the truck is calibrated again from the saved values, and the output says so."""
