@@ -20,7 +20,7 @@ __all__ = ["SENTENCE_KEYS", "GIVEN", "check_out_file", "claimed_out_file", "head
 
 #: Metadata keys whose value is a sentence: an RPC III header (96-byte values) holds it split over
 #: ``key``, ``key_2``, ``key_3``...
-SENTENCE_KEYS = ("fallback_reason", "cal_cab", "cal_second_start")
+SENTENCE_KEYS = ("fallback_reason", "cal_cab", "cal_frame", "cal_engine", "cal_damper", "cal_second_start")
 #: The metadata's ``ta_source`` (or ``scenario_file``) of a T_a (or truck) given as a Python object.
 GIVEN = "given in the call"
 

@@ -333,6 +333,25 @@ def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
     assert all(header[k] == v for k, v in meta.items())
 
 
+def test_a_choice_sentence_is_whole_in_an_rpc3_header(tmp_path):
+    """An RPC III header value holds 96 bytes: a structure's choice (the engine's, with the frame's joint
+    fit after it: 375 characters) is split over cal_engine, cal_engine_2... at word boundaries, and
+    those values joined give the sentence back, where one value kept only its last 93 characters."""
+    from rigsim.correction.io.rpc3 import read_rpc3, write_rpc3
+    from rigsim.scenarios.records.output import fit_metadata
+
+    sentence = ("engine in the chassis: the engine fitted (8.88 Hz mounts, 1.48e+03 kg) leaves a model error of "
+                "0.181 (the fit NRMSE beyond the load cells' noise, rms of the wheels), without it 0.190, less than "
+                "20% better in mean square. frame and engine apart: the frame and the engine fitted together "
+                "(torsion/bending 5.83/7.51 Hz, 7.46 Hz mounts, 1.5e+03 kg) leaves a model error of 0.180.")
+    meta = fit_metadata(tmp_path / "x.rsp", {k: sentence for k in ("cal_frame", "cal_engine", "cal_damper")})
+    write_rpc3(tmp_path / "x.rsp", ["Fz_FL"], ["N"], np.zeros((1, 8)), 1e-3, extra=meta)
+    header = read_rpc3(tmp_path / "x.rsp").header
+    for key in ("cal_frame", "cal_engine", "cal_damper"):
+        parts = [header[key]] + [header[f"{key}_{i}"] for i in range(2, 10) if f"{key}_{i}" in header]
+        assert len(parts) == 4 and " ".join(parts) == sentence
+
+
 def test_an_all_wheel_stiffening_in_truck_toml_is_the_rear_guess_too(tmp_path):
     """TRUCK.toml's [vehicle] tire_progressive_ratio / _onset_m (all wheels) start both axles' fits;
     a rear value given starts the rear's."""
