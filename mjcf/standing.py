@@ -29,7 +29,7 @@ MIN_GAP_M = 0.05
 MAX_GAP_M = 0.55
 #: 1/s: a real eigenvalue of the truck at rest (dry friction off) above this is a rest it leaves, the
 #: truck leaning over on its springs; below it, the finite differences' noise about neutral states
-#: (the bound :meth:`rigsim.scenarios.core.rig.Rig.check_stable` uses for the rig's loop).
+#: (the bound :meth:`rigsim.scenarios.core.rig.Rig.check_stable` takes for the rig's loop too).
 MAX_GROWTH_PER_S = 1e-3
 
 

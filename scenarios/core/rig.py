@@ -30,6 +30,7 @@ from rigsim.hydraulics.params import ActuatorParams
 from rigsim.mjcf import names
 from rigsim.mjcf.build import build_spec
 from rigsim.mjcf.physics import RigIndex, friction_disabled, static_equilibrium, tire_forces, tire_stiffness
+from rigsim.mjcf.standing import MAX_GROWTH_PER_S
 from rigsim.scenarios.core.config import Scenario, ScenarioError
 from rigsim.scenarios.core.drive import Drive
 from rigsim.scenarios.core.memory import check_memory
@@ -266,9 +267,9 @@ class Rig:
         """
         lam = self.linearize().poles()
         worst = lam[np.argmax(lam.real)]
-        # A growth rate below 1e-3 1/s is numerical noise of the finite differences around
+        # A growth rate below MAX_GROWTH_PER_S is numerical noise of the finite differences around
         # the neutrally stable integrator states, not an instability over a run of minutes.
-        if worst.real > 1e-3:
+        if worst.real > MAX_GROWTH_PER_S:
             raise ScenarioError(
                 f"the rig's closed loop under this truck is unstable: pole {worst.real:.3g} "
                 f"{'+-' if worst.imag else ''}{abs(worst.imag):.4g}j rad/s ({abs(worst.imag) / (2 * np.pi):.1f} Hz); "
