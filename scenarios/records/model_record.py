@@ -207,7 +207,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
         meta["cal_cell_mass"] = "x " * 60
         meta["cal_cab"] = "x " * 150
         meta["cal_frame"] = "x " * 150
-        meta["cal_engine"] = "x " * 250  # the engine's choice, and the frame's with it where both were tried
+        meta["cal_engine"] = "x " * 250  # room for two sentences
         meta["cal_damper"] = "x " * 150
         meta["cal_second_start"] = "x " * 180
     elif cal is not None:

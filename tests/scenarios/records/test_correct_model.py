@@ -334,8 +334,8 @@ def test_every_calibration_key_fits_an_rpc3_header(tmp_path):
 
 
 def test_a_choice_sentence_is_whole_in_an_rpc3_header(tmp_path):
-    """An RPC III header value holds 96 bytes: a structure's choice (the engine's, with the frame's joint
-    fit after it: 375 characters) is split over cal_engine, cal_engine_2... at word boundaries, and
+    """An RPC III header value holds 96 bytes: a structure's choice (two sentences, 375 characters) is
+    split over cal_engine, cal_engine_2... at word boundaries, and
     those values joined give the sentence back, where one value kept only its last 93 characters."""
     from rigsim.correction.io.rpc3 import read_rpc3, write_rpc3
     from rigsim.scenarios.records.output import fit_metadata
