@@ -43,7 +43,7 @@ from rigsim.scenarios.records.model.family import (ADDITIVE, DAMPER_FITTED, DEFA
                                                    ENGINE_FITTED, FITTED, FRAME_FITTED, RANGES, STATION_FITTED, UNITS)
 from rigsim.scenarios.records.model.joined import join
 from rigsim.scenarios.records.model.first_guess import (catalogue, damper_guess, description, engine_guess,
-                                                        frame_guess, is_light, spring_fields, static_guess,
+                                                        frame_guess, is_light, spring_fields, static_guess, PAYLOAD_X_LIMIT_M,
                                                         static_lateral, xml_nominal)
 from rigsim.scenarios.records.model.model_runs import check_record
 from rigsim.scenarios.records.model.onset_load import ONSET_RATIO, ONSET_STIFFNESS, TOP, load_guess, load_range
@@ -272,7 +272,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
             b = max(b, a + 1.0)  # a range, however narrow (least squares needs lower < upper)
             loads[k], guess[k] = (load, b - a), load / kt
         else:
-            lo, hi = BOUNDS.get(k, (-3.5, 3.5) if k == "payload_x_m" else (0.0, np.inf))[:2]
+            lo, hi = BOUNDS.get(k, (-PAYLOAD_X_LIMIT_M, PAYLOAD_X_LIMIT_M) if k == "payload_x_m" else (0.0, np.inf))[:2]
             r = RANGES[k]
             a, b = (guess[k] - r, guess[k] + r) if k in ADDITIVE else (guess[k] * r[0], guess[k] * r[1])
             a, b = max(a, lo), min(b, hi)

@@ -34,7 +34,7 @@ from rigsim.mjcf.engine import ENGINE_MASS_KG
 from rigsim.scenarios.records.model.family import FRAME_FITTED
 from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "CATALOGUE_ENGINE_HZ", "engine_guess", "CATALOGUE_DAMPER_KNEE_M_PER_S", "CATALOGUE_DAMPER_RATIO", "damper_guess", "EMPTY_FRACTION", "LIGHT_FRACTION", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "CATALOGUE_ENGINE_HZ", "engine_guess", "CATALOGUE_DAMPER_KNEE_M_PER_S", "CATALOGUE_DAMPER_RATIO", "damper_guess", "EMPTY_FRACTION", "LIGHT_FRACTION", "PAYLOAD_X_LIMIT_M", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -218,6 +218,9 @@ LIGHTER_FRACTION = 0.1
 #: the linear floor, the pitch inertia fitted 0.36 and 0.34). At 1400-1540 kg (gen10, gen22: 20-22 %)
 #: the two fits give the same correction; the bound keeps the height where a payload is a load.
 LIGHT_FRACTION = 0.1
+#: m: the payload's centre along the truck is within this of the chassis frame's origin (the bed's
+#: reach on the fleet's longest truck, 6.5 m wheelbase); the fit's bound on ``payload_x_m``.
+PAYLOAD_X_LIMIT_M = 3.5
 
 
 #: m: a payload centre the measured left/right moment puts closer to the centreline than this is on
@@ -301,10 +304,16 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
     :data:`LIGHTER_FRACTION` of it (an empty truck lighter than the catalogue's), is an empty truck:
     (0, the XML's x), which :func:`calibrate` holds instead of fitting.
 
+    A light payload (:func:`is_light`) whose share puts it off the truck is the empty truck's own
+    weight and balance off the catalogue's (its chassis, tanks and engine), not a load: it is placed
+    at the nearest end of the bed (:data:`PAYLOAD_X_LIMIT_M`), from where the fit moves it (the
+    fleet suite's fresh draw: an empty 4.89 m truck on leaves read as 74 kg at x = -6.94 m).
+
     Raises
     ------
     ScenarioError
-        Measured loads that imply no payload on the truck (one sentence).
+        Measured loads that imply no payload on the truck, or a load (not light) off the truck (one
+        sentence).
     """
     f = np.asarray(force_N, dtype=float).mean(axis=0)
     empty = empty_truck_loads(base_scenario)
@@ -321,7 +330,9 @@ def static_guess(force_N, base_scenario: Scenario) -> tuple[float, float]:
                             f"{payload:.0f} kg, outside {lo:g} to {hi:g} kg: check the force channels' scale and sign")
     x_f, x_r = _nominal(description(base_scenario))[1]  # the axles' positions in the chassis frame
     x = x_r + (x_f - x_r) * d_front / d_total
-    if abs(x) > 3.5:
+    if abs(x) > PAYLOAD_X_LIMIT_M and is_light(payload, base_scenario):
+        return float(payload), float(np.sign(x) * PAYLOAD_X_LIMIT_M)
+    if abs(x) > PAYLOAD_X_LIMIT_M:
         raise ScenarioError(f"the measured front/rear load split puts the payload at x = {x:.2f} m, off the truck "
-                            "(-3.5 to 3.5 m): check which force channels are front and rear")
+                            f"({-PAYLOAD_X_LIMIT_M:g} to {PAYLOAD_X_LIMIT_M:g} m): check which force channels are front and rear")
     return float(payload), float(x)

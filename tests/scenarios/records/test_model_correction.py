@@ -427,6 +427,34 @@ def test_an_empty_truck_is_held_empty_not_refused():
         static_guess(np.tile(empty - 1.05 * lighter * g / 4, (10, 1)), sc)
 
 
+def test_a_light_payload_off_the_truck_is_the_trucks_own_balance_not_a_wiring_fault():
+    """The front/rear split of a light payload (below LIGHT_FRACTION of the empty truck) is the empty
+    truck's own balance off the catalogue's: the fleet suite's fresh empty truck read as 74 kg whose
+    lever-rule place was x = -6.94 m, and the calibration was refused as miswired. Such a payload is
+    placed at the nearest end of the bed (PAYLOAD_X_LIMIT_M, the fit's bound); a load (3 t) whose
+    split puts it as far off the truck is still refused, naming the front and rear channels. The
+    lever rule x = x_r + (x_f - x_r) dF_front / dF is the reference: a split of -0.9 puts a payload
+    0.9 wheelbases behind the rear axle."""
+    from rigsim.scenarios.records.model.first_guess import LIGHT_FRACTION, PAYLOAD_X_LIMIT_M, static_guess
+    from rigsim.scenarios.records.model.model_runs import static_axle_loads
+
+    sc = load_scenario(_paper("high_48"))
+    empty = static_axle_loads(TruckVariant(payload_kg=0.0, **catalogue()), sc)
+    g = 9.80665
+
+    def split(kg, front_share):  # the empty truck's loads and kg more, front_share of it on the front axle
+        return np.tile(empty + kg * g / 2 * np.array([front_share, front_share, 1 - front_share, 1 - front_share]), (10, 1))
+
+    light = 0.3 * LIGHT_FRACTION * empty.sum() / g
+    for share, end in ((-0.9, -1.0), (1.9, 1.0)):
+        payload, x = static_guess(split(light, share), sc)
+        assert payload == pytest.approx(light, rel=1e-3) and x == end * PAYLOAD_X_LIMIT_M
+    payload, x = static_guess(split(light, 0.5), sc)  # a light payload on the truck keeps its place
+    assert abs(x) < PAYLOAD_X_LIMIT_M
+    with pytest.raises(ScenarioError, match="off the truck .* front and rear"):
+        static_guess(split(3000.0, -0.9), sc)
+
+
 def test_the_payloads_lateral_offset_comes_from_the_left_right_moment():
     """The measured static loads' moment about the centreline pins the payload's lateral offset
     (moment balance about the x axis, the truck rolled on its springs): the nominal truck's loads
