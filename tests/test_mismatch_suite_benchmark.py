@@ -32,8 +32,12 @@ def test_a_fallback_is_wrong_where_the_refused_hybrid_was_better():
               _score("wrong", "linear", 0.2, 0.1, 0.3, 0.18)]  # the hybrid better: wrong
     head, rows, text, numbers = rows_and_goals(scores, lambda s: s.name)
     assert numbers["wrong_fallbacks"] == ["wrong"] and numbers["fallbacks"] == 2
-    col = head.index("model error (worst)")
+    col = head.index("model error (worst): windows / record")
     assert [r[col] for r in rows] == ["0.100", "0.300", "0.180"]
+    # where the model ran on the whole record, its error there beside the windows'
+    rows = rows_and_goals([dataclasses.replace(scores[0], record_error=np.array([0.1, 0.54, 0.1, 0.1]))],
+                          lambda s: s.name)[1]
+    assert rows[0][col] == "0.100 / 0.540"
     assert "where the forced model correction (hybrid) was better on every wheel: 1 (wrong)" in text
 
 

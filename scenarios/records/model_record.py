@@ -176,7 +176,7 @@ def model_metadata(settings, record, pairs, force_cols, model_result, fallback_s
                               if model_result is not None else "x " * 200)
     if settings.calibration_records:  # the calibration fitted windows of these records too
         meta["cal_also"] = ",".join(_shown_path(r) for r in settings.calibration_records)
-    reason = "x " * 100 if model_result is None else model_result.reason
+    reason = "x " * 300 if model_result is None else model_result.reason
     if reason:
         meta["fallback_reason"] = reason
     meta.update({"corners": ",".join(f"{k}={c}" for k, c in zip(pairs, force_cols)),

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from rigsim.correction.identification.noise import noise_rms
 from rigsim.correction.output.apply import band_limit
 from rigsim.correction.output.lowpass import BAND_LOWPASS, BAND_MODE, as_lowpass
+from rigsim.scenarios.records.model.result import model_error
 
-__all__ = ["band_errors", "noise_bandwidth_hz"]
+__all__ = ["band_errors", "noise_bandwidth_hz", "record_errors"]
 
 
 def noise_bandwidth_hz(fs: float, lowpass=BAND_LOWPASS) -> float:
@@ -65,3 +67,27 @@ def band_errors(model_N, force_N, windows, fs: float, noise_N) -> tuple[tuple, t
     fit = np.sqrt(np.mean(residual ** 2, axis=0)) / std
     noise = np.asarray(noise_N, float) * np.sqrt(noise_bandwidth_hz(fs) / (fs / 2.0)) / std
     return tuple(float(v) for v in fit), tuple(float(v) for v in noise)
+
+
+def record_errors(model_N, force_N, first: int, fs: float) -> tuple:
+    """Per wheel: the model's error over the whole run the correction uses, 1.
+
+    :func:`band_errors`' figure on one window, from sample ``first`` (the model runs' start-up
+    over) to the record's end, beyond the white noise's share there (the load cells' noise from
+    the record, :func:`rigsim.correction.identification.noise.noise_rms`), as the calibration's
+    model error is read on its windows.
+
+    Parameters
+    ----------
+    model_N : numpy.ndarray, N, (n, 4)
+        The model's force on the record, pans following the measured x_a (its run from the first sample).
+    force_N : numpy.ndarray, N, (n, 4)
+        The measured force.
+    first : int
+        The first settled sample.
+    fs : float, Hz
+    """
+    force = np.asarray(force_N, dtype=float)
+    fit, noise = band_errors([np.asarray(model_N, dtype=float)], force, [(0, int(first), force.shape[0])], fs,
+                             noise_rms(force, fs))
+    return model_error(fit, noise)

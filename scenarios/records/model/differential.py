@@ -35,8 +35,9 @@ linear correction's filter transients are not.
 :func:`correct_with_model` calibrates the model from the record
 (:func:`rigsim.scenarios.records.model.calibrate.calibrate`) and corrects, or says in one
 sentence why the linear correction is to be used instead: the calibration did not converge or could
-not run; without L, the calibrated model does not reproduce F_rig's dynamic part in the correction's
-band beyond the load cells' noise; with L, the model's own runs show
+not run; the calibrated model does not reproduce F_rig's dynamic part in the correction's band
+beyond the load cells' noise (without L, on any wheel; with L, on the wheels it names), on the
+calibration's windows or over the whole record the correction runs it on; with L, the model's own runs show
 that L could turn the model's residual against the hybrid on the wheels it names
 (derived from the linear correction's error on the model truck and what L does to the residual,
 the DLC guarded apart). The limits, those decisions and their sentences are
@@ -60,9 +61,10 @@ from rigsim.scenarios.core.watch import SimulationError
 from rigsim.scenarios.records.model.cab_choice import AUTO, check_cab
 from rigsim.scenarios.records.model.cell_mass import without_cell_mass
 from rigsim.scenarios.records.model.frame_choice import calibrate_truck
+from rigsim.scenarios.records.model.band_error import record_errors
 from rigsim.scenarios.records.model.fallback import (calibration_failed, differential_holds, fallback_reason,
                                                      hybrid_outlook, hybrid_reason, model_error_limit, outlier_reason,
-                                                     outlier_wheel)
+                                                     outlier_wheel, record_holds, record_reason)
 from rigsim.scenarios.records.model.calibrate import WINDOW_LEAD_S, WINDOW_S, WINDOWS, fit_windows
 from rigsim.scenarios.records.model.model_runs import SETTLE_S, check_record, model_step, portable, window_job
 from rigsim.scenarios.records.model.restart import calibrate_again
@@ -302,8 +304,12 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                               base_scenario=base_scenario, executor=ex)
         # the load cells' uncompensated mass, fitted with the truck, taken out
         force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
+        on_record = record_errors(f_a, force, int(np.argmax(settled_mask(t))), fs)  # the run the correction uses
         noise = outlook = None
         if linear is None:
+            if not record_holds(on_record, excess_limit).all():
+                return _linear(record_reason(cal, on_record, holds, excess_limit), cal, wall0, timings,
+                               record_error=on_record)
             corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
         else:
             corrected, settled, gain, residual = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t),
@@ -311,10 +317,10 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                                                     with_residual=True)
             outlook = hybrid_outlook(f_ref, f_a, residual, corrected, linear, fs,
                                      settled_mask(t) & np.asarray(settled, dtype=bool), pans_m=x_a_m)
-            reason = hybrid_reason(cal, holds, outlook, excess_limit)
-            holds = holds & outlook.holds
+            reason = hybrid_reason(cal, holds, outlook, excess_limit, on_record)
+            holds = holds & record_holds(on_record, excess_limit) & outlook.holds
             if not holds.any():
-                return _linear(reason, cal, wall0, timings, outlook)
+                return _linear(reason, cal, wall0, timings, outlook, on_record)
             formula = HYBRID_FORMULA
             noise = {c: float(v) if white else None
                      for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}
@@ -326,7 +332,7 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                            calibration=cal, corrected_N=corrected, settled=settled,
                            wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings,
                            wheels=tuple(c for c, ok in zip(CORNERS, holds) if ok or linear is None), formula=formula,
-                           model_N=(f_ref, f_a), residual_noise_N=noise, outlook=outlook)
+                           model_N=(f_ref, f_a), residual_noise_N=noise, outlook=outlook, record_error=on_record)
 
 
 def _fit(calibrated, excess_limit: float, linear, wall0: float, timings: dict):
@@ -355,6 +361,7 @@ def _fit(calibrated, excess_limit: float, linear, wall0: float, timings: dict):
     return cal, reason
 
 
-def _linear(reason: str, cal, wall0: float, timings: dict, outlook=None) -> ModelCorrection:
+def _linear(reason: str, cal, wall0: float, timings: dict, outlook=None, record_error=None) -> ModelCorrection:
     return ModelCorrection(method=LINEAR, reason=reason, calibration=cal,
-                           wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings, outlook=outlook)
+                           wall_time_s=round(time.perf_counter() - wall0, 3), timings=timings, outlook=outlook,
+                           record_error=record_error)

@@ -58,7 +58,7 @@ from rigsim.scenarios.core.config import ScenarioError
 
 __all__ = ["DIFFERENTIAL_LIMIT", "HYBRID_LIMIT", "OUTLIER_RATIO", "DLC_GOAL", "LAGS_S", "FIT_RATE_HZ", "RIDGE",
            "model_error_limit", "past_limit", "fallback_reason", "calibration_failed", "outlier_wheel", "outlier_reason",
-           "differential_holds", "wheels_reason", "hybrid_reason", "HybridOutlook", "linear_part", "hybrid_outlook"]
+           "differential_holds", "wheels_reason", "record_holds", "record_reason", "hybrid_reason", "HybridOutlook", "linear_part", "hybrid_outlook"]
 
 #: Largest per-wheel model error (:attr:`Calibration.excess_nrmse`: the model's force, pans
 #: following x_a, against the measured F_rig on the calibration windows, its dynamic part in the
@@ -321,9 +321,41 @@ def wheels_reason(calibration, holds, excess_limit: float = HYBRID_LIMIT) -> str
             "corrected linearly.")
 
 
-def hybrid_reason(calibration, holds, outlook, excess_limit: float = HYBRID_LIMIT) -> str:
+def record_holds(record_error, excess_limit: float = HYBRID_LIMIT) -> np.ndarray:
+    """Per wheel (bool, (4,)): the model error over the whole run the correction uses
+    (:func:`~rigsim.scenarios.records.model.band_error.record_errors`, 1) within ``excess_limit`` (1).
+
+    The calibration reads its model error on its windows, each run from a few seconds before it;
+    the correction uses one run over the whole record. A truck whose wheels leave the pans (a light
+    axle on a rough road) can bounce in step with the rig on every window and out of step for
+    seconds elsewhere: the model's lift-offs and landings, once apart from the truck's, take a few
+    bounces to come back. The limit that holds on the windows holds on the run the correction uses."""
+    return np.asarray(record_error, dtype=float) <= excess_limit
+
+
+def record_reason(calibration, record_error, among, excess_limit: float = HYBRID_LIMIT) -> str:
+    """One sentence naming the wheels (of ``among``, bool (4,)) whose model error over the whole
+    record (``record_error``, 1, (4,)) exceeds ``excess_limit`` (1), "" if none."""
+    err = np.asarray(record_error, dtype=float)
+    bad = [i for i, ok in enumerate(np.asarray(among, dtype=bool)) if ok and not err[i] <= excess_limit]
+    if not bad:
+        return ""
+    figures = ", ".join(f"{CORNERS[i]} only to a model error of {err[i]:.3f} ({calibration.excess_nrmse[i]:.3f} on the "
+                        "calibration's windows)" for i in bad)
+    which = "that wheel is" if len(bad) == 1 else "those wheels are"
+    return (f"run over the whole record, the calibrated truck model reproduces the measured wheel force of "
+            f"{figures} (limit {excess_limit:g}): it falls out of step with the truck "
+            f"where the windows did not look, so {which} corrected linearly.")
+
+
+def hybrid_reason(calibration, holds, outlook, excess_limit: float = HYBRID_LIMIT, record_error=None) -> str:
     """The hybrid correction's sentence: the wheels left out of the calibration (``holds`` False,
-    :func:`wheels_reason`), then those the derived fallback corrects linearly
+    :func:`wheels_reason`), those whose model error over the whole record is past the limit
+    (``record_error``, :func:`record_reason`), then those the derived fallback corrects linearly
     (:meth:`HybridOutlook.reason` of ``outlook``); "" where the model corrects every wheel."""
+    holds = np.asarray(holds, dtype=bool)
+    on_record = holds if record_error is None else holds & record_holds(record_error, excess_limit)
     return " ".join(r for r in (wheels_reason(calibration, holds, excess_limit),
-                                outlook.reason(holds, calibration.excess_nrmse)) if r)
+                                "" if record_error is None else record_reason(calibration, record_error, holds,
+                                                                              excess_limit),
+                                outlook.reason(on_record, calibration.excess_nrmse)) if r)

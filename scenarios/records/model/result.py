@@ -311,6 +311,10 @@ class ModelCorrection:
     outlook : HybridOutlook or None
         The derived fallback's figures per wheel (:mod:`~rigsim.scenarios.records.model.fallback`), where
         the hybrid was weighed against the linear correction; None otherwise.
+    record_error : tuple of float or None, 1, (4,)
+        Per wheel, the model error over the whole run the correction uses
+        (:func:`~rigsim.scenarios.records.model.band_error.record_errors`), where the model ran on the
+        record; None otherwise.
     """
 
     method: str
@@ -325,6 +329,7 @@ class ModelCorrection:
     model_N: tuple | None = None
     residual_noise_N: Mapping | None = None
     outlook: object | None = None
+    record_error: tuple | None = None
 
     @property
     def use_linear(self) -> bool:
@@ -339,4 +344,5 @@ class ModelCorrection:
         return {"method": self.method, "reason": self.reason, "calibration": self.calibration,
                 "settled_samples": settled_s, "wall_time_s": self.wall_time_s, "timings": dict(self.timings),
                 "wheels": list(self.wheels), "formula": self.formula,
-                "residual_noise_N": None if self.residual_noise_N is None else dict(self.residual_noise_N)}
+                "residual_noise_N": None if self.residual_noise_N is None else dict(self.residual_noise_N),
+                "record_error": None if self.record_error is None else list(self.record_error)}

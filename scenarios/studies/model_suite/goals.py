@@ -68,9 +68,17 @@ def _limit_text(ev: dict) -> str:
             "each record)")
 
 
+def _error_text(score) -> str:
+    """The worst model error on the calibration's windows and, where read, over the whole record."""
+    if score.model_error is None:
+        return ""
+    rec = getattr(score, "record_error", None)
+    return f"{np.max(score.model_error):.3f}" + ("" if rec is None else f" / {np.max(rec):.3f}")
+
+
 def rows_and_goals(scores, describe) -> tuple[list[str], list[list], str, dict]:
     """The table (one row per plant, ``describe(score)`` its plant in words), the goals' text and their numbers."""
-    head = ["case", "plant", "method", "model error (worst)", "worst DLC error", "NRMSE / floor (worst)",
+    head = ["case", "plant", "method", "model error (worst): windows / record", "worst DLC error", "NRMSE / floor (worst)",
             "linear NRMSE (worst)", "forced differential NRMSE (worst)", "hybrid NRMSE / floor (worst)",
             "hybrid worst DLC error", "wall s"]
     rows = []
@@ -78,7 +86,7 @@ def rows_and_goals(scores, describe) -> tuple[list[str], list[list], str, dict]:
         d, n = s.dlc_error["delivered"], s.nrmse["delivered"]
         forced = s.nrmse.get("forced")
         rows.append([s.name, describe(s), s.method,
-                     "" if s.model_error is None else f"{np.max(s.model_error):.3f}", pct(d[np.argmax(np.abs(d))]),
+                     _error_text(s), pct(d[np.argmax(np.abs(d))]),
                      f"{np.max(n / s.floor):.2f}", f"{np.max(s.nrmse['linear']):.3f}",
                      "" if forced is None else f"{np.max(forced):.3f}",
                      "" if forced is None else f"{np.max(s.nrmse['hybrid'] / s.floor):.2f}",

@@ -79,6 +79,10 @@ class PlantScore:
     damper : tuple of float or None, (m/s, 1)
         The model's digressive dampers' knee and slope ratio where the calibration fitted them (the
         same module), None where it kept them linear.
+    record_error : numpy.ndarray or None, (4,)
+        The model error over the whole run the correction used
+        (:attr:`~rigsim.scenarios.records.model.result.ModelCorrection.record_error`, 1), None where the
+        model did not run on the record.
     """
 
     name: str
@@ -97,6 +101,7 @@ class PlantScore:
     frame_hz: tuple[float, float] | None = None
     engine: tuple[float, float] | None = None
     damper: tuple[float, float] | None = None
+    record_error: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         return {"name": self.name, "plant": dict(self.plant), "method": self.method, "reason": self.reason,
@@ -107,7 +112,8 @@ class PlantScore:
                 "model_error": None if self.model_error is None else self.model_error.tolist(),
                 "timings": dict(self.timings), "frame_hz": None if self.frame_hz is None else list(self.frame_hz),
                 "engine": None if self.engine is None else list(self.engine),
-                "damper": None if self.damper is None else list(self.damper)}
+                "damper": None if self.damper is None else list(self.damper),
+                "record_error": None if self.record_error is None else self.record_error.tolist()}
 
     @classmethod
     def from_dict(cls, d: Mapping) -> "PlantScore":
@@ -124,7 +130,13 @@ class PlantScore:
                    model_error=maybe(d["model_error"]), timings=dict(d.get("timings", {})),
                    frame_hz=None if d.get("frame_hz") is None else tuple(d["frame_hz"]),
                    engine=None if d.get("engine") is None else tuple(d["engine"]),
-                   damper=None if d.get("damper") is None else tuple(d["damper"]))
+                   damper=None if d.get("damper") is None else tuple(d["damper"]),
+                   record_error=maybe(d.get("record_error")))
+
+
+def _array_or_none(v) -> np.ndarray | None:
+    """``v`` as a float array, None kept."""
+    return None if v is None else np.asarray(v, dtype=float)
 
 
 def _cpu_s() -> float:
@@ -207,4 +219,4 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
                       floor=np.asarray(floor, dtype=float), wall_s=round(wall, 1), cpu_s=round(cpu, 1),
                       scored_s=float(scores["linear"]["scored_s"]), fit_nrmse=fit, model_error=error,
                       timings=dict(mc.timings), frame_hz=frame, engine=engine,
-                      damper=damper)
+                      damper=damper, record_error=_array_or_none(mc.record_error))

@@ -47,3 +47,26 @@ def test_a_gain_error_a_bias_and_noise():
     fit, _ = band_errors(high, force, windows, FS, np.zeros(4))
     whole = 300.0 / np.sqrt(2) / std  # that error over the whole band: ~0.13
     assert max(fit / whole) < 0.02  # at five times the band limit: gone from the band (the filter's edges aside)
+
+
+def test_the_whole_record_error_is_the_windows_figure_on_one_window_beyond_the_noise():
+    """record_errors: a model off by 10 % of the dynamic part on rl and rr from the record's middle on
+    (a model out of step where no window looked), exact before; the measured force with 100 N of
+    white noise. Reference: the error's rms over the settled samples, sqrt(1/2) x 0.1 of the second
+    half's dynamic part, over the band-limited force's std (the noise's share taken out as
+    band_errors' white-noise figure, which the estimate from the record reproduces)."""
+    from rigsim.scenarios.records.model.band_error import record_errors
+
+    force = _record()
+    n, first = force.shape[0], 3000
+    model = force.copy()
+    half = n // 2
+    dyn = force - 3e4
+    model[half:, 2:] += 0.1 * dyn[half:, 2:]
+    noisy = force + 100.0 * RNG.standard_normal(force.shape)
+    err = np.asarray(record_errors(model, noisy, first, FS))
+    std = force[first:].std(axis=0)
+    off = 0.1 * dyn[half:, 2:]
+    expect = np.sqrt((off ** 2).sum(axis=0) / (n - first)) / std[2:]
+    assert err[2:] == pytest.approx(expect, rel=0.03)
+    assert max(err[:2]) < 0.2 * min(expect)  # the exact wheels: the noise taken out, a little left to chance

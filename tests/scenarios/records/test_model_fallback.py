@@ -149,6 +149,7 @@ def test_the_cab_is_chosen_on_the_calibration_without_the_outlier_wheel(monkeypa
     # the hybrid's own weighing (fallback.hybrid_outlook) keeps every calibrated wheel: not this test's subject
     monkeypatch.setattr(differential, "hybrid_outlook",
                         lambda *a, **k: SimpleNamespace(holds=np.ones(4, bool), reason=lambda *a: ""))
+    monkeypatch.setattr(differential, "record_errors", lambda *a: (0.0,) * 4)  # nor the whole record's error
     n = 4000
     t = np.arange(n) / 1000.0
     x = np.zeros((n, 4))
@@ -159,3 +160,37 @@ def test_the_cab_is_chosen_on_the_calibration_without_the_outlier_wheel(monkeypa
     assert said == ["rr's model error (9.400) is far past every other wheel's, so the truck is calibrated again "
                     "without it", ""]
     assert mc.calibration.wheels == ("fl", "fr", "rl") and mc.wheels == ("fl", "fr", "rl")
+
+
+def test_a_wheel_the_model_loses_over_the_whole_record_is_corrected_linearly(monkeypatch):
+    """correct_with_model weighs the model on the run the correction uses, not on the calibration's
+    windows alone (calibrations faked, their windows' errors 0.035): a model force equal to the
+    measured one on fl and fr, and on rl and rr out of step from 2.5 s on (a 5 Hz force of the
+    same size half a period late: a model error near sqrt(2) there) is kept on fl and fr; rl and rr
+    are corrected linearly, the sentence naming both with both errors."""
+    import numpy as np
+
+    from rigsim.scenarios.core.config import load_scenario, paper_scenarios
+    import rigsim.scenarios.records.model.differential as differential
+
+    n = 6000
+    t = np.arange(n) / 1000.0
+    wave = 3e3 * np.sin(2 * np.pi * 5.0 * t)
+    force = 20e3 + wave[:, None] + np.random.default_rng(0).normal(0.0, 100.0, (n, 4))
+    model = 20e3 + np.repeat(wave[:, None], 4, axis=1)
+    model[2500:, 2:] = 20e3 - wave[2500:, None]
+    monkeypatch.setattr(differential, "calibrate_truck", lambda *a, **k: _cal((0.035,) * 4))
+    monkeypatch.setattr(differential, "calibrate_again", lambda cal, again, limit: cal)
+    monkeypatch.setattr(differential, "model_force_pair", lambda *a, **kw: (model.copy(), model.copy()))
+    monkeypatch.setattr(differential, "hybrid_outlook",  # the hybrid's own weighing keeps every wheel
+                        lambda *a, **k: SimpleNamespace(holds=np.ones(4, bool), reason=lambda *a: ""))
+    sc = load_scenario(paper_scenarios()[0])
+    x = np.zeros((n, 4))
+    mc = differential.correct_with_model(t, x, x, force, base_scenario=sc, workers=1, windows=1, window_s=1.0,
+                                         lead_s=0.5, linear=lambda f: (np.asarray(f, float), np.ones(len(f), bool)))
+    assert mc.method == "model" and mc.wheels == ("fl", "fr")
+    assert max(mc.record_error[:2]) < 0.05 and min(mc.record_error[2:]) > 1.0
+    assert mc.reason.startswith("run over the whole record, the calibrated truck model reproduces the measured wheel "
+                                "force of rl only to a model error of ")
+    assert "(0.035 on the calibration's windows)" in mc.reason and "so those wheels are corrected linearly." in mc.reason
+    np.testing.assert_array_equal(mc.corrected_N[:, 2:], force[:, 2:])  # L, here the identity, on the measured force
