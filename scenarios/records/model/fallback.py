@@ -344,7 +344,7 @@ def record_reason(calibration, record_error, among, excess_limit: float = HYBRID
                         "calibration's windows)" for i in bad)
     which = "that wheel is" if len(bad) == 1 else "those wheels are"
     return (f"run over the whole record, the calibrated truck model reproduces the measured wheel force of "
-            f"{figures} (limit {excess_limit:g}): it falls out of step with the truck "
+            f"{figures}, past the limit of {excess_limit:g}: it falls out of step with the truck "
             f"where the windows did not look, so {which} corrected linearly.")
 
 
