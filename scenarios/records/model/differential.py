@@ -72,7 +72,8 @@ from rigsim.scenarios.records.model.result import LINEAR, MODEL, Calibration, Mo
 from rigsim.scenarios.records.model.saved import check_saved
 from rigsim.scenarios.records.model.refine import refine_on_record, refined_names
 
-__all__ = ["START_S", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "model_force_pair", "differential_correction",
+__all__ = ["START_S", "HYBRID_FORMULA", "DIFFERENTIAL_FORMULA", "model_force_pair", "model_forces_on",
+           "differential_correction",
            "hybrid_correction", "settled_mask", "correct_with_model"]
 
 #: The model runs' start-up transient, s: samples before it are not settled. Measured on the
@@ -94,9 +95,21 @@ def model_force_pair(variant: TruckVariant, t_s, x_ref_m, x_a_m, *, force_N, bas
     measured pans: ``(F_model(x_ref), F_model(x_a))``, on the step the record's measured force
     ``force_N`` (N) calls for (:func:`~rigsim.scenarios.records.model.model_runs.model_step`);
     parameters as :func:`differential_correction`'s."""
-    t, fs = check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})
+    check_record(t_s, {"x_ref_m": x_ref_m, "x_a_m": x_a_m, "force_N": force_N})  # refused by these names
+    return model_forces_on(variant, t_s, (x_ref_m, x_a_m), force_N=force_N, base_scenario=base_scenario,
+                           workers=workers, executor=executor)
+
+
+def model_forces_on(variant: TruckVariant, t_s, pans_m, *, force_N, base_scenario: Scenario,
+                    workers: int | None = None, executor=None) -> tuple:
+    """The model truck's wheel forces (N, (n, 4)) on each of ``pans_m`` (a sequence of pan motions,
+    m, (n, 4) each), one run each from the record's first sample, in parallel, on the step the
+    record's measured force ``force_N`` (N) calls for; :func:`model_force_pair` runs the drive and
+    the measured pans, a saved calibration's check (:func:`~rigsim.scenarios.records.model.saved.check_saved`)
+    the measured pans alone where its tire is refitted after it."""
+    t, fs = check_record(t_s, {"force_N": force_N} | {f"pans_m[{i}]": x for i, x in enumerate(pans_m)})
     base, step = portable(base_scenario), model_step(force_N, fs)
-    jobs = [(window_job, (variant, t, np.asarray(x, float), base, SETTLE_S, step)) for x in (x_ref_m, x_a_m)]
+    jobs = [(window_job, (variant, t, np.asarray(x, float), base, SETTLE_S, step)) for x in pans_m]
     return tuple(run_jobs(jobs, workers=workers, executor=executor))
 
 
@@ -273,10 +286,13 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                    executor=ex, defer=defer, **(calibrate_kw | kw))
 
         cal, pair, refit, reason = None, None, "", ""
-        if saved is not None:  # checked on this record by the model runs the correction needs
-            cal, pair, refit = check_saved(saved, lambda v: model_force_pair(
-                v, t, x_ref_m, x_a_m, force_N=force_N, base_scenario=base_scenario, executor=ex), force_N, x_a_m, t, wins,
+        if saved is not None:  # checked on this record by the model runs the correction needs: both where
+            # the saved values are used as they are, F_model(x_a) alone where a refit changes them after
+            pans = (x_a_m,) if refined_names(saved) else (x_ref_m, x_a_m)
+            cal, runs, refit = check_saved(saved, lambda v: model_forces_on(
+                v, t, pans, force_N=force_N, base_scenario=base_scenario, executor=ex), force_N, x_a_m, t, wins,
                 excess_limit)
+            pair = runs if runs is not None and len(runs) == 2 else None
             calibrate_kw = calibrate_kw | ({"start": dict(zip(saved.names, saved.fitted))} if refit else {})
             if cal is not None and refined_names(cal):  # the tire's stiffening at this record's loads
                 with contextlib.suppress(ScenarioError, SimulationError):  # a refit that cannot run: the check's

@@ -357,14 +357,15 @@ def on_record(cal: Calibration, model_N, force_N, x_a_m, t_s, windows: tuple) ->
                                windows_s=tuple((float(t[s]), float(t[e - 1] + 1.0 / fs)) for _, s, e in windows))
 
 
-def check_saved(cal: Calibration, model_pair, force_N, x_a_m, t_s, windows: tuple, limit: float) -> tuple:
+def check_saved(cal: Calibration, model_runs, force_N, x_a_m, t_s, windows: tuple, limit: float) -> tuple:
     """A saved calibration checked on this record: (``cal`` as :func:`on_record` shows it, the
-    model's (F_model(x_ref), F_model(x_a)), "") where its model error is within ``limit`` (1) on
-    every wheel it was fitted on, else (None, None, one sentence: the truck is calibrated again).
+    model's runs, "") where its model error is within ``limit`` (1) on every wheel it was fitted
+    on, else (None, None, one sentence: the truck is calibrated again).
 
-    ``model_pair(variant)`` runs the calibrated truck on this record (the runs the correction
-    needs anyway); ``windows`` are this record's
-    (:func:`~rigsim.scenarios.records.model.calibrate.fit_windows`)."""
+    ``model_runs(variant)`` runs the calibrated truck on this record: a tuple of wheel forces (N,
+    (n, 4)) whose last is on the measured pans, F_model(x_a), the one the check reads (the
+    correction's (F_model(x_ref), F_model(x_a)) where it uses them as they are); ``windows`` are
+    this record's (:func:`~rigsim.scenarios.records.model.calibrate.fit_windows`)."""
     import dataclasses
     import time
 
@@ -373,12 +374,12 @@ def check_saved(cal: Calibration, model_pair, force_N, x_a_m, t_s, windows: tupl
     from rigsim.mjcf.names import CORNERS
 
     t0 = time.perf_counter()
-    pair = model_pair(cal.variant())
-    here = on_record(cal, pair[1], force_N, x_a_m, t_s, windows)
+    runs = model_runs(cal.variant())
+    here = on_record(cal, runs[-1], force_N, x_a_m, t_s, windows)
     here = dataclasses.replace(here, wall_time_s=round(time.perf_counter() - t0, 3))
     excess = np.where(np.isin(CORNERS, here.wheels), here.excess_nrmse, 0.0)
     if excess.max() <= limit:
-        return here, pair, ""
+        return here, runs, ""
     worst = int(np.argmax(excess))
     return None, None, (f"the saved calibration's model error on this record ({excess[worst]:.3f} on "
                         f"{CORNERS[worst]}) is past {limit:g}, so the truck was calibrated again from its values")

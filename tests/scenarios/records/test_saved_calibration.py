@@ -243,6 +243,26 @@ def test_a_refit_that_cannot_run_keeps_the_saved_calibration(lab, tmp_path, monk
     assert got.evaluations == 0 and got.fitted == first.fitted and not got.second_start
 
 
+def test_a_check_followed_by_a_refit_runs_the_measured_pans_alone(lab, tmp_path, monkeypatch):
+    """Where the saved tire is refitted after the check, the check's model run on the drive would be
+    thrown away: the check runs the model on the measured pans alone, and the correction both pans
+    with the refitted values (three record-length runs, not four)."""
+    from rigsim.scenarios.cli.main import main
+    from rigsim.scenarios.records.model import differential
+
+    calls = []
+    real = differential.model_forces_on
+
+    def counted(variant, t_s, pans_m, **kw):
+        calls.append(len(pans_m))
+        return real(variant, t_s, pans_m, **kw)
+
+    monkeypatch.setattr(differential, "model_forces_on", counted)
+    argv = [*lab.argv, "--calibration", str(lab.dir / "first.calibration.json"), "-o", str(tmp_path / "out.csv")]
+    assert main(argv) == 0
+    assert calls == [1, 2]
+
+
 def test_a_calibration_the_record_refutes_is_fitted_again_from_its_values(lab, capsys, tmp_path):
     """A saved payload 40 % off (the truck loaded otherwise since): the model error on the record is
     past the limit, so the truck is calibrated again from the saved values, and the output says so."""
