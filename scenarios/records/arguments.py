@@ -134,7 +134,7 @@ def ta_form(value, where: str):
     """``value`` when a T_a of a form the correction takes: ``(num, den)``, an ActuatorFit or a
     ``control.TransferFunction`` (:func:`rigsim.correction.output.filters.actuator_coefficients`); else one
     sentence naming ``where``."""
-    from rigsim.correction.identification.actuator_fit import ActuatorFit
+    from rigsim.correction.identification.actuator_result import ActuatorFit
     from rigsim.correction.output.filters import actuator_coefficients
 
     if not isinstance(value, ActuatorFit):
