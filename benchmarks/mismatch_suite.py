@@ -52,7 +52,7 @@ from rigsim.scenarios.core.pool import run_jobs  # noqa: E402
 from rigsim.scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa: E402
 from rigsim.scenarios.records.model.fallback import HYBRID_LIMIT  # noqa: E402
 from rigsim.scenarios.studies.model_suite.goals import pct, rows_and_goals  # noqa: E402
-from rigsim.scenarios.records.settings import DRIFT_CUT_MAX_HZ  # noqa: E402
+from rigsim.scenarios.records.model_settings import DRIFT_CUT_MAX_HZ  # noqa: E402
 from rigsim.scenarios.studies import scoring  # noqa: E402
 from rigsim.scenarios.studies.model_suite.mismatch import (describe, mismatch_job, mismatch_plants,  # noqa: E402
                                                            mismatch_scenario)

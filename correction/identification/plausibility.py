@@ -22,7 +22,7 @@ predicts the response at frequencies it was not fitted on. A pair wired wrongly 
 * **a unit or scale mistake** (an LVDT in mm read as m): a static gain far from 1.
 
 :func:`check_actuator` applies the criteria to an
-:class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` (in this order: gain, phase spread,
+:class:`~rigsim.correction.identification.actuator_result.ActuatorFit` (in this order: gain, phase spread,
 antiphase, lead, held-out error), :func:`plausibility` gives the numbers they read; a refusal is a
 :class:`WiringError`, an :class:`~rigsim.correction.identification.actuator_fit_rules.ActuatorFitError`
 that names the likely cause (:attr:`WiringError.cause`). Frequencies in Hz, phases in degrees.
@@ -150,7 +150,7 @@ def plausibility(fit, coherence_min: float = TRUSTED_COHERENCE) -> Plausibility:
 
     Parameters
     ----------
-    fit : rigsim.correction.identification.actuator_fit.ActuatorFit
+    fit : rigsim.correction.identification.actuator_result.ActuatorFit
     coherence_min : float, 1
         Coherence from which a point of the estimate is trusted (the fit's).
     """
@@ -182,7 +182,7 @@ def check_actuator(fit, coherence_min: float = TRUSTED_COHERENCE) -> Plausibilit
 
     Parameters
     ----------
-    fit : rigsim.correction.identification.actuator_fit.ActuatorFit
+    fit : rigsim.correction.identification.actuator_result.ActuatorFit
     coherence_min : float, 1
         Coherence from which a point of the estimate is trusted (the fit's).
 

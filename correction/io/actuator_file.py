@@ -55,7 +55,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from rigsim.correction.identification.actuator_fit import ActuatorFit
+from rigsim.correction.identification.actuator_result import ActuatorFit
 from rigsim.correction.output.eq4 import EQ4_PARAMETERS, eq4_coefficients_from
 from rigsim.correction.io.tomlfile import check_keys, number, read_toml, write_toml
 from rigsim.errors import RigsimError
@@ -252,7 +252,7 @@ def write_actuators_file(path, actuators: Mapping, meta: Mapping | None = None) 
         The TOML file (created or replaced; not overwriting an input is the caller's business).
     actuators : Mapping of str to ActuatorFit or (num, den)
         Corner name to ``T_a`` (descending powers of s, s in rad/s); an
-        :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` also writes ``[<corner>.fit]`` with its
+        :class:`~rigsim.correction.identification.actuator_result.ActuatorFit` also writes ``[<corner>.fit]`` with its
         diagnostics (orders, band, held-out error, per-band errors, bandwidth, poles, zeros).
     meta : Mapping, optional
         The ``[meta]`` table: strings, numbers, booleans or lists of them (e.g. source, date,
@@ -267,7 +267,7 @@ def write_actuators_file(path, actuators: Mapping, meta: Mapping | None = None) 
     Examples
     --------
     Two corners' T_a as ``(num, den)``, s in rad/s (an identified
-    :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` also writes its diagnostics):
+    :class:`~rigsim.correction.identification.actuator_result.ActuatorFit` also writes its diagnostics):
 
     >>> import pathlib, tempfile
     >>> from rigsim.correction.io.actuator_file import read_actuators_file, write_actuators_file

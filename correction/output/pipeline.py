@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigsim.correction.identification.actuator_fit import ActuatorFit
+from rigsim.correction.identification.actuator_result import ActuatorFit
 from rigsim.correction.output.apply import correct
 from rigsim.correction.output.correction_filter import SETTLING_TOLERANCE
 from rigsim.correction.output.filters import design_correction, reference_filter
@@ -143,7 +143,7 @@ def correct_forces(force_N, actuators, fs: float, *, lowpass=BAND_LOWPASS, mode:
         Measured forces, shape (n,) or (n, k), sampled at ``fs``.
     actuators : T_a or sequence of k T_a
         Each ``T_a = X_a / X_p`` as ``(num, den)`` (descending powers of s, s in rad/s), an
-        :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit` or a continuous SISO
+        :class:`~rigsim.correction.identification.actuator_result.ActuatorFit` or a continuous SISO
         ``control.TransferFunction``; one ``T_a`` (or a sequence of one) serves every column.
     fs : float, Hz
         Sampling rate.

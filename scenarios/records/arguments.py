@@ -25,14 +25,22 @@ from collections.abc import Mapping, Sequence
 
 from rigsim.scenarios.records.naming import KEYWORDS, Naming
 
-__all__ = ["shown", "finite", "count", "flag", "checked_names", "checked_corner_map", "checked_pairs", "file_path",
+__all__ = ["refusal", "is_path", "shown", "finite", "count", "flag", "checked_names", "checked_corner_map", "checked_pairs", "file_path",
            "ta_form", "checked_record", "SETTLED_SHARE", "lowest_corner_hz", "check_corner", "check_windows"]
 
 
-def _error(message: str):
+def refusal(message: str):
+    """The :class:`~rigsim.scenarios.core.config.ScenarioError` of one sentence that refuses an option."""
     from rigsim.scenarios.core.config import ScenarioError
 
     return ScenarioError(message)
+
+
+def is_path(value) -> bool:
+    """Whether ``value`` names a file (``str``, ``bytes`` or ``os.PathLike``)."""
+    import os
+
+    return isinstance(value, (str, bytes, os.PathLike))
 
 
 def shown(value) -> str:
@@ -63,9 +71,9 @@ def count(naming: Naming, key: str, value, most: tuple[int, str] | None = None) 
     whole = isinstance(value, numbers.Integral) and not isinstance(value, bool)
     v = None if whole else finite(value)
     if not (whole or (v is not None and v.is_integer())) or value < 1:
-        raise _error(f"{naming(key)} must be a whole number >= 1, got {shown(value)}")
+        raise refusal(f"{naming(key)} must be a whole number >= 1, got {shown(value)}")
     if most is not None and value > most[0]:
-        raise _error(f"{naming(key)} must be a whole number from 1 to {most[0]} ({most[1]}), got {shown(value)}")
+        raise refusal(f"{naming(key)} must be a whole number from 1 to {most[0]} ({most[1]}), got {shown(value)}")
     return int(value)
 
 
@@ -75,7 +83,7 @@ def flag(naming: Naming, key: str, value) -> bool:
         import numpy as np
 
         if not isinstance(value, np.bool_):
-            raise _error(f"{naming(key)} must be True or False, got {shown(value)}")
+            raise refusal(f"{naming(key)} must be True or False, got {shown(value)}")
     return bool(value)
 
 
@@ -90,7 +98,7 @@ def checked_names(naming: Naming, key: str, value, form: str):
     naming ``key`` and its ``form`` (``"'A,B' or a sequence of channel names"``)."""
     if value is None or isinstance(value, str) or (_strs(value) and len(value)):
         return value
-    raise _error(f"{naming(key)} must be {form}, got {shown(value)}")
+    raise refusal(f"{naming(key)} must be {form}, got {shown(value)}")
 
 
 def checked_corner_map(naming: Naming, value):
@@ -100,7 +108,7 @@ def checked_corner_map(naming: Naming, value):
     items = [tuple(i) for i in value.items()] if isinstance(value, Mapping) else value
     if isinstance(items, Sequence) and not isinstance(items, bytes) and len(items) and all(_strs(i) for i in items):
         return value
-    raise _error(f"{naming('corner_map')} must be 'fl=COLUMN,...', a mapping of corner -> channel or (corner, "
+    raise refusal(f"{naming('corner_map')} must be 'fl=COLUMN,...', a mapping of corner -> channel or (corner, "
                  f"channel) pairs, got {shown(value)}")
 
 
@@ -109,7 +117,7 @@ def checked_pairs(pairs, naming: Naming = KEYWORDS):
     if isinstance(pairs, str) or (isinstance(pairs, Mapping) and all(
             isinstance(c, str) and _strs(cols) for c, cols in pairs.items())):
         return pairs
-    raise _error(f"{naming('pairs')} must be 'fl=DRIVE:LVDT,...' or a mapping of corner -> (DRIVE, LVDT) channel "
+    raise refusal(f"{naming('pairs')} must be 'fl=DRIVE:LVDT,...' or a mapping of corner -> (DRIVE, LVDT) channel "
                  f"names, got {shown(pairs)}")
 
 
@@ -126,14 +134,14 @@ def ta_form(value, where: str):
     """``value`` when a T_a of a form the correction takes: ``(num, den)``, an ActuatorFit or a
     ``control.TransferFunction`` (:func:`rigsim.correction.output.filters.actuator_coefficients`); else one
     sentence naming ``where``."""
-    from rigsim.correction.identification.actuator_fit import ActuatorFit
+    from rigsim.correction.identification.actuator_result import ActuatorFit
     from rigsim.correction.output.filters import actuator_coefficients
 
     if not isinstance(value, ActuatorFit):
         try:
             actuator_coefficients(value)
         except ValueError as exc:
-            raise _error(f"{where}: {exc}, or an actuator file") from None
+            raise refusal(f"{where}: {exc}, or an actuator file") from None
     return value
 
 
@@ -143,11 +151,11 @@ def checked_record(record):
     from rigsim.correction.io.measured import MeasuredChannels
 
     if not isinstance(record, MeasuredChannels):
-        raise _error(f"record must be a MeasuredChannels (read_record's, or make_channels') or a record file's path, "
+        raise refusal(f"record must be a MeasuredChannels (read_record's, or make_channels') or a record file's path, "
                      f"got {shown(record)}")
     for name in record.data:
         if name not in record.units:
-            raise _error(f"record channel {name!r} has no unit in record.units; give it its SI unit ('N', 'm', or '' "
+            raise refusal(f"record channel {name!r} has no unit in record.units; give it its SI unit ('N', 'm', or '' "
                          "for none)")
     return record
 
@@ -191,7 +199,7 @@ def check_corner(settings, record) -> None:
         opt = settings.naming("lowpass_hz")
         fix = (f"{opt} of at least {lowest:.3g} Hz, or a longer record" if lowest < record.fs_hz / 2 else
                f"a longer record (no corner below its Nyquist frequency, {record.fs_hz / 2:g} Hz, settles in it)")
-        raise _error(f"{opt} {hz:g} Hz: the low-pass's transients ({_transient_s_hz(settings.mode) / hz:.3g} s) "
+        raise refusal(f"{opt} {hz:g} Hz: the low-pass's transients ({_transient_s_hz(settings.mode) / hz:.3g} s) "
                      f"leave less than {SETTLED_SHARE:.0%} of {str(record.path)!r} ({record_s:.3g} s) settled; give "
                      f"{fix}")
 
@@ -221,6 +229,6 @@ def check_windows(settings, record) -> None:
         mid = (lo + hi) // 2
         lo, hi = (mid, hi) if holds(mid) else (lo, mid)
     opt = settings.naming("calibration_windows")
-    raise _error(f"{opt} {asked}: {str(record.path)!r} ({record.n_samples / record.fs_hz:.3g} s) holds {lo} "
+    raise refusal(f"{opt} {asked}: {str(record.path)!r} ({record.n_samples / record.fs_hz:.3g} s) holds {lo} "
                  f"calibration window(s) of {WINDOW_LEAD_S:g} s lead-in + {WINDOW_S:g} s side by side; give {opt} "
                  f"of at most {lo}")

@@ -149,7 +149,7 @@ class CorrectionResult:
         :meth:`write_calibration` writes it for the next record of this truck.
     actuators : tuple
         The T_a of each channel (linear; ``(num, den)`` or an identified
-        :class:`~rigsim.correction.identification.actuator_fit.ActuatorFit`); empty for the model.
+        :class:`~rigsim.correction.identification.actuator_result.ActuatorFit`); empty for the model.
     filters : tuple of CorrectionFilter
         The linear correction's filter of each channel; empty for the model.
     inputs : tuple of str

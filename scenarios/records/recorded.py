@@ -44,7 +44,7 @@ class RecordedIdentification:
         The file.
     pairs : Mapping[str, tuple[str, str]]
         Per corner the (drive, LVDT) column names.
-    fits : Mapping[str, rigsim.correction.identification.actuator_fit.ActuatorFit]
+    fits : Mapping[str, rigsim.correction.identification.actuator_result.ActuatorFit]
     fs_hz : float, Hz
     record_s : float, s
     lvdt_filter : rigsim.correction.io.acquisition.ChannelFilter or None

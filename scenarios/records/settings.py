@@ -21,8 +21,10 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from rigsim.scenarios.records.arguments import (check_corner, check_windows, checked_corner_map, checked_names, checked_pairs,
-                                                checked_record, count, file_path, finite, flag, shown, ta_form)
+from rigsim.scenarios.records.arguments import (check_corner, check_windows, checked_corner_map, checked_names,
+                                                checked_record, count, file_path, finite, flag, is_path, refusal, shown,
+                                                ta_form)
+from rigsim.scenarios.records.model_settings import checked_drift_hz, model_pairs_workers, saved_calibration, truck_scenario
 from rigsim.scenarios.records.channels import parse_columns, parse_corner_map, parse_identify, wanted_channels
 from rigsim.scenarios.records.naming import KEYWORDS, Naming
 from rigsim.scenarios.records.output import GIVEN
@@ -34,16 +36,6 @@ LOWPASSES = ("paper", "regularized")
 MODES = ("causal", "zerophase")
 TRANSIENTS = ("drop", "mark", "keep")
 CABS = ("auto", "held", "fitted")
-
-
-def _error(message: str):
-    from rigsim.scenarios.core.config import ScenarioError
-
-    return ScenarioError(message)
-
-
-def _is_path(value) -> bool:
-    return isinstance(value, (str, bytes, os.PathLike))
 
 
 @dataclass(frozen=True)
@@ -162,7 +154,7 @@ class CorrectionSettings:
 
 def _choice(naming: Naming, key: str, value, allowed) -> None:
     if not isinstance(value, str) or value not in allowed:
-        raise _error(f"{naming(key)} must be one of {', '.join(allowed)}, got {shown(value)}")
+        raise refusal(f"{naming(key)} must be one of {', '.join(allowed)}, got {shown(value)}")
 
 
 def _check_lowpass(naming: Naming, lowpass: str, lowpass_hz) -> float | None:
@@ -171,9 +163,9 @@ def _check_lowpass(naming: Naming, lowpass: str, lowpass_hz) -> float | None:
     opt = naming("lowpass_hz")
     hz = finite(lowpass_hz)
     if hz is None or hz <= 0:
-        raise _error(f"{opt} must be a finite number of Hz > 0, got {shown(lowpass_hz)}")
+        raise refusal(f"{opt} must be a finite number of Hz > 0, got {shown(lowpass_hz)}")
     if lowpass != "regularized":
-        raise _error(f"{opt} sets the corner of the regularized low-pass; the paper's low-pass keeps its 16/24 Hz: "
+        raise refusal(f"{opt} sets the corner of the regularized low-pass; the paper's low-pass keeps its 16/24 Hz: "
                      f"drop {opt} or pass {naming.setting('lowpass', 'regularized')}")
     return hz
 
@@ -181,7 +173,7 @@ def _check_lowpass(naming: Naming, lowpass: str, lowpass_hz) -> float | None:
 def _one_ta(value, naming: Naming):
     """(T_a, source) from ``value``: an actuator file (path) or a T_a object."""
     opt = naming("actuator")
-    if not _is_path(value):
+    if not is_path(value):
         return ta_form(value, opt), GIVEN
     from rigsim.correction.io.actuator_file import read_actuator_file
 
@@ -189,15 +181,15 @@ def _one_ta(value, naming: Naming):
     try:
         return read_actuator_file(path), path
     except ValueError as exc:
-        raise _error(f"{opt}: {exc}") from None
+        raise refusal(f"{opt}: {exc}") from None
 
 
 def _corner_tas(value, naming: Naming) -> tuple[dict, str]:
     """(corner -> T_a, source) from ``value``: a per-corner actuator file (path) or a mapping."""
     opt = naming("actuators")
-    if not _is_path(value):
+    if not is_path(value):
         if not isinstance(value, Mapping) or not value:
-            raise _error(f"{opt} must be a per-corner actuator file or a mapping of corner -> T_a, got "
+            raise refusal(f"{opt} must be a per-corner actuator file or a mapping of corner -> T_a, got "
                          f"{shown(value)}")
         return {str(c): ta_form(ta, f"{opt} {c!r}") for c, ta in value.items()}, GIVEN
     from rigsim.correction.io.actuator_file import read_actuators_file
@@ -206,104 +198,7 @@ def _corner_tas(value, naming: Naming) -> tuple[dict, str]:
     try:
         return read_actuators_file(path), path
     except ValueError as exc:
-        raise _error(f"{opt}: {exc}") from None
-
-
-def _model_options(naming: Naming, identify, actuator, actuators, pairs, workers):
-    """(pairs in corner order, workers); the model's options only."""
-    from rigsim.mjcf.names import CORNERS
-    from rigsim.scenarios.core.pool import worker_count
-    from rigsim.scenarios.records.recorded import pairs_of
-
-    n = naming
-    if identify is not None:
-        raise _error(f"{n('identify')} fits one T_a for the linear correction; with {n('model')} the fallback "
-                     f"identifies each corner from {n('pairs')}: drop {n('identify')}")
-    if actuator is not None and actuators is not None:
-        raise _error(f"give at most one of {n('actuator')} and {n('actuators')} (the T_a of {n('model')}'s linear "
-                     "fallback)")
-    if pairs is not None:
-        checked_pairs(pairs, n)
-    if not pairs:
-        raise _error(f"{n('model')} needs {n.setting('pairs', 'fl=DRIVE:LVDT,fr=...,rl=...,rr=...')} naming each "
-                     "corner's drive and LVDT channels")
-    pairs = pairs_of(pairs, n)
-    for corner in pairs:
-        if corner not in CORNERS:
-            raise _error(f"{n('pairs')} names corner {corner!r}; the truck's corners are {', '.join(CORNERS)}")
-    missing = [c for c in CORNERS if c not in pairs]
-    if missing:
-        raise _error(f"{n('pairs')} has no corner {missing[0]!r}; give CORNER=DRIVE:LVDT for each of "
-                     f"{', '.join(CORNERS)}")
-    cores = os.cpu_count() or 1
-    workers = worker_count(count(n, "workers", workers, (WORKERS_PER_CORE * cores,
-                                                        f"{WORKERS_PER_CORE} per core; this machine has {cores}")))
-    return {c: pairs[c] for c in CORNERS}, workers
-
-
-#: Most worker processes of the model correction per core, 1: the truck model's runs are CPU-bound,
-#: so more processes than cores add only memory (each holds a MuJoCo model); a few per core leave
-#: room for a machine whose cores are counted low (a container's quota).
-WORKERS_PER_CORE = 4
-
-#: Largest drift-cut corner, Hz: the truck's body bounce and pitch (and a cab on soft mounts) are at
-#: 1.5-3 Hz, where the measured force must pass; the cut's gain at 1.5 Hz is 0.5 with a 1.5 Hz corner.
-DRIFT_CUT_MAX_HZ = 1.5
-
-
-def _drift_hz(naming: Naming, drift_cut_hz) -> float | None:
-    """The model correction's drift-cut corner (Hz) or None (no cut) from the option (None: the default)."""
-    from rigsim.correction.output.denoise import DRIFT_HZ
-
-    if drift_cut_hz is None:
-        return DRIFT_HZ
-    hz = finite(drift_cut_hz)
-    if hz is None or not 0 <= hz <= DRIFT_CUT_MAX_HZ:
-        raise _error(f"{naming('drift_cut_hz')} must be 0 (no drift cut, for load cells that do not drift) or a "
-                     f"corner in Hz up to {DRIFT_CUT_MAX_HZ:g} (below the truck's body modes), got "
-                     f"{shown(drift_cut_hz)}")
-    return hz or None
-
-
-def _scenario(naming: Naming, model) -> tuple:
-    """(the truck's scenario, its file or :data:`~rigsim.scenarios.records.output.GIVEN`) from ``model``."""
-    from rigsim.scenarios.core.config import Scenario, ScenarioError, load_scenario
-
-    if isinstance(model, Scenario):
-        return model, GIVEN
-    if not _is_path(model):
-        raise _error(f"{naming('truck')} must be a scenario file (TRUCK.toml) or a Scenario, got {shown(model)}")
-    path = file_path(model, naming("truck"))
-    try:
-        return load_scenario(path), path
-    except ScenarioError as exc:
-        raise _error(f"{naming('truck')}: {exc}") from None
-
-
-def _saved(naming: Naming, calibration, scenario) -> tuple:
-    """(the saved calibration or None, its file or :data:`~rigsim.scenarios.records.output.GIVEN`) from
-    ``calibration``, refused where it was made for a truck described otherwise than ``scenario``'s."""
-    if calibration is None:
-        return None, None
-    from rigsim.scenarios.core.config import ScenarioError
-    from rigsim.scenarios.records.model.saved import SavedCalibration, read_calibration, spec_of, truck_differs
-
-    opt = naming("calibration")
-    if isinstance(calibration, SavedCalibration):
-        saved, source = calibration, GIVEN
-    elif _is_path(calibration):
-        source = file_path(calibration, opt)
-        try:
-            saved = read_calibration(source)
-        except ScenarioError as exc:
-            raise _error(f"{opt}: {exc}") from None
-    else:
-        raise _error(f"{opt} must be a calibration file (rigsim correct --model writes one) or a SavedCalibration, "
-                     f"got {shown(calibration)}")
-    differs = truck_differs(saved, spec_of(scenario))
-    if differs:
-        raise _error(f"{opt} {str(source)!r}: {differs}")
-    return saved, source
+        raise refusal(f"{opt}: {exc}") from None
 
 
 def _fallback_tas(naming: Naming, actuator, actuators):
@@ -317,7 +212,7 @@ def _fallback_tas(naming: Naming, actuator, actuators):
     table, source = _corner_tas(actuators, naming)
     missing = [c for c in CORNERS if c not in table]
     if missing:
-        raise _error(f"{naming('actuators')} {source!r} has no corner {missing[0]!r}; the linear fallback of "
+        raise refusal(f"{naming('actuators')} {source!r} has no corner {missing[0]!r}; the linear fallback of "
                      f"{naming('model')} corrects the four corners {', '.join(CORNERS)}")
     return [table[c] for c in CORNERS], source
 
@@ -331,10 +226,10 @@ def _options(options, naming: Naming):
     if isinstance(options, ModelOptions):
         linear = LinearOptions() if options.linear is None else options.linear
         if not isinstance(linear, LinearOptions):
-            raise _error(f"{naming('linear')} must be a rigsim.LinearOptions (L's T_a and low-pass) or None, got "
+            raise refusal(f"{naming('linear')} must be a rigsim.LinearOptions (L's T_a and low-pass) or None, got "
                          f"{shown(linear)}")
         return options, linear
-    raise _error(f"{naming('options')} must be rigsim.LinearOptions(actuators=...) (the linear correction) or "
+    raise refusal(f"{naming('options')} must be rigsim.LinearOptions(actuators=...) (the linear correction) or "
                  f"rigsim.ModelOptions(truck, pairs=...) (a truck model calibrated on the record), got {shown(options)}")
 
 
@@ -367,7 +262,7 @@ def correction_settings(options, *, columns=None, corner_map=None, transient: st
     normalize_dc = flag(n, "normalize_dc", normalize_dc)
     force_filter, lvdt_filter = check_timing(force_filter, "force_filter", n), check_timing(lvdt_filter, "lvdt_filter", n)
     if lvdt_filter is not None and model is None and identify is None:
-        raise _error(f"{n('lvdt_filter')} describes the LVDT channels that {n('identify')} or {n('model')} read; "
+        raise refusal(f"{n('lvdt_filter')} describes the LVDT channels that {n('identify')} or {n('model')} read; "
                      f"drop it, or identify T_a with it (rigsim identify --from-file takes it too)")
     common = dict(lowpass=lowpass, lowpass_hz=lowpass_hz, mode=mode, transient=transient,
                   normalize_dc=normalize_dc, cab="auto" if cab is None else cab, naming=n,
@@ -378,10 +273,10 @@ def correction_settings(options, *, columns=None, corner_map=None, transient: st
         sources = [k for k, v in (("actuator", actuator), ("actuators", actuators), ("identify", identify))
                    if v is not None]
         if len(sources) != 1:
-            raise _error(f"give exactly one of {n.setting('actuator', 'ACT.toml')}, "
+            raise refusal(f"give exactly one of {n.setting('actuator', 'ACT.toml')}, "
                          f"{n.setting('actuators', 'ACTS.toml')} and {n.setting('identify', 'DRIVE_COL,DISP_COL')}")
         if items is not None and actuators is None:
-            raise _error(f"{n('corner_map')} maps corners of a per-corner file: use it with "
+            raise refusal(f"{n('corner_map')} maps corners of a per-corner file: use it with "
                          f"{n.setting('actuators', 'ACTS.toml')}")
         ta, source = (None, None) if identify is not None else (
             _one_ta(actuator, n) if actuator is not None else _corner_tas(actuators, n))
@@ -390,16 +285,16 @@ def correction_settings(options, *, columns=None, corner_map=None, transient: st
             corner_map=None if items is None else tuple(items), identify=tuple(id_cols), ta=ta,
             per_corner=actuators is not None, ta_source=source, pairs=None, scenario=None, scenario_file=None,
             workers=None, max_evaluations=None, calibration_windows=None,
-            inputs=(source,) if _is_path(actuator) or _is_path(actuators) else (), **common)
-    pairs, workers = _model_options(n, identify, actuator, actuators, model.pairs, model.workers)
+            inputs=(source,) if is_path(actuator) or is_path(actuators) else (), **common)
+    pairs, workers = model_pairs_workers(n, identify, actuator, actuators, model.pairs, model.workers)
     max_evaluations = count(n, "max_evaluations", model.max_evaluations)
     calibration_windows = count(n, "calibration_windows", model.calibration_windows)
-    drift_hz = _drift_hz(n, model.drift_cut_hz)
-    scenario, scenario_file = _scenario(n, model.truck)
-    saved, saved_file = _saved(n, model.calibration, scenario)
+    drift_hz = checked_drift_hz(n, model.drift_cut_hz)
+    scenario, scenario_file = truck_scenario(n, model.truck)
+    saved, saved_file = saved_calibration(n, model.calibration, scenario)
     more = model.calibration_records
     if isinstance(more, (str, bytes, os.PathLike)) or not isinstance(more, (tuple, list)):
-        raise _error(f"{n('calibration_records')} must be a list of other records of this truck (files or "
+        raise refusal(f"{n('calibration_records')} must be a list of other records of this truck (files or "
                      f"read_record's records), got {shown(more)}")
     asked, items = parse_columns(columns, n), parse_corner_map(corner_map, n)
     ta, source = _fallback_tas(n, actuator, actuators)

@@ -12,7 +12,7 @@ __all__ = ["bode_png"]
 def bode_png(fits, title: str) -> bytes:
     """Magnitude (dB), phase (deg) and coherence of the H1 estimate against the fitted T_a, per corner.
 
-    ``fits``: ``{corner: rigsim.correction.identification.actuator_fit.ActuatorFit}``.
+    ``fits``: ``{corner: rigsim.correction.identification.actuator_result.ActuatorFit}``.
     """
     import matplotlib
 

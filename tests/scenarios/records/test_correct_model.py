@@ -274,7 +274,7 @@ def test_the_help_literals_match_their_homes():
     assert f"each {WINDOW_LEAD_S:g} s lead-in + {WINDOW_S:g} s" in text
     assert f"at least {WINDOW_LEAD_S + WINDOW_S:g} s of record" in text
     from rigsim.correction.output.denoise import DRIFT_HZ
-    from rigsim.scenarios.records.settings import DRIFT_CUT_MAX_HZ
+    from rigsim.scenarios.records.model_settings import DRIFT_CUT_MAX_HZ
 
     assert f"(default {DRIFT_HZ:g}, at most {DRIFT_CUT_MAX_HZ:g})" in text
 
@@ -284,7 +284,7 @@ def test_the_help_literals_match_their_homes():
     ("nan", "got nan"),
 ])
 def test_a_drift_cut_out_of_range_is_refused_before_any_work(record, tmp_path, capsys, value, expected):
-    """--drift-cut-hz: 0 or a corner up to settings.DRIFT_CUT_MAX_HZ, below the truck's body modes;
+    """--drift-cut-hz: 0 or a corner up to model_settings.DRIFT_CUT_MAX_HZ, below the truck's body modes;
     anything else exits 2 with one sentence naming the option, and no file is written."""
     out = tmp_path / "out.csv"
     assert main(["correct", str(record["csv"]), "--model", str(record["scenario"]), "--pairs", PAIRS, "-o", str(out),
@@ -298,7 +298,8 @@ def test_the_drift_cut_option_gives_the_corner_the_correction_uses():
     hybrid_correction takes it), 1.2 stays 1.2; the linear correction's options have no drift cut."""
     from rigsim import LinearOptions, ModelOptions
     from rigsim.correction.output.denoise import DRIFT_HZ
-    from rigsim.scenarios.records.settings import DRIFT_CUT_MAX_HZ, correction_settings
+    from rigsim.scenarios.records.model_settings import DRIFT_CUT_MAX_HZ
+    from rigsim.scenarios.records.settings import correction_settings
 
     model = ModelOptions(paper_scenarios()[2], pairs=PAIRS)
     assert correction_settings(model).drift_hz == DRIFT_HZ < DRIFT_CUT_MAX_HZ
