@@ -121,17 +121,14 @@ class PlantScore:
         def arrays(m):
             return {k: np.asarray(v, dtype=float) for k, v in m.items()}
 
-        def maybe(v):
-            return None if v is None else np.asarray(v, dtype=float)
-
         return cls(name=d["name"], plant=dict(d["plant"]), method=d["method"], reason=d["reason"],
                    nrmse=arrays(d["nrmse"]), dlc_error=arrays(d["dlc_error"]), floor=np.asarray(d["floor"], float),
-                   wall_s=d["wall_s"], cpu_s=d["cpu_s"], scored_s=d["scored_s"], fit_nrmse=maybe(d["fit_nrmse"]),
-                   model_error=maybe(d["model_error"]), timings=dict(d.get("timings", {})),
+                   wall_s=d["wall_s"], cpu_s=d["cpu_s"], scored_s=d["scored_s"], fit_nrmse=_array_or_none(d["fit_nrmse"]),
+                   model_error=_array_or_none(d["model_error"]), timings=dict(d.get("timings", {})),
                    frame_hz=None if d.get("frame_hz") is None else tuple(d["frame_hz"]),
                    engine=None if d.get("engine") is None else tuple(d["engine"]),
                    damper=None if d.get("damper") is None else tuple(d["damper"]),
-                   record_error=maybe(d.get("record_error")))
+                   record_error=_array_or_none(d.get("record_error")))
 
 
 def _array_or_none(v) -> np.ndarray | None:
