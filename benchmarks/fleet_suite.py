@@ -4,6 +4,7 @@
 
     python benchmarks/fleet_suite.py --draw development|fresh [--trucks 24] [--duration-s 30]
                                      [--seed N] [--cab auto|held|fitted] [--workers N] [--noise-N 100]
+                                     [--part K/N]
     python benchmarks/fleet_suite.py --page DEVELOPMENT.txt FRESH.txt [--results docs/results]
 
 Truck ``i`` of a draw (:func:`rigsim.scenarios.studies.model_suite.fleet.draw_truck`) is a spec sheet
@@ -24,6 +25,9 @@ when it runs (unless ``--seed`` gives one) and prints it: the set the method is 
 tuned on. Each run prints its table, the goals and one JSON line; ``--page`` writes
 ``docs/results/fleet_suite.md`` from the two runs' printed output, the draws side by side with a
 95 % confidence interval over trucks (:func:`rigsim.scenarios.studies.model_suite.goals.share_interval`).
+``--part K/N`` scores the draw's trucks K-1, K-1+N, K-1+2N... alone (every truck is still drawn
+and checked first), so that N processes or machines share a draw; ``--page`` joins the parts of one
+draw and seed, given as their outputs, into that draw's table.
 Goals (:mod:`rigsim.scenarios.studies.model_suite.goals`): at least 95 % of wheels within 1 % of the road
 DLC at NRMSE at most half the linear floor; no wheel more than 0.05 NRMSE above the linear
 correction.
@@ -96,6 +100,8 @@ def run_draw(args) -> dict:
                                                     else secrets.randbits(31))
     print(f"fleet suite, {args.draw} draw: seed {seed}", file=sys.stderr, flush=True)
     trucks = fleet_trucks(args.trucks, seed)  # every truck drawn and checked before any run
+    part_k, part_n = args.part
+    trucks = trucks[part_k - 1::part_n]
     t0 = time.perf_counter()
     keys = [(i, k) for i in range(len(trucks)) for k in ("road", "rig", "identify")]
     jobs = [(fleet_job, (trucks[i], args.duration_s, k)) for i, k in keys]
@@ -132,7 +138,7 @@ def run_draw(args) -> dict:
     print(f"- 95 % confidence interval of the share over trucks: {100 * interval[0]:.1f}-{100 * interval[1]:.1f} %")
     if refused:
         print(f"- recorded at {RETRY_RATE_HZ:g} Hz where the linear correction refused 1 kHz: {', '.join(refused)}")
-    settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "duration_s": args.duration_s,
+    settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "part": f"{part_k}/{part_n}", "duration_s": args.duration_s,
                 "at_retry_rate": refused,
                 "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__)}
     out = json.loads(to_json(settings | {"summary": numbers, "interval": interval,
@@ -149,9 +155,35 @@ def _read_run(path: pathlib.Path) -> dict:
     return json.loads(lines[-1])
 
 
+def joined(runs: list[dict]) -> list[dict]:
+    """The runs with the parts of one draw and seed (``--part``) joined into one run, in the order each
+    draw first appears: its trucks in the draw's order, its interval over all of them, its commands
+    joined with ``&``. Refuses parts that overlap, miss a truck or differ in their settings."""
+    groups: dict = {}
+    for run in runs:
+        groups.setdefault((run["draw"], run["seed"]), []).append(run)
+    out = []
+    for (draw, seed), parts in groups.items():
+        if len(parts) == 1 and parts[0].get("part", "1/1") == "1/1":
+            out.append(parts[0])
+            continue
+        plants = sorted((p for run in parts for p in run["plants"]), key=lambda p: p["name"])
+        names = [p["name"] for p in plants]
+        settings = {(run["trucks"], run["duration_s"], run["noise_N"], run["cab"]) for run in parts}
+        if len(settings) > 1 or len(set(names)) != len(names) or len(names) != parts[0]["trucks"]:
+            raise SystemExit(f"the parts of the {draw} draw (seed {seed}) do not make one draw: give each part "
+                             f"once, all run with the same --trucks, --duration-s, --noise-N and --cab")
+        scores = [PlantScore.from_dict(p) for p in plants]
+        out.append(parts[0] | {"part": "1/1", "plants": plants, "interval": list(share_interval(scores)),
+                               "at_retry_rate": sorted(n for run in parts for n in run.get("at_retry_rate") or []),
+                               "wall_time_s": max(run["wall_time_s"] for run in parts),
+                               "command": " & ".join(run["command"] for run in parts)})
+    return out
+
+
 def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path:
     """``fleet_suite.md``: each draw's summary side by side, then each draw's table."""
-    runs = [_read_run(p) for p in paths]
+    runs = joined([_read_run(p) for p in paths])
     for run in runs:  # where a run wrote its page is not what it measured
         run["command"] = re.sub(r" --results(=| )\S+", "", run["command"])
     summary_head = ["draw", "seed", "trucks", "wheels good (95 % CI over trucks)", "worst DLC error",
@@ -185,6 +217,17 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
     return page
 
 
+def _part(text: str) -> tuple[int, int]:
+    """``K/N`` (1 <= K <= N) as (K, N)."""
+    try:
+        k, n = (int(v) for v in text.split("/"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--part must be K/N, e.g. 1/2, got {text!r}") from None
+    if not 1 <= k <= n:
+        raise argparse.ArgumentTypeError(f"--part K/N needs 1 <= K <= N, got {text!r}")
+    return k, n
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--draw", choices=DRAWS, default=None, help="run the development draw (seed 0) or a fresh one")
@@ -194,6 +237,8 @@ def main(argv=None) -> int:
     ap.add_argument("--cab", choices=CAB_CHOICES, default=AUTO, help="the model's cab mode (default auto)")
     ap.add_argument("--noise-N", type=float, default=scoring.NOISE_N, help="white load-cell noise, N rms (default 100)")
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    ap.add_argument("--part", type=_part, default=(1, 1), metavar="K/N",
+                    help="score the draw's trucks K-1, K-1+N, ... alone (default 1/1: all of them)")
     ap.add_argument("--page", type=pathlib.Path, nargs="+", default=None, metavar="RUN.txt",
                     help="write fleet_suite.md from runs' printed output instead of running")
     ap.add_argument("--results", type=pathlib.Path, default=RESULTS, help="folder of fleet_suite.md")
