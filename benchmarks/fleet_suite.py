@@ -187,7 +187,7 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
     for run in runs:  # where a run wrote its page is not what it measured
         run["command"] = re.sub(r" --results(=| )\S+", "", run["command"])
     summary_head = ["draw", "seed", "trucks", "wheels good (95 % CI over trucks)", "worst DLC error",
-                    "worst NRMSE above linear", "fallbacks", "median wall s"]
+                    "worst NRMSE above linear", "fallbacks", "median wall s", "median CPU s"]
     summary, parts = [], []
     for run in runs:
         scores = [PlantScore.from_dict(p) for p in run["plants"]]
@@ -195,7 +195,8 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
         lo, hi = run["interval"]
         summary.append([run["draw"], run["seed"], len(scores), f"{100 * numbers['share_good']:.1f} % "
                         f"({100 * lo:.1f}-{100 * hi:.1f} %)", f"{100 * numbers['worst_dlc_error']:.2f} %",
-                        f"{numbers['worst_above_linear']:+.3f}", numbers["fallbacks"], f"{numbers['median_wall_s']:.0f}"])
+                        f"{numbers['worst_above_linear']:+.3f}", numbers["fallbacks"], f"{numbers['median_wall_s']:.0f}",
+                        f"{np.median([s.cpu_s for s in scores]):.0f}"])
         retried = run.get("at_retry_rate") or []
         unsaid = any("frame_hz" not in p for p in run["plants"])  # an output without the fitted frames
         parts.append(f"**The {run['draw']} draw** (seed {run['seed']}, `{run['command']}`"
@@ -207,7 +208,9 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
     note = ("Per truck the worse wheel, as in the mismatch suite (docs/results/mismatch_suite.md); the plant column "
             "gives the spec sheet (wheelbase, rear tires, front/rear suspension, payload) and what the plant has that "
             "its model lacks. The records pass through the lab's chain as it was (corners off by up to 5 %) and are "
-            "aligned with its nominal settings.\n\n" + "\n\n".join(parts))
+            "aligned with its nominal settings. A truck's wall time depends on what else the machine ran (the draws may run "
+            "side by side); its CPU time is the calibration's and correction's own, in this process and its workers.\n\n"
+            + "\n\n".join(parts))
     command = " && ".join(r["command"] for r in runs)
     draws = " and ".join(dict.fromkeys(r["draw"] for r in runs))
     page = write_results_page(results, "fleet_suite", f"The model correction on trucks a lab brings: {draws} "
