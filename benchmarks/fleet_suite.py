@@ -196,7 +196,7 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
         summary.append([run["draw"], run["seed"], len(scores), f"{100 * numbers['share_good']:.1f} % "
                         f"({100 * lo:.1f}-{100 * hi:.1f} %)", f"{100 * numbers['worst_dlc_error']:.2f} %",
                         f"{numbers['worst_above_linear']:+.3f}", numbers["fallbacks"], f"{numbers['median_wall_s']:.0f}",
-                        f"{np.median([s.cpu_s for s in scores]):.0f}"])
+                        f"{numbers['median_cpu_s']:.0f}"])
         retried = run.get("at_retry_rate") or []
         unsaid = any("frame_hz" not in p for p in run["plants"])  # an output without the fitted frames
         parts.append(f"**The {run['draw']} draw** (seed {run['seed']}, `{run['command']}`"

@@ -320,19 +320,20 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                                               base_scenario=base_scenario, executor=ex)
         # the load cells' uncompensated mass, fitted with the truck, taken out
         force = without_cell_mass(force_N, x_a_m, fs, cal.cell_mass_kg)
-        on_record = record_errors(f_a, force, int(np.argmax(settled_mask(t))), fs)  # the run the correction uses
+        started = settled_mask(t)  # past the model runs' start-up
+        on_record = record_errors(f_a, force, int(np.argmax(started)), fs)  # the run the correction uses
         noise = outlook = None
         if linear is None:
             if not record_holds(on_record, excess_limit).all():
                 return _linear(record_reason(cal, on_record, holds, excess_limit), cal, wall0, timings,
                                record_error=on_record)
-            corrected, settled, formula = force + f_ref - f_a, settled_mask(t), DIFFERENTIAL_FORMULA
+            corrected, settled, formula = force + f_ref - f_a, started, DIFFERENTIAL_FORMULA
         else:
-            corrected, settled, gain, residual = hybrid_correction(force, f_ref, f_a, linear, fs, settled_mask(t),
+            corrected, settled, gain, residual = hybrid_correction(force, f_ref, f_a, linear, fs, started,
                                                                     drift_hz=drift_hz, drift_rms_N=drift_rms_N,
                                                                     with_residual=True)
-            outlook = hybrid_outlook(f_ref, f_a, residual, corrected, linear, fs,
-                                     settled_mask(t) & np.asarray(settled, dtype=bool), pans_m=x_a_m)
+            settled = started & np.asarray(settled, dtype=bool)  # and past L's own transients
+            outlook = hybrid_outlook(f_ref, f_a, residual, corrected, linear, fs, settled, pans_m=x_a_m)
             reason = hybrid_reason(cal, holds, outlook, excess_limit, on_record)
             holds = holds & record_holds(on_record, excess_limit) & outlook.holds
             if not holds.any():
@@ -342,7 +343,6 @@ def correct_with_model(t_s, x_ref_m, x_a_m, force_N, *, base_scenario: Scenario,
                      for c, v, white, ok in zip(CORNERS, gain.noise_rms, gain.measured, holds) if ok}
             if not holds.all():
                 corrected[:, ~holds] = linear(np.asarray(force_N, dtype=float))[0][:, ~holds]
-            settled = settled_mask(t) & np.asarray(settled, dtype=bool)
         timings["correction_s"] = round(time.perf_counter() - t1, 3)
     return ModelCorrection(method=MODEL, reason=reason if linear is not None else "",
                            calibration=cal, corrected_N=corrected, settled=settled,

@@ -72,7 +72,7 @@ def _error_text(score) -> str:
     """The worst model error on the calibration's windows and, where read, over the whole record."""
     if score.model_error is None:
         return ""
-    rec = getattr(score, "record_error", None)
+    rec = score.record_error
     return f"{np.max(score.model_error):.3f}" + ("" if rec is None else f" / {np.max(rec):.3f}")
 
 
@@ -104,7 +104,8 @@ def rows_and_goals(scores, describe) -> tuple[list[str], list[list], str, dict]:
     numbers = {"wheels": int(d.size), "share_good": float(good), "worst_dlc_error": float(np.max(np.abs(d))),
                "worst_above_linear": float(np.max(above)), "fallbacks": len(fallbacks),
                "fallbacks_without_reason": sum(1 for s in fallbacks if not s.reason), "wrong_fallbacks": wrong,
-               "median_wall_s": float(np.median([s.wall_s for s in scores])), "limit": limit_evidence(scores)}
+               "median_wall_s": float(np.median([s.wall_s for s in scores])),
+               "median_cpu_s": float(np.median([s.cpu_s for s in scores])), "limit": limit_evidence(scores)}
     met = {"share": good >= SHARE, "dlc": numbers["worst_dlc_error"] <= DLC_ALL,
            "linear": numbers["worst_above_linear"] <= ABOVE_LINEAR,
            "fallbacks": not wrong and not numbers["fallbacks_without_reason"]}
