@@ -253,7 +253,7 @@ def calibrate(t_s, x_a_m, force_N, *, base_scenario: Scenario, x_ref_m=None, nam
     held = [k for k in FITTED if k in ("cab_mount_hz", "chassis_roll_inertia_kg_m2", *EMPTY_STAND_IN.values())
             or k.startswith("tire_progressive")
             or k in STATION_FITTED or (k in FRAME_FITTED + ENGINE_FITTED + DAMPER_FITTED and k in guess)]
-    for k in held:  # held: rigid cab and frame, engine in the chassis, linear dampers and tire, stations alike, the XML's chassis
+    for k in held:  # held: rigid cab and frame, engine in the chassis, dampers as given (linear where not), linear tire, stations alike, the XML's chassis
         if k not in names and k not in (fitted_guess or {}):
             guess[k] = None
     lower, upper, loads = [], [], {}
