@@ -107,8 +107,8 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   slope below it, all four alike. A vehicle damper's blow-off valves open at 0.1-0.3 m/s and beyond
   it its force grows at a fifth to a half of its low-speed slope; a linear damper fitted to such a
   damper takes a slope between the two and errs at both ends of the speeds a rough road drives. Held
-  at 0.15 m/s and 0.5 where not fitted (a described truck's dampers are a vehicle damper's, not
-  linear: :mod:`~rigsim.scenarios.records.model.frame_choice` says why), searched 0.05-0.5 m/s and
+  at 0.15 m/s and 0.75 where not fitted (a described truck's dampers, midway between a new damper's
+  and a worn, linear one's: :mod:`~rigsim.scenarios.records.model.frame_choice` says why), searched 0.05-0.5 m/s and
   0.2-1 (:data:`rigsim.mjcf.dampers.BOUNDS`; 1 is a linear damper); the slope below the knee is each
   axle's fitted damping.
 

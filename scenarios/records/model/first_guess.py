@@ -34,7 +34,7 @@ from rigsim.mjcf.engine import ENGINE_MASS_KG
 from rigsim.scenarios.records.model.family import FRAME_FITTED
 from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "CATALOGUE_ENGINE_HZ", "engine_guess", "CATALOGUE_DAMPER_KNEE_M_PER_S", "CATALOGUE_DAMPER_RATIO", "damper_guess", "EMPTY_FRACTION", "LIGHT_FRACTION", "PAYLOAD_X_LIMIT_M", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "CATALOGUE_ENGINE_HZ", "engine_guess", "CATALOGUE_DAMPER_KNEE_M_PER_S", "CATALOGUE_DAMPER_RATIO", "HELD_DAMPER_RATIO", "damper_guess", "held_damper", "EMPTY_FRACTION", "LIGHT_FRACTION", "PAYLOAD_X_LIMIT_M", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -67,6 +67,14 @@ CATALOGUE_ENGINE_HZ = 9.0
 #: of the low-speed slope beyond it (:data:`rigsim.mjcf.dampers.BOUNDS`).
 CATALOGUE_DAMPER_KNEE_M_PER_S = 0.15
 CATALOGUE_DAMPER_RATIO = 0.5
+#: The slope beyond the knee (over the slope below, 1) at which a described truck's dampers are held
+#: where the record does not fit them (:func:`held_damper`): midway between a new vehicle damper's
+#: (:data:`CATALOGUE_DAMPER_RATIO`) and a linear one (1), which is what a damper worn to a third or a
+#: half of its force is. A rig record seldom tells the two apart (the pans run the dampers slower than
+#: the road does: :mod:`~rigsim.scenarios.records.model.frame_choice`), and a truck's spec sheet does
+#: not say how worn its dampers are, so a model held at either end biases the trucks of the other
+#: kind by the whole difference; the middle halves the larger bias.
+HELD_DAMPER_RATIO = 0.75
 
 
 #: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
@@ -140,6 +148,14 @@ def damper_guess(desc: TruckVariant) -> dict[str, float]:
     catalogue truck, whose dampers stay the XML's linear ones."""
     return ({"damper_digressive_knee_m_per_s": CATALOGUE_DAMPER_KNEE_M_PER_S,
              "damper_digressive_ratio": CATALOGUE_DAMPER_RATIO} if described(desc) else {})
+
+
+def held_damper(desc: TruckVariant) -> dict[str, float]:
+    """The spring dampers a described truck's model holds until its record says otherwise: the knee of
+    :func:`damper_guess` (m/s) and :data:`HELD_DAMPER_RATIO` (1) beyond it; none on the catalogue truck,
+    whose dampers stay the XML's linear ones."""
+    guess = damper_guess(desc)
+    return guess | {"damper_digressive_ratio": HELD_DAMPER_RATIO} if guess else {}
 
 
 @functools.lru_cache(maxsize=8)

@@ -40,19 +40,21 @@ error of 0.182 against the rigid frame's 0.190, the engine alone 0.181, both tog
 where the frame and the engine were each fitted and neither kept, both are fitted together, started
 at their scans' best values, and kept (:func:`choose_frame_engine`) as each is.
 
-A described truck's spring dampers are digressive from the start, held at a vehicle damper's
-characteristic (:func:`~rigsim.scenarios.records.model.first_guess.damper_guess`: blow-off at
-:data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_KNEE_M_PER_S`, slope
-:data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_RATIO` of the low-speed one beyond),
-not linear. A rig record seldom tells the two apart: the pans miss the drive most at the wheel-hop
-modes, where the dampers' speeds on the road are largest, so on the rig the dampers run below their
-knee where on the road they run beyond it. A model whose dampers are linear there damps the hop on
-the road as on the rig and underestimates the road's wheel force at its hop; the correction, which
-maps the model's residual on the rig to the road linearly, cannot put it back (the fleet suite's
-draw of seed 96060782, fleet09, digressive dampers x0.54 beyond 0.16 m/s: both front wheels 1.0-1.1 %
-below the road's DLC with linear dampers, within 0.1 % with the held ones, the model error on the
-windows 0.163 and 0.154; fleet17 of that draw, whose dampers are worn and linear, front wheels within
-0.03 % of each other either way). The knee and ratio (:data:`~.family.DAMPER_FITTED`) are then chosen the
+A described truck's spring dampers are digressive from the start, held
+(:func:`~rigsim.scenarios.records.model.first_guess.held_damper`) with a knee at
+:data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_KNEE_M_PER_S`, where a vehicle
+damper's blow-off valves open, and a slope beyond it of
+:data:`~rigsim.scenarios.records.model.first_guess.HELD_DAMPER_RATIO` of the low-speed one: midway
+between a new damper's and a worn, linear one's. A rig record seldom tells them apart: the pans miss
+the drive most at the wheel-hop modes, where the dampers' speeds on the road are largest, so on the
+rig the dampers run below their knee where on the road they run beyond it. The correction, which
+maps the model's residual on the rig to the road linearly, cannot put back a damping that depends on
+the amplitude, so the held dampers decide how a truck's hop is damped on the road. Either end biases
+the other kind of truck: linear dampers left both front wheels of a truck with digressive ones (x0.54
+beyond 0.16 m/s) 1.0-1.1 % below the road's DLC, within 0.1 % with dampers held at x0.5 (the fleet
+suite's draw of seed 96060782, fleet09); dampers held at x0.5 left the rear wheels of a truck whose
+dampers are worn 0.9-1.15 % above it, within 0.2 % with linear ones and within 0.6 % at x0.75 (seed
+1187241191, fleet11). The knee and ratio (:data:`~.family.DAMPER_FITTED`) are then chosen the
 same way as the engine, after it: the scan runs the truck with dampers of
 :data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_RATIO` beyond each knee of
 :data:`DAMPER_SCAN_M_PER_S` (the highest a damper nearly linear at the record's speeds); fitted, the
@@ -79,7 +81,7 @@ from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCA
                                                        excess_square, scan_error)
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
-from rigsim.scenarios.records.model.first_guess import (CATALOGUE_DAMPER_RATIO, damper_guess, description,
+from rigsim.scenarios.records.model.first_guess import (CATALOGUE_DAMPER_RATIO, damper_guess, description, held_damper,
                                                         engine_guess, frame_guess)
 from rigsim.scenarios.records.model.result import Calibration
 
@@ -168,12 +170,12 @@ def choose_engine(plain: Calibration, engined: Calibration, min_gain: float = MI
 
 def held_dampers(plain: Calibration) -> str:
     """How ``plain`` holds its spring dampers, the start of its damper sentence: linear, or digressive at
-    the values it holds (a described truck's first guess, a vehicle damper's)."""
+    the values it holds (a described truck's, :func:`~rigsim.scenarios.records.model.first_guess.held_damper`)."""
     held = plain.values()
     knee, ratio = held.get("damper_digressive_knee_m_per_s"), held.get("damper_digressive_ratio")
     if knee is None or ratio is None or ratio >= 1.0:
         return "dampers linear"
-    return f"dampers held digressive as a vehicle damper's (knee {knee:.3g} m/s, slope beyond it x{ratio:.3g})"
+    return f"dampers held digressive (knee {knee:.3g} m/s, slope beyond it x{ratio:.3g})"
 
 
 def choose_damper(plain: Calibration, digressive: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
@@ -230,7 +232,7 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
         What ``calibrate_cab`` refuses (before any model run).
     """
     desc = description(cab_kw["base_scenario"])
-    dampers = damper_guess(desc)  # a described truck's dampers as a vehicle damper's until the record says otherwise
+    dampers = held_damper(desc)  # a described truck's dampers held midway until the record says otherwise
     if cab_kw.get("names") is None and dampers:
         fitted_guess = dampers | (fitted_guess or {})
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:

@@ -197,12 +197,14 @@ def test_the_catalogue_truck_and_named_fields_get_no_frame(monkeypatch):
     assert SCAN_HZ[0] == 4.0 and SCAN_HZ[-1] == 16.0 and len(SCAN_HZ) == 9
 
 
-def test_a_described_trucks_dampers_start_as_a_vehicle_dampers(monkeypatch):
-    """A described truck's calibrations hold the dampers digressive at the first guess (0.15 m/s, slope
-    x0.5 beyond: the middle of the 0.1-0.3 m/s where blow-off valves open and of a fifth to a half of
-    the low-speed slope), not linear; a caller's own values win, and the catalogue truck and named
-    fields are left as they are. The sentence of a calibration that keeps them says they are held."""
-    from rigsim.scenarios.records.model.first_guess import CATALOGUE_DAMPER_KNEE_M_PER_S, CATALOGUE_DAMPER_RATIO
+def test_a_described_trucks_dampers_are_held_midway(monkeypatch):
+    """A described truck's calibrations hold the dampers digressive at the knee of the first guess
+    (0.15 m/s, the middle of the 0.1-0.3 m/s where blow-off valves open) with a slope beyond it of 0.75
+    of the one below: midway between a new damper's (0.5, the middle of a fifth to a half) and a worn,
+    linear one's (1), not linear; a caller's own values win, and the catalogue truck and named fields
+    are left as they are. The sentence of a calibration that keeps them says they are held."""
+    from rigsim.scenarios.records.model.first_guess import (CATALOGUE_DAMPER_KNEE_M_PER_S, CATALOGUE_DAMPER_RATIO,
+                                                            HELD_DAMPER_RATIO)
 
     seen = []
 
@@ -213,9 +215,10 @@ def test_a_described_trucks_dampers_start_as_a_vehicle_dampers(monkeypatch):
     monkeypatch.setattr(frame_choice, "calibrate_cab", cab)
     tractor = load_scenario(TRUCKS / "tractor_air.toml")
     calibrate_truck(None, None, None, base_scenario=tractor, workers=1)
+    assert HELD_DAMPER_RATIO == (CATALOGUE_DAMPER_RATIO + 1.0) / 2.0
     assert seen[-1] == {"damper_digressive_knee_m_per_s": CATALOGUE_DAMPER_KNEE_M_PER_S,
-                        "damper_digressive_ratio": CATALOGUE_DAMPER_RATIO} == {
-                            "damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.5}
+                        "damper_digressive_ratio": HELD_DAMPER_RATIO} == {
+                            "damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.75}
     calibrate_truck(None, None, None, base_scenario=tractor, workers=1,
                     fitted_guess={"damper_digressive_ratio": 0.8, "payload_kg": 900.0})
     assert seen[-1] == {"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.8, "payload_kg": 900.0}
@@ -223,12 +226,11 @@ def test_a_described_trucks_dampers_start_as_a_vehicle_dampers(monkeypatch):
     assert seen[-1] is None  # the catalogue truck's dampers stay the XML's linear ones
     calibrate_truck(None, None, None, base_scenario=tractor, names=("payload_kg",), workers=1)
     assert seen[-1] is None
-    held = dataclasses.replace(RIGID, fixed={"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.5})
-    assert frame_choice.held_dampers(held) == ("dampers held digressive as a vehicle damper's (knee 0.15 m/s, slope "
-                                               "beyond it x0.5)")
+    held = dataclasses.replace(RIGID, fixed={"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.75})
+    assert frame_choice.held_dampers(held) == "dampers held digressive (knee 0.15 m/s, slope beyond it x0.75)"
     assert frame_choice.held_dampers(RIGID) == "dampers linear"
     chosen, why = choose_damper(held, _digressive(0.18, 0.95, 0.23))
-    assert chosen is held and why.startswith("dampers held digressive as a vehicle damper's (knee 0.15 m/s")
+    assert chosen is held and why.startswith("dampers held digressive (knee 0.15 m/s")
 
 
 def test_a_frame_that_bends_is_fitted_and_found(tmp_path):
