@@ -58,6 +58,7 @@ from rigsim.scenarios.records.model.cab_choice import AUTO, CAB_CHOICES  # noqa:
 from rigsim.scenarios.studies import scoring  # noqa: E402
 from rigsim.scenarios.studies.model_suite.fleet import fleet_job, fleet_trucks, lacks, spec_text  # noqa: E402
 from rigsim.scenarios.studies.model_suite.goals import pct, rows_and_goals, share_interval  # noqa: E402
+from rigsim.scenarios.studies.model_suite.lab_mass import mass_text  # noqa: E402
 from rigsim.scenarios.studies.model_suite.mismatch_score import PlantScore, score_plant  # noqa: E402
 from rigsim.scenarios.studies.results_page import markdown_table, script_command, write_results_page  # noqa: E402
 
@@ -69,6 +70,9 @@ DEVELOPMENT_SEED = 0
 #: finer step than 1 ms to hold to 1 % below 30 Hz, and says so), they are recorded again at this rate,
 #: as a lab follows that sentence's fix.
 RETRY_RATE_HZ = 2000.0
+#: kg: the load cells' uncompensated mass of the fleet's lab chain (its cells' mass less its
+#: compensation; every truck's chain is the typical lab's, its filter corners apart).
+CHAIN_MASS_KG = TYPICAL_LAB.cell_mass_kg - TYPICAL_LAB.compensation_kg
 
 
 def _score(truck, runs, args, rate_hz):
@@ -203,6 +207,7 @@ def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path
                      + ("; its output does not say which trucks' calibrations fitted the frame" if unsaid else "")
                      + ")\n\n"
                      + markdown_table(head, rows).rstrip("\n") + "\n\n" + goals
+                     + ("\n" + mass if (mass := mass_text(scores, CHAIN_MASS_KG)) else "")
                      + (f"\n- recorded at {RETRY_RATE_HZ:g} Hz, where the linear correction refused the 1 kHz records "
                         f"(its T_a^-1 off by more than 1 % below 30 Hz at that step): {', '.join(retried)}" if retried else ""))
     note = ("Per truck the worse wheel, as in the mismatch suite (docs/results/mismatch_suite.md); the plant column "

@@ -32,10 +32,15 @@ from rigsim.scenarios.records.model.differential import (correct_with_model, hyb
 from rigsim.scenarios.studies.correction_score import band_rows, score_correction
 from rigsim.scenarios.studies.scoring import best_linear
 
-__all__ = ["FLOOR_TAPS", "PlantScore", "score_plant"]
+__all__ = ["FLOOR_TAPS", "MASS_SCAN_KG", "PlantScore", "score_plant"]
 
 #: The linear floor's FIR, samples ahead and behind at 1 kHz (benchmarks/nrmse_decomposition.py's).
 FLOOR_TAPS = (50, 400)
+#: kg: the load cells' masses about the fitted one at which the hybrid correction is scored again
+#: (:attr:`PlantScore.mass_scan`): the fitted masses of a lab's trucks spread over several kilograms
+#: about its cells' own. The hybrid is linear in the mass, so a score's square is quadratic in it and
+#: three masses give it at any other (:func:`~rigsim.scenarios.studies.model_suite.lab_mass.hybrid_at_mass`).
+MASS_SCAN_KG = (-10.0, 0.0, 10.0)
 
 
 @dataclass(frozen=True)
@@ -83,6 +88,12 @@ class PlantScore:
         The model error over the whole run the correction used
         (:attr:`~rigsim.scenarios.records.model.result.ModelCorrection.record_error`, 1), None where the
         model did not run on the record.
+    cell_mass_kg : float or None, kg
+        The load cells' uncompensated mass the calibration fitted, None without a calibration.
+    mass_scan : Mapping[str, numpy.ndarray] or None
+        The hybrid correction with the load cells' mass taken as others than the fitted one
+        (:data:`MASS_SCAN_KG` about it): ``mass_kg`` (kg, (3,)), ``dlc_error`` and ``nrmse`` (1, (3, 4)),
+        for :func:`~rigsim.scenarios.studies.model_suite.lab_mass.hybrid_at_mass`; None without a calibration.
     """
 
     name: str
@@ -102,6 +113,8 @@ class PlantScore:
     engine: tuple[float, float] | None = None
     damper: tuple[float, float] | None = None
     record_error: np.ndarray | None = None
+    cell_mass_kg: float | None = None
+    mass_scan: Mapping[str, np.ndarray] | None = None
 
     def to_dict(self) -> dict:
         return {"name": self.name, "plant": dict(self.plant), "method": self.method, "reason": self.reason,
@@ -113,7 +126,9 @@ class PlantScore:
                 "timings": dict(self.timings), "frame_hz": None if self.frame_hz is None else list(self.frame_hz),
                 "engine": None if self.engine is None else list(self.engine),
                 "damper": None if self.damper is None else list(self.damper),
-                "record_error": None if self.record_error is None else self.record_error.tolist()}
+                "record_error": None if self.record_error is None else self.record_error.tolist(),
+                "cell_mass_kg": self.cell_mass_kg,
+                "mass_scan": None if self.mass_scan is None else {k: v.tolist() for k, v in self.mass_scan.items()}}
 
     @classmethod
     def from_dict(cls, d: Mapping) -> "PlantScore":
@@ -128,7 +143,8 @@ class PlantScore:
                    frame_hz=None if d.get("frame_hz") is None else tuple(d["frame_hz"]),
                    engine=None if d.get("engine") is None else tuple(d["engine"]),
                    damper=None if d.get("damper") is None else tuple(d["damper"]),
-                   record_error=_array_or_none(d.get("record_error")))
+                   record_error=_array_or_none(d.get("record_error")), cell_mass_kg=d.get("cell_mass_kg"),
+                   mass_scan=None if d.get("mass_scan") is None else arrays(d["mass_scan"]))
 
 
 def _array_or_none(v) -> np.ndarray | None:
@@ -187,19 +203,26 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
                             base_scenario=base_scenario, workers=workers, cab=cab, linear=lin, drift_hz=drift_hz)
     wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
-    forced = hybrid = None
+    rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
+    scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
+    mass_scan = None
     if mc.calibration is not None:  # the model's two runs: the correction's, else run for the forced forms
         f_ref, f_a = mc.model_N or model_force_pair(mc.calibration.variant(), rig.t_s, rig.signals["profile_m"],
                                                     measured.pan_m, force_N=measured.force_N,
                                                     base_scenario=base_scenario, workers=workers)
-        force = without_cell_mass(measured.force_N, measured.pan_m, fs, mc.calibration.cell_mass_kg)
-        forced = force + f_ref - f_a
-        hybrid = hybrid_correction(force, f_ref, f_a, lin, fs, settled_mask(rig.t_s), drift_hz=drift_hz)[0]
-    rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
-    scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
-    if forced is not None:
-        scores["forced"] = score_correction(forced, road_N, fs, rows)
+
+        def hybrid_at(mass_kg):
+            force = without_cell_mass(measured.force_N, measured.pan_m, fs, mass_kg)
+            return force, hybrid_correction(force, f_ref, f_a, lin, fs, settled_mask(rig.t_s), drift_hz=drift_hz)[0]
+
+        force, hybrid = hybrid_at(mc.calibration.cell_mass_kg)
+        scores["forced"] = score_correction(force + f_ref - f_a, road_N, fs, rows)
         scores["hybrid"] = score_correction(hybrid, road_N, fs, rows)
+        masses = mc.calibration.cell_mass_kg + np.asarray(MASS_SCAN_KG, dtype=float)
+        scanned = [scores["hybrid"] if d == 0.0 else score_correction(hybrid_at(m)[1], road_N, fs, rows)
+                   for m, d in zip(masses, MASS_SCAN_KG)]
+        mass_scan = {"mass_kg": masses, "dlc_error": np.array([np.asarray(c["dlc_error"]) for c in scanned]),
+                     "nrmse": np.array([np.asarray(c["nrmse"]) for c in scanned])}
     scores["delivered"] = (score_correction(mc.corrected_N, road_N, fs, rows) if mc.method == "model"
                            else scores["linear"])
     floor = linear_floor(raw.force_N, band_limit(road_N, fs, BAND_LOWPASS, BAND_MODE), *FLOOR_TAPS, rows=rows).nrmse
@@ -216,4 +239,5 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
                       floor=np.asarray(floor, dtype=float), wall_s=round(wall, 1), cpu_s=round(cpu, 1),
                       scored_s=float(scores["linear"]["scored_s"]), fit_nrmse=fit, model_error=error,
                       timings=dict(mc.timings), frame_hz=frame, engine=engine,
-                      damper=damper, record_error=_array_or_none(mc.record_error))
+                      damper=damper, record_error=_array_or_none(mc.record_error),
+                      cell_mass_kg=None if cal is None else float(cal.cell_mass_kg), mass_scan=mass_scan)
