@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigsim.scenarios.studies.model_suite.goals import DLC_GOOD, FLOOR_RATIO
+from rigsim.scenarios.studies.model_suite.goals import DLC_GOOD, FLOOR_RATIO, good_on_linear
 
 __all__ = ["hybrid_at_mass", "lab_mass_kg", "share_at_mass", "mass_text"]
 
@@ -50,7 +50,7 @@ def share_at_mass(scores, mass_kg: float) -> float:
         d, n = s.dlc_error["delivered"], s.nrmse["delivered"]
         if s.method == "model" and s.mass_scan is not None and np.allclose(n, s.nrmse["hybrid"]):
             d, n = hybrid_at_mass(s, mass_kg)
-        good.append((np.abs(d) <= DLC_GOOD) & (n <= FLOOR_RATIO * s.nrmse["linear"]))
+        good.append(good_on_linear(s, d, n))
     return float(np.mean(np.concatenate(good)))
 
 
@@ -59,8 +59,8 @@ def mass_text(scores, chain_kg: float) -> str:
     from its calibrations and with the chain's own ``chain_kg`` (kg); "" where a score has no scan."""
     if not scores or any(s.mass_scan is None for s in scores if s.method == "model"):
         return ""
-    lab = lab_mass_kg(scores)
     masses = [s.cell_mass_kg for s in scores if s.cell_mass_kg is not None]
+    lab = float(np.median(masses))  # lab_mass_kg's
     return (f"- the load cells' mass as the lab's (a study, not what `rigsim correct` does): the trucks' fitted masses "
             f"{min(masses):+.1f} to {max(masses):+.1f} kg, their median {lab:+.1f} kg, the chain's own {chain_kg:+.1f} kg; "
             f"with the median for every truck {100 * share_at_mass(scores, lab):.1f} % of the wheels within "

@@ -203,7 +203,8 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
     mc = correct_with_model(rig.t_s, rig.signals["profile_m"], measured.pan_m, measured.force_N,
                             base_scenario=base_scenario, workers=workers, cab=cab, linear=lin, drift_hz=drift_hz)
     wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
-    rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & settled_mask(rig.t_s)
+    started = settled_mask(rig.t_s)
+    rows = band_rows(road_N.shape[0], fs) & np.asarray(linear_settled, dtype=bool) & started
     scores = {"linear": score_correction(linear_N, road_N, fs, rows)}
     mass_scan = None
     if mc.calibration is not None:  # the model's two runs: the correction's, else run for the forced forms
@@ -213,7 +214,7 @@ def score_plant(name: str, plant: Mapping[str, float], base_scenario, road, rig,
 
         def hybrid_at(mass_kg):
             force = without_cell_mass(measured.force_N, measured.pan_m, fs, mass_kg)
-            return force, hybrid_correction(force, f_ref, f_a, lin, fs, settled_mask(rig.t_s), drift_hz=drift_hz)[0]
+            return force, hybrid_correction(force, f_ref, f_a, lin, fs, started, drift_hz=drift_hz)[0]
 
         force, hybrid = hybrid_at(mc.calibration.cell_mass_kg)
         scores["forced"] = score_correction(force + f_ref - f_a, road_N, fs, rows)
