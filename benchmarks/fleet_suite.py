@@ -89,12 +89,13 @@ def _truck_text(score) -> str:
 
 def _frame_text(score) -> str:
     """Where the calibration fitted the model's frame: its torsion/bending modes, Hz; its engine: mount Hz, mass kg;
-    its dampers digressive: knee m/s, slope ratio."""
+    its dampers digressive: knee m/s, slope ratio, rebound ratio."""
     out = "" if score.frame_hz is None else f"; model's frame fitted {score.frame_hz[0]:.1f}/{score.frame_hz[1]:.1f} Hz"
     if score.engine is not None:
         out += f"; model's engine fitted {score.engine[1]:.0f} kg on {score.engine[0]:.1f} Hz"
     if score.damper is not None:
-        out += f"; model's dampers digressive x{score.damper[1]:.2f} above {score.damper[0]:.2f} m/s"
+        out += f"; model's dampers digressive x{score.damper[1]:.2f} above {score.damper[0]:.2f} m/s" + (
+            f", rebound x{score.damper[2]:.2f}" if len(score.damper) > 2 else "")
     return out
 
 

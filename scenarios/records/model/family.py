@@ -101,15 +101,19 @@ lab does not know to better than ~10-30 % and that change the wheel forces:
   the front tires and the frame. From 9 Hz and 1 t (:data:`rigsim.mjcf.engine.ENGINE_MASS_KG`),
   searched 5-20 Hz (through its compliance) and 0.3-1.5 t (:data:`rigsim.mjcf.engine.BOUNDS`); the
   mounts' damping and the engine's place are held (:mod:`rigsim.mjcf.engine`'s estimates).
-* ``damper_digressive_knee_m_per_s``, ``damper_digressive_ratio`` (:data:`DAMPER_FITTED`), on a
-  described truck only, where they make the fit clearly better (after the engine): the spring
-  dampers digressive (:mod:`rigsim.mjcf.dampers`), their slope beyond the knee a fraction of the
-  slope below it, all four alike. A vehicle damper's blow-off valves open at 0.1-0.3 m/s and beyond
-  it its force grows at a fifth to a half of its low-speed slope; a linear damper fitted to such a
-  damper takes a slope between the two and errs at both ends of the speeds a rough road drives. Held
-  at 0.15 m/s and 0.75 where not fitted (a described truck's dampers, midway between a new damper's
-  and a worn, linear one's: :mod:`~rigsim.scenarios.records.model.frame_choice` says why), searched 0.05-0.5 m/s and
-  0.2-1 (:data:`rigsim.mjcf.dampers.BOUNDS`; 1 is a linear damper); the slope below the knee is each
+* ``damper_digressive_knee_m_per_s``, ``damper_digressive_ratio``, ``damper_rebound_ratio``
+  (:data:`DAMPER_FITTED`), on a described truck only, always, after the engine: the spring dampers
+  digressive (:mod:`rigsim.mjcf.dampers`), their slope beyond the knee a fraction of the slope below
+  it, and harder in rebound than in bump (:func:`rigsim.mjcf.stations.add_rebound_damping`), all four
+  alike. A new vehicle damper's blow-off valves open at 0.1-0.3 m/s and beyond it its force grows at
+  a fifth to a half of its low-speed slope; a worn one is linear; a linear damper fitted to a
+  digressive one takes a slope between the two and errs at both ends of the speeds a rough road
+  drives. Dampers are valved 2-4 times harder in rebound than in bump: a symmetric damper fitted to
+  such a one misses the force's asymmetry, which the rig's large strokes at the wheel-hop modes show.
+  Held at 0.15 m/s, 0.95 and 2 until fitted (nearly linear, the low end of the rebound's valving:
+  :mod:`~rigsim.scenarios.records.model.frame_choice` says why), searched 0.05-0.5 m/s, 0.2-1
+  (:data:`rigsim.mjcf.dampers.BOUNDS`; 1 is a linear damper) and 1-5
+  (:data:`rigsim.mjcf.variant.BOUNDS`; 1 is symmetric); the slope below the knee in bump is each
   axle's fitted damping.
 
 The truck is the one the scenario's ``[vehicle]`` describes (its wheelbase, tracks, rear tires,
@@ -161,7 +165,7 @@ ENGINE_FITTED = ("engine_mount_hz", "engine_mass_kg")
 #: The spring dampers' digressive knee and their slope beyond it over their slope below (all four
 #: dampers alike): fitted on a described truck (:mod:`~rigsim.scenarios.records.model.frame_choice`),
 #: both or neither.
-DAMPER_FITTED = ("damper_digressive_knee_m_per_s", "damper_digressive_ratio")
+DAMPER_FITTED = ("damper_digressive_knee_m_per_s", "damper_digressive_ratio", "damper_rebound_ratio")
 #: The fields that can be fitted, in this order (:data:`DEFAULT_NAMES` are fitted by default).
 FITTED = ("payload_kg", "payload_x_m", "payload_z_m", "chassis_pitch_inertia_kg_m2", "chassis_roll_inertia_kg_m2",
           "tire_stiffness_front_N_per_m", "tire_stiffness_rear_N_per_m",
@@ -179,7 +183,7 @@ UNITS = {"payload_kg": "kg", "payload_x_m": "m", "payload_z_m": "m", "chassis_pi
          "spring_rate_front_N_per_m": "N/m", "spring_rate_rear_N_per_m": "N/m",
          "spring_damping_front_Ns_per_m": "N s/m", "spring_damping_rear_Ns_per_m": "N s/m",
          **dict.fromkeys(FRAME_FITTED, "Hz"), "engine_mount_hz": "Hz", "engine_mass_kg": "kg",
-         "damper_digressive_knee_m_per_s": "m/s", "damper_digressive_ratio": "1"}
+         "damper_digressive_knee_m_per_s": "m/s", "damper_digressive_ratio": "1", "damper_rebound_ratio": "1"}
 #: The fields fitted unless the caller names others: all of :data:`FITTED` but the cab mount, which
 #: is held rigid (the XML's cab) unless asked for (``names=FITTED``): on a smooth road at low speed
 #: its effect on the wheel forces is too small to pin, and the fit can wander to the range's
@@ -214,8 +218,10 @@ RANGES = {"payload_kg": (0.5, 1.5), "payload_x_m": 1.0, "payload_z_m": 0.5, "cha
           **dict.fromkeys(FRAME_FITTED, (1.0 / 3.0, 20.0 / 9.0)),
           # from the 9 Hz and 1 t guesses to rigsim.mjcf.engine.BOUNDS' 5-20 Hz and 0.3-1.5 t
           "engine_mount_hz": (5.0 / 9.0, 20.0 / 9.0), "engine_mass_kg": (0.3, 1.5),
-          # from the 0.15 m/s and 0.5 guesses to rigsim.mjcf.dampers.BOUNDS' 0.05-0.5 m/s and 0.2-1
-          "damper_digressive_knee_m_per_s": (1.0 / 3.0, 10.0 / 3.0), "damper_digressive_ratio": (0.4, 2.0)}
+          # from the 0.15 m/s and 0.95 guesses to the whole of rigsim.mjcf.dampers.BOUNDS' 0.05-0.5 m/s and 0.2-1,
+          # and from the rebound's 2 to the whole of rigsim.mjcf.variant.BOUNDS' 1-5
+          "damper_digressive_knee_m_per_s": (1.0 / 3.0, 10.0 / 3.0), "damper_digressive_ratio": (0.2, 2.0),
+          "damper_rebound_ratio": (0.5, 2.5)}
 #: Fields searched and scaled additively (their :data:`RANGES` entry: the span either side of the
 #: guess, in the field's unit, theta = 1 at the guess and 0 at its low end; clipped to
 #: :data:`rigsim.mjcf.variant.BOUNDS`): the payload's x, which may be either sign, and the progressive tire's

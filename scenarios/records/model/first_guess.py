@@ -34,7 +34,7 @@ from rigsim.mjcf.engine import ENGINE_MASS_KG
 from rigsim.scenarios.records.model.family import FRAME_FITTED
 from rigsim.scenarios.records.model.model_runs import static_axle_loads
 
-__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "CATALOGUE_ENGINE_HZ", "engine_guess", "CATALOGUE_DAMPER_KNEE_M_PER_S", "CATALOGUE_DAMPER_RATIO", "HELD_DAMPER_RATIO", "damper_guess", "held_damper", "EMPTY_FRACTION", "LIGHT_FRACTION", "PAYLOAD_X_LIMIT_M", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
+__all__ = ["SPEC_FIELDS", "SPRING_CATALOGUE_FACTORS", "AIR_FRICTION_GUESS_N", "description", "spring_fields", "CATALOGUE_FACTORS", "CATALOGUE_CAB_MOUNT_HZ", "CATALOGUE_TIRE_RATIO", "CATALOGUE_FRAME_HZ", "frame_guess", "CATALOGUE_ENGINE_HZ", "engine_guess", "CATALOGUE_DAMPER_KNEE_M_PER_S", "CATALOGUE_DAMPER_RATIO", "CATALOGUE_DAMPER_REBOUND_RATIO", "damper_guess", "EMPTY_FRACTION", "LIGHT_FRACTION", "PAYLOAD_X_LIMIT_M", "empty_truck_loads", "empty_truck_kg", "is_light", "xml_nominal", "catalogue", "static_guess",
            "LATERAL_FLOOR_M", "static_lateral"]
 
 #: The catalogue guess: XML nominal times these factors (1). Fixed, not tuned to any plant: a
@@ -62,19 +62,20 @@ CATALOGUE_FRAME_HZ = 9.0
 #: The first guess of an engine's bounce on its mounts, Hz: the middle of a truck engine's 6-12 Hz
 #: (:data:`rigsim.mjcf.engine.BOUNDS`); its mass the catalogue's :data:`rigsim.mjcf.engine.ENGINE_MASS_KG`.
 CATALOGUE_ENGINE_HZ = 9.0
-#: The first guess of a digressive damper's knee, m/s, and its slope beyond over its slope below, 1:
-#: the middle of the 0.1-0.3 m/s where vehicle dampers' blow-off valves open and of the fifth to a half
-#: of the low-speed slope beyond it (:data:`rigsim.mjcf.dampers.BOUNDS`).
+#: The first guess of a described truck's dampers: the knee, m/s, the middle of the 0.1-0.3 m/s where
+#: vehicle dampers' blow-off valves open (:data:`rigsim.mjcf.dampers.BOUNDS`), and the slope beyond it
+#: over the slope below, 1, nearly linear: held so in the fits before the dampers' own
+#: (:mod:`~rigsim.scenarios.records.model.frame_choice`), which starts from them. A new damper's slope
+#: beyond its knee is a fifth to a half of the one below; a damper worn to a third or a half of its
+#: force is linear, and a truck's spec sheet does not say which its dampers are. The fit starts from
+#: the linear end, where a worn truck's record leaves it, and the record moves it where the dampers
+#: are digressive; not at 1 itself, where the knee would have no effect to start the search from.
 CATALOGUE_DAMPER_KNEE_M_PER_S = 0.15
-CATALOGUE_DAMPER_RATIO = 0.5
-#: The slope beyond the knee (over the slope below, 1) at which a described truck's dampers are held
-#: where the record does not fit them (:func:`held_damper`): midway between a new vehicle damper's
-#: (:data:`CATALOGUE_DAMPER_RATIO`) and a linear one (1), which is what a damper worn to a third or a
-#: half of its force is. A rig record seldom tells the two apart (the pans run the dampers slower than
-#: the road does: :mod:`~rigsim.scenarios.records.model.frame_choice`), and a truck's spec sheet does
-#: not say how worn its dampers are, so a model held at either end biases the trucks of the other
-#: kind by the whole difference; the middle halves the larger bias.
-HELD_DAMPER_RATIO = 0.75
+CATALOGUE_DAMPER_RATIO = 0.95
+#: The first guess of a described truck's dampers' rebound over bump slope, 1: the low end of the 2-4
+#: times harder in rebound a vehicle damper is valved to (:data:`rigsim.mjcf.variant.BOUNDS`), held
+#: until fitted as the knee and slope are (a worn damper's valving is softer).
+CATALOGUE_DAMPER_REBOUND_RATIO = 2.0
 
 
 #: The fields of ``[vehicle]`` that describe the truck itself (its spec sheet), held in the model at
@@ -143,19 +144,13 @@ def engine_guess(desc: TruckVariant) -> dict[str, float]:
 
 
 def damper_guess(desc: TruckVariant) -> dict[str, float]:
-    """The first guess of digressive spring dampers (:data:`CATALOGUE_DAMPER_KNEE_M_PER_S`, m/s, and
-    :data:`CATALOGUE_DAMPER_RATIO`, 1) on a described truck, whose calibration may fit them; none on the
-    catalogue truck, whose dampers stay the XML's linear ones."""
+    """The first guess of digressive spring dampers (:data:`CATALOGUE_DAMPER_KNEE_M_PER_S`, m/s,
+    :data:`CATALOGUE_DAMPER_RATIO` and :data:`CATALOGUE_DAMPER_REBOUND_RATIO`, 1) on a described truck,
+    held until its calibration fits them; none on the catalogue truck, whose dampers stay the XML's
+    linear, symmetric ones."""
     return ({"damper_digressive_knee_m_per_s": CATALOGUE_DAMPER_KNEE_M_PER_S,
-             "damper_digressive_ratio": CATALOGUE_DAMPER_RATIO} if described(desc) else {})
-
-
-def held_damper(desc: TruckVariant) -> dict[str, float]:
-    """The spring dampers a described truck's model holds until its record says otherwise: the knee of
-    :func:`damper_guess` (m/s) and :data:`HELD_DAMPER_RATIO` (1) beyond it; none on the catalogue truck,
-    whose dampers stay the XML's linear ones."""
-    guess = damper_guess(desc)
-    return guess | {"damper_digressive_ratio": HELD_DAMPER_RATIO} if guess else {}
+             "damper_digressive_ratio": CATALOGUE_DAMPER_RATIO,
+             "damper_rebound_ratio": CATALOGUE_DAMPER_REBOUND_RATIO} if described(desc) else {})
 
 
 @functools.lru_cache(maxsize=8)

@@ -40,26 +40,22 @@ error of 0.182 against the rigid frame's 0.190, the engine alone 0.181, both tog
 where the frame and the engine were each fitted and neither kept, both are fitted together, started
 at their scans' best values, and kept (:func:`choose_frame_engine`) as each is.
 
-A described truck's spring dampers are digressive from the start, held
-(:func:`~rigsim.scenarios.records.model.first_guess.held_damper`) with a knee at
-:data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_KNEE_M_PER_S`, where a vehicle
-damper's blow-off valves open, and a slope beyond it of
-:data:`~rigsim.scenarios.records.model.first_guess.HELD_DAMPER_RATIO` of the low-speed one: midway
-between a new damper's and a worn, linear one's. A rig record seldom tells them apart: the pans miss
-the drive most at the wheel-hop modes, where the dampers' speeds on the road are largest, so on the
-rig the dampers run below their knee where on the road they run beyond it. The correction, which
-maps the model's residual on the rig to the road linearly, cannot put back a damping that depends on
-the amplitude, so the held dampers decide how a truck's hop is damped on the road. Either end biases
-the other kind of truck: linear dampers left both front wheels of a truck with digressive ones (x0.54
-beyond 0.16 m/s) 1.0-1.1 % below the road's DLC, within 0.1 % with dampers held at x0.5 (the fleet
-suite's draw of seed 96060782, fleet09); dampers held at x0.5 left the rear wheels of a truck whose
-dampers are worn 0.9-1.15 % above it, within 0.2 % with linear ones and within 0.6 % at x0.75 (seed
-1187241191, fleet11). The knee and ratio (:data:`~.family.DAMPER_FITTED`) are then chosen the
-same way as the engine, after it: the scan runs the truck with dampers of
-:data:`~rigsim.scenarios.records.model.first_guess.CATALOGUE_DAMPER_RATIO` beyond each knee of
-:data:`DAMPER_SCAN_M_PER_S` (the highest a damper nearly linear at the record's speeds); fitted, the
-ratio may reach 1 (linear); kept where clearly better and the knee did not stop at its range's bottom
-(0.05 m/s: a damper whose saturating part acts as friction, which the fitted friction already is).
+A described truck's spring dampers are held nearly linear through those fits
+(:func:`~rigsim.scenarios.records.model.first_guess.damper_guess`: a knee at 0.15 m/s, where a
+vehicle damper's blow-off valves open, a slope beyond it of 0.95 of the one below, and twice as hard
+in rebound as in bump), and then their knee, slope and rebound (:data:`~.family.DAMPER_FITTED`) are
+always fitted with everything else, from those values and the kept calibration's optimum. A spec sheet does not say whether a truck's dampers
+are new and digressive (beyond the knee a fifth to a half of the slope below) or worn and linear,
+and the record says it faintly: the pans miss the drive most at the wheel-hop modes, where the
+dampers' speeds on the road are largest, so on the rig the dampers run mostly below their knee
+where on the road they run beyond it. A digressive damper lowers the fit's squared residual by a
+few percent to a third, well under what a frame or an engine must win, while it moves the road's
+DLC by a percent: the correction, which maps the model's residual on the rig to the road linearly,
+cannot put back a damping that depends on the amplitude, so the model's dampers decide how a
+truck's hop is damped on the road. So the fitted dampers are kept (:func:`choose_damper`) wherever
+the fit is no worse in mean square (the held dampers are in the fitted family, so only a search
+stopped short is worse) and the knee did not stop at its range's bottom (0.05 m/s: a damper whose
+saturating part acts as friction, which the fitted friction already is).
 
 The catalogue truck keeps the XML's rigid chassis (no frame or engine is fitted or scanned), as
 does a calibration whose fitted fields the caller names.
@@ -81,11 +77,10 @@ from rigsim.scenarios.records.model.cab_choice import (AUTO, EDGE, MIN_GAIN, SCA
                                                        excess_square, scan_error)
 from rigsim.scenarios.records.model.calibrate import calibrate, with_sigma
 from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
-from rigsim.scenarios.records.model.first_guess import (CATALOGUE_DAMPER_RATIO, damper_guess, description, held_damper,
-                                                        engine_guess, frame_guess)
+from rigsim.scenarios.records.model.first_guess import damper_guess, description, engine_guess, frame_guess
 from rigsim.scenarios.records.model.result import Calibration
 
-__all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "DAMPER_SCAN_M_PER_S", "frame_scan", "engine_scan", "damper_scan",
+__all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "frame_scan", "engine_scan",
            "choose_frame", "choose_engine", "choose_frame_engine", "choose_damper",
            "calibrate_truck"]
 
@@ -93,14 +88,14 @@ __all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "DAMPER_SCAN_M_PER_S", "frame_scan", "en
 #: 4-16 Hz a quarter octave apart, around the 5-12 Hz of a laden frame's first modes and inside the
 #: fitted frame's search range (3-20 Hz, :data:`rigsim.mjcf.frame.BOUNDS`).
 SCAN_HZ = tuple(float(v) for v in np.round(4.0 * 2.0 ** (np.arange(9) / 4.0), 2))
+#: Least relative reduction of the fit's mean squared model error for the fitted dampers to be kept,
+#: 1: none (the module's description); a fit that ends worse than the dampers held is a search stopped
+#: short.
+DAMPER_MIN_GAIN = 0.0
 #: The engine mounts tried at the kept fit's optimum (:func:`engine_scan`), Hz: 5-14 Hz a quarter
 #: octave apart, around a truck engine's 6-12 Hz bounce, from the fitted mount's range's bottom
 #: (5-20 Hz, :data:`rigsim.mjcf.engine.BOUNDS`).
 ENGINE_SCAN_HZ = tuple(float(v) for v in np.round(5.0 * 2.0 ** (np.arange(7) / 4.0), 2))
-#: The digressive dampers' knees tried at the kept fit's optimum (:func:`damper_scan`), m/s: 0.07-0.4
-#: m/s a half octave apart, around the 0.1-0.3 m/s where vehicle dampers' blow-off valves open, inside
-#: the fitted knee's search range (0.05-0.5 m/s, :data:`rigsim.mjcf.dampers.BOUNDS`).
-DAMPER_SCAN_M_PER_S = tuple(float(v) for v in np.round(0.07 * 2.0 ** (np.arange(6) / 2.0), 3))
 
 
 def frame_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
@@ -129,13 +124,6 @@ def engine_scan(state, hz=ENGINE_SCAN_HZ, mass_kg: float = ENGINE_MASS_KG) -> tu
     return best_scan(state, ("engine_mount_hz",), hz, {"engine_mass_kg": float(mass_kg)})
 
 
-def damper_scan(state, knees=DAMPER_SCAN_M_PER_S, ratio: float = CATALOGUE_DAMPER_RATIO) -> tuple[float, float]:
-    """The most digressive spring dampers (slope ``ratio`` beyond their knee, 1) could reduce the
-    squared residual of a fit whose dampers are held (linear, or at a first guess), to first order: the largest gain (1) over the
-    knees ``knees`` (m/s, each one truck run per window) and the knee that gives it (m/s)."""
-    return best_scan(state, ("damper_digressive_knee_m_per_s",), knees, {"damper_digressive_ratio": float(ratio)})
-
-
 def _choose(what: str, plain: Calibration, fitted: Calibration, fields, edge, min_gain: float):
     """(the calibration to use, one sentence why, without its verdict) of ``plain`` and ``fitted``
     (``fields`` fitted too, ``what`` their sentence with their values): ``fitted`` where it is
@@ -150,7 +138,8 @@ def _choose(what: str, plain: Calibration, fitted: Calibration, fields, edge, mi
     if low:
         return plain, f"{text}, but {low[0]} stopped at its search range's bottom."
     if gain < min_gain:
-        return plain, f"{text}, less than {min_gain:.0%} better in mean square."
+        return plain, f"{text}, " + (f"less than {min_gain:.0%} better in mean square." if min_gain > 0 else
+                                     "worse in mean square.")
     return fitted, f"{text}."
 
 
@@ -170,18 +159,19 @@ def choose_engine(plain: Calibration, engined: Calibration, min_gain: float = MI
 
 def held_dampers(plain: Calibration) -> str:
     """How ``plain`` holds its spring dampers, the start of its damper sentence: linear, or digressive at
-    the values it holds (a described truck's, :func:`~rigsim.scenarios.records.model.first_guess.held_damper`)."""
+    the values it holds (a described truck's, :func:`~rigsim.scenarios.records.model.first_guess.damper_guess`)."""
     held = plain.values()
     knee, ratio = held.get("damper_digressive_knee_m_per_s"), held.get("damper_digressive_ratio")
+    rebound = held.get("damper_rebound_ratio") or 1.0
     if knee is None or ratio is None or ratio >= 1.0:
-        return "dampers linear"
-    return f"dampers held digressive (knee {knee:.3g} m/s, slope beyond it x{ratio:.3g})"
+        return "dampers linear" + (f" (rebound x{rebound:.3g})" if rebound != 1.0 else "")
+    return f"dampers held digressive (knee {knee:.3g} m/s, slope beyond it x{ratio:.3g}, rebound x{rebound:.3g})"
 
 
-def choose_damper(plain: Calibration, digressive: Calibration, min_gain: float = MIN_GAIN) -> tuple[Calibration, str]:
+def choose_damper(plain: Calibration, digressive: Calibration, min_gain: float = DAMPER_MIN_GAIN) -> tuple[Calibration, str]:
     """The calibration to use of the dampers held (:func:`held_dampers`) and the dampers' knee and slope
-    fitted, and one sentence why."""
-    chosen, why = _choose("digressive dampers fitted (knee {} m/s, slope beyond it x{})", plain, digressive,
+    fitted (kept where no worse, :data:`DAMPER_MIN_GAIN`: the module's description), and one sentence why."""
+    chosen, why = _choose("digressive dampers fitted (knee {} m/s, slope beyond it x{}, rebound x{})", plain, digressive,
                           DAMPER_FITTED, ("damper_digressive_knee_m_per_s",), min_gain)
     return chosen, (f"{held_dampers(plain)}: " if chosen is plain else "dampers digressive: ") + why
 
@@ -232,7 +222,7 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
         What ``calibrate_cab`` refuses (before any model run).
     """
     desc = description(cab_kw["base_scenario"])
-    dampers = held_damper(desc)  # a described truck's dampers held midway until the record says otherwise
+    dampers = damper_guess(desc)  # a described truck's dampers held nearly linear until they are fitted
     if cab_kw.get("names") is None and dampers:
         fitted_guess = dampers | (fitted_guess or {})
     with local_executor(workers) if executor is None else contextlib.nullcontext(executor) as ex:
@@ -271,14 +261,12 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
             cal = dataclasses.replace(cal, frame_choice=why if together else cal.frame_choice,
                                       engine_choice=("engine on its mounts: fitted with the frame (the frame's choice "
                                                      "says why)." if together else f"{cal.engine_choice} {why}"))
-        if not set(DAMPER_FITTED) & set(cal.names):
-            guess = damper_guess(desc)
-            ratio = guess["damper_digressive_ratio"]
+        if not set(DAMPER_FITTED) & set(cal.names):  # always fitted: the record's faint word on them decides
+            held = damper_guess(desc) | {k: v for k, v in cal.values().items() if k in DAMPER_FITTED and v is not None}
+            knee = held["damper_digressive_knee_m_per_s"]
             cal, state, why = _structure(cal, state, fit, "the dampers' knee and slope fitted", held_dampers(cal),
-                                         DAMPER_FITTED,
-                                         lambda st: damper_scan(st, ratio=ratio),
-                                         lambda knee: guess | {"damper_digressive_knee_m_per_s": knee},
-                                         guess["damper_digressive_knee_m_per_s"], choose_damper, unit="m/s")
+                                         DAMPER_FITTED, lambda st: (1.0, knee), lambda knee: held, knee, choose_damper,
+                                         unit="m/s")
             cal = dataclasses.replace(cal, damper_choice=why)
     return cal
 

@@ -81,9 +81,9 @@ class PlantScore:
     engine : tuple of float or None, (Hz, kg)
         The model's engine mount frequency and mass where the calibration fitted its engine on mounts
         (the same module), None where it kept the engine in the chassis.
-    damper : tuple of float or None, (m/s, 1)
-        The model's digressive dampers' knee and slope ratio where the calibration fitted them (the
-        same module), None where it kept them linear.
+    damper : tuple of float or None, (m/s, 1, 1)
+        The model's digressive dampers' knee, slope ratio and rebound ratio where the calibration
+        fitted them (the same module), None where it did not.
     record_error : numpy.ndarray or None, (4,)
         The model error over the whole run the correction used
         (:attr:`~rigsim.scenarios.records.model.result.ModelCorrection.record_error`, 1), None where the
@@ -111,7 +111,7 @@ class PlantScore:
     timings: Mapping[str, float] = field(default_factory=dict)
     frame_hz: tuple[float, float] | None = None
     engine: tuple[float, float] | None = None
-    damper: tuple[float, float] | None = None
+    damper: tuple[float, ...] | None = None
     record_error: np.ndarray | None = None
     cell_mass_kg: float | None = None
     mass_scan: Mapping[str, np.ndarray] | None = None

@@ -20,8 +20,8 @@ from rigsim.scenarios.core.run import run
 from rigsim.scenarios.records.model import frame_choice
 from rigsim.scenarios.records.model.cab_choice import MIN_GAIN
 from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, FRAME_FITTED
-from rigsim.scenarios.records.model.frame_choice import (DAMPER_SCAN_M_PER_S, ENGINE_SCAN_HZ, SCAN_HZ, calibrate_truck,
-                                                         choose_damper, choose_engine, choose_frame)
+from rigsim.scenarios.records.model.frame_choice import (ENGINE_SCAN_HZ, SCAN_HZ, calibrate_truck, choose_damper,
+                                                         choose_engine, choose_frame)
 from rigsim.scenarios.records.model.result import Calibration
 from rigsim.scenarios.studies import scoring
 
@@ -86,24 +86,26 @@ def test_the_engine_is_kept_on_its_mounts_where_clearly_better_and_not_gone_soft
     assert ENGINE_SCAN_HZ[0] == 5.0 and 14.0 < ENGINE_SCAN_HZ[-1] < 14.3 and len(ENGINE_SCAN_HZ) == 7
 
 
-def _digressive(knee: float, ratio: float, rear: float) -> Calibration:
-    return _cal(("payload_kg", *DAMPER_FITTED), (1.0, knee, ratio), (0.24, 0.24, rear, rear),
-                ((0.5, 2.0), (0.05, 0.5), (0.2, 1.0)))
+def _digressive(knee: float, ratio: float, rear: float, rebound: float = 2.0) -> Calibration:
+    return _cal(("payload_kg", *DAMPER_FITTED), (1.0, knee, ratio, rebound), (0.24, 0.24, rear, rear),
+                ((0.5, 2.0), (0.05, 0.5), (0.2, 1.0), (1.0, 5.0)))
 
 
-def test_digressive_dampers_are_kept_where_clearly_better_and_not_gone_to_friction():
-    """The frame's rule for the dampers: MIN_GAIN better in mean square and the knee not at its range's
-    bottom (0.05 m/s, rigsim.mjcf.dampers.BOUNDS: a saturating part that acts as friction); the ratio
-    may end anywhere in 0.2-1. The scan's knees span the 0.1-0.3 m/s where blow-off valves open."""
+def test_fitted_dampers_are_kept_where_no_worse_and_not_gone_to_friction():
+    """The dampers' rule: kept where the fit is no worse in mean square, however little better (a
+    digressive damper lowers the fit's squared residual by a few percent while it moves the road's DLC
+    by a percent: fleet06 of the fresh draw of seed 1221966170, 0.096 to 0.092, its front wheels
+    -1.2 % to -0.8 %), and the knee not at its range's bottom (0.05 m/s, rigsim.mjcf.dampers.BOUNDS: a
+    saturating part that acts as friction); the ratio may end anywhere in 0.2-1."""
     plain = _cal(("payload_kg",), (1.0,), (0.24, 0.24, 0.24, 0.24), ((0.5, 2.0),))
-    better = _digressive(0.18, 0.35, 0.08)
+    better = _digressive(0.18, 0.35, 0.235)  # 2 % better in mean square, a tenth of MIN_GAIN
     chosen, why = choose_damper(plain, better)
-    assert chosen is better and why.startswith("dampers digressive: ") and "knee 0.18 m/s, slope beyond it x0.35" in why
+    assert chosen is better and why.startswith("dampers digressive: ") and "knee 0.18 m/s, slope beyond it x0.35, rebound x2)" in why
+    assert choose_damper(plain, _digressive(0.18, 0.95, 0.24))[0].names == better.names  # as good: kept
     chosen, why = choose_damper(plain, _digressive(0.0505, 0.35, 0.05))
     assert chosen is plain and why.startswith("dampers linear: ") and "damper_digressive_knee_m_per_s stopped" in why
-    chosen, why = choose_damper(plain, _digressive(0.18, 0.95, 0.23))
-    assert chosen is plain and f"{MIN_GAIN:.0%}" in why
-    assert DAMPER_SCAN_M_PER_S[0] == 0.07 and DAMPER_SCAN_M_PER_S[0] < 0.1 and 0.3 < DAMPER_SCAN_M_PER_S[-1] < 0.5
+    chosen, why = choose_damper(plain, _digressive(0.18, 0.95, 0.25))
+    assert chosen is plain and why.endswith("worse in mean square.")
 
 
 def test_a_frame_and_engine_neither_kept_alone_are_fitted_together(monkeypatch):
@@ -119,7 +121,7 @@ def test_a_frame_and_engine_neither_kept_alone_are_fitted_together(monkeypatch):
 
     bounds = {"payload_kg": (0.5, 2.0), **dict.fromkeys(FRAME_FITTED, (3.0, 20.0)), "engine_mount_hz": (5.0, 20.0),
               "engine_mass_kg": (300.0, 1500.0), "damper_digressive_knee_m_per_s": (0.05, 0.5),
-              "damper_digressive_ratio": (0.2, 1.0)}
+              "damper_digressive_ratio": (0.2, 1.0), "damper_rebound_ratio": (1.0, 5.0)}
     rigid = dataclasses.replace(_cal(("payload_kg",), (1.0,), (0.19,) * 4, ((0.5, 2.0),)), cab_choice="cab held: a")
     starts = []
 
@@ -128,13 +130,13 @@ def test_a_frame_and_engine_neither_kept_alone_are_fitted_together(monkeypatch):
             if not set(DAMPER_FITTED) & set(names):
                 starts.append({n: v for n, v in start.items() if n != "payload_kg"})
             error = joint_error if set(FRAME_FITTED + ENGINE_FITTED) <= set(names) else 0.182
+            error = 0.5 if set(DAMPER_FITTED) <= set(names) else error  # the dampers' fit, worse: held
             return _cal(names, [start.get(n, 1.0) for n in names], (error,) * 4, [bounds[n] for n in names]), State()
         return calibrate
 
     monkeypatch.setattr(frame_choice, "calibrate_cab", lambda *a, **k: (rigid, State()))
     monkeypatch.setattr(frame_choice, "frame_scan", lambda state: (0.5, 5.66))
     monkeypatch.setattr(frame_choice, "engine_scan", lambda state, **k: (0.5, 11.89))
-    monkeypatch.setattr(frame_choice, "damper_scan", lambda state, **k: (0.0, 0.1))
     monkeypatch.setattr(frame_choice, "with_sigma", lambda cal, state: (cal, state))
     tractor = load_scenario(TRUCKS / "tractor_air.toml")
     monkeypatch.setattr(frame_choice, "calibrate", fit(0.081))
@@ -189,7 +191,7 @@ def test_the_catalogue_truck_and_named_fields_get_no_frame(monkeypatch):
     monkeypatch.setattr(frame_choice, "calibrate_cab", lambda *a, **k: (cal, object()))
     monkeypatch.setattr(frame_choice, "frame_scan", lambda state: pytest.fail("scanned"))
     monkeypatch.setattr(frame_choice, "engine_scan", lambda *a, **k: pytest.fail("scanned"))
-    monkeypatch.setattr(frame_choice, "damper_scan", lambda *a, **k: pytest.fail("scanned"))
+    monkeypatch.setattr(frame_choice, "calibrate", lambda *a, **k: pytest.fail("fitted"))
     paper = load_scenario(paper_scenarios()[0])
     assert calibrate_truck(None, None, None, base_scenario=paper, workers=1) is cal
     tractor = load_scenario(TRUCKS / "tractor_air.toml")
@@ -197,39 +199,64 @@ def test_the_catalogue_truck_and_named_fields_get_no_frame(monkeypatch):
     assert SCAN_HZ[0] == 4.0 and SCAN_HZ[-1] == 16.0 and len(SCAN_HZ) == 9
 
 
-def test_a_described_trucks_dampers_are_held_midway(monkeypatch):
-    """A described truck's calibrations hold the dampers digressive at the knee of the first guess
-    (0.15 m/s, the middle of the 0.1-0.3 m/s where blow-off valves open) with a slope beyond it of 0.75
-    of the one below: midway between a new damper's (0.5, the middle of a fifth to a half) and a worn,
-    linear one's (1), not linear; a caller's own values win, and the catalogue truck and named fields
-    are left as they are. The sentence of a calibration that keeps them says they are held."""
-    from rigsim.scenarios.records.model.first_guess import (CATALOGUE_DAMPER_KNEE_M_PER_S, CATALOGUE_DAMPER_RATIO,
-                                                            HELD_DAMPER_RATIO)
+def test_a_described_trucks_dampers_are_held_nearly_linear_then_fitted(monkeypatch):
+    """A described truck's calibrations hold the dampers at the first guess, a knee of 0.15 m/s (the
+    middle of the 0.1-0.3 m/s where blow-off valves open) and a slope beyond it of 0.95 of the one
+    below (nearly linear, where a worn damper is; at 1 the knee would not move the fit), twice as hard
+    in rebound as in bump (the low end of a vehicle damper's 2-4, rigsim.mjcf.variant.BOUNDS), a
+    caller's own values winning; the catalogue truck and named fields are left as they are. Then the knee, slope and
+    rebound are fitted, always, from the held values and the calibration's optimum, with no scan first."""
+    seen, fits = [], []
 
-    seen = []
+    class State:
+        class problem:
+            evaluations = 0
+
+    held = dataclasses.replace(RIGID, fixed={"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.95,
+                                             "damper_rebound_ratio": 2.0})
+    trusted = dataclasses.replace(held, fit_nrmse=(0.05,) * 4)  # the scans trusted: no frame or engine fitted
 
     def cab(*a, fitted_guess=None, **k):
         seen.append(fitted_guess)
-        return RIGID, None  # no fit state: nothing chosen after the cab
+        return trusted, State()
+
+    def fit(*a, names, start, **k):
+        fits.append((names, start))
+        if set(DAMPER_FITTED) <= set(names):
+            return _cal(names, (1.0, 0.2, 0.45, 2.5), (0.05, 0.05, 0.048, 0.048),
+                        ((0.5, 2.0), (0.05, 0.5), (0.2, 1.0), (1.0, 5.0))), State()
+        return _cal(names, [start.get(n, 1.0) for n in names], (0.5,) * 4, [(0.1, 30.0)] * len(names)), State()
 
     monkeypatch.setattr(frame_choice, "calibrate_cab", cab)
+    monkeypatch.setattr(frame_choice, "calibrate", fit)
+    monkeypatch.setattr(frame_choice, "frame_scan", lambda state: (0.0, 9.0))
+    monkeypatch.setattr(frame_choice, "engine_scan", lambda state, **k: (0.0, 9.0))
+    monkeypatch.setattr(frame_choice, "with_sigma", lambda cal, state: (cal, state))
     tractor = load_scenario(TRUCKS / "tractor_air.toml")
-    calibrate_truck(None, None, None, base_scenario=tractor, workers=1)
-    assert HELD_DAMPER_RATIO == (CATALOGUE_DAMPER_RATIO + 1.0) / 2.0
-    assert seen[-1] == {"damper_digressive_knee_m_per_s": CATALOGUE_DAMPER_KNEE_M_PER_S,
-                        "damper_digressive_ratio": HELD_DAMPER_RATIO} == {
-                            "damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.75}
+    cal = calibrate_truck(None, None, None, base_scenario=tractor, workers=1)
+    assert seen[-1] == {"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.95,
+                        "damper_rebound_ratio": 2.0}
+    assert [set(DAMPER_FITTED) <= set(names) for names, _ in fits] == [True]  # the frame and engine not fitted
+    names, start = fits[-1]
+    assert names == ("payload_kg", *DAMPER_FITTED) and start == {
+        "payload_kg": 1.0, "damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.95,
+        "damper_rebound_ratio": 2.0}
+    assert cal.names == names and cal.damper_choice.startswith("dampers digressive: digressive dampers fitted (knee "
+                                                                "0.2 m/s, slope beyond it x0.45, rebound x2.5)")
     calibrate_truck(None, None, None, base_scenario=tractor, workers=1,
                     fitted_guess={"damper_digressive_ratio": 0.8, "payload_kg": 900.0})
-    assert seen[-1] == {"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.8, "payload_kg": 900.0}
+    assert seen[-1] == {"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.8,
+                        "damper_rebound_ratio": 2.0, "payload_kg": 900.0}
+    monkeypatch.setattr(frame_choice, "calibrate_cab", lambda *a, fitted_guess=None, **k: (seen.append(fitted_guess)
+                                                                                          or (RIGID, None)))
     calibrate_truck(None, None, None, base_scenario=load_scenario(paper_scenarios()[0]), workers=1)
     assert seen[-1] is None  # the catalogue truck's dampers stay the XML's linear ones
     calibrate_truck(None, None, None, base_scenario=tractor, names=("payload_kg",), workers=1)
     assert seen[-1] is None
-    held = dataclasses.replace(RIGID, fixed={"damper_digressive_knee_m_per_s": 0.15, "damper_digressive_ratio": 0.75})
-    assert frame_choice.held_dampers(held) == "dampers held digressive (knee 0.15 m/s, slope beyond it x0.75)"
+    assert frame_choice.held_dampers(held) == ("dampers held digressive (knee 0.15 m/s, slope beyond it x0.95, "
+                                               "rebound x2)")
     assert frame_choice.held_dampers(RIGID) == "dampers linear"
-    chosen, why = choose_damper(held, _digressive(0.18, 0.95, 0.23))
+    chosen, why = choose_damper(held, _digressive(0.18, 0.95, 0.25))
     assert chosen is held and why.startswith("dampers held digressive (knee 0.15 m/s")
 
 
