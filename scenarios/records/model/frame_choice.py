@@ -44,9 +44,10 @@ A described truck's spring dampers are held nearly linear through those fits
 (:func:`~rigsim.scenarios.records.model.first_guess.damper_guess`: a knee at 0.15 m/s, where a
 vehicle damper's blow-off valves open, a slope beyond it of 0.95 of the one below, and twice as hard
 in rebound as in bump), and then their knee, slope and rebound (:data:`~.family.DAMPER_FITTED`) are
-always fitted with everything else, from those values and the kept calibration's optimum. A spec sheet does not say whether a truck's dampers
-are new and digressive (beyond the knee a fifth to a half of the slope below) or worn and linear,
-and the record says it faintly: the pans miss the drive most at the wheel-hop modes, where the
+always fitted with everything else, from those values and the kept calibration's optimum. A spec
+sheet does not say whether a truck's dampers are new and digressive (beyond the knee a fifth to a
+half of the slope below) or worn and linear, nor how much harder they are in rebound, and the
+record says the first faintly: the pans miss the drive most at the wheel-hop modes, where the
 dampers' speeds on the road are largest, so on the rig the dampers run mostly below their knee
 where on the road they run beyond it. A digressive damper lowers the fit's squared residual by a
 few percent to a third, well under what a frame or an engine must win, while it moves the road's
@@ -80,7 +81,7 @@ from rigsim.scenarios.records.model.family import DAMPER_FITTED, ENGINE_FITTED, 
 from rigsim.scenarios.records.model.first_guess import damper_guess, description, engine_guess, frame_guess
 from rigsim.scenarios.records.model.result import Calibration
 
-__all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "frame_scan", "engine_scan",
+__all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "DAMPER_MIN_GAIN", "frame_scan", "engine_scan",
            "choose_frame", "choose_engine", "choose_frame_engine", "choose_damper",
            "calibrate_truck"]
 
@@ -88,14 +89,14 @@ __all__ = ["SCAN_HZ", "ENGINE_SCAN_HZ", "frame_scan", "engine_scan",
 #: 4-16 Hz a quarter octave apart, around the 5-12 Hz of a laden frame's first modes and inside the
 #: fitted frame's search range (3-20 Hz, :data:`rigsim.mjcf.frame.BOUNDS`).
 SCAN_HZ = tuple(float(v) for v in np.round(4.0 * 2.0 ** (np.arange(9) / 4.0), 2))
-#: Least relative reduction of the fit's mean squared model error for the fitted dampers to be kept,
-#: 1: none (the module's description); a fit that ends worse than the dampers held is a search stopped
-#: short.
-DAMPER_MIN_GAIN = 0.0
 #: The engine mounts tried at the kept fit's optimum (:func:`engine_scan`), Hz: 5-14 Hz a quarter
 #: octave apart, around a truck engine's 6-12 Hz bounce, from the fitted mount's range's bottom
 #: (5-20 Hz, :data:`rigsim.mjcf.engine.BOUNDS`).
 ENGINE_SCAN_HZ = tuple(float(v) for v in np.round(5.0 * 2.0 ** (np.arange(7) / 4.0), 2))
+#: Least relative reduction of the fit's mean squared model error for the fitted dampers to be kept,
+#: 1: none (the module's description); a fit that ends worse than the dampers held is a search stopped
+#: short.
+DAMPER_MIN_GAIN = 0.0
 
 
 def frame_scan(state, hz=SCAN_HZ) -> tuple[float, float]:
@@ -168,11 +169,13 @@ def held_dampers(plain: Calibration) -> str:
     return f"dampers held digressive (knee {knee:.3g} m/s, slope beyond it x{ratio:.3g}, rebound x{rebound:.3g})"
 
 
-def choose_damper(plain: Calibration, digressive: Calibration, min_gain: float = DAMPER_MIN_GAIN) -> tuple[Calibration, str]:
-    """The calibration to use of the dampers held (:func:`held_dampers`) and the dampers' knee and slope
-    fitted (kept where no worse, :data:`DAMPER_MIN_GAIN`: the module's description), and one sentence why."""
-    chosen, why = _choose("digressive dampers fitted (knee {} m/s, slope beyond it x{}, rebound x{})", plain, digressive,
-                          DAMPER_FITTED, ("damper_digressive_knee_m_per_s",), min_gain)
+def choose_damper(plain: Calibration, digressive: Calibration,
+                  min_gain: float = DAMPER_MIN_GAIN) -> tuple[Calibration, str]:
+    """The calibration to use of the dampers held (:func:`held_dampers`) and the dampers' knee, slope and
+    rebound fitted (kept where no worse, :data:`DAMPER_MIN_GAIN`: the module's description), and one
+    sentence why."""
+    chosen, why = _choose("digressive dampers fitted (knee {} m/s, slope beyond it x{}, rebound x{})", plain,
+                          digressive, DAMPER_FITTED, ("damper_digressive_knee_m_per_s",), min_gain)
     return chosen, (f"{held_dampers(plain)}: " if chosen is plain else "dampers digressive: ") + why
 
 
