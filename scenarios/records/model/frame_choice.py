@@ -256,8 +256,7 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
         if {"frame", "engine"} <= set(tried) and not set(FRAME_FITTED + ENGINE_FITTED) & set(cal.names):
             guess = engine_guess(desc)
             cal, state, why = _structure(cal, state, fit, "the frame and the engine together", "frame and engine apart",
-                                         FRAME_FITTED
-                                         + ENGINE_FITTED, lambda st: (1.0, tried["frame"]),
+                                         FRAME_FITTED + ENGINE_FITTED, None,
                                          lambda hz: dict.fromkeys(FRAME_FITTED, hz) | guess
                                          | {"engine_mount_hz": tried["engine"]}, tried["frame"], choose_frame_engine)
             together = set(FRAME_FITTED) <= set(cal.names)
@@ -265,11 +264,10 @@ def calibrate_truck(t_s, x_a_m, force_N, *, cab: str = AUTO, fitted_guess: dict 
                                       engine_choice=("engine on its mounts: fitted with the frame (the frame's choice "
                                                      "says why)." if together else f"{cal.engine_choice} {why}"))
         if not set(DAMPER_FITTED) & set(cal.names):  # always fitted: the record's faint word on them decides
-            held = damper_guess(desc) | {k: v for k, v in cal.values().items() if k in DAMPER_FITTED and v is not None}
-            knee = held["damper_digressive_knee_m_per_s"]
-            cal, state, why = _structure(cal, state, fit, "the dampers' knee and slope fitted", held_dampers(cal),
-                                         DAMPER_FITTED, lambda st: (1.0, knee), lambda knee: held, knee, choose_damper,
-                                         unit="m/s")
+            held = dampers | {k: v for k, v in fitted_guess.items() if k in DAMPER_FITTED and v is not None}
+            cal, state, why = _structure(cal, state, fit, "the dampers' knee, slope and rebound fitted",
+                                         held_dampers(cal), DAMPER_FITTED, None, lambda knee: held,
+                                         held["damper_digressive_knee_m_per_s"], choose_damper, unit="m/s")
             cal = dataclasses.replace(cal, damper_choice=why)
     return cal
 
@@ -279,15 +277,17 @@ def _structure(cal: Calibration, state, fit, what: str, kept: str, fields, scan,
     """One structure's choice (the module's description) from the calibration ``cal`` and its fit's
     ``state`` (Jacobian computed, pool running): (the calibration kept, its state, one sentence why).
     ``fit(names, start)`` calibrates with ``names`` from the values ``start``; ``scan(state)`` gives
-    (gain, value); ``start_of(hz)`` the structure's fields at the scan's best value ``hz`` (in ``unit``;
-    ``hz0`` where the scan would not run); ``choose(cal, fitted)`` keeps one and says why; ``kept``
-    starts the sentence where the structure is not fitted. The structures chosen before keep their
-    sentences. A structure whose fit cannot run (a truck it cannot be built into) leaves ``cal`` as it
-    is and says why. A structure fitted and not kept puts the scan's best value in ``tried[key]``."""
+    (gain, value), or None to fit the structure without a scan; ``start_of(hz)`` the structure's fields
+    at the scan's best value ``hz`` (in ``unit``; ``hz0`` where the scan would not run or there is none);
+    ``choose(cal, fitted)`` keeps one and says why; ``kept`` starts the sentence where the structure is
+    not fitted. The structures chosen before keep their sentences. A structure whose fit cannot run (a
+    truck it cannot be built into) leaves ``cal`` as it is and says why. A structure fitted and not
+    kept puts the scan's best value in ``tried[key]``."""
     w0, runs0 = time.perf_counter(), state.problem.evaluations
     gain, hz = 1.0, hz0
-    with contextlib.suppress(ScenarioError, SimulationError):  # a structure that would not run: fit it
-        gain, hz = scan(state)
+    if scan is not None:
+        with contextlib.suppress(ScenarioError, SimulationError):  # a structure that would not run: fit it
+            gain, hz = scan(state)
     error = scan_error(cal)
     scanned = state.problem.evaluations - runs0
     if gain < MIN_GAIN / 2 and error <= SCAN_TRUSTED:
