@@ -4,7 +4,7 @@
 
     python benchmarks/fleet_suite.py --draw development|fresh [--trucks 24] [--duration-s 30]
                                      [--seed N] [--cab auto|held|fitted] [--workers N] [--noise-N 100]
-                                     [--part K/N]
+                                     [--part K/N] [--keep SCORES.jsonl]
     python benchmarks/fleet_suite.py --page DEVELOPMENT.txt FRESH.txt [--results docs/results]
 
 Truck ``i`` of a draw (:func:`rigsim.scenarios.studies.model_suite.fleet.draw_truck`) is a spec sheet
@@ -42,6 +42,7 @@ import os
 import pathlib
 import re
 import secrets
+import subprocess
 import sys
 import time
 
@@ -99,16 +100,99 @@ def _frame_text(score) -> str:
     return out
 
 
+#: What a ``--keep`` file's lines must share with the run that reads them: the draw, its settings and
+#: the code that scored it (:func:`code_version`).
+KEPT_SETTINGS = ("draw", "seed", "trucks", "duration_s", "noise_N", "cab", "code")
+
+
+def code_version() -> str | None:
+    """The commit of the repository this script runs from, with ``+changes`` where its tracked files
+    differ from it; None outside a git checkout."""
+    root = pathlib.Path(__file__).resolve().parents[1]
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root, capture_output=True,
+                               text=True, check=True)
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return head.stdout.strip() + ("+changes" if dirty.stdout.strip() else "")
+
+
+def read_kept(path: pathlib.Path | None) -> list[dict]:
+    """The lines of a ``--keep`` file (none where it is not given or does not exist yet). A line a run
+    cut short left unfinished is skipped (its truck is run again), and said on stderr."""
+    if path is None or not path.exists():
+        return []
+    lines, cut = [], 0
+    for text in path.read_text(encoding="utf-8").splitlines():
+        try:
+            line = json.loads(text)
+        except json.JSONDecodeError:
+            cut += text.strip() != ""
+            continue
+        if isinstance(line, dict) and "plant" in line:
+            lines.append(line)
+        else:
+            cut += 1
+    if cut:
+        print(f"{path}: {cut} line(s) not a whole truck's score (a run cut while writing); those trucks run again",
+              file=sys.stderr, flush=True)
+    return lines
+
+
+def kept_scores(lines: list[dict], settings: dict, path) -> dict[str, tuple[PlantScore, bool]]:
+    """The trucks a ``--keep`` file's ``lines`` hold for the run of ``settings``: {name: (its score, whether
+    it was recorded at :data:`RETRY_RATE_HZ`)}. Refuses (exit 2) a file that holds another draw's or
+    settings' scores, before any run."""
+    out = {}
+    for line in lines:
+        other = {k: line.get(k) for k in KEPT_SETTINGS}
+        if other != {k: settings[k] for k in KEPT_SETTINGS}:
+            diff = next(k for k in KEPT_SETTINGS if other[k] != settings[k])
+            print(f"--keep {path} holds scores of a run with {diff} {other[diff]!r}, not {settings[diff]!r}: give "
+                  f"that run's settings, or another --keep file", file=sys.stderr, flush=True)
+            raise SystemExit(2)
+        out[line["plant"]["name"]] = (PlantScore.from_dict(line["plant"]), bool(line.get("retried")))
+    return out
+
+
+def keep(path: pathlib.Path | None, settings: dict, score: PlantScore, retried: bool) -> None:
+    """Append ``score`` to the ``--keep`` file as one JSON line, flushed to disk."""
+    if path is None:
+        return
+    line = json.loads(to_json({k: settings[k] for k in KEPT_SETTINGS} | {"retried": retried, "plant": score.to_dict()}))
+    with path.open("a", encoding="utf-8") as f:
+        f.write(json.dumps(line) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def _seed(args, lines: list[dict]) -> int:
+    """The draw's seed: ``--seed``; else 0 for the development draw; else a fresh draw's ``--keep`` file's;
+    else drawn now."""
+    if args.seed is not None:
+        return args.seed
+    if args.draw == "development":
+        return DEVELOPMENT_SEED
+    return lines[0]["seed"] if lines else secrets.randbits(31)
+
+
 def run_draw(args) -> dict:
     """Run and score one draw; its settings, summary and scores (as printed in its JSON line)."""
-    seed = args.seed if args.seed is not None else (DEVELOPMENT_SEED if args.draw == "development"
-                                                    else secrets.randbits(31))
+    lines = read_kept(args.keep)
+    seed = _seed(args, lines)
+    settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "duration_s": args.duration_s,
+                "noise_N": args.noise_N, "cab": args.cab, "code": code_version()}
+    kept = kept_scores(lines, settings, args.keep)
     print(f"fleet suite, {args.draw} draw: seed {seed}", file=sys.stderr, flush=True)
     trucks = fleet_trucks(args.trucks, seed)  # every truck drawn and checked before any run
     part_k, part_n = args.part
     trucks = trucks[part_k - 1::part_n]
     t0 = time.perf_counter()
-    keys = [(i, k) for i in range(len(trucks)) for k in ("road", "rig", "identify")]
+    for truck in trucks:
+        if truck.name in kept:
+            print(f"[{0:6.0f} s] {truck.name}: kept in {args.keep}", file=sys.stderr, flush=True)
+    keys = [(i, k) for i in range(len(trucks)) if trucks[i].name not in kept for k in ("road", "rig", "identify")]
     jobs = [(fleet_job, (trucks[i], args.duration_s, k)) for i, k in keys]
 
     def said(j, _r):
@@ -118,7 +202,13 @@ def run_draw(args) -> dict:
     by = dict(zip(keys, run_jobs(jobs, workers=args.workers, on_done=said)))
     scores, refused = [], []
     for i, truck in enumerate(trucks):
+        if truck.name in kept:
+            s, retried = kept[truck.name]
+            scores.append(s)
+            refused += [truck.name] if retried else []
+            continue
         runs = [by.pop((i, k)) for k in ("road", "rig", "identify")]
+        retried = False
         try:
             s = _score(truck, runs, args, None)
         except CorrectionError as exc:  # the lab's own fix: record at a rate the correction filter holds at
@@ -130,7 +220,9 @@ def run_draw(args) -> dict:
                             workers=args.workers)
             s = _score(truck, runs, args, RETRY_RATE_HZ)
             refused.append(truck.name)
+            retried = True
         s = dataclasses.replace(s, plant={**s.plant, "_spec": spec_text(truck), "_lacks": lacks(truck)})
+        keep(args.keep, settings, s, retried)
         scores.append(s)
         print(f"[{time.perf_counter() - t0:6.0f} s] {s.name} ({spec_text(truck)}): {s.method}, DLC "
               f"{' '.join(pct(x) for x in s.dlc_error['delivered'])}, NRMSE/floor "
@@ -143,9 +235,7 @@ def run_draw(args) -> dict:
     print(f"- 95 % confidence interval of the share over trucks: {100 * interval[0]:.1f}-{100 * interval[1]:.1f} %")
     if refused:
         print(f"- recorded at {RETRY_RATE_HZ:g} Hz where the linear correction refused 1 kHz: {', '.join(refused)}")
-    settings = {"draw": args.draw, "seed": seed, "trucks": args.trucks, "part": f"{part_k}/{part_n}", "duration_s": args.duration_s,
-                "at_retry_rate": refused,
-                "noise_N": args.noise_N, "cab": args.cab, "command": script_command(__file__)}
+    settings = settings | {"part": f"{part_k}/{part_n}", "at_retry_rate": refused, "command": script_command(__file__)}
     out = json.loads(to_json(settings | {"summary": numbers, "interval": interval,
                                          "wall_time_s": round(time.perf_counter() - t0, 1),
                                          "plants": [s.to_dict() for s in scores]}))
@@ -174,10 +264,10 @@ def joined(runs: list[dict]) -> list[dict]:
             continue
         plants = sorted((p for run in parts for p in run["plants"]), key=lambda p: p["name"])
         names = [p["name"] for p in plants]
-        settings = {(run["trucks"], run["duration_s"], run["noise_N"], run["cab"]) for run in parts}
+        settings = {(run["trucks"], run["duration_s"], run["noise_N"], run["cab"], run.get("code")) for run in parts}
         if len(settings) > 1 or len(set(names)) != len(names) or len(names) != parts[0]["trucks"]:
             raise SystemExit(f"the parts of the {draw} draw (seed {seed}) do not make one draw: give each part "
-                             f"once, all run with the same --trucks, --duration-s, --noise-N and --cab")
+                             f"once, all run with the same --trucks, --duration-s, --noise-N and --cab by the same code")
         scores = [PlantScore.from_dict(p) for p in plants]
         out.append(parts[0] | {"part": "1/1", "plants": plants, "interval": list(share_interval(scores)),
                                "at_retry_rate": sorted(n for run in parts for n in run.get("at_retry_rate") or []),
@@ -248,6 +338,8 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     ap.add_argument("--part", type=_part, default=(1, 1), metavar="K/N",
                     help="score the draw's trucks K-1, K-1+N, ... alone (default 1/1: all of them)")
+    ap.add_argument("--keep", type=pathlib.Path, default=None, metavar="SCORES.jsonl",
+                    help="append each truck's score to this file as it is scored; the trucks it holds are not run again")
     ap.add_argument("--page", type=pathlib.Path, nargs="+", default=None, metavar="RUN.txt",
                     help="write fleet_suite.md from runs' printed output instead of running")
     ap.add_argument("--results", type=pathlib.Path, default=RESULTS, help="folder of fleet_suite.md")

@@ -61,3 +61,66 @@ def test_a_part_is_k_of_n(suite):
     for bad in ("3/2", "0/2", "a/b", "2"):
         with pytest.raises(argparse.ArgumentTypeError):
             suite._part(bad)
+
+
+def _args(tmp_path, **kw) -> argparse.Namespace:
+    return argparse.Namespace(**{"draw": "fresh", "seed": 7, "trucks": 4, "duration_s": 30.0, "noise_N": 100.0,
+                                 "cab": "auto", "part": (1, 1), "workers": 1, "keep": tmp_path / "kept.jsonl"} | kw)
+
+
+def _settings(suite, args) -> dict:
+    return {"draw": args.draw, "seed": args.seed, "trucks": args.trucks, "duration_s": args.duration_s,
+            "noise_N": args.noise_N, "cab": args.cab, "code": suite.code_version()}
+
+
+def test_a_kept_score_is_read_back_as_it_was_and_a_cut_line_is_run_again(suite, tmp_path):
+    args = _args(tmp_path)
+    settings = _settings(suite, args)
+    suite.keep(args.keep, settings, _score(0, 0.001), False)
+    suite.keep(args.keep, settings, _score(1, 0.02), True)
+    with args.keep.open("a", encoding="utf-8") as f:
+        f.write('{"draw": "fresh", "plant": {"na')  # a run cut while writing truck 2
+    kept = suite.kept_scores(suite.read_kept(args.keep), settings, args.keep)
+    assert sorted(kept) == ["fleet00-B-50kmh-0kg", "fleet01-B-50kmh-0kg"]
+    score, retried = kept["fleet01-B-50kmh-0kg"]
+    assert retried and not kept["fleet00-B-50kmh-0kg"][1]
+    assert score.to_dict() == _score(1, 0.02).to_dict()
+
+
+def test_a_keep_file_of_another_draw_is_refused_naming_what_differs(suite, tmp_path, capsys):
+    args = _args(tmp_path)
+    suite.keep(args.keep, _settings(suite, args), _score(0, 0.001), False)
+    with pytest.raises(SystemExit) as exc:
+        suite.kept_scores(suite.read_kept(args.keep), _settings(suite, _args(tmp_path, seed=8)), args.keep)
+    assert exc.value.code == 2 and "seed 7, not 8" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # scored by other code: not one draw either
+        suite.kept_scores(suite.read_kept(args.keep), _settings(suite, args) | {"code": "0" * 40}, args.keep)
+
+
+def test_a_fresh_draw_with_a_keep_file_goes_on_with_its_seed(suite, tmp_path):
+    args = _args(tmp_path, seed=None)
+    suite.keep(args.keep, _settings(suite, _args(tmp_path, seed=123)), _score(0, 0.001), False)
+    lines = suite.read_kept(args.keep)
+    assert suite._seed(args, lines) == 123
+    assert suite._seed(_args(tmp_path, seed=5), lines) == 5
+    assert suite._seed(_args(tmp_path, seed=None, draw="development"), lines) == suite.DEVELOPMENT_SEED
+
+
+def test_a_draw_cut_short_runs_only_the_trucks_its_keep_file_lacks(suite, tmp_path, monkeypatch):
+    """Three of four trucks kept: only the fourth's road, rig and identification run and it is scored and
+    kept; the draw's table holds all four (truck 1's miss counted)."""
+    args = _args(tmp_path)
+    for i in range(3):
+        suite.keep(args.keep, _settings(suite, args), _score(i, 0.02 if i == 1 else 0.001), False)
+    trucks = [argparse.Namespace(name=f"fleet{i:02d}-B-50kmh-0kg") for i in range(4)]
+    ran = []
+    monkeypatch.setattr(suite, "fleet_trucks", lambda n, seed: trucks)
+    monkeypatch.setattr(suite, "run_jobs", lambda jobs, workers, on_done=None: ran.extend(jobs) or [None] * len(jobs))
+    monkeypatch.setattr(suite, "_score", lambda truck, runs, a, rate: _score(3, 0.002))
+    monkeypatch.setattr(suite, "spec_text", lambda truck: "s")
+    monkeypatch.setattr(suite, "lacks", lambda truck: "l")
+    out = suite.run_draw(args)
+    assert [job[1][0].name for job in ran] == ["fleet03-B-50kmh-0kg"] * 3
+    assert [p["name"][:7] for p in out["plants"]] == ["fleet00", "fleet01", "fleet02", "fleet03"]
+    assert out["summary"]["share_good"] == pytest.approx(0.75)
+    assert len(suite.read_kept(args.keep)) == 4
