@@ -224,7 +224,8 @@ def fleet_job(truck: FleetTruck, duration_s: float, kind: str, rate_hz: float | 
 
 def lacks(truck: FleetTruck) -> str:
     """What the plant has that its model lacks, in a few words: the frame's modes (the model fits its
-    own, cut at mid-wheelbase and damped 4 %) with where the plant's is cut and its damping, and the rest."""
+    own, cut at mid-wheelbase and damped 4 %) with where the plant's is cut and its damping, and the rest
+    (the dampers' rebound over bump among them: the model fits its own from twice, a spec sheet gives none)."""
     p = truck.plant
     parts = [f"frame {p['frame_torsion_hz']:.1f}/{p['frame_bending_hz']:.1f} Hz cut at "
              f"{p['frame_hinge_share']:.2f} of the wheelbase, damped {100 * p['frame_damping_ratio']:.1f} %",
@@ -234,6 +235,8 @@ def lacks(truck: FleetTruck) -> str:
     else:
         worn = [p[f"spring_damping_factor_{c}"] for c in CORNERS]
         parts.append(f"dampers worn to {min(worn):.2f}-{max(worn):.2f}")
+    if "damper_rebound_ratio" in p:
+        parts.append(f"rebound x{p['damper_rebound_ratio']:.2f}")
     if "cab_mount_hz" in p:
         parts.append(f"cab {p['cab_mount_hz']:.1f} Hz")
     if p.get("tire_progressive_spread_m"):

@@ -64,6 +64,7 @@ def test_every_plant_stands_and_carries_what_its_model_lacks(fleet):
         for field, (lo, hi) in fleet_ranges()["structure"]["frame"].items():
             assert lo <= getattr(plant, field) <= hi
         assert f"cut at {plant.frame_hinge_share:.2f} of the wheelbase" in lacks(truck)
+        assert f"rebound x{plant.damper_rebound_ratio:.2f}" in lacks(truck)  # the model's dampers start at x2
         digressive = plant.damper_digressive_ratio is not None
         worn = all(getattr(plant, f"spring_damping_factor_{c}") <= 0.5 for c in ("fl", "fr", "rl", "rr"))
         assert digressive or worn
