@@ -118,6 +118,15 @@ def code_version() -> str | None:
     return head.stdout.strip() + ("+changes" if dirty.stdout.strip() else "")
 
 
+def refused(text: str) -> SystemExit:
+    """Bad input: ``text`` (one sentence naming the field and the fix) on stderr, and the exit (code 2) to
+    raise before any run or write; its message is ``text``."""
+    print(text, file=sys.stderr, flush=True)
+    exc = SystemExit(text)
+    exc.code = 2
+    return exc
+
+
 def read_kept(path: pathlib.Path | None) -> list[dict]:
     """The lines of a ``--keep`` file (none where it is not given or does not exist yet). A line a run
     cut short left unfinished is skipped (its truck is run again), and said on stderr."""
@@ -149,9 +158,8 @@ def kept_scores(lines: list[dict], settings: dict, path) -> dict[str, tuple[Plan
         other = {k: line.get(k) for k in KEPT_SETTINGS}
         if other != {k: settings[k] for k in KEPT_SETTINGS}:
             diff = next(k for k in KEPT_SETTINGS if other[k] != settings[k])
-            print(f"--keep {path} holds scores of a run with {diff} {other[diff]!r}, not {settings[diff]!r}: give "
-                  f"that run's settings, or another --keep file", file=sys.stderr, flush=True)
-            raise SystemExit(2)
+            raise refused(f"--keep {path} holds scores of a run with {diff} {other[diff]!r}, not {settings[diff]!r}: "
+                          f"give that run's settings, or another --keep file")
         out[line["plant"]["name"]] = (PlantScore.from_dict(line["plant"]), bool(line.get("retried")))
     return out
 
@@ -244,9 +252,11 @@ def run_draw(args) -> dict:
 
 
 def _read_run(path: pathlib.Path) -> dict:
+    if not path.is_file():
+        raise refused(f"--page {path}: no such file; give the files a fleet_suite run's output was written to")
     lines = [line for line in path.read_text(encoding="utf-8").splitlines() if line.startswith("{")]
     if not lines:
-        raise SystemExit(f"{path}: no JSON line of a fleet_suite run in it; give the file its run printed")
+        raise refused(f"--page {path}: no JSON line of a fleet_suite run in it; give the file its run printed")
     return json.loads(lines[-1])
 
 
@@ -266,7 +276,7 @@ def joined(runs: list[dict]) -> list[dict]:
         names = [p["name"] for p in plants]
         settings = {(run["trucks"], run["duration_s"], run["noise_N"], run["cab"], run.get("code")) for run in parts}
         if len(settings) > 1 or len(set(names)) != len(names) or len(names) != parts[0]["trucks"]:
-            raise SystemExit(f"the parts of the {draw} draw (seed {seed}) do not make one draw: give each part "
+            raise refused(f"the parts of the {draw} draw (seed {seed}) do not make one draw: give each part "
                              f"once, all run with the same --trucks, --duration-s, --noise-N and --cab by the same code")
         scores = [PlantScore.from_dict(p) for p in plants]
         out.append(parts[0] | {"part": "1/1", "plants": plants, "interval": list(share_interval(scores)),
@@ -348,9 +358,9 @@ def main(argv=None) -> int:
         write_page(args.page, args.results)
         return 0
     if args.draw is None:
-        raise SystemExit("give --draw development or --draw fresh (or --page RUN.txt ...)")
+        ap.error("give --draw development or --draw fresh (or --page RUN.txt ...)")
     if not 1 <= args.trucks <= 200 or args.duration_s < scoring.MIN_DURATION_S or args.noise_N < 0:
-        raise SystemExit(f"--trucks must be 1-200, --duration-s >= {scoring.MIN_DURATION_S:g} s, --noise-N >= 0")
+        ap.error(f"--trucks must be 1-200, --duration-s >= {scoring.MIN_DURATION_S:g} s, --noise-N >= 0")
     run_draw(args)
     return 0
 

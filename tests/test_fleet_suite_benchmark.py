@@ -124,3 +124,18 @@ def test_a_draw_cut_short_runs_only_the_trucks_its_keep_file_lacks(suite, tmp_pa
     assert [p["name"][:7] for p in out["plants"]] == ["fleet00", "fleet01", "fleet02", "fleet03"]
     assert out["summary"]["share_good"] == pytest.approx(0.75)
     assert len(suite.read_kept(args.keep)) == 4
+
+
+def test_bad_input_is_refused_with_exit_2_before_any_run(suite, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        suite.main(["--page", str(tmp_path / "missing.txt"), "--results", str(tmp_path)])
+    assert exc.value.code == 2 and "no such file" in capsys.readouterr().err
+    (tmp_path / "empty.txt").write_text("not a run\n", encoding="utf-8")
+    with pytest.raises(SystemExit) as exc:
+        suite.main(["--page", str(tmp_path / "empty.txt"), "--results", str(tmp_path)])
+    assert exc.value.code == 2 and "no JSON line" in capsys.readouterr().err
+    for argv in (["--draw", "fresh", "--trucks", "0"], []):
+        with pytest.raises(SystemExit) as exc:
+            suite.main(argv)
+        assert exc.value.code == 2
+    assert not list(tmp_path.glob("*.md"))
