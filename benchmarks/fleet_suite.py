@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import hashlib
 import json
 import os
 import pathlib
@@ -105,17 +106,25 @@ def _frame_text(score) -> str:
 KEPT_SETTINGS = ("draw", "seed", "trucks", "duration_s", "noise_N", "cab", "code")
 
 
-def code_version() -> str | None:
-    """The commit of the repository this script runs from, with ``+changes`` where its tracked files
-    differ from it; None outside a git checkout."""
-    root = pathlib.Path(__file__).resolve().parents[1]
+#: What scores a draw: the package's sources, its dependencies' pins and this script (paths in the repository).
+CODE_PATHS = ("rigsim", "mjcf", "hydraulics", "correction", "scenarios", "pyproject.toml", "benchmarks/fleet_suite.py")
+
+
+def code_version(root: pathlib.Path | None = None) -> str | None:
+    """The version of the code that scores a draw: a digest of :data:`CODE_PATHS` as committed (their git
+    object ids at HEAD, so that a commit of docs or tests leaves it as it is), with ``+changes`` where
+    the checkout's files there differ from HEAD; None outside a git checkout. ``root``: the repository
+    (default: this script's)."""
+    root = pathlib.Path(__file__).resolve().parents[1] if root is None else root
     try:
-        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True)
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root, capture_output=True,
-                               text=True, check=True)
+        ids = subprocess.run(["git", "rev-parse", *(f"HEAD:{p}" for p in CODE_PATHS)], cwd=root, capture_output=True,
+                             text=True, check=True)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", *CODE_PATHS], cwd=root,
+                               capture_output=True, text=True, check=True)
     except (OSError, subprocess.CalledProcessError):
         return None
-    return head.stdout.strip() + ("+changes" if dirty.stdout.strip() else "")
+    digest = hashlib.sha1(ids.stdout.encode()).hexdigest()[:16]
+    return digest + ("+changes" if dirty.stdout.strip() else "")
 
 
 def refused(text: str) -> SystemExit:

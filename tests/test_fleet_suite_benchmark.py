@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
+import subprocess
 
 import numpy as np
 import pytest
@@ -139,3 +141,30 @@ def test_bad_input_is_refused_with_exit_2_before_any_run(suite, tmp_path, capsys
             suite.main(argv)
         assert exc.value.code == 2
     assert not list(tmp_path.glob("*.md"))
+
+
+@pytest.mark.skipif(shutil.which("git") is None, reason="needs git")
+def test_the_code_version_follows_the_code_not_the_docs(suite, tmp_path):
+    """A --keep file is tied to the code that scored it: a commit of docs leaves the version as it is, an
+    uncommitted change to the package says ``+changes``, and its commit gives another version."""
+    def git(*args):
+        subprocess.run(["git", "-c", "user.name=t", "-c", "user.email=t@t", *args], cwd=tmp_path, check=True,
+                       capture_output=True)
+
+    for path in suite.CODE_PATHS + ("docs/index.md",):  # a folder (no suffix) gets one file
+        f = tmp_path / path if "." in path else tmp_path / path / "a.py"
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_text("1\n", encoding="utf-8")
+    git("init", "-q")
+    git("add", "-A")
+    git("commit", "-qm", "a")
+    first = suite.code_version(tmp_path)
+    assert first is not None and "+" not in first
+    (tmp_path / "docs/index.md").write_text("2\n", encoding="utf-8")
+    git("commit", "-qam", "docs")
+    assert suite.code_version(tmp_path) == first
+    (tmp_path / "scenarios/a.py").write_text("2\n", encoding="utf-8")
+    assert suite.code_version(tmp_path) == first + "+changes"
+    git("commit", "-qam", "code")
+    assert suite.code_version(tmp_path) not in (first, first + "+changes", None)
+    assert suite.code_version(tmp_path.parent / "nowhere") is None
