@@ -298,8 +298,8 @@ def joined(runs: list[dict]) -> list[dict]:
 def write_page(paths: list[pathlib.Path], results: pathlib.Path) -> pathlib.Path:
     """``fleet_suite.md``: each draw's summary side by side, then each draw's table."""
     runs = joined([_read_run(p) for p in paths])
-    for run in runs:  # where a run wrote its page is not what it measured
-        run["command"] = re.sub(r" --results(=| )\S+", "", run["command"])
+    for run in runs:  # where a run wrote its page or kept its scores is not what it measured
+        run["command"] = re.sub(r" --(results|keep)(=| )\S+", "", run["command"])
     summary_head = ["draw", "seed", "trucks", "wheels good (95 % CI over trucks)", "worst DLC error",
                     "worst NRMSE above linear", "fallbacks", "median wall s", "median CPU s"]
     summary, parts = [], []
