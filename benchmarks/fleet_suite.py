@@ -112,19 +112,20 @@ CODE_PATHS = ("rigsim", "mjcf", "hydraulics", "correction", "scenarios", "pyproj
 
 def code_version(root: pathlib.Path | None = None) -> str | None:
     """The version of the code that scores a draw: a digest of :data:`CODE_PATHS` as committed (their git
-    object ids at HEAD, so that a commit of docs or tests leaves it as it is), with ``+changes`` where
-    the checkout's files there differ from HEAD; None outside a git checkout. ``root``: the repository
+    object ids at HEAD, so that a commit of docs or tests leaves it as it is), with ``+changes-`` and a
+    digest of the difference where the checkout's files there differ from HEAD; None outside a git
+    checkout. ``root``: the repository
     (default: this script's)."""
     root = pathlib.Path(__file__).resolve().parents[1] if root is None else root
     try:
         ids = subprocess.run(["git", "rev-parse", *(f"HEAD:{p}" for p in CODE_PATHS)], cwd=root, capture_output=True,
                              text=True, check=True)
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", *CODE_PATHS], cwd=root,
-                               capture_output=True, text=True, check=True)
+        diff = subprocess.run(["git", "diff", "HEAD", "--", *CODE_PATHS], cwd=root, capture_output=True, text=True,
+                              check=True)
     except (OSError, subprocess.CalledProcessError):
         return None
     digest = hashlib.sha1(ids.stdout.encode()).hexdigest()[:16]
-    return digest + ("+changes" if dirty.stdout.strip() else "")
+    return digest + (f"+changes-{hashlib.sha1(diff.stdout.encode()).hexdigest()[:8]}" if diff.stdout.strip() else "")
 
 
 def refused(text: str) -> SystemExit:

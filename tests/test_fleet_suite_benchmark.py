@@ -146,7 +146,8 @@ def test_bad_input_is_refused_with_exit_2_before_any_run(suite, tmp_path, capsys
 @pytest.mark.skipif(shutil.which("git") is None, reason="needs git")
 def test_the_code_version_follows_the_code_not_the_docs(suite, tmp_path):
     """A --keep file is tied to the code that scored it: a commit of docs leaves the version as it is, an
-    uncommitted change to the package says ``+changes``, and its commit gives another version."""
+    uncommitted change to the package says ``+changes-`` with its own digest, and its commit gives another
+    version."""
     def git(*args):
         subprocess.run(["git", "-c", "user.name=t", "-c", "user.email=t@t", *args], cwd=tmp_path, check=True,
                        capture_output=True)
@@ -164,7 +165,10 @@ def test_the_code_version_follows_the_code_not_the_docs(suite, tmp_path):
     git("commit", "-qam", "docs")
     assert suite.code_version(tmp_path) == first
     (tmp_path / "scenarios/a.py").write_text("2\n", encoding="utf-8")
-    assert suite.code_version(tmp_path) == first + "+changes"
+    changed = suite.code_version(tmp_path)
+    assert changed.startswith(first + "+changes-")
+    (tmp_path / "scenarios/a.py").write_text("3\n", encoding="utf-8")  # other uncommitted code: another version
+    assert suite.code_version(tmp_path).startswith(first + "+changes-") and suite.code_version(tmp_path) != changed
     git("commit", "-qam", "code")
-    assert suite.code_version(tmp_path) not in (first, first + "+changes", None)
+    assert suite.code_version(tmp_path) not in (first, changed, None) and "+" not in suite.code_version(tmp_path)
     assert suite.code_version(tmp_path.parent / "nowhere") is None
