@@ -114,8 +114,7 @@ def code_version(root: pathlib.Path | None = None) -> str | None:
     """The version of the code that scores a draw: a digest of :data:`CODE_PATHS` as committed (their git
     object ids at HEAD, so that a commit of docs or tests leaves it as it is), with ``+changes-`` and a
     digest of the difference where the checkout's files there differ from HEAD; None outside a git
-    checkout. ``root``: the repository
-    (default: this script's)."""
+    checkout. ``root``: the repository (default: this script's)."""
     root = pathlib.Path(__file__).resolve().parents[1] if root is None else root
     try:
         ids = subprocess.run(["git", "rev-parse", *(f"HEAD:{p}" for p in CODE_PATHS)], cwd=root, capture_output=True,
@@ -218,12 +217,12 @@ def run_draw(args) -> dict:
         print(f"[{time.perf_counter() - t0:6.0f} s] {trucks[i].name}: {k}", file=sys.stderr, flush=True)
 
     by = dict(zip(keys, run_jobs(jobs, workers=args.workers, on_done=said)))
-    scores, refused = [], []
+    scores, at_retry_rate = [], []
     for i, truck in enumerate(trucks):
         if truck.name in kept:
             s, retried = kept[truck.name]
             scores.append(s)
-            refused += [truck.name] if retried else []
+            at_retry_rate += [truck.name] if retried else []
             continue
         runs = [by.pop((i, k)) for k in ("road", "rig", "identify")]
         retried = False
@@ -237,7 +236,7 @@ def run_draw(args) -> dict:
             runs = run_jobs([(fleet_job, (truck, args.duration_s, k, RETRY_RATE_HZ)) for k in ("road", "rig", "identify")],
                             workers=args.workers)
             s = _score(truck, runs, args, RETRY_RATE_HZ)
-            refused.append(truck.name)
+            at_retry_rate.append(truck.name)
             retried = True
         s = dataclasses.replace(s, plant={**s.plant, "_spec": spec_text(truck), "_lacks": lacks(truck)})
         keep(args.keep, settings, s, retried)
@@ -251,9 +250,9 @@ def run_draw(args) -> dict:
     print(markdown_table(head, rows))
     print(goals)
     print(f"- 95 % confidence interval of the share over trucks: {100 * interval[0]:.1f}-{100 * interval[1]:.1f} %")
-    if refused:
-        print(f"- recorded at {RETRY_RATE_HZ:g} Hz where the linear correction refused 1 kHz: {', '.join(refused)}")
-    settings = settings | {"part": f"{part_k}/{part_n}", "at_retry_rate": refused, "command": script_command(__file__)}
+    if at_retry_rate:
+        print(f"- recorded at {RETRY_RATE_HZ:g} Hz where the linear correction refused 1 kHz: {', '.join(at_retry_rate)}")
+    settings = settings | {"part": f"{part_k}/{part_n}", "at_retry_rate": at_retry_rate, "command": script_command(__file__)}
     out = json.loads(to_json(settings | {"summary": numbers, "interval": interval,
                                          "wall_time_s": round(time.perf_counter() - t0, 1),
                                          "plants": [s.to_dict() for s in scores]}))
@@ -287,7 +286,7 @@ def joined(runs: list[dict]) -> list[dict]:
         settings = {(run["trucks"], run["duration_s"], run["noise_N"], run["cab"], run.get("code")) for run in parts}
         if len(settings) > 1 or len(set(names)) != len(names) or len(names) != parts[0]["trucks"]:
             raise refused(f"the parts of the {draw} draw (seed {seed}) do not make one draw: give each part "
-                             f"once, all run with the same --trucks, --duration-s, --noise-N and --cab by the same code")
+                          f"once, all run with the same --trucks, --duration-s, --noise-N and --cab by the same code")
         scores = [PlantScore.from_dict(p) for p in plants]
         out.append(parts[0] | {"part": "1/1", "plants": plants, "interval": list(share_interval(scores)),
                                "at_retry_rate": sorted(n for run in parts for n in run.get("at_retry_rate") or []),

@@ -55,8 +55,9 @@ DLC by a percent: the correction, which maps the model's residual on the rig to 
 cannot put back a damping that depends on the amplitude, so the model's dampers decide how a
 truck's hop is damped on the road. So the fitted dampers are kept (:func:`choose_damper`) wherever
 the fit is no worse in mean square to the least squares' resolution (:data:`DAMPER_MIN_GAIN`: the
-held dampers are in the fitted family, so only a search stopped short is clearly worse) and the knee did not stop at its range's bottom (0.05 m/s: a damper whose
-saturating part acts as friction, which the fitted friction already is).
+held dampers are in the fitted family, so only a search stopped short is clearly worse) and the
+knee did not stop at its range's bottom (0.05 m/s: a damper whose saturating part acts as friction,
+which the fitted friction already is).
 
 The catalogue truck keeps the XML's rigid chassis (no frame or engine is fitted or scanned), as
 does a calibration whose fitted fields the caller names.
